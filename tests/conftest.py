@@ -1,0 +1,3 @@
+import os
+
+os.environ.setdefault("EHSA_OPT_QUIET", "1")
