@@ -1,7 +1,8 @@
-"""Figures (matplotlib, Agg backend). Computation modules never import this one.
+"""Figures (matplotlib, Agg backend). Computation modules never import plotting.
 
 Each function returns a :class:`matplotlib.figure.Figure`; :func:`save` writes it
-atomically as PNG.
+atomically as PNG.  Topic modules live beside this one (``plots.identify``,
+``plots.quarter_car``, ``plots.design``, ``plots.discrepancy``).
 """
 
 from __future__ import annotations
