@@ -21,6 +21,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import __version__
+from .progress import progress_bar
 
 __all__ = ["Step", "StepOutput", "Context", "STEPS", "reproduce", "atomic_write_text"]
 
@@ -204,12 +205,14 @@ def _data_paths() -> list[Path]:
 
 
 def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs: int = 2,
-              steps: list[Step] | None = None, log: Callable[[str], None] = print) -> Path:
+              steps: list[Step] | None = None, log: Callable[[str], None] | None = None) -> Path:
     """Run the pipeline and write ``OUT/REPORT.md``; returns its path.
 
     Steps whose inputs did not change since a previous run in the same ``out_dir``
     are taken from ``OUT/cache`` (logged as cached).
     """
+    from tqdm.auto import tqdm
+    log = log or tqdm.write  # prints above the progress bar
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     cache = out / "cache"
@@ -218,8 +221,11 @@ def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs:
     steps = STEPS if steps is None else steps
     sections = []
     hashes: dict[str, str] = {}
+    timings: list[tuple[str, str, float]] = []
     t_all = time.perf_counter()
+    bar = progress_bar(total=len(steps), desc="reproduce", unit="step")
     for n, step in enumerate(steps, start=1):
+        bar.set_postfix_str(step.key)
         key = _hash({"step": step.key, "version": __version__, "quick": quick,
                      "inputs": step.inputs(ctx), "depends": [hashes[d] for d in step.depends]})
         hashes[step.key] = key
@@ -234,6 +240,7 @@ def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs:
                                                          for f in cached["figures"]):
             log(f"[{n}/{len(steps)}] {step.title}: cached (hash {key}), not recomputed")
             output = StepOutput(cached["markdown"], cached["figures"], cached["results"])
+            timings.append((step.title, "cached", float(cached.get("seconds", 0.0))))
         else:
             log(f"[{n}/{len(steps)}] {step.title} ...")
             t0 = time.perf_counter()
@@ -244,8 +251,14 @@ def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs:
                                                  "results": output.results, "seconds": dt},
                                                 default=float))
             log(f"[{n}/{len(steps)}] {step.title}: done in {dt:.1f} s")
+            timings.append((step.title, "computed", dt))
+        bar.update(1)
         ctx.results[step.key] = output.results
         sections.append(f"## {n}. {step.title}\n\n{output.markdown}")
+    bar.close()
+    rows = "\n".join(f"| {t} | {how} | {sec:.1f} |" for t, how, sec in timings)
+    sections.append("## Run log\n\n| step | this run | compute time (s) |\n|---|---|---|\n"
+                    + rows + "\n")
     mode = "quick" if quick else "full"
     head = (f"# ehsa_opt reproduction report\n\nBowen, Viñolas & Olazagoitia (2019), *The "
             f"influence of friction parameters in a ball-screw energy-harvesting shock "
