@@ -128,7 +128,8 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
     """Generator voltage and sprung-mass displacement vs road sine frequency.
 
     For each frequency one compiled batch simulates every (friction case, load)
-    pair: the road is x0 = A sin(2π f t); after max(settle_cycles, settle_min_s)
+    pair: the road is x0 = A sin(2π f t) (amplitude ramped in over the first half
+    of the settling time); after max(settle_cycles, settle_min_s)
     the fundamental amplitudes over ``measure_cycles`` whole cycles are taken
     (friction makes the system nonlinear, hence simulation, not Eqs 2–3).
     """
@@ -148,7 +149,11 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
         t_settle = n_cyc / f
         n_total = int(round((t_settle + measure_cycles / f) * sample_rate_hz))
         t = np.arange(n_total + 1) * h
-        x0 = amplitude_m * np.sin(2.0 * math.pi * f * t)
+        # amplitude ramped in over the first half of the settling time (raised cosine):
+        # the body mode is then hardly excited by the start
+        t_ramp = 0.5 * t_settle
+        env = np.where(t < t_ramp, 0.5 * (1.0 - np.cos(math.pi * t / t_ramp)), 1.0)
+        x0 = amplitude_m * env * np.sin(2.0 * math.pi * f * t)
         zt, _, _ = simulate_batch(params, x0, h)
         steps += n_total * len(pairs)
         tt = t[1:]
