@@ -261,10 +261,8 @@ def simulate_quarter_car(vehicle: VehicleParams,
     # Energy balance over the window: road work = Δ stored + R i² + friction.
     stored = np.array([QuarterCarModel.stored_energy(zt[b], x0_keep, params[:, b])
                        for b in range(len(hs))])
-    z_start = zt[:, :, 0]
     col = {name: i for i, name in enumerate(STEP_OUTPUT_NAMES)}
     R = params[PARAM_NAMES.index("total_resistance_ohm")]
-    re = params[PARAM_NAMES.index("load_ohm")]
     cur = zt[:, STATE_NAMES.index("current_A"), :]
 
     def integral(sig: np.ndarray) -> np.ndarray:  # trapezoid over the window
@@ -276,7 +274,6 @@ def simulate_quarter_car(vehicle: VehicleParams,
     d_stored = stored[:, -1] - stored[:, 0]
     scale = np.maximum(np.abs(work), 1e-300)
     residual = (work - d_stored - e_r - e_f) / scale
-    del z_start
     # Metrics
     acc = y[:, col["sprung_acc_m_s2"], :]
     acc_w = np.array([weighted_rms_fft(a, sample_rate_hz) for a in acc])
@@ -312,7 +309,6 @@ def simulate_quarter_car(vehicle: VehicleParams,
     if keep_series:
         series = {name: y[:, i, :] for i, name in enumerate(STEP_OUTPUT_NAMES)}
         series.update({name: zt[:, i, :] for i, name in enumerate(STATE_NAMES)})
-        del re
     n_keep = x0_keep.size
     return QuarterCarSimulation(
         success=finite, message=msg, metrics=metrics, time_s=np.arange(n_keep) * h + h,
