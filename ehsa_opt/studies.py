@@ -57,12 +57,16 @@ def friction_cases(identification: Mapping[str, Any] | None = None) -> FrictionC
     ----------
     identification : mapping, optional
         ``ctx.results["identification"]``; used when it has ``friction_min`` and
-        ``friction_max`` (mappings of the eight friction names).
+        ``friction_max`` (mappings of the eight friction names, or sequences in
+        :data:`~ehsa_opt.params.FRICTION_NAMES` order).
     """
     if identification and "friction_min" in identification and "friction_max" in identification:
-        lo = FrictionParams(**{k: float(identification["friction_min"][k]) for k in FRICTION_NAMES})
-        hi = FrictionParams(**{k: float(identification["friction_max"][k]) for k in FRICTION_NAMES})
-        return FrictionCases({"none": None, "min": lo, "max": hi},
+        def build(values: Any) -> FrictionParams:
+            if isinstance(values, Mapping):
+                return FrictionParams(**{k: float(values[k]) for k in FRICTION_NAMES})
+            return FrictionParams.from_array(values)  # sequence in FRICTION_NAMES order
+        return FrictionCases({"none": None, "min": build(identification["friction_min"]),
+                              "max": build(identification["friction_max"])},
                              "identified bounds (min/max over the bench tests)")
     truth = FrictionParams(**load_truth(embedded_data_dir())["friction"])
     scaled = {k: (v if "velocity" in k else MIN_FRICTION_SCALE * v)

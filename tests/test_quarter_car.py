@@ -138,7 +138,7 @@ def test_synthesised_road_psd_in_octave_bands_and_seed():
     assert not np.allclose(prof.elevation_m, other.elevation_m)
 
 
-def test_measured_profile_csv(tmp_path):
+def test_measured_profile_csv(tmp_path, capsys):
     d = np.linspace(0, 100, 1001)
     z = 0.01 * np.sin(2 * np.pi * d / 10.0)
     csv = tmp_path / "road.csv"
@@ -152,7 +152,10 @@ def test_measured_profile_csv(tmp_path):
     assert sim.success and math.isnan(sim.metrics["dissipation_bound_W"][0])
     assert sim.metrics["power_W"][0] > 0
     # CLI: bound is null for a measured profile
+    capsys.readouterr()
     assert main(["simulate", str(prob_file), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["dissipation_bound_W"] is None and out["power_W"] > 0
 
 
 @pytest.mark.parametrize("content,match", [

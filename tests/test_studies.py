@@ -20,6 +20,8 @@ def test_friction_cases_use_identification_when_given():
                               for k in FRICTION_NAMES}}
     got = friction_cases(ident)
     assert "identified" in got.source
+    as_lists = friction_cases({k: [v[n] for n in FRICTION_NAMES] for k, v in ident.items()})
+    assert as_lists.cases["max"] == got.cases["max"]
     assert got.cases["max"].nut_coulomb_N == pytest.approx(2 * default.cases["max"].nut_coulomb_N)
 
 
