@@ -93,7 +93,7 @@ def step_quarter_car_paths(ctx: Context) -> StepOutput:
 
 def step_fig13(ctx: Context) -> StepOutput:
     fc = friction_cases(ctx.results.get("identification"))
-    freqs = np.geomspace(0.5, 20.0, 8 if ctx.quick else 20)
+    freqs = np.geomspace(0.5, 20.0, 12 if ctx.quick else 30)
     study = stepped_sine_response(VehicleParams(), HarvesterParams(), fc, [15.0, 47.0, 109.0],
                                   freqs, amplitude_m=0.01)
     rel = "figures/fig13_frequency_response.png"
