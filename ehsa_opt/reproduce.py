@@ -22,7 +22,8 @@ import numpy as np
 
 from . import __version__
 
-__all__ = ["Step", "StepOutput", "Context", "STEPS", "reproduce", "atomic_write_text"]
+__all__ = ["Step", "StepOutput", "Context", "STEPS", "reproduce", "atomic_write_text",
+           "atomic_write_bytes"]
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:
@@ -33,6 +34,22 @@ def atomic_write_text(path: str | Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` via a temporary file, fsync and rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
