@@ -229,6 +229,20 @@ class QuarterCarObjectives:
 
 
 # --------------------------------------------------------------------------- pymoo problem
+@dataclass(frozen=True)
+class _ObjectiveChunk:
+    """Picklable task: objective matrix of a block of unit-cube points."""
+
+    space: DesignSpace
+    evaluator: Any
+    names: tuple[str, ...]
+
+    def __call__(self, U: np.ndarray) -> np.ndarray:
+        res = self.evaluator(self.space.from_unit(U))
+        return np.column_stack([np.broadcast_to(np.asarray(res[k], float), (U.shape[0],))
+                                for k in self.names])
+
+
 class DesignProblem(Problem):
     """The design problem as a pymoo :class:`~pymoo.core.problem.Problem`.
 
@@ -249,6 +263,9 @@ class DesignProblem(Problem):
         self.space = space
         self.evaluator = evaluator
         self.objective_names = tuple(evaluator.objective_names)
+        #: optional ``mapper(fn, list_of_chunks) -> list`` (local pool or Dask, see
+        #: :mod:`ehsa_opt.sweep`) to spread a population over workers; not pickled
+        self.mapper: Any = None
         super().__init__(n_var=space.n, n_obj=len(self.objective_names), xl=0.0, xu=1.0,
                          vtype=float)
 
@@ -259,10 +276,17 @@ class DesignProblem(Problem):
     def objectives_unit(self, U: Any) -> np.ndarray:
         """Objective matrix (n, n_obj) of unit-cube points ``U`` (n, n_var)."""
         U = np.atleast_2d(np.asarray(U, dtype=float))
-        res = self.evaluator(self.space.from_unit(U))
-        F = np.column_stack([np.broadcast_to(np.asarray(res[k], float), (U.shape[0],))
-                             for k in self.objective_names])
-        return F
+        if self.mapper is not None and U.shape[0] > 1:
+            parts = self.mapper(_ObjectiveChunk(self.space, self.evaluator,
+                                                self.objective_names),
+                                np.array_split(U, min(U.shape[0], 8)))
+            return np.vstack(parts)
+        return _ObjectiveChunk(self.space, self.evaluator, self.objective_names)(U)
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["mapper"] = None  # executors/clients are not part of the problem's state
+        return state
 
     def _evaluate(self, X: np.ndarray, out: dict, *args: Any, **kwargs: Any) -> None:
         F = self.objectives_unit(X)
