@@ -394,8 +394,8 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
                           weights: Sequence[float] | None = None,
                           start: Mapping[str, float] | None = None, *, n_starts: int = 6,
                           seed: int = 0, max_iter: int = 300, tol: float = 1e-10,
-                          fd_step: float = 1e-6, where: str = "goal attainment"
-                          ) -> GoalAttainmentResult:
+                          fd_step: float = 1e-6, refine: bool = True,
+                          where: str = "goal attainment") -> GoalAttainmentResult:
     """Goal attainment (MATLAB ``fgoalattain``): min γ s.t. F_i(x) − w_i γ ≤ goal_i.
 
     Solved as a smooth NLP in (unit-cube x, γ) by SLSQP with vectorised
@@ -417,6 +417,14 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
         Total number of starts (≥ 1).
     seed : int
         Seed of the random starts.
+    refine : bool
+        Tie-break (an extension of ``fgoalattain``): the min-γ set is often not a
+        single point (objectives whose constraints are slack leave directions
+        free), so a second SLSQP stage keeps every F_i ≤ goal_i + w_i γ* and
+        minimises Σ_i (F_i − goal_i)/scale_i, i.e. improves the slack objectives
+        as far as the optimal γ* allows. γ is unchanged; the design becomes
+        Pareto-optimal and reproducible. Its iterations are appended to
+        ``history`` (``phase`` 2).
     """
     from scipy.optimize import minimize
 
@@ -476,19 +484,54 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
                      "feasible": hard_ok and viol <= 1e-6, "history": hist,
                      "start": problem.space.from_unit(u0)})
     ok = [r for r in runs if r["feasible"]]
-    best = min(ok or runs, key=lambda r: r["gamma"])
+    best_k = min((k for k, r in enumerate(runs) if r["feasible"] or not ok),
+                 key=lambda k: runs[k]["gamma"])
+    best = runs[best_k]
+    refined = None
+    if refine and best["feasible"] and np.any(w > 0):
+        gstar = best["gamma"]
+        cache2: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+        def fj2(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            nonlocal nfev
+            key = np.asarray(u, float).tobytes()
+            if key not in cache2:
+                cache2[key] = _fd_objectives(problem, np.clip(u, 0.0, 1.0), fd_step)
+                nfev += 2 * n + 1
+            return cache2[key]
+
+        cap = g + w * gstar + 1e-9 * scale
+        hist2: list[tuple[np.ndarray, float]] = []
+        res2 = minimize(lambda u: float(np.sum((fj2(u)[0] - g) / scale)), best["u"],
+                        jac=lambda u: np.sum(fj2(u)[1] / scale[:, None], axis=0),
+                        method="SLSQP", bounds=[(0.0, 1.0)] * n,
+                        constraints=[{"type": "ineq", "fun": lambda u: (cap - fj2(u)[0]) / scale,
+                                      "jac": lambda u: -fj2(u)[1] / scale[:, None]}],
+                        callback=lambda uk: hist2.append((np.clip(uk, 0, 1).copy(), gstar)),
+                        options={"maxiter": max_iter, "ftol": tol})
+        u2 = np.clip(res2.x, 0.0, 1.0)
+        F2 = fj2(u2)[0]
+        if np.all(F2 <= cap + 1e-8 * scale) and float(np.sum((F2 - g) / scale)) <= float(
+                np.sum((fj2(best["u"])[0] - g) / scale)):
+            refined = {"u": u2, "status": int(res2.status), "message": str(res2.message),
+                       "nit": int(res2.nit), "history": hist2}
+            best = {**best, "u": u2,
+                    "gamma": float(np.max((F2[w > 0] - g[w > 0]) / w[w > 0]))}
     d = {k: float(v) for k, v in problem.space.from_unit(best["u"]).items()}
     full = problem.evaluate_design({k: np.array([v]) for k, v in d.items()})
     objectives = {k: float(np.ravel(v)[0]) for k, v in full.items()}
     history = []
-    for u, gam in best["history"]:
+    phases = [(1, u, gam) for u, gam in best["history"]]
+    if refined is not None:
+        phases += [(2, u, gam) for u, gam in refined["history"]]
+    for phase, u, gam in phases:
         dd = {k: float(v) for k, v in problem.space.from_unit(u).items()}
         ff = problem.evaluate_design({k: np.array([v]) for k, v in dd.items()})
-        history.append({"design": dd, "objectives": {k: float(np.ravel(v)[0])
-                                                     for k, v in ff.items()},
+        history.append({"phase": phase, "design": dd,
+                        "objectives": {k: float(np.ravel(v)[0]) for k, v in ff.items()},
                         "gamma": gam})
     success = bool(best["feasible"] and best["status"] == 0)
-    msg = (f"start {runs.index(best) + 1}/{len(runs)}: {best['message']}"
+    msg = (f"start {best_k + 1}/{len(runs)}: {best['message']}"
            + ("" if best["feasible"] else " (constraints violated: no feasible end point)"))
     starts = [{"start": {k: float(v) for k, v in r["start"].items()}, "gamma": r["gamma"],
                "status": r["status"], "message": r["message"], "nit": r["nit"],
@@ -498,7 +541,9 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
         objectives=objectives, goals=g, weights=w, objective_names=tuple(names),
         history=history, starts=starts,
         stats={"nfev": nfev, "seconds": time.perf_counter() - t0, "n_starts": len(runs),
-               "chosen_start": runs.index(best)},
+               "chosen_start": best_k,
+               "refinement": None if refined is None else
+               {k: refined[k] for k in ("status", "message", "nit")}},
         x=best["u"])
 
 

@@ -14,6 +14,7 @@ The physical tables (``[vehicle]`` with ``preset`` or fields, ``[harvester]``,
     speed_km_per_h = 70.0
     [design]
     method = "goal-attainment"  # or "nsga2"
+    n_freq = 1024               # frequency points of the exact linear evaluation
     log_scaled = ["total_inertia_gcm2", "speed_constant_rpm_per_V", "load_ohm"]
     [design.bounds]             # paper Table 3
     total_inertia_gcm2 = [250.0, 10000.0]
@@ -152,6 +153,7 @@ class DesignConfig:
     goal_attainment: GoalAttainmentSettings = field(default_factory=GoalAttainmentSettings)
     nsga2: NSGA2Settings = field(default_factory=NSGA2Settings)
     raw: Mapping[str, Any] = field(default_factory=dict)
+    n_freq: int = 1024
 
     @property
     def prototype_design(self) -> dict[str, float]:
@@ -189,7 +191,8 @@ def parse_design_config(doc: Mapping[str, Any], path: str = "problem") -> Design
     harvester = from_mapping(HarvesterParams, doc.get("harvester", {}), f"{path} [harvester]")
 
     dt = doc.get("design", {})
-    _check_keys(dt, ("method", "bounds", "log_scaled"), f"{path} [design]")
+    _check_keys(dt, ("method", "bounds", "log_scaled", "n_freq"), f"{path} [design]")
+    n_freq = _int(dt.get("n_freq", 1024), f"{path} [design] n_freq", 16)
     method = check_method(str(dt.get("method", "goal-attainment")), f"{path} [design] method")
     bounds = dt.get("bounds", {
         "total_inertia_gcm2": [250.0, 10000.0], "lead_mm_per_rev": [5.0, 20.0],
@@ -234,7 +237,7 @@ def parse_design_config(doc: Mapping[str, Any], path: str = "problem") -> Design
     return DesignConfig(path=path, vehicle=vehicle, vehicle_name=vname, road=road,
                         harvester=harvester, space=space, method=method,
                         goals=GoalSpec(rel, goals, weights), goal_attainment=gas, nsga2=ns,
-                        raw=doc)
+                        raw=doc, n_freq=n_freq)
 
 
 def load_design_config(path: str | Path) -> DesignConfig:

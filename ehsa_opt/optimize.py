@@ -27,7 +27,8 @@ __all__ = ["build_problem", "goals_and_weights", "optimize", "OptimizeOutcome",
 
 def build_problem(cfg: DesignConfig, mapper: Any = None) -> DesignProblem:
     """The pymoo design problem of a config (frictionless quarter car, fast path)."""
-    ev = QuarterCarObjectives(cfg.vehicle, cfg.road, cfg.harvester)
+    ev = QuarterCarObjectives(cfg.vehicle, cfg.road, cfg.harvester,
+                              (("n_freq", cfg.n_freq),))
     problem = DesignProblem(cfg.space, ev)
     problem.mapper = mapper
     return problem
