@@ -121,12 +121,14 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     method = check_method(args.method or cfg.method)
     out = check_out_dir(args.out)
     gens = args.gens or cfg.nsga2.gens
-    with executor(1, args.scheduler) as mapper, \
-            progress_bar(total=gens if method == "nsga2" else None, desc="generations",
-                         unit="gen") as bar:
+    import contextlib
+    bar_cm = (progress_bar(total=gens, desc="generations", unit="gen") if method == "nsga2"
+              else contextlib.nullcontext())
+    with executor(1, args.scheduler) as mapper, bar_cm as bar:
         def tick(done: int, total: int) -> None:
-            bar.n = done
-            bar.refresh()
+            if bar is not None:
+                bar.n = done
+                bar.refresh()
         outcome = optimize(cfg, method, out_dir=out, pop=args.pop, gens=args.gens,
                            seed=args.seed, checkpoint=args.checkpoint, resume=args.resume,
                            stop_after=args.stop_after,

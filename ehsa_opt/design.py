@@ -484,8 +484,10 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
                      "feasible": hard_ok and viol <= 1e-6, "history": hist,
                      "start": problem.space.from_unit(u0)})
     ok = [r for r in runs if r["feasible"]]
-    best_k = min((k for k, r in enumerate(runs) if r["feasible"] or not ok),
-                 key=lambda k: runs[k]["gamma"])
+    pool = [k for k, r in enumerate(runs) if r["feasible"] or not ok]
+    g_min = min(runs[k]["gamma"] for k in pool)
+    # ties (to 1e-9) go to the earliest start, i.e. the given start point
+    best_k = next(k for k in pool if runs[k]["gamma"] <= g_min + 1e-9 * max(1.0, abs(g_min)))
     best = runs[best_k]
     refined = None
     if refine and best["feasible"] and np.any(w > 0):
@@ -734,7 +736,8 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
     hv_scale, hv_reference : sequences, optional
         Hypervolume of F / hv_scale against hv_reference (defaults 1 and 2).
     pick : str
-        'knee', 'compromise' or 'preference' (see :func:`pick_preferred`).
+        'knee', 'compromise' or 'preference' (see :func:`pick_preferred`), made
+        among the front points inside the hypervolume box (all if none is).
     """
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.termination import get_termination
@@ -797,7 +800,12 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
             interrupted = True
             break
     X, F = _front(algorithm)
-    idx = pick_preferred(F, pick, pick_weights)
+    # pick among the points inside the hypervolume box (F/scale < reference): the
+    # front's far tails (e.g. 1/ρ_g in the thousands) would otherwise set the
+    # normalisation; all points when none is inside
+    inside = np.all(F / scale < ref, axis=1)
+    cand = np.flatnonzero(inside) if inside.any() else np.arange(F.shape[0])
+    idx = int(cand[pick_preferred(F[cand] / scale, pick, pick_weights)])
     msg = (f"stopped after {len(history)} of {n_gen} generations (resume with --resume)"
            if interrupted else f"{len(history)} generations, {F.shape[0]} non-dominated designs")
     return ParetoResult(

@@ -77,7 +77,9 @@ def goal_attainment_history(res: Any, which: str = "design") -> Any:
         ax.set_visible(False)
     for ax in axes[-1]:
         ax.set_xlabel("iteration")
-    fig.suptitle(f"{title}; γ = {res.gamma:+.4f}", fontsize=10)
+    start = res.stats.get("chosen_start", 0)
+    fig.suptitle(f"{title}; γ = {res.gamma:+.4f} (start {'prototype' if start == 0 else start + 1})",
+                 fontsize=10)
     fig.tight_layout()
     return fig
 
