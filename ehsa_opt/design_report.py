@@ -117,7 +117,7 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         f"| attainment factor γ | 0 (goals) | **{ga.gamma:+.4f}** | {gamma_paper:+.4f} | – |",
     ]
     binding = [k for k, g, w in zip(OBJECTIVE_NAMES, ga.goals, ga.weights)
-               if w > 0 and abs((ga.objectives[k] - g) / w - ga.gamma) < 1e-6]
+               if w > 0 and abs((ga.objectives[k] - g) / w - ga.gamma) < 1e-5]
     md = (
         f"Goal attainment (`fgoalattain` semantics: min γ s.t. F_i − w_i γ ≤ goal_i, SLSQP "
         f"with vectorised finite-difference gradients, {ga.stats['n_starts']} starts) on "

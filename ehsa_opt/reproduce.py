@@ -215,6 +215,19 @@ STEPS: list[Step] = [
 ]
 
 
+def _design_steps() -> list[Step]:
+    from .design_report import design_inputs, step_goal_attainment, step_pareto
+    return [
+        Step("design_goal_attainment", "Optimal design by goal attainment (paper §4.2, Figs 17–19)",
+             step_goal_attainment, design_inputs),
+        Step("design_pareto", "Pareto front of the design problem (NSGA-II)", step_pareto,
+             design_inputs),
+    ]
+
+
+STEPS += _design_steps()
+
+
 def _data_paths() -> list[Path]:
     from .datasets import embedded_data_dir
     return [embedded_data_dir("bench_prototype"), embedded_data_dir("emps")]
