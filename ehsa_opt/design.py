@@ -656,7 +656,9 @@ class ParetoResult:
         Index of the knee / preference pick.
     history : list[dict]
         Per generation: ``gen``, ``n_eval``, ``hv`` (normalised hypervolume of the
-        current non-dominated set), ``n_front``.
+        population's non-dominated set; NSGA-II's crowding truncation can lower
+        it), ``n_front``, ``hv_archive`` / ``n_archive`` (of every non-dominated
+        design evaluated so far: non-decreasing).
     hv_scale, hv_reference : ndarray
         Normalisation (F / hv_scale) and reference point of the hypervolume.
     stats : dict
@@ -773,6 +775,7 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
         algorithm = state["algorithm"]
         algorithm.problem = problem  # same fingerprint; use this process's evaluator
         history = state["history"]
+        archive = state["archive"]
         resumed_from = len(history)
         if resumed_from > n_gen:
             raise ParameterError(f"--resume {rdir}: checkpoint already has {resumed_from} "
@@ -782,17 +785,28 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
         algorithm = NSGA2(pop_size=pop_size, seed=seed, eliminate_duplicates=True)
         algorithm.setup(problem, termination=("n_gen", n_gen), verbose=False)
         history = []
+        archive = np.zeros((0, m))
         ck = Path(checkpoint) if checkpoint is not None else None
     algorithm.termination = get_termination("n_gen", n_gen)
     interrupted = False
     while len(history) < n_gen:
-        algorithm.next()
+        # Algorithm.next() spelled out, to see the evaluated infills (archive)
+        infills = algorithm.infill()
+        if infills is not None:
+            algorithm.evaluator.eval(algorithm.problem, infills, algorithm=algorithm)
+            algorithm.advance(infills=infills)
+            Fa = np.vstack([archive, infills.get("F")]) if archive.size else infills.get("F")
+            archive = Fa[non_dominated(Fa)]
+        else:
+            algorithm.advance()
         _, F = _front(algorithm)
         history.append({"gen": len(history) + 1, "n_eval": int(algorithm.evaluator.n_eval),
-                        "hv": hypervolume(F / scale, ref), "n_front": int(F.shape[0])})
+                        "hv": hypervolume(F / scale, ref), "n_front": int(F.shape[0]),
+                        "hv_archive": hypervolume(archive / scale, ref),
+                        "n_archive": int(archive.shape[0])})
         if ck is not None:
             blob = pickle.dumps({"algorithm": algorithm, "history": history, "fingerprint": fp,
-                                 "pop_size": pop_size, "seed": seed})
+                                 "pop_size": pop_size, "seed": seed, "archive": archive})
             _atomic_write_bytes(ck / "algorithm.pkl", blob)
         if progress is not None:
             progress(len(history), n_gen)

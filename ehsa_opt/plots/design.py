@@ -157,7 +157,11 @@ def hypervolume_history(histories: Mapping[str, Sequence[Mapping[str, float]]],
     """Hypervolume against evaluations, one line per run."""
     fig, ax = plt.subplots(figsize=(5.5, 3.4))
     for name, h in histories.items():
-        ax.plot([r["n_eval"] for r in h], [r["hv"] for r in h], "o-", ms=3, label=name)
+        line, = ax.plot([r["n_eval"] for r in h], [r["hv"] for r in h], "o-", ms=3,
+                        label=f"{name}: population front")
+        if "hv_archive" in h[0]:
+            ax.plot([r["n_eval"] for r in h], [r["hv_archive"] for r in h], "--",
+                    color=line.get_color(), label=f"{name}: all evaluated (archive)")
     ax.set_xlabel("evaluations")
     ax.set_ylabel("hypervolume (normalised)")
     ref = "" if reference is None else f", ref. {list(np.round(reference, 3))}"
