@@ -259,6 +259,9 @@ class DesignProblem(Problem):
         attribute ``objective_names``; must be picklable (checkpoints, Dask).
     """
 
+    #: designs per evaluation block (see :meth:`objectives_unit`)
+    CHUNK = 64
+
     def __init__(self, space: DesignSpace, evaluator: Callable[..., Mapping[str, Any]]) -> None:
         self.space = space
         self.evaluator = evaluator
@@ -276,12 +279,14 @@ class DesignProblem(Problem):
     def objectives_unit(self, U: Any) -> np.ndarray:
         """Objective matrix (n, n_obj) of unit-cube points ``U`` (n, n_var)."""
         U = np.atleast_2d(np.asarray(U, dtype=float))
-        if self.mapper is not None and U.shape[0] > 1:
-            parts = self.mapper(_ObjectiveChunk(self.space, self.evaluator,
-                                                self.objective_names),
-                                np.array_split(U, min(U.shape[0], 8)))
-            return np.vstack(parts)
-        return _ObjectiveChunk(self.space, self.evaluator, self.objective_names)(U)
+        # fixed blocks of CHUNK designs, locally and on a mapper alike: vectorised
+        # evaluators may round differently with the batch size, and the blocks make
+        # local and distributed runs bit-identical
+        blocks = np.array_split(U, max(1, -(-U.shape[0] // self.CHUNK)))
+        task = _ObjectiveChunk(self.space, self.evaluator, self.objective_names)
+        if self.mapper is not None and len(blocks) > 1:
+            return np.vstack(self.mapper(task, blocks))
+        return np.vstack([task(b) for b in blocks])
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
