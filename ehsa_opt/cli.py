@@ -190,6 +190,49 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    import json
+    import warnings
+
+    from .problem import load_problem
+    from .quarter_car import RoadHoldingWarning, simulate_quarter_car
+    prob = load_problem(args.problem)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RoadHoldingWarning)
+        sim = simulate_quarter_car(prob.vehicle, prob.harvester, prob.friction, prob.road,
+                                   settle_s=prob.simulation.settle_s,
+                                   sample_rate_hz=prob.simulation.sample_rate_hz,
+                                   base_dir=prob.base_dir, keep_series=False)
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
+    m = sim.metrics_of(0)
+    if not sim.success:
+        raise ValueError(f"{args.problem}: simulation failed: {sim.message}")
+    if args.json:
+        out = dict(m)
+        out["road"] = sim.road_source
+        out["frictionless"] = prob.friction is None or prob.friction.is_frictionless
+        out["wall_s"] = round(sim.stats["wall_s"], 4)
+        print(json.dumps(out))
+        return 0
+    rows = [("comfort alpha (-)", m["comfort"]),
+            ("W_k-weighted rms acceleration (m/s^2)", m["comfort_weighted_rms_m_s2"]),
+            ("road holding (-)", m["road_holding"]),
+            ("power in R_e (W)", m["power_W"]),
+            ("power, dimensionless (-)", m["power_dimensionless"]),
+            ("efficiency (%)", 100.0 * m["efficiency"]),
+            ("power absorbed by the damper (W)", m["dissipated_power_W"]),
+            ("dissipation bound (W)", m["dissipation_bound_W"]),
+            ("peak power (W)", m["peak_power_W"]),
+            ("energy balance residual (%)", 100.0 * m["energy_residual"])]
+    print(f"{args.problem}: {sim.road_source}, "
+          f"{'frictionless' if prob.friction is None else 'with friction'}, "
+          f"{sim.stats['steps']} steps in {sim.stats['wall_s']:.2f} s")
+    for label, value in rows:
+        print(f"  {label:<40s} {'n/a' if value is None else format(value, '.4g')}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``ehsa-opt`` argument parser."""
     parser = argparse.ArgumentParser(
@@ -246,6 +289,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
     w.add_argument("--out", required=True, metavar="OUT_DIR")
     w.set_defaults(func=_cmd_sweep)
+
+    s = sub.add_parser("simulate", help="simulate a quarter car with the harvester on a road")
+    s.add_argument("problem", metavar="PROBLEM.toml")
+    s.add_argument("--json", action="store_true", help="print one JSON object of metrics")
+    s.set_defaults(func=_cmd_simulate)
 
     r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data")
     r.add_argument("--quick", action="store_true", help="fewer starts, shorter roads (minutes)")
