@@ -1,12 +1,13 @@
 """Problem files for design studies: the ``[design]``, ``[goals]``,
-``[goal_attainment]``, ``[nsga2]``, ``[friction_study]`` and ``[sweep]`` tables.
+``[goal_attainment]``, ``[nsga2]`` and ``[sweep]`` tables.
 
-The physical tables (``[vehicle]`` with ``preset`` or fields, ``[harvester]``,
-``[road]``, ``[friction]``, ``[simulation]``) follow SPEC §7 names.  Example
+The physical part (``preset`` or ``[vehicle]``, ``[harvester]``, ``[road]``,
+``[friction]``, ``[simulation]``) is a quarter-car problem file parsed by
+:func:`ehsa_opt.problem.problem_from_mapping` (``[road]`` defaults to class C
+at 70 km/h here).  Example
 (``problems/paper_design.toml``)::
 
-    [vehicle]
-    preset = "passenger_car"
+    preset = "passenger_car"    # or a [vehicle] table (ehsa_opt.problem format)
     [harvester]                 # the prototype: start point and goal reference
     load_ohm = 47.0
     [road]
@@ -43,7 +44,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from .design import DESIGN_VARIABLES, OBJECTIVE_NAMES, DesignSpace
-from .params import (HarvesterParams, ParameterError, RoadParams, VehicleParams, from_mapping,
+from .params import (HarvesterParams, ParameterError, RoadParams, VehicleParams,
                      load_toml, nearest_name)
 
 __all__ = ["METHODS", "GoalSpec", "NSGA2Settings", "GoalAttainmentSettings", "DesignConfig",
@@ -52,8 +53,10 @@ __all__ = ["METHODS", "GoalSpec", "NSGA2Settings", "GoalAttainmentSettings", "De
 #: Optimisation methods of ``ehsa-opt optimize``.
 METHODS: tuple[str, ...] = ("goal-attainment", "nsga2")
 
-_TOP = ("vehicle", "harvester", "road", "friction", "simulation", "design", "goals",
-        "goal_attainment", "nsga2", "friction_study", "sweep", "title", "description")
+#: Physical tables, parsed by :func:`ehsa_opt.problem.problem_from_mapping`.
+_PHYSICAL = ("preset", "vehicle", "harvester", "friction", "road", "simulation")
+_TOP = _PHYSICAL + ("design", "goals", "goal_attainment", "nsga2", "sweep", "title",
+                    "description")
 
 
 def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
@@ -154,6 +157,7 @@ class DesignConfig:
     nsga2: NSGA2Settings = field(default_factory=NSGA2Settings)
     raw: Mapping[str, Any] = field(default_factory=dict)
     n_freq: int = 1024
+    physical: Any = None  #: the :class:`ehsa_opt.problem.QuarterCarProblem` of the file
 
     @property
     def prototype_design(self) -> dict[str, float]:
@@ -169,26 +173,16 @@ class DesignConfig:
         return {n: float(values[n]) for n in self.space.names}
 
 
-def _vehicle(table: Mapping[str, Any], where: str) -> tuple[VehicleParams, str]:
-    table = dict(table)
-    preset = table.pop("preset", None)
-    if preset is not None:
-        base = VehicleParams.preset(str(preset))
-        if table:
-            from dataclasses import asdict
-            merged = asdict(base)
-            merged.update(table)
-            return from_mapping(VehicleParams, merged, where), f"{preset} (modified)"
-        return base, str(preset)
-    return from_mapping(VehicleParams, table, where), "custom"
-
-
 def parse_design_config(doc: Mapping[str, Any], path: str = "problem") -> DesignConfig:
     """Build a :class:`DesignConfig` from a parsed TOML document."""
+    from .problem import problem_from_mapping
+
     _check_keys(doc, _TOP, path)
-    vehicle, vname = _vehicle(doc.get("vehicle", {}), f"{path} [vehicle]")
-    road = from_mapping(RoadParams, doc.get("road", {}), f"{path} [road]")
-    harvester = from_mapping(HarvesterParams, doc.get("harvester", {}), f"{path} [harvester]")
+    phys_doc = {k: doc[k] for k in _PHYSICAL if k in doc}
+    phys_doc.setdefault("road", {"iso_class": "C", "speed_km_per_h": 70.0})
+    phys = problem_from_mapping(phys_doc, path, Path(path).parent if path else ".")
+    vehicle, road, harvester = phys.vehicle, phys.road, phys.harvester
+    vname = str(doc["preset"]) if "preset" in doc else "custom"
 
     dt = doc.get("design", {})
     _check_keys(dt, ("method", "bounds", "log_scaled", "n_freq"), f"{path} [design]")
@@ -237,7 +231,7 @@ def parse_design_config(doc: Mapping[str, Any], path: str = "problem") -> Design
     return DesignConfig(path=path, vehicle=vehicle, vehicle_name=vname, road=road,
                         harvester=harvester, space=space, method=method,
                         goals=GoalSpec(rel, goals, weights), goal_attainment=gas, nsga2=ns,
-                        raw=doc, n_freq=n_freq)
+                        raw=doc, n_freq=n_freq, physical=phys)
 
 
 def load_design_config(path: str | Path) -> DesignConfig:

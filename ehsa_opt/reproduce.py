@@ -216,12 +216,16 @@ STEPS: list[Step] = [
 
 
 def _design_steps() -> list[Step]:
-    from .design_report import design_inputs, step_goal_attainment, step_pareto
+    from .design_report import (design_inputs, step_friction_on_optimum,
+                                 step_goal_attainment, step_pareto)
     return [
         Step("design_goal_attainment", "Optimal design by goal attainment (paper §4.2, Figs 17–19)",
              step_goal_attainment, design_inputs),
         Step("design_pareto", "Pareto front of the design problem (NSGA-II)", step_pareto,
              design_inputs),
+        Step("design_friction", "Friction on the optimised design (paper Fig 20, Table 4)",
+             step_friction_on_optimum, design_inputs,
+             depends=("design_goal_attainment",)),
     ]
 
 

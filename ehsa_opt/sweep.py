@@ -36,13 +36,13 @@ import numpy as np
 from .params import (FrictionParams, HarvesterParams, ParameterError, RoadParams, VehicleParams,
                      from_mapping, nearest_name)
 
-__all__ = ["SweepSpec", "SweepTask", "run_sweep", "parse_sweep", "executor",
+__all__ = ["SweepSpec", "SweepTask", "run_sweep", "parse_sweep", "executor", "harvesters_from",
            "default_friction_sets", "rows_to_csv", "METRIC_COLUMNS", "DESIGN_KEYS"]
 
 #: Output columns of every case.
 METRIC_COLUMNS: tuple[str, ...] = (
     "comfort", "comfort_weighted_rms_m_s2", "road_holding", "power_W", "power_dimensionless",
-    "efficiency", "dissipated_power_W", "dissipation_bound_W")
+    "efficiency", "dissipated_power_W", "dissipation_bound_W", "peak_power_W")
 
 #: Keys a sweep may vary in [sweep.design].
 DESIGN_KEYS: tuple[str, ...] = tuple(
@@ -102,6 +102,8 @@ class SweepSpec:
     design: tuple[tuple[str, tuple[float, ...]], ...] = ()
     road_length_m: float = 1000.0
     seed: int = 0
+    settle_s: float = 2.0
+    sample_rate_hz: float = 1000.0
 
     def __post_init__(self) -> None:
         for k, vals in self.design:
@@ -133,7 +135,8 @@ class SweepSpec:
             road = RoadParams(iso_class=cls, speed_km_per_h=float(v),
                               length_m=self.road_length_m, seed=self.seed)
             out.append(SweepTask(vn, veh, road, fn, fr, self.base,
-                                 tuple((k, tuple(a.tolist())) for k, a in grid.items())))
+                                 tuple((k, tuple(a.tolist())) for k, a in grid.items()),
+                                 self.settle_s, self.sample_rate_hz))
         return out
 
     @property
@@ -154,6 +157,8 @@ class SweepTask:
     friction: FrictionParams | None
     base: HarvesterParams
     design: tuple[tuple[str, tuple[float, ...]], ...]
+    settle_s: float = 2.0
+    sample_rate_hz: float = 1000.0
 
     def designs(self) -> dict[str, np.ndarray]:
         return {k: np.asarray(v, float) for k, v in self.design}
@@ -167,7 +172,8 @@ class SweepTask:
             from .metrics import linear_metrics
             m = linear_metrics(self.vehicle, self.road, ev.design_mapping(d))
         else:
-            m = _time_domain_metrics(self.vehicle, self.road, self.base, d, self.friction)
+            m = _time_domain_metrics(self.vehicle, self.road, self.base, d, self.friction,
+                                     self.settle_s, self.sample_rate_hz)
         rows = []
         for i in range(n):
             row: dict[str, Any] = {"vehicle": self.vehicle_name, "iso_class": self.road.iso_class,
@@ -181,18 +187,41 @@ class SweepTask:
         return rows
 
 
+def harvesters_from(base: HarvesterParams, designs: Mapping[str, np.ndarray]
+                    ) -> list[HarvesterParams]:
+    """One :class:`HarvesterParams` per design point: ``base`` with the design's
+    fields replaced (``total_inertia_gcm2`` split in the base's motor/screw ratio,
+    ``speed_constant_rpm_per_V`` → K_e = K_t = 60/(2π k_n))."""
+    n = len(next(iter(designs.values()))) if designs else 1
+    out = []
+    for i in range(n):
+        d = {k: float(np.asarray(v)[i]) for k, v in designs.items()}
+        changes: dict[str, float] = {}
+        if "total_inertia_gcm2" in d:
+            jt = d.pop("total_inertia_gcm2")
+            share = base.motor_inertia_gcm2 / base.total_inertia_gcm2
+            changes.update(motor_inertia_gcm2=jt * share, screw_inertia_gcm2=jt * (1 - share))
+        if "speed_constant_rpm_per_V" in d:
+            ke = 60.0 / (2.0 * math.pi * d.pop("speed_constant_rpm_per_V"))
+            changes.update(voltage_constant_Vs_per_rad=ke, torque_constant_Nm_per_A=ke)
+        changes.update(d)
+        out.append(base.replace(**changes))
+    return out
+
+
 def _time_domain_metrics(vehicle: VehicleParams, road: RoadParams, base: HarvesterParams,
-                         designs: Mapping[str, np.ndarray], friction: FrictionParams
+                         designs: Mapping[str, np.ndarray], friction: FrictionParams,
+                         settle_s: float = 2.0, sample_rate_hz: float = 1000.0
                          ) -> dict[str, np.ndarray]:
-    """Metrics of designs with friction, by the time-domain quarter car."""
-    try:
-        from .quarter_car import simulate_designs  # type: ignore[attr-defined]
-    except ImportError:
-        raise ParameterError(
-            "friction cases need the time-domain quarter car (ehsa_opt.quarter_car."
-            "simulate_designs), which this build does not have; sweep friction = ['none'] "
-            "only") from None
-    return simulate_designs(vehicle, road, base, designs, friction)
+    """Metrics of designs with friction: one batched time-domain simulation
+    (:func:`ehsa_opt.quarter_car.simulate_quarter_car`) on the task's road."""
+    from .quarter_car import simulate_quarter_car
+    hs = harvesters_from(base, designs)
+    sim = simulate_quarter_car(vehicle, hs, [friction] * len(hs), road, settle_s=settle_s,
+                               sample_rate_hz=sample_rate_hz, keep_series=False, warn=False)
+    if not sim.success:
+        raise RuntimeError(f"time-domain simulation failed ({sim.message}) for {road}")
+    return sim.metrics
 
 
 def _call(task: Callable[[], Any]) -> Any:
@@ -298,8 +327,12 @@ def parse_sweep(doc: Mapping[str, Any], path: str = "problem",
             raise ParameterError(f"{where}: unknown key '{key}'"
                                  + (f"; did you mean '{near}'?" if near else "")
                                  + f" (valid: {', '.join(valid)})")
-    base = from_mapping(HarvesterParams, doc.get("harvester", {}), f"{path} [harvester]")
-    road = from_mapping(RoadParams, doc.get("road", {}), f"{path} [road]")
+    from .problem import problem_from_mapping
+    phys_doc = {k: doc[k] for k in ("preset", "vehicle", "harvester", "friction", "road",
+                                    "simulation") if k in doc}
+    phys_doc.setdefault("road", {})
+    phys = problem_from_mapping(phys_doc, path)
+    base, road, sim = phys.harvester, phys.road, phys.simulation
     speeds = tuple(float(v) for v in _list(st, "speed_km_per_h", [road.speed_km_per_h], where))
     classes = tuple(str(c).upper() for c in _list(st, "iso_class", [road.iso_class], where))
     vnames = [str(v) for v in _list(st, "vehicle", ["passenger_car"], where)]
@@ -330,4 +363,5 @@ def parse_sweep(doc: Mapping[str, Any], path: str = "problem",
                 from None
     return SweepSpec(base=base, vehicles=vehicles, iso_classes=classes, speeds_km_per_h=speeds,
                      frictions=tuple(frictions), design=tuple(design),
-                     road_length_m=road.length_m, seed=road.seed)
+                     road_length_m=road.length_m, seed=road.seed, settle_s=sim.settle_s,
+                     sample_rate_hz=sim.sample_rate_hz)

@@ -36,7 +36,7 @@ def test_paper_problem_file_is_table_3():
     ({"goals": {"comfrt": 1.0}}, "did you mean 'comfort'"),
     ({"nsga2": {"pop": 2}}, "pop must be an integer >= 4"),
     ({"nsga2": {"pick": "preference"}}, "needs pick_weights"),
-    ({"vehicle": {"preset": "truck"}}, "unknown preset 'truck'"),
+    ({"preset": "truck"}, "unknown preset .truck."),
     ({"optimise": {}}, "did you mean 'optimize'|unknown key 'optimise'"),
 ])
 def test_bad_problem_files(doc, match):
