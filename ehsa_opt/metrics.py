@@ -271,30 +271,36 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
         fine, fd, sig = _mode_grid(m2, m1, k2, k1, meq, ke, kt, r, Rs, L, open_c, f_lo, f_hi)
         f = np.sort(np.concatenate([np.broadcast_to(base_grid, (fine.shape[0], base_grid.size)),
                                     fine], axis=1), axis=1)
-        s = 2j * math.pi * f
+        # Real arithmetic throughout (the complex algebra written out for speed).
+        w = 2.0 * math.pi * f
+        w2 = w * w
         col = lambda a: a[:, None]  # noqa: E731
-        y_el = np.where(col(open_c), 0.0, col(kk_r2) / (col(Rs) + s * col(L)))  # F/v electrical
-        dyn = k2 + s * (s * col(meq) + y_el)          # suspension dynamic stiffness D(s)
-        a11 = m2 * s * s + dyn
-        det = a11 * (m1 * s * s + dyn + k1) - dyn * dyn
-        # Transfer functions from road *velocity* (white): X/V0 = (X/X0)/s.
-        h2 = k1 * dyn / det                            # X2/X0
-        h1 = k1 * a11 / det                            # X1/X0
-        acc2 = s * h2                                  # ẍ2 / V0
-        tyre = (h1 - 1.0) / s                          # (x1 − x0) / V0
-        vrel = h2 - h1                                 # (ẋ2 − ẋ1) / V0
-        cur2 = np.abs(col(ke) * vrel / (col(r) * (col(Rs) + s * col(L)))) ** 2
-        cur2 = np.where(col(open_c), 0.0, cur2)
+        Rc, Lc = col(Rs), col(L)
+        den_e = Rc * Rc + w2 * Lc * Lc
+        gain = np.where(col(open_c), 0.0, col(kk_r2) / den_e)
+        yr, yi = gain * Rc, -gain * w * Lc              # electrical F/v = kk/(r²(R + jωL))
+        d_re = k2 - w2 * col(meq) - w * yi              # D = k2 + s (s m_eq + y_el)
+        d_im = w * yr
+        a_re = d_re - m2 * w2                           # a11 = D − m2 ω²
+        b_re = d_re - m1 * w2 + k1                      # a22 = D − m1 ω² + k1
+        det_re = a_re * b_re - d_im * d_im - (d_re * d_re - d_im * d_im)
+        det_im = (a_re + b_re) * d_im - 2.0 * d_re * d_im
+        det2 = det_re * det_re + det_im * det_im
+        acc2 = w2 * k1 * k1 * (d_re * d_re + d_im * d_im) / det2          # |ẍ2/V0|²
+        vrel2 = (k1 * m2) ** 2 * w2 * w2 / det2                            # |v/V0|²
+        t_re, t_im = k1 * a_re - det_re, k1 * d_im - det_im
+        tyre2 = (t_re * t_re + t_im * t_im) / (w2 * det2)                  # |(x1 − x0)/V0|²
+        cur2 = np.where(col(open_c), 0.0, col(ke / r) ** 2 * vrel2 / den_e)
         wk2 = wk_abs2(f)
         wq = _quadrature_weights(f, fd, sig) * phi_v
 
         def integ(y: np.ndarray) -> np.ndarray:
             return np.sum(y * wq, axis=1)
 
-        out["var_acc_w"][sl] = integ(wk2 * np.abs(acc2) ** 2)
-        out["var_tyre"][sl] = integ(np.abs(tyre) ** 2)
+        out["var_acc_w"][sl] = integ(wk2 * acc2)
+        out["var_tyre"][sl] = integ(tyre2)
         out["p_load"][sl] = np.where(open_c, 0.0, np.where(open_c, 0.0, Re) * integ(cur2))
-        out["p_diss"][sl] = integ(np.real(y_el) * np.abs(vrel) ** 2)
+        out["p_diss"][sl] = integ(yr * vrel2)
     acc_rms = np.sqrt(out["var_acc_w"])
     power = out["p_load"]
     with np.errstate(invalid="ignore", divide="ignore"):
