@@ -6,8 +6,9 @@ Prints
      single-design calls) for the speed-up of the vectorised pymoo Problem;
   2. hypervolume against evaluations (normalised F / F(prototype), reference 2);
   3. checkpoint/resume after 12 of 25 generations: pareto.csv identical?;
-  4. a sweep on 1 local job, 2 local processes and a Dask LocalCluster: times and
-     whether the tidy CSVs are identical.
+  4. a frequency-path sweep and 5. a time-domain friction sweep on 1 local job,
+     2 local processes and a Dask LocalCluster: times, speed-up against the single
+     job, and whether the tidy CSVs are identical.
 
 Run from the repository root:  python benchmarks/design_speed.py
 """
@@ -98,6 +99,28 @@ def main() -> None:
               f"{time.perf_counter() - t0:.2f} s")
     same = len(set(out.values())) == 1
     print(f"   identical tidy CSV on local, 2 processes and Dask: {same}")
+
+    # time-domain (friction) sweep: real work per task, so parallelism pays
+    doc = {"harvester": {"load_ohm": 47.0}, "road": {"length_m": 300.0},
+           "sweep": {"speed_km_per_h": [30.0, 70.0, 100.0, 130.0],
+                     "friction": ["min", "max"], "design": {"load_ohm": [20.0, 75.0, 250.0]}}}
+    spec = parse_sweep(doc, "benchmark-friction")
+    out = {}
+    times = {}
+    for name, kw in (("1 local job", {"jobs": 1}), ("2 local processes", {"jobs": 2})):
+        t0 = time.perf_counter()
+        out[name] = rows_to_csv(run_sweep(spec, **kw))
+        times[name] = time.perf_counter() - t0
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster:
+        t0 = time.perf_counter()
+        out["dask"] = rows_to_csv(run_sweep(spec, scheduler=cluster.scheduler_address))
+        times["Dask LocalCluster, 2 workers"] = time.perf_counter() - t0
+    base = times["1 local job"]
+    print(f"5. time-domain friction sweep, {spec.n_cases} cases ({len(spec.tasks())} tasks, "
+          f"300 m roads): " + ", ".join(f"{k} {v:.2f} s (x{base / v:.2f})"
+                                        for k, v in times.items()))
+    print(f"   identical tidy CSV: {len(set(out.values())) == 1}")
 
 
 if __name__ == "__main__":
