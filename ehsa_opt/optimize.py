@@ -92,6 +92,13 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
     from .reproduce import atomic_write_text
 
     method = check_method(method or cfg.method)
+    if method != "nsga2":
+        given = [n for n, v in (("--checkpoint", checkpoint), ("--resume", resume),
+                                ("--stop-after", stop_after), ("--pop", pop), ("--gens", gens))
+                 if v is not None]
+        if given:
+            raise ParameterError(f"{', '.join(given)} only apply to --method nsga2 (goal "
+                                 f"attainment takes a second or less and has no generations)")
     out = Path(out_dir)
     problem = build_problem(cfg, mapper)
     goals, weights, proto = goals_and_weights(cfg, problem)

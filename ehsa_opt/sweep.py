@@ -228,6 +228,27 @@ def _call(task: Callable[[], Any]) -> Any:
     return task()
 
 
+def _check_cluster_imports(client: Any, where: Any) -> None:
+    """Refuse a cluster whose scheduler or workers cannot import ehsa_opt (the
+    tasks are pickled by reference; Dask's scheduler unpickles the graph)."""
+    import importlib.util
+
+    def found(spec: Any) -> bool:
+        return spec is not None
+    try:
+        on_sched = found(client.run_on_scheduler(importlib.util.find_spec, "ehsa_opt"))
+        on_workers = {w: found(s) for w, s in client.run(importlib.util.find_spec,
+                                                         "ehsa_opt").items()}
+    except Exception as exc:  # pragma: no cover - cluster-specific failures
+        raise ParameterError(f"--scheduler {where}: cannot query the cluster ({exc})") from None
+    missing = ([] if on_sched else ["scheduler"]) + [w for w, ok in on_workers.items() if not ok]
+    if missing:
+        raise ParameterError(
+            f"--scheduler {where}: ehsa_opt is not importable on {', '.join(missing)}; install "
+            f"it there (pip install .) or start the scheduler and workers with "
+            f"PYTHONPATH=<repository root>")
+
+
 @contextlib.contextmanager
 def executor(jobs: int = 1, scheduler: Any = None
              ) -> Iterator[Callable[[Callable[..., Any], Sequence[Any]], list]]:
@@ -250,12 +271,18 @@ def executor(jobs: int = 1, scheduler: Any = None
         own = not isinstance(scheduler, Client)
         if own:
             try:
-                client = Client(scheduler, timeout=20)
+                client = Client(scheduler, timeout=10)
             except (OSError, TimeoutError, ValueError) as exc:
                 raise ParameterError(f"--scheduler {scheduler}: cannot connect ({exc}); check "
                                      f"the address, e.g. tcp://127.0.0.1:8786") from None
         else:
             client = scheduler
+        try:
+            _check_cluster_imports(client, scheduler)
+        except BaseException:
+            if own:
+                client.close()
+            raise
 
         def dask_map(fn: Callable[..., Any], items: Sequence[Any]) -> list:
             futures = client.map(fn, list(items), pure=False)

@@ -56,6 +56,9 @@ def test_cli_bad_input_exits_2(tmp_path, capsys):
     zero.write_text('[goals]\ncomfort = 0.0\n')
     assert main(["optimize", str(zero), "--out", str(tmp_path / "o")]) == 2
     assert "goal 0 and weight 0" in capsys.readouterr().err
+    assert main(["optimize", str(PAPER), "--method", "goal-attainment", "--resume", "x",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "only apply to --method nsga2" in capsys.readouterr().err
     assert not (tmp_path / "o" / "result.json").exists()
 
 
