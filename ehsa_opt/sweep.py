@@ -28,7 +28,8 @@ from __future__ import annotations
 import contextlib
 import itertools
 import math
-from dataclasses import asdict, dataclass, field
+import dataclasses
+from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
@@ -46,7 +47,7 @@ METRIC_COLUMNS: tuple[str, ...] = (
 
 #: Keys a sweep may vary in [sweep.design].
 DESIGN_KEYS: tuple[str, ...] = tuple(
-    [f.name for f in __import__("dataclasses").fields(HarvesterParams)]
+    [f.name for f in dataclasses.fields(HarvesterParams)]
     + ["total_inertia_gcm2", "speed_constant_rpm_per_V"])
 
 _CASE_KEYS = ("vehicle", "iso_class", "speed_km_per_h", "friction")
