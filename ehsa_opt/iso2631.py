@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike
 from scipy import optimize, signal
 
 __all__ = ["WK_PARAMETERS", "ISO2631_WK_TABLE", "wk_exact", "wk_abs2", "wk_exact_tf", "WkFit",
-           "wk_state_space", "wk_fit_error", "weighted_rms_fft"]
+           "wk_state_space", "wk_fit_error", "wk_filter", "weighted_rms_fft"]
 
 #: Filter parameters of W_k (ISO 2631-1 Table A.2), frequencies in Hz.
 WK_PARAMETERS: dict[str, float] = {
@@ -244,6 +244,28 @@ def wk_fit_error(order: int = 6, band_hz: tuple[float, float] = (0.5, 80.0)) -> 
     fit = wk_state_space(order, tuple(band_hz))
     return {"order": fit.order, "max_rel_error": fit.max_rel_error,
             "rms_rel_error": fit.rms_rel_error}
+
+
+def wk_filter(signal_: ArrayLike, sample_rate_hz: float, order: int = 6) -> np.ndarray:
+    """Causal time-domain W_k weighting with the low-order fit (Tustin discretisation).
+
+    Parameters
+    ----------
+    signal_ : array_like
+        Uniformly sampled acceleration, m/s².
+    sample_rate_hz : float
+        Sample rate, Hz (well above 2 × 80 Hz for the fit's band to be faithful).
+    order : int
+        Order of :func:`wk_state_space` (its error is reported by :func:`wk_fit_error`).
+
+    Returns
+    -------
+    ndarray
+        The weighted signal, m/s² (starts from rest, so discard an initial transient).
+    """
+    fit = wk_state_space(order)
+    b, a = signal.bilinear(fit.num, fit.den, fs=sample_rate_hz)
+    return signal.lfilter(b, a, np.asarray(signal_, dtype=float))
 
 
 def weighted_rms_fft(signal_: ArrayLike, sample_rate_hz: float) -> float:

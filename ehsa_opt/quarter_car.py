@@ -175,6 +175,53 @@ def _as_list(obj: Any, cls: type, n: int | None) -> list:
     return items
 
 
+_CHUNK_DESIGNS = 16
+
+
+def _window_metrics(zt: np.ndarray, y: np.ndarray, params: np.ndarray, x0_keep: np.ndarray,
+                    h: float, sample_rate_hz: float, vehicle: VehicleParams, speed: float,
+                    bound: float | None) -> dict[str, np.ndarray]:
+    """Metrics and energy-balance residual of a batch over the metric window."""
+    n_b = zt.shape[0]
+    # Energy balance over the window: road work = Δ stored + R i² + friction.
+    stored = np.array([QuarterCarModel.stored_energy(zt[b], x0_keep, params[:, b])
+                       for b in range(n_b)])
+    col = {name: i for i, name in enumerate(STEP_OUTPUT_NAMES)}
+    R = params[PARAM_NAMES.index("total_resistance_ohm")]
+    cur = zt[:, STATE_NAMES.index("current_A"), :]
+
+    def integral(sig: np.ndarray) -> np.ndarray:  # trapezoid over the window
+        return h * (np.sum(sig, axis=1) - 0.5 * (sig[:, 0] + sig[:, -1]))
+
+    work = np.sum(y[:, col["road_work_J"], 1:], axis=1)
+    e_r = integral(R[:, None] * cur ** 2)
+    e_f = integral(y[:, col["friction_power_W"], :])
+    d_stored = stored[:, -1] - stored[:, 0]
+    scale = np.maximum(np.abs(work), 1e-300)
+    residual = (work - d_stored - e_r - e_f) / scale
+    acc = y[:, col["sprung_acc_m_s2"], :]
+    acc_w = np.array([weighted_rms_fft(a, sample_rate_hz) for a in acc])
+    k1 = vehicle.tyre_stiffness_N_per_m
+    tyre = y[:, col["tyre_deflection_m"], :]
+    power = y[:, col["load_power_W"], :]
+    p_mean = power.mean(axis=1)
+    p_diss = y[:, col["damper_power_W"], :].mean(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        eff = np.where(p_diss > 0.0, p_mean / p_diss, 0.0)
+    return {
+        "comfort": acc_w / G,
+        "comfort_weighted_rms_m_s2": acc_w,
+        "road_holding": k1 * np.sqrt(np.mean(tyre ** 2, axis=1)) / (G * vehicle.total_mass_kg),
+        "power_W": p_mean,
+        "power_dimensionless": dimensionless_power(p_mean, vehicle, speed),
+        "efficiency": eff,
+        "dissipated_power_W": p_diss,
+        "dissipation_bound_W": np.full(n_b, np.nan if bound is None else bound),
+        "peak_power_W": power.max(axis=1),
+        "energy_residual": residual,
+    }
+
+
 def simulate_quarter_car(vehicle: VehicleParams,
                          harvester: HarvesterParams | Sequence[HarvesterParams] | None = None,
                          friction: FrictionParams | Sequence[FrictionParams] | None = None,
@@ -253,54 +300,22 @@ def simulate_quarter_car(vehicle: VehicleParams,
     params = np.stack([param_vector(vehicle, hh, ff) for hh, ff in zip(hs, fs_)], axis=1)
     z0 = np.zeros((len(STATE_NAMES), len(hs)))
     z0[0, :] = z0[1, :] = x_in[0]
-    t0 = time.perf_counter()
-    zt, y, compiled = simulate_batch(params, x_in, h, jit, z0)
-    wall = time.perf_counter() - t0
-    zt, y = zt[:, :, keep], y[:, :, keep]
     x0_keep = x_in[1:][keep]
-    # Energy balance over the window: road work = Δ stored + R i² + friction.
-    stored = np.array([QuarterCarModel.stored_energy(zt[b], x0_keep, params[:, b])
-                       for b in range(len(hs))])
-    z_start = zt[:, :, 0]
-    col = {name: i for i, name in enumerate(STEP_OUTPUT_NAMES)}
-    R = params[PARAM_NAMES.index("total_resistance_ohm")]
-    re = params[PARAM_NAMES.index("load_ohm")]
-    cur = zt[:, STATE_NAMES.index("current_A"), :]
-
-    def integral(sig: np.ndarray) -> np.ndarray:  # trapezoid over the window
-        return h * (np.sum(sig, axis=1) - 0.5 * (sig[:, 0] + sig[:, -1]))
-
-    work = np.sum(y[:, col["road_work_J"], 1:], axis=1)
-    e_r = integral(R[:, None] * cur ** 2)
-    e_f = integral(y[:, col["friction_power_W"], :])
-    d_stored = stored[:, -1] - stored[:, 0]
-    scale = np.maximum(np.abs(work), 1e-300)
-    residual = (work - d_stored - e_r - e_f) / scale
-    del z_start
-    # Metrics
-    acc = y[:, col["sprung_acc_m_s2"], :]
-    acc_w = np.array([weighted_rms_fft(a, sample_rate_hz) for a in acc])
-    k1 = vehicle.tyre_stiffness_N_per_m
-    tyre = y[:, col["tyre_deflection_m"], :]
-    power = y[:, col["load_power_W"], :]
-    p_mean = power.mean(axis=1)
-    p_diss = y[:, col["damper_power_W"], :].mean(axis=1)
-    v = profile.speed_m_per_s
     bound = dissipation_bound_W(vehicle, road_params) if road_params is not None else None
-    with np.errstate(invalid="ignore", divide="ignore"):
-        eff = np.where(p_diss > 0.0, p_mean / p_diss, 0.0)
-    metrics = {
-        "comfort": acc_w / G,
-        "comfort_weighted_rms_m_s2": acc_w,
-        "road_holding": k1 * np.sqrt(np.mean(tyre ** 2, axis=1)) / (G * vehicle.total_mass_kg),
-        "power_W": p_mean,
-        "power_dimensionless": dimensionless_power(p_mean, vehicle, v),
-        "efficiency": eff,
-        "dissipated_power_W": p_diss,
-        "dissipation_bound_W": np.full(len(hs), np.nan if bound is None else bound),
-        "peak_power_W": power.max(axis=1),
-        "energy_residual": residual,
-    }
+    # Without series, simulate in chunks of designs so memory stays bounded
+    # (14 doubles per design and step are produced by the compiled roll).
+    chunk = len(hs) if keep_series else _CHUNK_DESIGNS
+    parts, wall, compiled = [], 0.0, False
+    zt = y = None
+    for lo in range(0, len(hs), chunk):
+        sl = slice(lo, min(lo + chunk, len(hs)))
+        t0 = time.perf_counter()
+        zt, y, compiled = simulate_batch(params[:, sl], x_in, h, jit, z0[:, sl])
+        wall += time.perf_counter() - t0
+        zt, y = zt[:, :, keep], y[:, :, keep]
+        parts.append(_window_metrics(zt, y, params[:, sl], x0_keep, h, sample_rate_hz,
+                                     vehicle, profile.speed_m_per_s, bound))
+    metrics = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     finite = all(np.all(np.isfinite(a)) for k, a in metrics.items() if k != "dissipation_bound_W")
     msg = "ok" if finite else "non-finite results: the step diverged (check parameters)"
     if warn:
@@ -312,7 +327,6 @@ def simulate_quarter_car(vehicle: VehicleParams,
     if keep_series:
         series = {name: y[:, i, :] for i, name in enumerate(STEP_OUTPUT_NAMES)}
         series.update({name: zt[:, i, :] for i, name in enumerate(STATE_NAMES)})
-        del re
     n_keep = x0_keep.size
     return QuarterCarSimulation(
         success=finite, message=msg, metrics=metrics, time_s=np.arange(n_keep) * h + h,

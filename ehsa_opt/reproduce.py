@@ -212,9 +212,22 @@ STEPS: list[Step] = [
     Step("harvester", "Harvester equivalent quantities (paper Eqs 1–3)", _step_harvester),
     Step("bench_truth", "Bench model against the embedded data", _step_bench_truth,
          lambda ctx: _data_digest(_data_paths()[0])),
+    # Quarter car (issue 4): paper §4.1 and Fig 21
+    Step("qc_paths", "Quarter car: W_k, frequency vs time domain, dissipation bound",
+         lambda ctx: _quarter_car_step("step_quarter_car_paths", ctx), lambda ctx: ctx.quick),
+    Step("qc_fig13", "Quarter car: frequency responses, no/min/max friction (paper Fig 13)",
+         lambda ctx: _quarter_car_step("step_fig13", ctx), lambda ctx: _qc_inputs(ctx)),
+    Step("qc_fig14", "Harvester force–velocity loops and equivalent damping (paper Fig 14)",
+         lambda ctx: _quarter_car_step("step_fig14", ctx), lambda ctx: _qc_inputs(ctx)),
+    Step("qc_fig15_16", "Class C at 100 km/h with equal damping slopes (paper Figs 15/16)",
+         lambda ctx: _quarter_car_step("step_fig15_16", ctx), lambda ctx: _qc_inputs(ctx)),
+    Step("qc_fig21", "Power time history of the optimised design (paper Fig 21)",
+         lambda ctx: _quarter_car_step("step_fig21", ctx),
+         lambda ctx: [_qc_inputs(ctx), ctx.results.get("design", {}).get("optimum_harvester")]),
 ]
 
 
+<<<<<<< HEAD
 def _design_steps() -> list[Step]:
     from .design_report import (design_inputs, step_friction_on_optimum,
                                  step_goal_attainment, step_pareto)
@@ -230,6 +243,16 @@ def _design_steps() -> list[Step]:
 
 
 STEPS += _design_steps()
+=======
+def _quarter_car_step(name: str, ctx: Context) -> StepOutput:
+    from . import quarter_car_report
+    return getattr(quarter_car_report, name)(ctx)
+
+
+def _qc_inputs(ctx: Context) -> Any:
+    from .quarter_car_report import friction_inputs
+    return friction_inputs(ctx)
+>>>>>>> quartercar
 
 
 def _data_paths() -> list[Path]:

@@ -44,6 +44,23 @@ def test_wk_state_space_fit_is_stable_and_reports_its_error():
     assert wk_fit_error(4)["max_rel_error"] > wk_fit_error(6)["max_rel_error"]
 
 
+def test_time_domain_wk_filter_matches_exact_weighting_within_fit_error():
+    from ehsa_opt.iso2631 import weighted_rms_fft, wk_filter
+    rng = np.random.default_rng(0)
+    fs = 1000.0
+    x = rng.normal(size=60000)
+    # band-limit to 0.5–80 Hz (the fit's band) so the comparison is about the band
+    spec = np.fft.rfft(x)
+    f = np.fft.rfftfreq(x.size, 1 / fs)
+    spec[(f < 0.5) | (f > 80.0)] = 0.0
+    x = np.fft.irfft(spec, x.size)
+    exact = weighted_rms_fft(x, fs)
+    for order in (6, 8):
+        y = wk_filter(x, fs, order)[5000:]
+        tol = wk_fit_error(order)["max_rel_error"] + 0.02  # + Tustin warping and window
+        assert np.sqrt(np.mean(y ** 2)) == pytest.approx(exact, rel=tol)
+
+
 # ----------------------------------------------------------------------------- road PSD
 def test_road_psd_and_bound():
     assert road_psd_m3(0.1, "C") == pytest.approx(256e-6)

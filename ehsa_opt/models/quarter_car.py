@@ -30,7 +30,6 @@ Parameters: a flat vector in :data:`PARAM_NAMES` order (see
 from __future__ import annotations
 
 import math
-from typing import Sequence
 
 import casadi as ca
 import numpy as np
@@ -237,7 +236,3 @@ class QuarterCarModel:
         pot = 0.5 * (q["suspension_stiffness_N_per_m"] * (z[0] - z[1]) ** 2
                      + q["tyre_stiffness_N_per_m"] * (z[1] - x0) ** 2)
         return kin + pot + 0.5 * q["inductance_H"] * z[4] ** 2
-
-
-def _names(seq: Sequence[str]) -> str:  # pragma: no cover - helper for repr
-    return ", ".join(seq)

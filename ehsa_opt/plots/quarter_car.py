@@ -1,0 +1,169 @@
+"""Quarter-car figures: simulation overview, paper Figs 13, 14, 15/16, 21, W_k."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from . import plt
+
+__all__ = ["simulation_overview", "fig13_frequency_response", "fig14_force_velocity",
+           "fig15_road_study", "fig21_power_history", "wk_figure"]
+
+_CASE_COLOURS = {"none": "C0", "min": "C2", "max": "C3"}
+
+
+def simulation_overview(sim: Any, k: int = 0) -> Any:
+    """Road, sprung displacement, load power and force–velocity of design ``k``."""
+    s = sim.series
+    fig, ax = plt.subplots(2, 2, figsize=(10, 6))
+    t = sim.time_s
+    ax[0, 0].plot(t, 1e3 * sim.road_m, lw=0.6, color="0.4", label="road x0")
+    ax[0, 0].plot(t, 1e3 * s["x2_m"][k], lw=0.8, color="C0", label="sprung x2")
+    ax[0, 0].set_ylabel("displacement (mm)")
+    ax[0, 0].legend(fontsize=8)
+    ax[0, 1].plot(t, s["load_power_W"][k], lw=0.6, color="C1")
+    ax[0, 1].set_ylabel("power in R_e (W)")
+    ax[1, 0].plot(t, s["sprung_acc_m_s2"][k], lw=0.5, color="C4")
+    ax[1, 0].set_ylabel("sprung acceleration (m/s²)")
+    for a in (ax[0, 0], ax[0, 1], ax[1, 0]):
+        a.set_xlabel("time (s)")
+    ax[1, 1].plot(s["stroke_velocity_m_s"][k], s["damper_force_N"][k], ".", ms=1, color="C3")
+    ax[1, 1].set_xlabel("stroke velocity (m/s)")
+    ax[1, 1].set_ylabel("damper force w/o inertia (N)")
+    fig.suptitle(f"{sim.road_source}: design {k}")
+    fig.tight_layout()
+    return fig
+
+
+def fig13_frequency_response(study: Any) -> Any:
+    """Paper Fig 13: generator voltage and sprung-mass transmissibility vs frequency."""
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    styles = ["-", "--", ":", "-."]
+    for i, case in enumerate(study.cases):
+        for j, load in enumerate(study.loads_ohm):
+            kw = dict(color=_CASE_COLOURS.get(case, f"C{i}"), ls=styles[j % 4], lw=1.2,
+                      label=f"{case} friction, R_e = {load:g} Ω")
+            ax[0].loglog(study.frequencies_hz, study.voltage_amplitude_V[i, j], **kw)
+            ax[1].loglog(study.frequencies_hz, study.sprung_transmissibility[i, j], **kw)
+    ax[0].set_ylabel("generator voltage amplitude (V)")
+    ax[1].set_ylabel("sprung displacement / road amplitude (–)")
+    for a in ax:
+        a.set_xlabel("road frequency (Hz)")
+        a.grid(True, which="both", alpha=0.3)
+    ax[1].legend(fontsize=7, ncol=1)
+    fig.suptitle(f"Stepped sine, road amplitude {1e3 * study.amplitude_m:g} mm "
+                 f"(friction: {study.friction_source})", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def fig14_force_velocity(study: Any) -> Any:
+    """Paper Fig 14: force–velocity loops, open and short circuit, min/max friction."""
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    for i, circuit in enumerate(("open circuit", "short circuit")):
+        for case in ("min", "max"):
+            v, f = study.loops[(circuit, case)]
+            c = study.equivalent_damping_Ns_per_m[(circuit, case)]
+            ax[i].plot(v, f, color=_CASE_COLOURS[case], lw=1.2,
+                       label=f"{case} friction: c_eq = {c:.0f} N s/m")
+        ax[i].set_title(circuit)
+        ax[i].set_xlabel("velocity (m/s)")
+        ax[i].set_ylabel("force (N)")
+        ax[i].grid(True, alpha=0.3)
+        ax[i].legend(fontsize=8)
+    fig.suptitle(f"Sine stroke {1e3 * study.amplitude_m:g} mm at {study.frequency_hz:g} Hz "
+                 f"(friction: {study.friction_source})", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def fig15_road_study(study: Any) -> Any:
+    """Paper Figs 15/16: road PSD, sprung displacement, power, stroke-velocity PSD, F–v."""
+    sim = study.sim
+    fig, ax = plt.subplots(3, 2, figsize=(11, 9.5))
+    rp = study.road_psd
+    band = (rp["n_cycles_per_m"] >= 0.01) & (rp["n_cycles_per_m"] <= 10.0)
+    ax[0, 0].loglog(rp["n_cycles_per_m"][band], rp["synth_m3"][band], lw=0.8, color="0.4",
+                    label="synthesised (Welch)")
+    ax[0, 0].loglog(rp["n_cycles_per_m"][band], rp["target_m3"][band], lw=1.5, color="k",
+                    ls="--", label="ISO 8608 target")
+    ax[0, 0].set_xlabel("spatial frequency (cycles/m)")
+    ax[0, 0].set_ylabel("G_d (m³)")
+    ax[0, 0].legend(fontsize=8)
+    t = sim.time_s
+    n_show = min(t.size, int(5.0 * sim.stats["sample_rate_hz"]))
+    for i, case in enumerate(study.cases):
+        col = _CASE_COLOURS.get(case, f"C{i}")
+        lab = f"{case} (R_e = {study.loads_ohm[i]:.3g} Ω)"
+        ax[0, 1].plot(t[:n_show], 1e3 * sim.series["x2_m"][i, :n_show], color=col, lw=0.8,
+                      label=lab)
+        ax[1, 0].plot(t[:n_show], sim.series["load_power_W"][i, :n_show], color=col, lw=0.7,
+                      label=f"{case}: mean {sim.metrics['power_W'][i]:.1f} W")
+        fsel = (study.stroke_velocity_psd["f_hz"] > 0) & (study.stroke_velocity_psd["f_hz"] <= 100)
+        ax[1, 1].loglog(study.stroke_velocity_psd["f_hz"][fsel],
+                        study.stroke_velocity_psd["psd"][i][fsel], color=col, lw=0.8, label=case)
+        ax[2, 0].plot(sim.series["stroke_velocity_m_s"][i], sim.series["damper_force_N"][i],
+                      ".", ms=0.8, color=col, alpha=0.5)
+        vv = np.linspace(sim.series["stroke_velocity_m_s"][i].min(),
+                         sim.series["stroke_velocity_m_s"][i].max(), 2)
+        ax[2, 0].plot(vv, study.slopes_Ns_per_m[i] * vv, color=col, lw=1.2,
+                      label=f"{case}: slope {study.slopes_Ns_per_m[i]:.0f} N s/m")
+    ax[0, 1].set_ylabel("sprung displacement (mm)")
+    ax[0, 1].set_xlabel("time (s)")
+    ax[0, 1].legend(fontsize=7)
+    ax[1, 0].set_ylabel("instantaneous power in R_e (W)")
+    ax[1, 0].set_xlabel("time (s)")
+    ax[1, 0].legend(fontsize=7)
+    ax[1, 1].set_xlabel("frequency (Hz)")
+    ax[1, 1].set_ylabel("stroke velocity PSD ((m/s)²/Hz)")
+    ax[1, 1].legend(fontsize=7)
+    ax[2, 0].set_xlabel("stroke velocity (m/s)")
+    ax[2, 0].set_ylabel("damper force w/o inertia (N)")
+    ax[2, 0].legend(fontsize=7)
+    drops = study.power_drop_percent()
+    txt = "\n".join(f"{c}: P = {sim.metrics['power_W'][i]:.1f} W ({drops[c]:+.1f} %), "
+                    f"η = {100 * sim.metrics['efficiency'][i]:.1f} %, "
+                    f"α = {sim.metrics['comfort'][i]:.3f}, η_rh = {sim.metrics['road_holding'][i]:.3f}"
+                    for i, c in enumerate(study.cases))
+    ax[2, 1].axis("off")
+    ax[2, 1].text(0.0, 0.9, txt, va="top", fontsize=8, family="monospace")
+    fig.suptitle(f"{study.title} — {sim.road_source} (friction: {study.friction_source})",
+                 fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def fig21_power_history(study: Any, seconds: float = 10.0) -> Any:
+    """Paper Fig 21: instantaneous power, no/min/max friction."""
+    sim = study.sim
+    fig, ax = plt.subplots(figsize=(10, 3.8))
+    n = min(sim.time_s.size, int(seconds * sim.stats["sample_rate_hz"]))
+    for i, case in enumerate(study.cases):
+        ax.plot(sim.time_s[:n], sim.series["load_power_W"][i, :n],
+                color=_CASE_COLOURS.get(case, f"C{i}"), lw=0.7,
+                label=f"{case}: mean {sim.metrics['power_W'][i]:.1f} W, peak "
+                      f"{sim.metrics['peak_power_W'][i]:.0f} W")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("power in R_e (W)")
+    ax.legend(fontsize=8)
+    ax.set_title(f"{study.title} — {sim.road_source}", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def wk_figure(f_hz: np.ndarray, exact: np.ndarray, fit: np.ndarray, table: dict,
+              label: str) -> Any:
+    """|W_k| exact, its low-order fit, and the standard's table values."""
+    fig, ax = plt.subplots(figsize=(6.5, 3.8))
+    ax.loglog(f_hz, exact, color="k", lw=1.5, label="exact W_k (H_h·H_l·H_t·H_s)")
+    ax.loglog(f_hz, fit, color="C1", ls="--", lw=1.2, label=label)
+    ax.loglog(list(table), list(table.values()), "o", ms=4, color="C0",
+              label="ISO 2631-1 table")
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("|W_k|")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig

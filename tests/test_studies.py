@@ -1,0 +1,74 @@
+"""Paper §4.1 studies: quick runs that check physics, not just that they run."""
+
+import numpy as np
+import pytest
+
+from ehsa_opt.params import FRICTION_NAMES, HarvesterParams, RoadParams, VehicleParams
+from ehsa_opt.studies import (force_velocity_loops, friction_cases, paper_optimum_harvester,
+                              road_study, stepped_sine_response)
+
+
+def test_friction_cases_use_identification_when_given():
+    default = friction_cases(None)
+    assert default.cases["none"] is None
+    assert default.cases["min"].nut_coulomb_N == pytest.approx(
+        0.3 * default.cases["max"].nut_coulomb_N)
+    assert "TRUE friction" in default.source
+    ident = {"friction_min": {k: getattr(default.cases["min"], k) for k in FRICTION_NAMES},
+             "friction_max": {k: getattr(default.cases["max"], k) * (2 if "velocity" not in k
+                                                                     else 1)
+                              for k in FRICTION_NAMES}}
+    got = friction_cases(ident)
+    assert "identified" in got.source
+    as_lists = friction_cases({k: [v[n] for n in FRICTION_NAMES] for k, v in ident.items()})
+    assert as_lists.cases["max"] == got.cases["max"]
+    assert got.cases["max"].nut_coulomb_N == pytest.approx(2 * default.cases["max"].nut_coulomb_N)
+
+
+def test_force_velocity_equivalent_damping():
+    fc = friction_cases(None)
+    h = HarvesterParams()
+    study = force_velocity_loops(h, fc)
+    c = study.equivalent_damping_Ns_per_m
+    assert c[("open circuit", "min")] < c[("open circuit", "max")]
+    # short circuit = electrical K²/(r² R_i) (inductance negligible at 1.5 Hz) + friction
+    elec = h.equivalent_damping_Ns_per_m(2 * np.pi * 1.5, 0.0)
+    for case in ("min", "max"):
+        assert c[("short circuit", case)] - c[("open circuit", case)] == pytest.approx(elec,
+                                                                                       rel=0.02)
+
+
+def test_stepped_sine_frictionless_matches_linear_transmissibility():
+    fc = friction_cases(None)
+    vehicle, h = VehicleParams(), HarvesterParams(load_ohm=47.0)
+    freqs = np.array([0.8, 3.0, 10.0])
+    study = stepped_sine_response(vehicle, h, fc, [47.0], freqs, amplitude_m=0.01,
+                                  settle_min_s=4.0)
+    # linear transmissibility |X2/X0| from Eqs 2–3 with the full impedance
+    from ehsa_opt.models.harvester import equivalent_impedance
+    w = 2 * np.pi * freqs
+    s = 1j * w
+    dyn = vehicle.suspension_stiffness_N_per_m + s * equivalent_impedance(h, w)
+    a11 = vehicle.sprung_mass_kg * s ** 2 + dyn
+    det = a11 * (vehicle.unsprung_mass_kg * s ** 2 + dyn + vehicle.tyre_stiffness_N_per_m) \
+        - dyn ** 2
+    lin = np.abs(vehicle.tyre_stiffness_N_per_m * dyn / det)
+    none = study.cases.index("none")
+    assert np.allclose(study.sprung_transmissibility[none, 0], lin, rtol=0.01)
+    # friction lowers the generator voltage at every frequency
+    mx = study.cases.index("max")
+    assert np.all(study.voltage_amplitude_V[mx, 0] < study.voltage_amplitude_V[none, 0])
+
+
+def test_road_study_retunes_to_equal_slopes_and_friction_costs_power():
+    fc = friction_cases(None)
+    study = road_study(VehicleParams(), HarvesterParams(load_ohm=10.0), fc,
+                       RoadParams(length_m=150.0), n_loads=10)
+    assert all(study.reachable)
+    assert np.allclose(study.slopes_Ns_per_m, study.target_slope_Ns_per_m, rtol=0.02)
+    assert study.loads_ohm[0] < study.loads_ohm[1] < study.loads_ohm[2]
+    p = study.average_power_W
+    assert p[0] > p[1] > p[2]
+    fixed = road_study(VehicleParams(), paper_optimum_harvester(), fc, RoadParams(length_m=150.0),
+                       retune=False)
+    assert fixed.loads_ohm == [75.0, 75.0, 75.0]
