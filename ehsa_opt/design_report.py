@@ -54,7 +54,10 @@ def _cfg() -> Any:
 
 
 def step_goal_attainment(ctx: Context) -> StepOutput:
+    """Goal attainment on the paper's problem; results carry ``design`` and
+    ``optimum_harvester`` (HarvesterParams fields, read by the Fig 21 step)."""
     from . import plots
+    from .params import HarvesterParams
     from .optimize import build_problem, objectives_at, optimize
     from .plots.design import goal_attainment_history
 
@@ -154,7 +157,12 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         f"its power/efficiency is worse. Vehicle, road seed and R_e of the prototype are "
         f"our assumptions (SPEC §4, §6), so absolute values differ from the paper's.\n\n"
         + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
+    from dataclasses import asdict
+    h_opt = HarvesterParams.from_design(d["total_inertia_gcm2"], d["lead_mm_per_rev"],
+                                        d["speed_constant_rpm_per_V"], d["load_ohm"],
+                                        base=cfg.harvester)
     res = {"design": d, "objectives": out["objectives"], "metrics": om, "gamma": ga.gamma,
+           "optimum_harvester": asdict(h_opt),
            "prototype": {"objectives": proto, "metrics": pm}, "success": ga.success,
            "at_lower_bound": at_lower, "binding": binding, "paper_design_in_our_model": pd_out}
     return StepOutput(md, figs, res)
@@ -224,7 +232,7 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
     from .sweep import default_friction_sets
 
     cfg = _cfg()
-    ga = ctx.results.get("design_goal_attainment", {}).get("design")  # noqa: the GA step
+    ga = ctx.results.get("design", {}).get("design")  # the goal-attainment step
     if ga is None:
         from .optimize import optimize
         ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")["design"]

@@ -227,23 +227,6 @@ STEPS: list[Step] = [
 ]
 
 
-<<<<<<< HEAD
-def _design_steps() -> list[Step]:
-    from .design_report import (design_inputs, step_friction_on_optimum,
-                                 step_goal_attainment, step_pareto)
-    return [
-        Step("design_goal_attainment", "Optimal design by goal attainment (paper §4.2, Figs 17–19)",
-             step_goal_attainment, design_inputs),
-        Step("design_pareto", "Pareto front of the design problem (NSGA-II)", step_pareto,
-             design_inputs),
-        Step("design_friction", "Friction on the optimised design (paper Fig 20, Table 4)",
-             step_friction_on_optimum, design_inputs,
-             depends=("design_goal_attainment",)),
-    ]
-
-
-STEPS += _design_steps()
-=======
 def _quarter_car_step(name: str, ctx: Context) -> StepOutput:
     from . import quarter_car_report
     return getattr(quarter_car_report, name)(ctx)
@@ -252,7 +235,25 @@ def _quarter_car_step(name: str, ctx: Context) -> StepOutput:
 def _qc_inputs(ctx: Context) -> Any:
     from .quarter_car_report import friction_inputs
     return friction_inputs(ctx)
->>>>>>> quartercar
+
+
+def _design_steps() -> list[Step]:
+    from .design_report import (design_inputs, step_friction_on_optimum,
+                                 step_goal_attainment, step_pareto)
+    return [
+        Step("design", "Optimal design by goal attainment (paper §4.2, Figs 17–19)",
+             step_goal_attainment, design_inputs),
+        Step("design_pareto", "Pareto front of the design problem (NSGA-II)", step_pareto,
+             design_inputs),
+        Step("design_friction", "Friction on the optimised design (paper Fig 20, Table 4)",
+             step_friction_on_optimum,
+             lambda ctx: [design_inputs(ctx), _qc_inputs(ctx)], depends=("design",)),
+    ]
+
+
+# The design steps go before the Fig 21 step, which simulates the design step's optimum.
+_fig21 = next((k for k, s in enumerate(STEPS) if s.key == "qc_fig21"), len(STEPS))
+STEPS[_fig21:_fig21] = _design_steps()
 
 
 def _data_paths() -> list[Path]:

@@ -55,24 +55,13 @@ _CASE_KEYS = ("vehicle", "iso_class", "speed_km_per_h", "friction")
 
 def default_friction_sets(identification: Mapping[str, Any] | None = None
                           ) -> tuple[dict[str, FrictionParams], str]:
-    """Friction sets 'min' and 'max' and a note on where they come from.
-
-    From the identification step's bounds when given (``friction_min`` /
-    ``friction_max`` dicts of :data:`~ehsa_opt.params.FRICTION_NAMES`); otherwise
-    the embedded data set's true friction as 'max' and the same scaled by 0.5 in
-    forces/torques and viscous terms as 'min' (labelled as such).
-    """
-    if identification and "friction_min" in identification and "friction_max" in identification:
-        return ({"min": FrictionParams(**identification["friction_min"]),
-                 "max": FrictionParams(**identification["friction_max"])},
-                "identified bounds (identification step)")
-    from .datasets import embedded_data_dir, load_truth
-    truth = load_truth(embedded_data_dir("bench_prototype"))
-    fmax = FrictionParams(**truth["friction"])
-    scaled = {k: (v if "velocity" in k else 0.5 * v) for k, v in fmax.as_dict().items()}
-    return ({"min": FrictionParams(**scaled), "max": fmax},
-            "embedded data set truth as 'max', 0.5 × its forces/torques/viscous terms as "
-            "'min' (no identification results available)")
+    """Friction sets 'min' and 'max' and a note on where they come from
+    (:func:`ehsa_opt.studies.friction_cases`: the identification step's bounds
+    when given, else the embedded data set's true friction as 'max' and a scaled
+    copy as 'min', labelled)."""
+    from .studies import friction_cases
+    fc = friction_cases(identification)
+    return {k: v for k, v in fc.cases.items() if v is not None}, fc.source
 
 
 @dataclass(frozen=True)
