@@ -81,6 +81,107 @@ def _cmd_bench_convert_emps(args: argparse.Namespace) -> int:
     return 0
 
 
+# ------------------------------------------------------------------ design
+def _design_figures(outcome: dict, out_dir: Path) -> list[Path]:
+    """Figures of an optimize run (goal-attainment history, front)."""
+    from . import plots
+    from .plots import design as pd
+
+    figs = []
+    ga = getattr(outcome, "goal_attainment", None)
+    if ga is not None:
+        for which, name in (("design", "ga_design_history.png"),
+                            ("mass", "ga_equivalent_mass.png"),
+                            ("objectives", "ga_objective_history.png")):
+            figs.append(plots.save(pd.goal_attainment_history(ga, which), out_dir / name))
+    res = outcome.result
+    if outcome["method"] == "nsga2" and res is not None and len(res.F):
+        ga_pt = outcome.get("goal_attainment", {}).get("objectives")
+        proto = outcome["prototype"]["objectives"]
+        figs.append(plots.save(pd.pareto_projections(res, ga_pt, proto),
+                               out_dir / "pareto_projections.png"))
+        ga_full = None
+        if ga_pt is not None:
+            ga_full = {**outcome["goal_attainment"]["design"], **ga_pt}
+        figs.append(plots.save(pd.parallel_coordinates(res, ga_full),
+                               out_dir / "parallel_coordinates.png"))
+        figs.append(plots.save(pd.hypervolume_history({"NSGA-II": res.history},
+                                                      res.hv_reference),
+                               out_dir / "hypervolume.png"))
+    return figs
+
+
+def _cmd_optimize(args: argparse.Namespace) -> int:
+    from .design_config import check_method, load_design_config
+    from .optimize import check_out_dir, optimize
+    from .progress import progress_bar
+    from .sweep import executor
+
+    cfg = load_design_config(args.problem)
+    method = check_method(args.method or cfg.method)
+    out = check_out_dir(args.out)
+    gens = args.gens or cfg.nsga2.gens
+    import contextlib
+    bar_cm = (progress_bar(total=gens, desc="generations", unit="gen") if method == "nsga2"
+              else contextlib.nullcontext())
+    with executor(1, args.scheduler) as mapper, bar_cm as bar:
+        def tick(done: int, total: int) -> None:
+            if bar is not None:
+                bar.n = done
+                bar.refresh()
+        outcome = optimize(cfg, method, out_dir=out, pop=args.pop, gens=args.gens,
+                           seed=args.seed, checkpoint=args.checkpoint, resume=args.resume,
+                           stop_after=args.stop_after,
+                           mapper=mapper if args.scheduler else None, progress=tick)
+    _design_figures(outcome, out / "figures")
+    d, o = outcome["design"], outcome["objectives"]
+    m = outcome["metrics"]
+    print(f"{method}: {outcome['message']}")
+    print("design: " + ", ".join(f"{k} = {v:.4g}" for k, v in d.items()))
+    print("objectives: " + ", ".join(f"{k} = {v:.4g}" for k, v in o.items()))
+    if "power_W" in m:
+        print(f"power {m['power_W']:.1f} W, efficiency {100 * m['efficiency']:.1f} %, "
+              f"W_k rms {m.get('comfort_weighted_rms_m_s2', float('nan')):.3f} m/s^2")
+    if "gamma" in outcome:
+        print(f"attainment factor gamma = {outcome['gamma']:+.4f}")
+    if method == "nsga2":
+        hv = outcome["hypervolume"]["history"]
+        print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
+              f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
+              f"{outcome.get('front_vs_goal_attainment')}")
+    print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
+                                            else ""))
+    return 0 if outcome["success"] or args.stop_after else 1
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from . import plots
+    from .params import load_toml
+    from .plots.design import sweep_lines
+    from .reproduce import atomic_write_text
+    from .sweep import parse_sweep, rows_to_csv, run_sweep
+    import time
+
+    spec = parse_sweep(load_toml(args.problem), args.problem)
+    t0 = time.perf_counter()
+    rows = run_sweep(spec, jobs=args.jobs, scheduler=args.scheduler)
+    dt = time.perf_counter() - t0
+    out = Path(args.out)
+    atomic_write_text(out / "sweep.csv", rows_to_csv(rows))
+    hue = [k for k in ("vehicle", "iso_class", "friction") if
+           len({r[k] for r in rows}) > 1] + [k for k, _ in spec.design]
+    ys = ["power_W", "efficiency", "comfort_weighted_rms_m_s2", "road_holding"]
+    if len(spec.speeds_km_per_h) > 1:
+        plots.save(sweep_lines(rows, "speed_km_per_h", ys, hue), out / "sweep.png")
+    elif spec.design:
+        x = spec.design[0][0]
+        plots.save(sweep_lines(rows, x, ys, [h for h in hue if h != x] or ["vehicle"]),
+                   out / "sweep.png")
+    where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
+    print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
+    return 0
+
+
 # ------------------------------------------------------------------ reproduce
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .reproduce import reproduce
@@ -162,6 +263,32 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("out_dir", metavar="OUT_DIR")
     e.add_argument("--overwrite", action="store_true")
     e.set_defaults(func=_cmd_bench_convert_emps)
+
+    o = sub.add_parser("optimize", help="optimal design: goal attainment or NSGA-II front")
+    o.add_argument("problem", metavar="PROBLEM.toml")
+    o.add_argument("--method", default=None,
+                   help="goal-attainment or nsga2 (default: [design] method of the file)")
+    o.add_argument("--pop", type=int, default=None, help="NSGA-II population (default [nsga2])")
+    o.add_argument("--gens", type=int, default=None, help="NSGA-II generations (total)")
+    o.add_argument("--seed", type=int, default=None, help="NSGA-II seed")
+    o.add_argument("--checkpoint", default=None, metavar="DIR",
+                   help="save the NSGA-II state after every generation (atomic)")
+    o.add_argument("--resume", default=None, metavar="DIR",
+                   help="continue an NSGA-II run from its checkpoint")
+    o.add_argument("--stop-after", type=int, default=None, metavar="G",
+                   help="stop after G generations (as if interrupted; resume later)")
+    o.add_argument("--scheduler", default=None, metavar="ADDR",
+                   help="evaluate populations on a Dask cluster, e.g. tcp://127.0.0.1:8786")
+    o.add_argument("--out", required=True, metavar="OUT_DIR")
+    o.set_defaults(func=_cmd_optimize)
+
+    w = sub.add_parser("sweep", help="design-space study: [sweep] grid, tidy CSV + figure")
+    w.add_argument("problem", metavar="PROBLEM.toml")
+    w.add_argument("--jobs", type=int, default=1, help="local worker processes (default 1)")
+    w.add_argument("--scheduler", default=None, metavar="ADDR",
+                   help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
+    w.add_argument("--out", required=True, metavar="OUT_DIR")
+    w.set_defaults(func=_cmd_sweep)
 
     s = sub.add_parser("simulate", help="simulate a quarter car with the harvester on a road")
     s.add_argument("problem", metavar="PROBLEM.toml")

@@ -23,7 +23,8 @@ import numpy as np
 from . import __version__
 from .progress import progress_bar
 
-__all__ = ["Step", "StepOutput", "Context", "STEPS", "reproduce", "atomic_write_text"]
+__all__ = ["Step", "StepOutput", "Context", "STEPS", "reproduce", "atomic_write_text",
+           "atomic_write_bytes"]
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:
@@ -34,6 +35,22 @@ def atomic_write_text(path: str | Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` via a temporary file, fsync and rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -219,6 +236,25 @@ def _quarter_car_step(name: str, ctx: Context) -> StepOutput:
 def _qc_inputs(ctx: Context) -> Any:
     from .quarter_car_report import friction_inputs
     return friction_inputs(ctx)
+
+
+def _design_steps() -> list[Step]:
+    from .design_report import (design_inputs, step_friction_on_optimum,
+                                 step_goal_attainment, step_pareto)
+    return [
+        Step("design", "Optimal design by goal attainment (paper §4.2, Figs 17–19)",
+             step_goal_attainment, design_inputs),
+        Step("design_pareto", "Pareto front of the design problem (NSGA-II)", step_pareto,
+             design_inputs),
+        Step("design_friction", "Friction on the optimised design (paper Fig 20, Table 4)",
+             step_friction_on_optimum,
+             lambda ctx: [design_inputs(ctx), _qc_inputs(ctx)], depends=("design",)),
+    ]
+
+
+# The design steps go before the Fig 21 step, which simulates the design step's optimum.
+_fig21 = next((k for k, s in enumerate(STEPS) if s.key == "qc_fig21"), len(STEPS))
+STEPS[_fig21:_fig21] = _design_steps()
 
 
 def _data_paths() -> list[Path]:

@@ -1,0 +1,221 @@
+"""Figures of design studies: goal-attainment histories (paper Figs 17–19), Pareto
+fronts (2-D projections, parallel coordinates, hypervolume), friction on the
+optimum (paper Fig 20) and sweeps."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping, Sequence
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+__all__ = ["goal_attainment_history", "pareto_projections", "parallel_coordinates",
+           "hypervolume_history", "friction_on_optimum", "sweep_lines"]
+
+_LABELS = {
+    "total_inertia_gcm2": "J_t (g cm²)", "lead_mm_per_rev": "lead (mm/rev)",
+    "speed_constant_rpm_per_V": "k_n (rpm/V)", "load_ohm": "R_e (Ω)",
+    "comfort": "α (comfort)", "road_holding": "η_rh (road holding)",
+    "inverse_power": "1/ρ_g", "inverse_efficiency": "1/η_g",
+    "power_W": "power (W)", "efficiency": "efficiency (–)",
+    "comfort_weighted_rms_m_s2": "W_k rms accel. (m/s²)",
+}
+
+
+def _label(k: str) -> str:
+    return _LABELS.get(k, k)
+
+
+def _equivalent_mass(d: Mapping[str, float]) -> float:
+    r = d["lead_mm_per_rev"] * 1e-3 / (2 * math.pi)
+    return d["total_inertia_gcm2"] * 1e-7 / r ** 2
+
+
+def goal_attainment_history(res: Any, which: str = "design") -> Any:
+    """Per SLSQP iteration: ``which='design'`` the design variables (paper Fig 17),
+    ``'mass'`` the equivalent mass m_eq (Fig 18), ``'objectives'`` comfort, road
+    holding, power and efficiency (Fig 19)."""
+    hist = res.history
+    it = np.arange(len(hist))
+    if which == "mass":
+        fig, ax = plt.subplots(figsize=(5.5, 3.2))
+        if "total_inertia_gcm2" in hist[0]["design"] and "lead_mm_per_rev" in hist[0]["design"]:
+            ax.plot(it, [_equivalent_mass(h["design"]) for h in hist], "o-", ms=3)
+        ax.set_xlabel("iteration")
+        ax.set_ylabel("m_eq = J_t / r² (kg)")
+        ax.grid(alpha=0.3)
+        ax.set_title("Equivalent mass per iteration (cf. paper Fig 18)", fontsize=9)
+        fig.tight_layout()
+        return fig
+    if which == "design":
+        keys = list(hist[0]["design"])
+        series = {k: [h["design"][k] for h in hist] for k in keys}
+        title = "Design variables per iteration (cf. paper Fig 17)"
+    elif which == "objectives":
+        o = hist[0]["objectives"]
+        keys = [k for k in ("comfort", "road_holding", "power_W", "efficiency") if k in o] \
+            or list(res.objective_names)
+        series = {k: [h["objectives"][k] for h in hist] for k in keys}
+        if "efficiency" in series:
+            series["efficiency"] = [100 * v for v in series["efficiency"]]
+        title = "Objectives per iteration (cf. paper Fig 19)"
+    else:
+        raise ValueError(f"goal_attainment_history: which='{which}' unknown (design, mass, "
+                         f"objectives)")
+    n = len(keys)
+    cols = 2 if n > 1 else 1
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(8, 2.4 * rows), squeeze=False)
+    for ax, k in zip(axes.ravel(), keys):
+        ax.plot(it, series[k], "o-", ms=3)
+        ax.set_ylabel("efficiency (%)" if k == "efficiency" else _label(k), fontsize=8)
+        ax.grid(alpha=0.3)
+        if k in ("total_inertia_gcm2", "speed_constant_rpm_per_V", "load_ohm"):
+            ax.set_yscale("log")
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel("iteration")
+    start = res.stats.get("chosen_start", 0)
+    fig.suptitle(f"{title}; γ = {res.gamma:+.4f} (start {'prototype' if start == 0 else start + 1})",
+                 fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def pareto_projections(pr: Any, ga: Mapping[str, float] | None = None,
+                       prototype: Mapping[str, float] | None = None) -> Any:
+    """All 2-D projections of the front, with the pick, the goal-attainment point
+    and the prototype."""
+    names = list(pr.objective_names)
+    pairs = [(i, j) for i in range(len(names)) for j in range(i + 1, len(names))]
+    cols = 3 if len(pairs) > 2 else len(pairs)
+    rows = math.ceil(len(pairs) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.3 * rows), squeeze=False)
+    for ax, (i, j) in zip(axes.ravel(), pairs):
+        ax.scatter(pr.F[:, i], pr.F[:, j], s=12, c="0.5", label="NSGA-II front")
+        k = pr.preferred
+        ax.scatter(pr.F[k, i], pr.F[k, j], s=60, marker="D", c="C2", label=f"{pr.pick} pick")
+        if ga is not None:
+            ax.scatter(ga[names[i]], ga[names[j]], s=90, marker="*", c="C3",
+                       label="goal attainment")
+        if prototype is not None:
+            ax.scatter(prototype[names[i]], prototype[names[j]], s=40, marker="s", c="C0",
+                       label="prototype")
+        ax.set_xlabel(_label(names[i]), fontsize=8)
+        ax.set_ylabel(_label(names[j]), fontsize=8)
+        ax.grid(alpha=0.3)
+    for ax in axes.ravel()[len(pairs):]:
+        ax.set_visible(False)
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle("Pareto front, 2-D projections (all objectives minimised)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def parallel_coordinates(pr: Any, ga: Mapping[str, float] | None = None) -> Any:
+    """Design variables and objectives of every front point, each axis scaled to
+    the front's range (log axes for log-scaled spans)."""
+    keys = list(pr.designs) + list(pr.objective_names)
+    data = np.column_stack([np.asarray(pr.designs[k], float) for k in pr.designs] + [pr.F])
+    lo, hi = data.min(axis=0), data.max(axis=0)
+    if ga is not None:
+        g = np.array([ga[k] for k in keys], float)
+        lo, hi = np.minimum(lo, g), np.maximum(hi, g)
+    logs = (lo > 0) & (hi / np.where(lo > 0, lo, 1) > 20)
+
+    def norm(v: np.ndarray) -> np.ndarray:
+        a = np.where(logs, np.log(np.maximum(v, 1e-300)), v)
+        l0 = np.where(logs, np.log(np.maximum(lo, 1e-300)), lo)
+        h0 = np.where(logs, np.log(np.maximum(hi, 1e-300)), hi)
+        return (a - l0) / np.where(h0 > l0, h0 - l0, 1.0)
+    fig, ax = plt.subplots(figsize=(9, 4))
+    x = np.arange(len(keys))
+    cmap = plt.get_cmap("viridis")
+    c = pr.F[:, 0]
+    cn = (c - c.min()) / (np.ptp(c) or 1.0)
+    for row, cv in zip(data, cn):
+        ax.plot(x, norm(row), color=cmap(cv), alpha=0.5, lw=0.9)
+    ax.plot(x, norm(data[pr.preferred]), color="C2", lw=2.5, label=f"{pr.pick} pick")
+    if ga is not None:
+        ax.plot(x, norm(g), color="C3", lw=2.5, ls="--", label="goal attainment")
+    ax.set_xticks(x, [_label(k) for k in keys], rotation=30, ha="right", fontsize=8)
+    for xi, l0, h0, lg in zip(x, lo, hi, logs):
+        ax.annotate(f"{h0:.3g}", (xi, 1.02), ha="center", fontsize=6)
+        ax.annotate(f"{l0:.3g}", (xi, -0.06), ha="center", fontsize=6)
+    ax.set_yticks([])
+    ax.set_ylim(-0.1, 1.08)
+    ax.legend(fontsize=8, loc="upper right")
+    ax.set_title("Parallel coordinates of the front (colour: comfort)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def hypervolume_history(histories: Mapping[str, Sequence[Mapping[str, float]]],
+                        reference: Sequence[float] | None = None) -> Any:
+    """Hypervolume against evaluations, one line per run."""
+    fig, ax = plt.subplots(figsize=(5.5, 3.4))
+    for name, h in histories.items():
+        line, = ax.plot([r["n_eval"] for r in h], [r["hv"] for r in h], "o-", ms=3,
+                        label=f"{name}: population front")
+        if "hv_archive" in h[0]:
+            ax.plot([r["n_eval"] for r in h], [r["hv_archive"] for r in h], "--",
+                    color=line.get_color(), label=f"{name}: all evaluated (archive)")
+    ax.set_xlabel("evaluations")
+    ax.set_ylabel("hypervolume (normalised)")
+    ref = "" if reference is None else f", ref. {list(np.round(reference, 3))}"
+    ax.set_title(f"Hypervolume of F/F(prototype){ref}", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def friction_on_optimum(rows: Sequence[Mapping[str, Any]]) -> Any:
+    """Paper Fig 20: power, comfort change, efficiency and road-holding change
+    against speed for each friction case."""
+    cases = list(dict.fromkeys(r["friction"] for r in rows))
+    fig, axes = plt.subplots(2, 2, figsize=(9, 6))
+    panels = [("power_W", "power (W)", axes[0, 0]),
+              ("comfort_change_pct", "comfort vs frictionless (%)", axes[0, 1]),
+              ("efficiency_pct", "efficiency (%)", axes[1, 0]),
+              ("road_holding_change_pct", "road holding vs frictionless (%)", axes[1, 1])]
+    for key, lab, ax in panels:
+        for c in cases:
+            rr = sorted((r for r in rows if r["friction"] == c), key=lambda r: r["speed_km_per_h"])
+            ax.plot([r["speed_km_per_h"] for r in rr], [r[key] for r in rr], "o-", ms=4, label=c)
+        ax.set_xlabel("speed (km/h)")
+        ax.set_ylabel(lab, fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("Friction on the optimised design (cf. paper Fig 20); positive comfort/road "
+                 "holding change = better", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def sweep_lines(rows: Sequence[Mapping[str, Any]], x: str, ys: Sequence[str],
+                hue: Sequence[str]) -> Any:
+    """Metrics ``ys`` against ``x``, one line per combination of the ``hue`` columns."""
+    groups: dict[tuple, list] = {}
+    for r in rows:
+        groups.setdefault(tuple(r[h] for h in hue), []).append(r)
+    n = len(ys)
+    cols = 2 if n > 1 else 1
+    nrows = math.ceil(n / cols)
+    fig, axes = plt.subplots(nrows, cols, figsize=(8.5, 2.8 * nrows), squeeze=False)
+    for ax, y in zip(axes.ravel(), ys):
+        for key, rr in groups.items():
+            rr = sorted(rr, key=lambda r: r[x])
+            ax.plot([r[x] for r in rr], [r[y] for r in rr], "o-", ms=3,
+                    label=", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in key))
+        ax.set_xlabel(_label(x), fontsize=8)
+        ax.set_ylabel(_label(y), fontsize=8)
+        ax.grid(alpha=0.3)
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    if len(groups) <= 12:
+        axes[0, 0].legend(fontsize=6, title=", ".join(hue), title_fontsize=6)
+    fig.tight_layout()
+    return fig
