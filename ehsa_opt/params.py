@@ -55,9 +55,11 @@ def nearest_name(key: str, valid: list[str] | tuple[str, ...]) -> str | None:
 
 
 def _spec(unit: str, doc: str, *, gt: float | None = None, ge: float | None = None,
-          le: float | None = None, lt: float | None = None, hint: str = "") -> dict:
+          le: float | None = None, lt: float | None = None, hint: str = "",
+          allow_inf: bool = False) -> dict:
     """Metadata of a numeric field: unit, description and admissible range."""
-    return {"unit": unit, "doc": doc, "gt": gt, "ge": ge, "le": le, "lt": lt, "hint": hint}
+    return {"unit": unit, "doc": doc, "gt": gt, "ge": ge, "le": le, "lt": lt, "hint": hint,
+            "allow_inf": allow_inf}
 
 
 def _num(default: float, unit: str, doc: str, **kw: Any) -> Any:
@@ -78,7 +80,7 @@ def _validate_numbers(obj: Any, where: str) -> None:
                 f"{where}: '{f.name}' must be a number in {md['unit']}, got {value!r}; "
                 f"write e.g. {f.name} = {f.default!r}")
         value = float(value)
-        if not math.isfinite(value):
+        if not math.isfinite(value) and not (md["allow_inf"] and value == math.inf):
             raise ParameterError(f"{where}: '{f.name}' = {value} is not finite; give a finite "
                                  f"value in {md['unit']}")
         bad = None
@@ -137,7 +139,7 @@ class HarvesterParams:
     torque_constant_Nm_per_A: float = _num(0.137, "N m/A", "torque constant K_t", gt=0.0, le=100.0)
     inductance_H: float = _num(1.7e-3, "H", "winding inductance L_i", ge=0.0, le=1.0,
                                hint="inductance is in henry: 1.7 mH = 0.0017")
-    load_ohm: float = _num(47.0, "ohm", "external load R_e", ge=0.0,
+    load_ohm: float = _num(47.0, "ohm", "external load R_e", ge=0.0, allow_inf=True,
                            hint="use inf for open circuit, 0 for short circuit")
 
     def __post_init__(self) -> None:

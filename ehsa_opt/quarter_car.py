@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import functools
 import math
+import tempfile
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -49,6 +50,18 @@ class RoadHoldingWarning(UserWarning):
     """Road holding above 1: the tyre would leave the ground (linear tyre invalid)."""
 
 
+_JIT_DIR: str | None = None
+
+
+def _jit_directory() -> str:
+    """A private temporary folder for CasADi's generated C and shared objects, so runs
+    never litter the user's working directory."""
+    global _JIT_DIR
+    if _JIT_DIR is None:
+        _JIT_DIR = tempfile.mkdtemp(prefix="ehsa_opt_jit_")
+    return _JIT_DIR
+
+
 @functools.lru_cache(maxsize=8)
 def compiled_step(h: float, jit: bool = True) -> tuple[ca.Function, bool]:
     """The quarter-car step for step ``h`` (s), compiled when a C compiler works.
@@ -62,7 +75,8 @@ def compiled_step(h: float, jit: bool = True) -> tuple[ca.Function, bool]:
     if jit:
         try:
             opts = {"jit": True, "compiler": "shell",
-                    "jit_options": {"flags": ["-O2"], "verbose": False}}
+                    "jit_options": {"flags": ["-O2"], "verbose": False,
+                                    "directory": _jit_directory()}}
             return model.step_function(h, opts), True
         except Exception:  # noqa: BLE001 - no compiler: the VM evaluates the same graph
             pass

@@ -43,3 +43,12 @@ def test_from_design_speed_constant():
     assert math.isclose(h.voltage_constant_Vs_per_rad, 60 / (2 * math.pi * 29.8))
     assert math.isclose(h.total_inertia_gcm2, 250.0)
     assert math.isclose(h.speed_constant_rpm_per_V, 29.8)
+
+
+def test_open_circuit_load_allowed_but_nan_refused():
+    h = HarvesterParams(load_ohm=math.inf)
+    assert h.equivalent_damping_Ns_per_m(10.0) == 0.0
+    with pytest.raises(ParameterError, match="not finite"):
+        HarvesterParams(load_ohm=math.nan)
+    with pytest.raises(ParameterError, match="not finite"):
+        HarvesterParams(lead_mm_per_rev=math.inf)
