@@ -62,16 +62,19 @@ class BenchSimulation:
         return float((e["work_in"][-1] - out) / e["work_in_abs"][-1])
 
 
-_INTEGRATOR_CACHE: dict[tuple, ca.Function] = {}
-
-
 def _integrator(model: BenchModel, motion: Any, grid: np.ndarray, rtol: float,
                 atol: float) -> ca.Function:
-    """Build (and for sine motions cache) the CVODES integrator."""
+    """Build (and for sine motions cache on the model) the CVODES integrator.
+
+    The cache lives on the model object, so it dies with the model (a module-level
+    cache keyed by ``id(model)`` could hand a stale integrator to a new model that
+    reuses a freed id).
+    """
     sine = isinstance(motion, SineMotion)
-    key = (id(model), len(grid), float(grid[0]), float(grid[-1]), rtol, atol) if sine else None
-    if key is not None and key in _INTEGRATOR_CACHE:
-        return _INTEGRATOR_CACHE[key]
+    cache: dict = model.__dict__.setdefault("_integrator_cache", {})
+    key = (len(grid), float(grid[0]), float(grid[-1]), rtol, atol) if sine else None
+    if key is not None and key in cache:
+        return cache[key]
     t = ca.MX.sym("t")
     p = ca.MX.sym("p", len(model.param_names))
     if sine:
@@ -95,7 +98,7 @@ def _integrator(model: BenchModel, motion: Any, grid: np.ndarray, rtol: float,
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 500000}
     F = ca.integrator("bench_sim", "cvodes", dae, float(grid[0]), grid[1:].tolist(), opts)
     if key is not None:
-        _INTEGRATOR_CACHE[key] = F
+        cache[key] = F
     return F
 
 

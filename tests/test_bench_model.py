@@ -115,3 +115,19 @@ def test_friction_params_in_vector_order():
     assert p[model.param_names.index("backlash_gap_m")] == 2e-4
     with pytest.raises(ValueError, match="did you mean 'backlash_gap_m'"):
         model.param_vector(47.0, None, {"backlash_gap": 1e-4})
+
+
+def test_integrator_cache_is_per_model():
+    """A new model never reuses another model's compiled integrator (even if the old
+    model was garbage-collected and its id reused)."""
+    t = np.arange(0, 0.5, 1e-3)
+    m = SineMotion(0.015, 2.0)
+    forces = []
+    for comps in [(), (Compliance(),), (), (Compliance(),)]:
+        model = BenchModel(H, comps)
+        sim = simulate_bench(model, m, model.param_vector(47.0, PROTOTYPE_FRICTION), t)
+        assert sim.states.shape[0] == model.n_states
+        forces.append(sim.force_N)
+        del model
+    np.testing.assert_allclose(forces[0], forces[2])
+    np.testing.assert_allclose(forces[1], forces[3])
