@@ -110,9 +110,15 @@ class IdentifyOptions:
     smoothing : float or None
         ``lam`` of the displacement smoothing spline (None: GCV).
     spline_points : int
-        The smoothing spline is fitted to at most max(spline_points, n/10) of a
-        test's n displacement samples (uniformly decimated; GCV costs ~0.3 ms
-        per point).
+        With GCV, the smoothing spline is fitted to at most
+        max(spline_points, n/10) of a test's n displacement samples (uniformly
+        decimated; GCV costs ~0.3 ms per point).
+    smoothing_cutoff_hz : float or None
+        If given (and ``smoothing`` is None), the spline penalty is set from an
+        equivalent low-pass cut-off f_c: the smoothing spline's response is
+        1/(1 + λ Δt ω⁴), so λ = 1/(Δt (2π f_c)⁴), and all samples are used.
+        GCV over-smooths long 1 kHz records (EMPS: M +7 %); see
+        :meth:`for_rig`.
     trim_fraction : float
         Fraction of each record left out of the objective at each end, where
         the spline's derivatives are least accurate (0–0.2).
@@ -130,6 +136,7 @@ class IdentifyOptions:
     objective_scale: float = 100.0
     smoothing: float | None = None
     spline_points: int = 600
+    smoothing_cutoff_hz: float | None = None
     trim_fraction: float = 0.01
     identifiable_rtol: float = 1e-6
 
@@ -159,6 +166,18 @@ class IdentifyOptions:
                              f"{self.trim_fraction!r}")
         if self.smoothing is not None and not self.smoothing >= 0:
             raise ValueError("IdentifyOptions: smoothing must be None or >= 0")
+        if self.smoothing_cutoff_hz is not None and not self.smoothing_cutoff_hz > 0:
+            raise ValueError("IdentifyOptions: smoothing_cutoff_hz must be None or > 0 (Hz)")
+
+    @classmethod
+    def for_rig(cls, has_generator: bool, **changes: Any) -> "IdentifyOptions":
+        """Defaults per rig: GCV smoothing for the sine bench tests; for rigs without
+        generator (recorded motion, e.g. EMPS at 1 kHz) a 60 Hz smoothing cut-off and
+        up to 5000 objective samples."""
+        base: dict[str, Any] = {} if has_generator else {"smoothing_cutoff_hz": 60.0,
+                                                         "max_samples": 5000}
+        base.update(changes)
+        return cls(**base)
 
 
 # ====================================================================== metrics
@@ -550,7 +569,9 @@ class _NLP:
         return w0
 
     def params_of(self, w: np.ndarray) -> dict[str, float]:
-        p = np.array(self.pfun(w[:len(self.prob.varied)])).ravel()
+        z = np.clip(w[:len(self.prob.varied)], self.lbw[:len(self.prob.varied)],
+                    self.ubw[:len(self.prob.varied)])  # IPOPT may sit 1e-12 outside
+        p = np.array(self.pfun(z)).ravel()
         return {n: float(v) for n, v in zip(self.names, p)}
 
     def solve(self, start: Mapping[str, float]) -> dict:
@@ -655,7 +676,11 @@ def test_motion(test: BenchTest, options: IdentifyOptions | None = None) -> Samp
     fitted to at most max(spline_points, n/10) uniformly decimated samples."""
     opt = options or IdentifyOptions()
     n = test.n_samples
-    m = min(n, max(opt.spline_points, n // 10))
+    if opt.smoothing is None and opt.smoothing_cutoff_hz is not None:
+        dt = float(np.mean(np.diff(test.time_s)))
+        lam = 1.0 / (dt * (2.0 * math.pi * opt.smoothing_cutoff_hz) ** 4)
+        return SampledMotion(test.time_s, test.displacement_m, lam)
+    m = n if opt.smoothing is not None else min(n, max(opt.spline_points, n // 10))
     idx = _node_indices(n, m - 1)
     return SampledMotion(test.time_s[idx], test.displacement_m[idx], opt.smoothing)
 
@@ -1047,6 +1072,7 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
     progress : callable, optional
         Called with the number of finished per-test fits.
     options : IdentifyOptions
+        Default :meth:`IdentifyOptions.for_rig`.
     fixed : mapping, optional
         Fixed/tied parameters (see :func:`fit_tests`).  For rigs without
         generator the default ties the breakaway to the Coulomb force and fixes
@@ -1057,7 +1083,11 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
     """
     if not isinstance(data, BenchData):
         data = load_bench(data)
-    options = options or IdentifyOptions()
+    if not (isinstance(starts, int) and starts >= 1):
+        raise ValueError(f"identify: starts must be an integer >= 1, got {starts!r}")
+    if not (isinstance(jobs, int) and jobs >= 1):
+        raise ValueError(f"identify: jobs must be an integer >= 1, got {jobs!r}")
+    options = options or IdentifyOptions.for_rig(data.has_generator)
     if fixed is None:
         fixed = {} if data.has_generator else {"nut_breakaway_N": "nut_coulomb_N",
                                                "nut_breakaway_velocity_m_per_s": 1e-3}
