@@ -37,8 +37,8 @@ combinations (rod friction at given speeds, total viscous, …) and their
 
 from __future__ import annotations
 
+import dataclasses
 import math
-import os
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -130,8 +130,8 @@ class IdentifyOptions:
     """
 
     degree: int = 3
-    max_intervals: int = 150
-    max_samples: int = 1000
+    max_intervals: int = 100
+    max_samples: int = 600
     tol: float = 1e-8
     max_iter: int = 500
     sum_weight: float = 0.1
@@ -1081,7 +1081,8 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
         the breakaway velocity at 1 mm/s, so the law reduces to
         M a + f_v v + F_C tanh(v / 0.1 mm/s) + F_0, the EMPS reference model.
     joint : bool
-        Run the joint fit.
+        Run the joint fit (one parameter set, at most 300 objective samples and
+        100 intervals per training test, ``min(starts, 2)`` starts).
     """
     if not isinstance(data, BenchData):
         data = load_bench(data)
@@ -1124,9 +1125,12 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
         train = [t for t in data.tests if t.file not in hold_files]
         held = [t for t in data.tests if t.file in hold_files]
         if train:
+            # the joint NLP holds every training test: fewer objective samples per test
+            jopt = dataclasses.replace(options, max_samples=min(options.max_samples, 300),
+                                       max_intervals=min(options.max_intervals, 100))
             jres = fit_tests(train, data.harvester, has_generator=data.has_generator,
                              components=components, starts=max(1, min(starts, 2)), seed=seed,
-                             jobs=jobs, options=options, fixed=fixed, identifiability=False)
+                             jobs=jobs, options=jopt, fixed=fixed, identifiability=False)
             if jres.success and held:
                 preds = simulate_tests(held, data.harvester, jres.parameters,
                                        has_generator=data.has_generator, components=components,

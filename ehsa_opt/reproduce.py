@@ -195,7 +195,18 @@ STEPS: list[Step] = [
     Step("harvester", "Harvester equivalent quantities (paper Eqs 1–3)", _step_harvester),
     Step("bench_truth", "Bench model against the embedded data", _step_bench_truth,
          lambda ctx: _data_digest(_data_paths()[0])),
+    Step("identify_prototype", "Friction identification on the prototype bench data "
+         "(paper §3, Table 2, Figs 8–12)", lambda ctx: _identify_steps().step_identify_prototype(ctx),
+         lambda ctx: [_data_digest(_data_paths()[0]), ctx.jobs > 1]),
+    Step("identify_emps", "Friction identification on the real EMPS data (SPEC §9)",
+         lambda ctx: _identify_steps().step_identify_emps(ctx),
+         lambda ctx: _data_digest(_data_paths()[1])),
 ]
+
+
+def _identify_steps():
+    from . import identify_report
+    return identify_report
 
 
 def _data_paths() -> list[Path]:
