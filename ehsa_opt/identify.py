@@ -952,7 +952,7 @@ def fisher_identifiability(nlp: _NLP, w: np.ndarray, velocities_m_per_s: Sequenc
                                                             for d in directions],
             "directions": directions,
             "non_identifiable": [d["main"] for d in weak],
-            "condition_number": float(ev[-1] / max(ev[0], 1e-300)),
+            "condition_number": float(ev[-1] / max(ev[0], 1e-300)), "threshold": rtol,
             "parameter_ci95": ci, "combinations": combos}
 
 

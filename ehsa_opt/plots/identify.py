@@ -112,7 +112,7 @@ def identifiability_figure(report: Any) -> Any:
         ev = np.clip(f.identifiability["relative_eigenvalues"], 1e-20, None)
         a1.semilogy(np.full(len(ev), k), ev, "o", ms=3, color="C0")
     if good:
-        rtol = good[0][1].identifiability and report.fits[0].identifiability and 1e-6
+        rtol = good[0][1].identifiability.get("threshold", 1e-6)
         a1.axhline(rtol, color="C3", ls="--", lw=1, label="identifiability threshold")
         a1.legend(fontsize=8)
     a1.set_xlabel("test #")
