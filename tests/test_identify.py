@@ -141,12 +141,17 @@ def test_fit_with_backlash_component_runs_generic_states():
 
 def test_cli_identify_contract_and_bad_data(tmp_path, capsys):
     data = tmp_path / "d"
-    write_synthetic(data, SyntheticSpec(effects={}, frequencies_hz=(1.0, 3.0),
+    write_synthetic(data, SyntheticSpec(effects={}, frequencies_hz=(1.0, 2.0, 3.0),
                                         loads_ohm=(47.0,)))
     out = tmp_path / "out"
     assert main(["identify", str(data), "--out", str(out), "--starts", "2", "--seed", "1"]) == 0
     js = json.loads((out / "identification.json").read_text())
-    assert len(js["tests"]) == 2 and set(js) >= {"tests", "bounds", "identifiable"}
+    assert len(js["tests"]) == 3 and set(js) >= {"tests", "bounds", "identifiable"}
+    # joint fit on two tests, validated on the held-out one
+    hold = js["joint_fit"]["holdout"]
+    assert [h["file"] for h in hold] == ["f2Hz_Re47.csv"]
+    assert hold[0]["force_relative_error_percent"] < 5.0
+    assert (out / "joint_fit_holdout.png").is_file()
     t0 = js["tests"][0]
     assert set(t0) >= {"file", "frequency_hz", "load_ohm", "parameters", "delta_F", "delta_V",
                        "force_relative_error_percent", "success", "starts"}
