@@ -84,12 +84,22 @@ def step_identify_prototype(ctx):
     for v, d in rod.items():
         lines.append(f"| rod friction at {v} m/s ({d['mean_N']:.1f} N) | "
                      f"{d['relative_spread']:.3f} |")
-    lines += ["", "So most of the per-test spread of Table 2 is **non-identifiability**: the "
-              "nut/bearing split (viscous exactly, f_v + t_v/r² only; Coulomb and breakaway "
-              "nearly, since both tanh laws saturate within a few mm/s) wanders from test to "
-              "test while the rod total stays within a few per cent. What remains in the rod "
-              "total is real variation: here the hidden backlash, whose contact peaks the "
-              "friction absorbs differently at each frequency and load.\n",
+    raw = [v for v in spread.values()]
+    rods = [d["relative_spread"] for d in rod.values()]
+    if raw and rods:
+        lines += ["", f"The raw parameters spread by {100 * min(raw):.0f}–{100 * max(raw):.0f} % "
+                  f"across the tests, the rod total by {100 * min(rods):.1f}–"
+                  f"{100 * max(rods):.1f} %. Most of the per-test spread of Table 2 is therefore "
+                  "**non-identifiability**: the nut/bearing split (viscous exactly — only "
+                  "f_v + t_v/r² is determined —, Coulomb and breakaway nearly, since both tanh "
+                  "laws saturate within a few mm/s) wanders from test to test. The rest, the "
+                  "spread of the rod total itself, is **real variation** of the best rigid-model "
+                  "fit: the hidden backlash, whose contact peaks the friction absorbs "
+                  "differently at each frequency and load. On clean synthetic data (no hidden "
+                  "effect) the same procedure recovers the rod total of every test within about "
+                  "1 % of the truth: `python benchmarks/identify_vs_shooting.py` prints the "
+                  "median and worst over the 21 tests.\n"]
+    lines += [
               f"**The voltage does not constrain the friction.** {ident.get('voltage_independent_of_friction') or ''}\n"]
     if rep.joint is not None and rep.joint.success:
         he = rep.holdout_errors

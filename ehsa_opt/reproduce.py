@@ -197,7 +197,7 @@ STEPS: list[Step] = [
          lambda ctx: _data_digest(_data_paths()[0])),
     Step("identify_prototype", "Friction identification on the prototype bench data "
          "(paper §3, Table 2, Figs 8–12)", lambda ctx: _identify_steps().step_identify_prototype(ctx),
-         lambda ctx: [_data_digest(_data_paths()[0]), ctx.jobs > 1]),
+         lambda ctx: _data_digest(_data_paths()[0])),
     Step("identify_emps", "Friction identification on the real EMPS data (SPEC §9)",
          lambda ctx: _identify_steps().step_identify_emps(ctx),
          lambda ctx: _data_digest(_data_paths()[1])),
