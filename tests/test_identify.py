@@ -167,3 +167,22 @@ def test_cli_identify_contract_and_bad_data(tmp_path, capsys):
     assert main(["identify", str(data), "--out", str(out2)]) == 2
     assert "f3Hz_Re47.csv" in capsys.readouterr().err
     assert not out2.exists()
+
+
+@pytest.mark.slow
+def test_full_matrix_acceptance(tmp_path):
+    """Issue 3 acceptance: 21 clean tests, 4 starts; rod friction within 3 % (median) and
+    10 % (worst) over 0.1–1 × peak velocity; the nut/bearing split flagged."""
+    write_synthetic(tmp_path / "d", SyntheticSpec(effects={}))
+    rep = identify(tmp_path / "d", starts=4, jobs=2, joint=False)
+    r = rep.data.harvester.lead_m_per_rad
+    errs = []
+    for t, f in zip(rep.data.tests, rep.fits):
+        assert f.success, f.message
+        v = np.linspace(0.1, 1.0, 50) * 2 * np.pi * t.frequency_hz * t.amplitude_m
+        true = rod_friction_N(v, PROTOTYPE_FRICTION, r)
+        est = rod_friction_N(v, [f.parameters[n] for n in FRICTION_NAMES], r)
+        errs.append(float(np.max(np.abs(est / true - 1))))
+    assert np.median(errs) < 0.03 and max(errs) < 0.10
+    assert rep.identifiable["non_identifiable_directions"].get(
+        "bearing_viscous_Nms_per_rad", 0) == len(rep.fits)
