@@ -904,7 +904,7 @@ def fisher_identifiability(nlp: _NLP, w: np.ndarray, velocities_m_per_s: Sequenc
     directions = []
     for k in range(nv):
         comp = {n: float(V[j, k]) for j, n in enumerate(varied)}
-        main = {n: c for n, c in sorted(comp.items(), key=lambda kv: -abs(kv[1])) if abs(c) > 0.2}
+        main = {n: c for n, c in sorted(comp.items(), key=lambda kv: -abs(kv[1])) if abs(c) > 0.1}
         directions.append({"relative_eigenvalue": float(max(rel[k], 0.0)), "vector": comp,
                            "main": main, "identifiable": bool(rel[k] >= rtol)})
     cov_z = np.linalg.pinv(Fz, rcond=rtol)
