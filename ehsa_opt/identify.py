@@ -147,7 +147,8 @@ class IdentifyOptions:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.degree, int) and 1 <= self.degree <= 9):
-            raise ValueError(f"IdentifyOptions: degree must be an integer 1..9, got {self.degree!r}")
+            raise ValueError(f"IdentifyOptions: degree must be an integer 1..9, got "
+                             f"{self.degree!r}")
         if not (isinstance(self.max_intervals, int) and self.max_intervals >= 4):
             raise ValueError("IdentifyOptions: max_intervals must be an integer >= 4, got "
                              f"{self.max_intervals!r}")
@@ -904,7 +905,8 @@ def fisher_identifiability(nlp: _NLP, w: np.ndarray, velocities_m_per_s: Sequenc
     directions = []
     for k in range(nv):
         comp = {n: float(V[j, k]) for j, n in enumerate(varied)}
-        main = {n: c for n, c in sorted(comp.items(), key=lambda kv: -abs(kv[1])) if abs(c) > 0.1}
+        main = {n: c for n, c in sorted(comp.items(), key=lambda kv: -abs(kv[1]))
+                if abs(c) > 0.1}
         directions.append({"relative_eigenvalue": float(max(rel[k], 0.0)), "vector": comp,
                            "main": main, "identifiable": bool(rel[k] >= rtol)})
     cov_z = np.linalg.pinv(Fz, rcond=rtol)

@@ -100,14 +100,16 @@ def step_identify_prototype(ctx):
                   "1 % of the truth: `python benchmarks/identify_vs_shooting.py` prints the "
                   "median and worst over the 21 tests.\n"]
     lines += [
-              f"**The voltage does not constrain the friction.** {ident.get('voltage_independent_of_friction') or ''}\n"]
+              "**The voltage does not constrain the friction.** "
+              + (ident.get("voltage_independent_of_friction") or "") + "\n"]
     if rep.joint is not None and rep.joint.success:
         he = rep.holdout_errors
         tr = rep.joint.per_test
         lines += [f"**Joint fit.** One parameter set for {len(tr)} tests, validated on "
                   f"{len(he)} held-out tests ({', '.join(rep.holdout_files)}): training "
                   f"force error {np.mean([x['force_relative_error_percent'] for x in tr]):.2f} "
-                  f"% (mean), held-out {np.mean([x['force_relative_error_percent'] for x in he]):.2f} "
+                  f"% (mean), held-out "
+                  f"{np.mean([x['force_relative_error_percent'] for x in he]):.2f} "
                   f"% (mean), held-out δ_F {min(x['delta_F'] for x in he):.3f}–"
                   f"{max(x['delta_F'] for x in he):.3f}.\n"]
     for f in figs:

@@ -196,7 +196,8 @@ STEPS: list[Step] = [
     Step("bench_truth", "Bench model against the embedded data", _step_bench_truth,
          lambda ctx: _data_digest(_data_paths()[0])),
     Step("identify_prototype", "Friction identification on the prototype bench data "
-         "(paper §3, Table 2, Figs 8–12)", lambda ctx: _identify_steps().step_identify_prototype(ctx),
+         "(paper §3, Table 2, Figs 8–12)",
+         lambda ctx: _identify_steps().step_identify_prototype(ctx),
          lambda ctx: _data_digest(_data_paths()[0])),
     Step("identify_emps", "Friction identification on the real EMPS data (SPEC §9)",
          lambda ctx: _identify_steps().step_identify_emps(ctx),
