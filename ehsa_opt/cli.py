@@ -180,6 +180,38 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
     print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
     return 0
+# ------------------------------------------------------------------ identify
+def _cmd_identify(args: argparse.Namespace) -> int:
+    import json
+
+    from .data import load_bench
+    from .identify import identify
+    from .progress import progress_bar
+    from .reproduce import atomic_write_text
+
+    data = load_bench(args.data_dir)  # refuses bad data before any solve
+    out = Path(args.out)
+    with progress_bar(total=len(data.tests), desc="identify", unit="test") as bar:
+        rep = identify(data, starts=args.starts, jobs=args.jobs, seed=args.seed,
+                       progress=lambda k: bar.update(1))
+    out.mkdir(parents=True, exist_ok=True)
+    rep.plot(out)
+    atomic_write_text(out / "identification.json", json.dumps(rep.to_json(), indent=1))
+    ok = sum(f.success for f in rep.fits)
+    print(f"identified {ok}/{len(rep.fits)} tests in {rep.seconds:.1f} s "
+          f"({args.starts} starts each); results in {out / 'identification.json'}")
+    for t, f in zip(data.tests, rep.fits):
+        if f.success:
+            dv = f"{f.delta_V:.4f}" if f.delta_V is not None else "—"
+            print(f"  {t.file}: δ_F {f.delta_F:.4f}  δ_V {dv}  force error "
+                  f"{f.force_relative_error_percent:.2f} %  ({f.status})")
+        else:
+            print(f"  {t.file}: FAILED ({f.message})")
+    if not data.has_generator and rep.fits[0].success:
+        p = rep.fits[0].parameters
+        print(f"  M = {p['inertia_kg']:.2f} kg, F_v = {p['nut_viscous_Ns_per_m']:.1f} N s/m, "
+              f"F_C = {p['nut_coulomb_N']:.2f} N, offset = {p['offset_N']:.2f} N")
+    return 0 if ok else 1
 
 
 # ------------------------------------------------------------------ reproduce
@@ -294,6 +326,14 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("problem", metavar="PROBLEM.toml")
     s.add_argument("--json", action="store_true", help="print one JSON object of metrics")
     s.set_defaults(func=_cmd_simulate)
+    i = sub.add_parser("identify", help="identify the friction of every bench test (paper §3)")
+    i.add_argument("data_dir", metavar="DATA_DIR")
+    i.add_argument("--out", required=True, metavar="OUT_DIR",
+                   help="output folder (identification.json and figures)")
+    i.add_argument("--starts", type=int, default=4, help="multistart points per test (default 4)")
+    i.add_argument("--jobs", type=int, default=1, help="parallel processes (default 1)")
+    i.add_argument("--seed", type=int, default=0, help="seed of the start draws (default 0)")
+    i.set_defaults(func=_cmd_identify)
 
     r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data")
     r.add_argument("--quick", action="store_true", help="fewer starts, shorter roads (minutes)")

@@ -206,26 +206,9 @@ def _step_bench_truth(ctx: Context) -> StepOutput:
     return StepOutput(md, [rel], {"rms_force_error_N": err})
 
 
-#: The pipeline, in order. Later capabilities append their steps here.
-STEPS: list[Step] = [
-    Step("data", "Embedded data", _step_data,
-         lambda ctx: [_data_digest(ctx_path) for ctx_path in _data_paths()]),
-    Step("harvester", "Harvester equivalent quantities (paper Eqs 1–3)", _step_harvester),
-    Step("bench_truth", "Bench model against the embedded data", _step_bench_truth,
-         lambda ctx: _data_digest(_data_paths()[0])),
-    # Quarter car (issue 4): paper §4.1 and Fig 21
-    Step("qc_paths", "Quarter car: W_k, frequency vs time domain, dissipation bound",
-         lambda ctx: _quarter_car_step("step_quarter_car_paths", ctx), lambda ctx: ctx.quick),
-    Step("qc_fig13", "Quarter car: frequency responses, no/min/max friction (paper Fig 13)",
-         lambda ctx: _quarter_car_step("step_fig13", ctx), lambda ctx: _qc_inputs(ctx)),
-    Step("qc_fig14", "Harvester force–velocity loops and equivalent damping (paper Fig 14)",
-         lambda ctx: _quarter_car_step("step_fig14", ctx), lambda ctx: _qc_inputs(ctx)),
-    Step("qc_fig15_16", "Class C at 100 km/h with equal damping slopes (paper Figs 15/16)",
-         lambda ctx: _quarter_car_step("step_fig15_16", ctx), lambda ctx: _qc_inputs(ctx)),
-    Step("qc_fig21", "Power time history of the optimised design (paper Fig 21)",
-         lambda ctx: _quarter_car_step("step_fig21", ctx),
-         lambda ctx: [_qc_inputs(ctx), ctx.results.get("design", {}).get("optimum_harvester")]),
-]
+def _identify_steps():
+    from . import identify_report
+    return identify_report
 
 
 def _quarter_car_step(name: str, ctx: Context) -> StepOutput:
@@ -240,21 +223,49 @@ def _qc_inputs(ctx: Context) -> Any:
 
 def _design_steps() -> list[Step]:
     from .design_report import (design_inputs, step_friction_on_optimum,
-                                 step_goal_attainment, step_pareto)
+                                step_goal_attainment, step_pareto)
     return [
         Step("design", "Optimal design by goal attainment (paper §4.2, Figs 17–19)",
              step_goal_attainment, design_inputs),
         Step("design_pareto", "Pareto front of the design problem (NSGA-II)", step_pareto,
-             design_inputs),
+             design_inputs, depends=("design",)),
         Step("design_friction", "Friction on the optimised design (paper Fig 20, Table 4)",
-             step_friction_on_optimum,
-             lambda ctx: [design_inputs(ctx), _qc_inputs(ctx)], depends=("design",)),
+             step_friction_on_optimum, lambda ctx: [design_inputs(ctx), _qc_inputs(ctx)],
+             depends=("design", "identification")),
     ]
 
 
-# The design steps go before the Fig 21 step, which simulates the design step's optimum.
-_fig21 = next((k for k, s in enumerate(STEPS) if s.key == "qc_fig21"), len(STEPS))
-STEPS[_fig21:_fig21] = _design_steps()
+#: The pipeline, in order: bench data and model (§2) → identification (§3) → §4.1 studies
+#: → design (§4.2) → friction on the optimum (Fig 20, Table 4, Fig 21) → real EMPS data.
+STEPS: list[Step] = [
+    Step("data", "Embedded data", _step_data,
+         lambda ctx: [_data_digest(ctx_path) for ctx_path in _data_paths()]),
+    Step("harvester", "Harvester equivalent quantities (paper Eqs 1–3)", _step_harvester),
+    Step("bench_truth", "Bench model against the embedded data", _step_bench_truth,
+         lambda ctx: _data_digest(_data_paths()[0])),
+    Step("identification", "Friction identification on the prototype bench data "
+         "(paper §3, Table 2, Figs 8–12)",
+         lambda ctx: _identify_steps().step_identify_prototype(ctx),
+         lambda ctx: _data_digest(_data_paths()[0])),
+    Step("qc_paths", "Quarter car: W_k, frequency vs time domain, dissipation bound",
+         lambda ctx: _quarter_car_step("step_quarter_car_paths", ctx), lambda ctx: ctx.quick),
+    Step("qc_fig13", "Quarter car: frequency responses, no/min/max friction (paper Fig 13)",
+         lambda ctx: _quarter_car_step("step_fig13", ctx), _qc_inputs,
+         depends=("identification",)),
+    Step("qc_fig14", "Harvester force–velocity loops and equivalent damping (paper Fig 14)",
+         lambda ctx: _quarter_car_step("step_fig14", ctx), _qc_inputs,
+         depends=("identification",)),
+    Step("qc_fig15_16", "Class C at 100 km/h with equal damping slopes (paper Figs 15/16)",
+         lambda ctx: _quarter_car_step("step_fig15_16", ctx), _qc_inputs,
+         depends=("identification",)),
+    *_design_steps(),
+    Step("qc_fig21", "Power time history of the optimised design (paper Fig 21)",
+         lambda ctx: _quarter_car_step("step_fig21", ctx), _qc_inputs,
+         depends=("identification", "design")),
+    Step("identify_emps", "Friction identification on the real EMPS data (SPEC §9)",
+         lambda ctx: _identify_steps().step_identify_emps(ctx),
+         lambda ctx: _data_digest(_data_paths()[1])),
+]
 
 
 def _data_paths() -> list[Path]:

@@ -1,0 +1,194 @@
+"""Figures of the friction identification (paper Figs 8–12, identifiability, joint fit)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Sequence
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from . import bench_fit, save
+
+__all__ = ["iterations_objective", "iterations_parameters", "objective_vs_parameter",
+           "bounds_figure", "identifiability_figure", "fit_result", "report_figures"]
+
+
+def iterations_objective(result: Any, title: str = "") -> Any:
+    """Fig 8: objective and normalised rms errors per IPOPT iteration (best start)."""
+    h = result.history
+    fig, ax = plt.subplots(figsize=(6.5, 3.4))
+    it = np.arange(len(h["objective"]))
+    ax.semilogy(it, h["rms_F"], "o-", ms=3, label="force: normalised rms error")
+    if h.get("rms_V") is not None:
+        ax.semilogy(it, h["rms_V"], "s-", ms=3, label="voltage: normalised rms error")
+    ax.semilogy(it, h["objective"], "k--", lw=1, label="objective t + w·mean J (scaled)")
+    ax.set_xlabel("IPOPT iteration")
+    ax.set_ylabel("value")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    ax.set_title(title or "Objective values per iteration (paper Fig 8)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def iterations_parameters(result: Any, title: str = "") -> Any:
+    """Fig 9: each varied parameter per IPOPT iteration (best start)."""
+    pars = result.history["parameters"]
+    n = len(pars)
+    cols = 4 if n > 4 else n
+    rows = int(np.ceil(n / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.0 * cols, 2.2 * rows), squeeze=False)
+    for ax, (name, vals) in zip(axes.ravel(), pars.items()):
+        ax.plot(vals, "o-", ms=2.5, color="C2")
+        ax.set_title(name, fontsize=7)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    fig.suptitle(title or "Parameter values per iteration (paper Fig 9)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def objective_vs_parameter(report: Any, name: str = "bearing_viscous_Nms_per_rad") -> Any:
+    """Fig 10: final objective of every start against one parameter, across tests."""
+    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    cmap = plt.get_cmap("viridis")
+    n = max(len(report.fits), 1)
+    for k, (t, f) in enumerate(zip(report.data.tests, report.fits)):
+        xs = [s["final"].get(name, np.nan) for s in f.starts if s["success"]]
+        ys = [s["objective"] for s in f.starts if s["success"]]
+        ax.scatter(xs, ys, s=12, color=cmap(k / n), alpha=0.7)
+        if f.success:
+            ax.scatter([f.parameters[name]], [f.objective], s=40, marker="*", color=cmap(k / n),
+                       edgecolor="k", lw=0.4)
+    ax.set_xlabel(name)
+    ax.set_ylabel("final objective (scaled)")
+    ax.set_yscale("log")
+    ax.grid(alpha=0.3, which="both")
+    ax.set_title(f"Objective against {name} across tests (paper Fig 10); star = kept start",
+                 fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def bounds_figure(report: Any) -> Any:
+    """Fig 12: per-test identified values and the min/max bounds of each parameter."""
+    names = list(report.bounds)
+    n = len(names)
+    cols = 4 if n > 4 else max(n, 1)
+    rows = int(np.ceil(n / cols)) or 1
+    fig, axes = plt.subplots(rows, cols, figsize=(3.0 * cols, 2.4 * rows), squeeze=False)
+    good = [(t, f) for t, f in zip(report.data.tests, report.fits) if f.success]
+    for ax, name in zip(axes.ravel(), names):
+        vals = [f.parameters[name] for _, f in good]
+        xs = np.arange(len(vals))
+        ax.plot(xs, vals, "o", ms=3, color="C0")
+        lo, hi = report.bounds[name]
+        ax.axhline(lo, color="C3", lw=1)
+        ax.axhline(hi, color="C3", lw=1)
+        ax.set_title(name, fontsize=7)
+        ax.set_xlabel("test #", fontsize=7)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    fig.suptitle("Identified friction per test and lower/upper bounds (paper Fig 12, Table 2)",
+                 fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def identifiability_figure(report: Any) -> Any:
+    """Relative Fisher eigenvalues per test, and the rod friction against its split."""
+    from ..friction import bearing_friction_Nm, nut_friction_N, rod_friction_N
+    from ..params import FRICTION_NAMES
+
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 3.8))
+    good = [(t, f) for t, f in zip(report.data.tests, report.fits)
+            if f.success and f.identifiability and "directions" in f.identifiability]
+    for k, (_, f) in enumerate(good):
+        ev = np.clip(f.identifiability["relative_eigenvalues"], 1e-20, None)
+        a1.semilogy(np.full(len(ev), k), ev, "o", ms=3, color="C0")
+    if good:
+        rtol = good[0][1].identifiability.get("threshold", 1e-6)
+        a1.axhline(rtol, color="C3", ls="--", lw=1, label="identifiability threshold")
+        a1.legend(fontsize=8)
+    a1.set_xlabel("test #")
+    a1.set_ylabel("eigenvalue / largest")
+    a1.set_title("Fisher information spectrum per test (scaled parameters)", fontsize=9)
+    a1.grid(alpha=0.3, which="both")
+    r = report.data.harvester.lead_m_per_rad
+    if good and "nut_coulomb_N" in good[0][1].parameters:
+        v = np.linspace(0.002, 0.35, 300)
+        for k, (_, f) in enumerate(good):
+            p = [f.parameters[n] for n in FRICTION_NAMES]
+            lab = k == 0
+            a2.plot(v, rod_friction_N(v, p, r), color="k", lw=0.8, alpha=0.6,
+                    label="rod total F_ns + T_b/r" if lab else None)
+            a2.plot(v, nut_friction_N(v, p), color="C0", lw=0.6, alpha=0.5,
+                    label="nut F_ns" if lab else None)
+            a2.plot(v, bearing_friction_Nm(v / r, p) / r, color="C1", lw=0.6, alpha=0.5,
+                    label="bearings T_b/r" if lab else None)
+        a2.set_xlabel("rod velocity (m/s)")
+        a2.set_ylabel("friction force at the rod (N)")
+        a2.legend(fontsize=8)
+        a2.grid(alpha=0.3)
+        a2.set_title("All tests: the total is tight, its split is not", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def fit_result(result: Any, tests: Sequence[Any] | None = None, harvester: Any = None,
+               **kw: Any) -> list[Any]:
+    """Figures of one :class:`~ehsa_opt.identify.FitResult`: Figs 8, 9 (and 11 if
+    ``tests`` and ``harvester`` are given)."""
+    figs = [iterations_objective(result), iterations_parameters(result)]
+    if tests is not None and harvester is not None and result.success:
+        from ..identify import simulate_tests
+        preds = simulate_tests(tests[:1], harvester, result.parameters, **kw)
+        figs.append(bench_fit(tests[0], preds[0], title="Measured vs simulated (paper Fig 11)"))
+    return figs
+
+
+def report_figures(report: Any, out_dir: Path) -> list[Path]:
+    """All identification figures of an :class:`~ehsa_opt.identify.IdentificationReport`."""
+    from ..identify import simulate_tests
+
+    out_dir = Path(out_dir)
+    paths = []
+    tests = report.data.tests
+    good = [k for k, f in enumerate(report.fits) if f.success]
+    if not good:
+        return paths
+    # representative test: the middle one of the matrix (or the only one)
+    k = good[len(good) // 2]
+    f, t = report.fits[k], tests[k]
+    paths.append(save(iterations_objective(f, f"Objective per iteration, {t.label} (paper Fig 8)"),
+                      out_dir / "fig08_objective_iterations.png"))
+    paths.append(save(iterations_parameters(f, f"Parameters per iteration, {t.label} "
+                                               "(paper Fig 9)"),
+                      out_dir / "fig09_parameter_iterations.png"))
+    name = ("bearing_viscous_Nms_per_rad" if report.data.has_generator
+            else "nut_viscous_Ns_per_m")
+    paths.append(save(objective_vs_parameter(report, name), out_dir / "fig10_objective_vs_tv.png"))
+    pr = simulate_tests([t], report.data.harvester, f.parameters,
+                        has_generator=report.data.has_generator)[0]
+    paths.append(save(bench_fit(t, pr, title=f"Measured vs simulated, {t.label} (paper Fig 11); "
+                                             f"δ_F = {f.delta_F:.3f}"
+                                + (f", δ_V = {f.delta_V:.3f}" if f.delta_V is not None else "")
+                                + f", rel. error {f.force_relative_error_percent:.2f} %"),
+                      out_dir / "fig11_measured_vs_simulated.png"))
+    paths.append(save(bounds_figure(report), out_dir / "fig12_bounds.png"))
+    paths.append(save(identifiability_figure(report), out_dir / "identifiability.png"))
+    if report.joint is not None and report.joint.success and report.holdout_files:
+        held = [x for x in tests if x.file == report.holdout_files[0]]
+        pr = simulate_tests(held, report.data.harvester, report.joint.parameters,
+                            has_generator=report.data.has_generator)[0]
+        err = report.holdout_errors[0]
+        paths.append(save(bench_fit(held[0], pr, title=f"Joint fit on held-out test "
+                                    f"{held[0].label}: δ_F = {err['delta_F']:.3f}, rel. error "
+                                    f"{err['force_relative_error_percent']:.2f} %"),
+                          out_dir / "joint_fit_holdout.png"))
+    return paths
