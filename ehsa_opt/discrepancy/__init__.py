@@ -1,0 +1,1 @@
+"""Model-discrepancy workflow (SPEC §7–9)."""
