@@ -105,6 +105,9 @@ class RodModel:
         return 0
 
 
+_MODELS: dict[tuple, Any] = {}
+
+
 @dataclass(frozen=True)
 class Rig:
     """What is fitted: harvester constants, rig kind and the model's components."""
@@ -114,9 +117,14 @@ class Rig:
     components: tuple[Component, ...] = ()
 
     def model(self) -> BenchModel | RodModel:
-        if self.has_generator:
-            return BenchModel(self.harvester, self.components)
-        return RodModel(self.harvester, self.components)
+        """The rig's model (cached: one model object per distinct rig, kept alive —
+        :func:`~ehsa_opt.bench.simulate_bench` caches integrators by model identity)."""
+        key = (self.has_generator, self.harvester,
+               tuple((type(c).__name__, tuple(sorted(vars(c).items()))) for c in self.components))
+        if key not in _MODELS:
+            _MODELS[key] = (BenchModel(self.harvester, self.components) if self.has_generator
+                            else RodModel(self.harvester, self.components))
+        return _MODELS[key]
 
     def with_components(self, components: Sequence[Component]) -> "Rig":
         return Rig(self.harvester, self.has_generator, tuple(components))
