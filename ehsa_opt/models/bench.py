@@ -16,14 +16,21 @@ states θ, ω)::
     J ω̇ = r f_t − K_t i − T_b(ω) − Σ τ_extra
     F   = f_t + F_ns(v) + Σ f_extra
 
+Rig without a generator (``generator=False``, e.g. EMPS): no winding, i ≡ 0 and
+V ≡ 0; two more parameters ``inertia_kg`` (M) and ``offset_N`` (F_0) enter the
+rod force, and on a rigid transmission the rotor inertia is lumped into M::
+
+    F = M a + F_0 + (T_b(ω) + Σ τ_extra) / r + F_ns(v) + Σ f_extra      (rigid)
+    F = f_t + M a + F_0 + F_ns(v) + Σ f_extra                           (elastic; J kept)
+
 Nut–screw friction F_ns acts at the rod velocity; bearing friction T_b on the
 rotor speed (SPEC §2).  With L_i = 0 the current is algebraic, i = e/R (the
 exact quasi-static limit).  The equivalent rigid-model force is
 F = m_eq a + K_t i/r + F_ns(v) + T_b(v/r)/r (paper Eq 4, SPEC §1).
 
 Parameters are a flat vector ``p`` in :attr:`BenchModel.param_names` order:
-``load_ohm``, the eight friction names of SPEC §7, then each component's
-parameters.  States are named in :attr:`BenchModel.state_names`.
+``load_ohm``, the eight friction names of SPEC §7, then (``generator=False``
+only) ``inertia_kg`` and ``offset_N``, then each component's parameters.  States are named in :attr:`BenchModel.state_names`.
 """
 
 from __future__ import annotations
@@ -37,7 +44,10 @@ from ..friction import bearing_friction_Nm, nut_friction_N
 from ..params import FRICTION_NAMES, FrictionParams, HarvesterParams
 from .components import Component, ParamSpec
 
-__all__ = ["BenchModel"]
+__all__ = ["BenchModel", "RIG_PARAM_NAMES"]
+
+#: Extra parameters of a rig without generator: rod inertia M (kg) and force offset F_0 (N).
+RIG_PARAM_NAMES: tuple[str, ...] = ("inertia_kg", "offset_N")
 
 
 class BenchModel:
@@ -50,6 +60,9 @@ class BenchModel:
         load is the parameter ``load_ohm`` of each simulation).
     components : sequence of Component
         Extra physical effects; at most one may be a transmission component.
+    generator : bool
+        False for a rig without generator (no winding, no voltage; adds the
+        parameters ``inertia_kg`` and ``offset_N``, see the module docstring).
 
     Attributes
     ----------
@@ -70,8 +83,9 @@ class BenchModel:
     """
 
     def __init__(self, harvester: HarvesterParams | None = None,
-                 components: Sequence[Component] = ()) -> None:
+                 components: Sequence[Component] = (), generator: bool = True) -> None:
         self.harvester = harvester or HarvesterParams()
+        self.generator = bool(generator)
         self.components = list(components)
         trans = [c for c in self.components if c.transmission]
         if len(trans) > 1:
@@ -85,13 +99,14 @@ class BenchModel:
         for c in self.components:
             for q in c.parameters:
                 self.param_specs[q.name] = q
-        self.param_names = ["load_ohm", *FRICTION_NAMES, *self.param_specs]
+        self.rig_names = [] if self.generator else list(RIG_PARAM_NAMES)
+        self.param_names = ["load_ohm", *FRICTION_NAMES, *self.rig_names, *self.param_specs]
         self._build()
 
     # ------------------------------------------------------------------ construction
     @property
     def has_inductance(self) -> bool:
-        return self.harvester.inductance_H > 0.0
+        return self.generator and self.harvester.inductance_H > 0.0
 
     def _build(self) -> None:
         h = self.harvester
@@ -103,7 +118,9 @@ class BenchModel:
         xr, vr, ar = u[0], u[1], u[2]
         Re = p[0]
         fr = [p[1 + k] for k in range(8)]
-        pc = {n: p[9 + k] for k, n in enumerate(self.param_specs)}
+        nrig = len(self.rig_names)
+        prig = {n: p[9 + k] for k, n in enumerate(self.rig_names)}
+        pc = {n: p[9 + nrig + k] for k, n in enumerate(self.param_specs)}
 
         states: list[tuple[str, Any]] = []
         if self.transmission is not None:
@@ -112,7 +129,7 @@ class BenchModel:
             states += [("rotor_angle_rad", theta), ("rotor_speed_rad_per_s", omega)]
         else:
             theta, omega = xr / r, vr / r
-        i_sym = ca.SX.sym("current_A") if L > 0 else None
+        i_sym = ca.SX.sym("current_A") if self.has_inductance else None
         if i_sym is not None:
             states.insert(0, ("current_A", i_sym))
 
@@ -124,7 +141,10 @@ class BenchModel:
         for c in self.components:
             e = c.emf(e, s, pc)
         R = Re + Ri
-        i = i_sym if i_sym is not None else e / R
+        if not self.generator:
+            i = ca.SX(0)
+        else:
+            i = i_sym if i_sym is not None else e / R
         s["i"] = i
         T_b = bearing_friction_Nm(omega, fr)
         F_ns = nut_friction_N(vr, fr)
@@ -137,21 +157,28 @@ class BenchModel:
             f_t = self.transmission.coupling_force(s, pc)
             rates["rotor_angle_rad"] = omega
             rates["rotor_speed_rad_per_s"] = (r * f_t - Kt * i - T_b - tau_extra) / J
-        else:
+        elif self.generator:
             f_t = (J * ar / r + Kt * i + T_b + tau_extra) / r
-        force = f_t + F_ns + f_extra
+        else:  # rotor inertia lumped into inertia_kg
+            f_t = (T_b + tau_extra) / r
+        f_rig = prig["inertia_kg"] * ar + prig["offset_N"] if not self.generator else 0.0
+        force = f_t + F_ns + f_extra + f_rig
         volt = Re * i
 
         # energy bookkeeping: power in = load + winding + friction + dissipation + d(stored)/dt
         # The emf transformation is lossless only if identity; components that change
         # the emf report their own dissipation (e.g. a voltage drop dissipates (Ke ω − e) i).
-        stored = 0.5 * J * omega ** 2
+        stored = 0.5 * J * omega ** 2 if (self.generator or self.transmission is not None) \
+            else 0.5 * prig["inertia_kg"] * vr ** 2
+        if not self.generator and self.transmission is not None:
+            stored += 0.5 * prig["inertia_kg"] * vr ** 2
+        comp_offset = prig["offset_N"] * vr if not self.generator else 0.0
         if i_sym is not None:
             stored += 0.5 * L * i_sym ** 2
         for c in self.components:
             stored += c.stored_energy(s, pc)
         comp_diss = sum((c.dissipated_power(s, pc) for c in self.components), ca.SX(0))
-        comp_diss += tau_extra * omega + f_extra * vr
+        comp_diss += tau_extra * omega + f_extra * vr + comp_offset
         energy = ca.vertcat(force * vr, Re * i ** 2, Ri * i ** 2, F_ns * vr + T_b * omega,
                             comp_diss, stored)
 
@@ -170,9 +197,13 @@ class BenchModel:
 
     def param_vector(self, load_ohm: float, friction: FrictionParams | None = None,
                      effects: Mapping[str, float] | None = None) -> np.ndarray:
-        """Assemble ``p``; component parameters default to their ParamSpec defaults."""
+        """Assemble ``p``; component parameters default to their ParamSpec defaults.
+
+        For ``generator=False`` ``effects`` may also set ``inertia_kg`` and
+        ``offset_N`` (defaults 0)."""
         friction = friction or FrictionParams()
-        values = {q.name: q.default for q in self.param_specs.values()}
+        values = {n: 0.0 for n in self.rig_names}
+        values.update({q.name: q.default for q in self.param_specs.values()})
         for k, v in (effects or {}).items():
             if k not in values:
                 from ..params import nearest_name
@@ -201,5 +232,6 @@ class BenchModel:
         return np.array(out, dtype=float)
 
     def __repr__(self) -> str:
-        return f"BenchModel(components={self.components!r}, states={self.state_names})"
+        gen = "" if self.generator else ", generator=False"
+        return f"BenchModel(components={self.components!r}, states={self.state_names}{gen})"
 
