@@ -1,10 +1,11 @@
 """Re-identification for the discrepancy workflow: one parameter set for a group of
 tests, generic over the bench model's components, by direct collocation + IPOPT.
 
-The model is a :class:`~ehsa_opt.models.bench.BenchModel` (rigs with a generator)
-or a :class:`RodModel` (rigs without, e.g. EMPS: ``M a + friction(v) + offset``),
-both with the same ``(x, u, p)`` CasADi functions, so any registered
-:class:`~ehsa_opt.models.components.Component` plugs in without a copy of the model.
+The model is the :class:`~ehsa_opt.models.bench.BenchModel` (``generator=False``
+for rigs without generator, e.g. EMPS: ``M a + friction(v) + offset``), so any
+registered :class:`~ehsa_opt.models.components.Component` plugs in without a copy
+of the model.  Without a generator the bearing friction is fixed at zero (it is
+indistinguishable from the nut friction at the rod).
 
 Transcription (on each test's own sample grid): the states of every sample are
 decision variables; defects use the trapezoidal rule for mechanical states and
@@ -32,17 +33,22 @@ import numpy as np
 
 from ..bench import simulate_bench
 from ..data import BenchTest
-from ..friction import nut_friction_N
+from ..identify import force_relative_error_percent
 from ..models import BenchModel
 from ..models.components import Component, ParamSpec
 from ..motion import SampledMotion, SineMotion
 from ..params import FRICTION_NAMES, HarvesterParams
 
-__all__ = ["RodModel", "Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
-           "fit_group", "predict", "force_relative_error_percent", "linear_baseline",
+__all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
+           "fit_group", "predict", "FilteredMotion", "force_relative_error_percent", "linear_baseline",
            "BASE_SPECS"]
 
 NUT_NAMES = FRICTION_NAMES[:4]
+
+#: Values fixed on a rig without generator: no load, no (separable) bearing friction.
+NO_GENERATOR_FIXED: dict[str, float] = {
+    "load_ohm": 1.0, "bearing_breakaway_Nm": 0.0, "bearing_coulomb_Nm": 0.0,
+    "bearing_breakaway_velocity_rad_per_s": 1.0, "bearing_viscous_Nms_per_rad": 0.0}
 
 #: Bounds and typical scales of the base parameters (bounds wider than the SPEC §2
 #: distributor ranges, which are for drawing starts, not limits).
@@ -69,42 +75,6 @@ def _scale(spec: ParamSpec) -> float:
     return max(abs(spec.lower), abs(spec.upper)) / 20.0 or 1.0
 
 
-class RodModel:
-    """Rig without generator (EMPS): F = M a + F_ns(v) + offset + Σ component forces.
-
-    Same interface as :class:`BenchModel` (``param_names``, ``param_specs``,
-    ``state_names``, ``outputs``); components may use ``rod_force`` and
-    ``rotor_torque`` (θ = x/r) but not a transmission (no rotor state is measured).
-    """
-
-    def __init__(self, harvester: HarvesterParams | None = None,
-                 components: Sequence[Component] = ()) -> None:
-        self.harvester = harvester or HarvesterParams()
-        self.components = list(components)
-        for c in self.components:
-            if c.transmission:
-                raise ValueError(f"RodModel: '{c.name}' is a transmission component; a rig "
-                                 f"without generator has no rotor state to carry it")
-        self.param_specs = {q.name: q for c in self.components for q in c.parameters}
-        self.param_names = ["inertia_kg", "offset_N", *NUT_NAMES, *self.param_specs]
-        self.state_names: list[str] = []
-        r = self.harvester.lead_m_per_rad
-        u = ca.SX.sym("u", 3)
-        p = ca.SX.sym("p", len(self.param_names))
-        pc = {n: p[6 + k] for k, n in enumerate(self.param_specs)}
-        s = {"x": u[0], "v": u[1], "a": u[2], "theta": u[0] / r, "omega": u[1] / r}
-        force = p[0] * u[2] + p[1] + nut_friction_N(u[1], [p[2], p[3], p[4], p[5]])
-        for c in self.components:
-            force += c.rod_force(s, pc) + c.rotor_torque(s, pc) / r
-        x = ca.SX(0, 1)
-        self.outputs = ca.Function("rod_out", [x, u, p], [force], ["x", "u", "p"], ["y"])
-        self.ode = None
-
-    @property
-    def n_states(self) -> int:
-        return 0
-
-
 _MODELS: dict[tuple, Any] = {}
 
 
@@ -116,14 +86,14 @@ class Rig:
     has_generator: bool = True
     components: tuple[Component, ...] = ()
 
-    def model(self) -> BenchModel | RodModel:
+    def model(self) -> BenchModel:
         """The rig's model (cached: one model object per distinct rig, kept alive —
         :func:`~ehsa_opt.bench.simulate_bench` caches integrators by model identity)."""
         key = (self.has_generator, self.harvester,
                tuple((type(c).__name__, tuple(sorted(vars(c).items()))) for c in self.components))
         if key not in _MODELS:
-            _MODELS[key] = (BenchModel(self.harvester, self.components) if self.has_generator
-                            else RodModel(self.harvester, self.components))
+            _MODELS[key] = BenchModel(self.harvester, self.components,
+                                      generator=self.has_generator)
         return _MODELS[key]
 
     def with_components(self, components: Sequence[Component]) -> "Rig":
@@ -168,20 +138,50 @@ def _sine_motion(test: BenchTest) -> SineMotion:
     return SineMotion(float(math.hypot(a, b)), float(test.frequency_hz), float(math.atan2(b, a)))
 
 
+class FilteredMotion:
+    """Recorded motion differentiated the way inverse-model identification does it
+    (EMPS reference): zero-phase 4th-order Butterworth low-pass, then central
+    differences.  A CVODES simulation needs a continuous motion: :meth:`sampled`
+    gives a :class:`~ehsa_opt.motion.SampledMotion` through the filtered samples."""
+
+    def __init__(self, time_s: np.ndarray, displacement_m: np.ndarray, cutoff_hz: float) -> None:
+        from scipy.signal import butter, filtfilt
+        t = np.asarray(time_s, float)
+        dt = float(np.median(np.diff(t)))
+        wn = min(2.0 * cutoff_hz * dt, 0.99)
+        b, a = butter(4, wn)
+        x = filtfilt(b, a, np.asarray(displacement_m, float))
+        v = np.gradient(x, t)
+        self.time_s, self.u = t, np.vstack([x, v, np.gradient(v, t)])
+        self.cutoff_hz = cutoff_hz
+
+    def evaluate(self, t: np.ndarray) -> np.ndarray:
+        return np.vstack([np.interp(t, self.time_s, row) for row in self.u])
+
+    def sampled(self) -> SampledMotion:
+        return SampledMotion(self.time_s, self.u[0], smoothing=1e-12)
+
+
 def prepare_tests(tests: Sequence[BenchTest], has_generator: bool = True,
-                  smoothing: float | None = None) -> list[PreparedTest]:
-    """Motion, measured outputs and noise levels of each test."""
+                  derivative_cutoff_hz: float | None = None) -> list[PreparedTest]:
+    """Motion, measured outputs and noise levels of each test.
+
+    Sine tests: the sine of the test frequency fitted to the measured
+    displacement.  Recorded tests: :class:`FilteredMotion` with cut-off
+    ``derivative_cutoff_hz`` (default: a tenth of the sample rate).
+    """
     out = []
     for t in tests:
         if t.excitation == "sine" and t.frequency_hz:
             motion: Any = _sine_motion(t)
         else:
-            motion = SampledMotion(t.time_s, t.displacement_m, smoothing)
+            fs = 1.0 / float(np.median(np.diff(t.time_s)))
+            motion = FilteredMotion(t.time_s, t.displacement_m, derivative_cutoff_hz or fs / 10)
         u = motion.evaluate(t.time_s)
         ys = [t.force_N] + ([t.voltage_V] if has_generator and t.voltage_V is not None else [])
         y = np.vstack(ys)
         sig = np.array([noise_std(row) for row in y])
-        fixed = {"load_ohm": float(t.load_ohm)} if has_generator else {}
+        fixed = {"load_ohm": float(t.load_ohm)} if has_generator else dict(NO_GENERATOR_FIXED)
         out.append(PreparedTest(t, motion, t.time_s, u, y, sig, fixed))
     return out
 
@@ -322,8 +322,10 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     h = rig.harvester
     specs = {**BASE_SPECS, **model.param_specs}
     names = [n for n in model.param_names if n != "load_ohm"]
-    free = list(free) if free is not None else list(names)
+    free = list(free) if free is not None else rig.base_names + list(model.param_specs)
     fixed = dict(fixed or {})
+    if not rig.has_generator:
+        fixed = {**NO_GENERATOR_FIXED, **fixed}
     scales = np.array([_scale(specs[n]) for n in free])
     z = ca.MX.sym("z", len(free))
     psym = {n: z[k] * scales[k] for k, n in enumerate(free)}
@@ -493,7 +495,7 @@ def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str,
         vals = {**pt.fixed, **parameters}
         p = np.array([float(vals[n]) for n in model.param_names])
         ny = pt.y.shape[0]
-        if model.n_states == 0 and isinstance(model, RodModel):
+        if model.n_states == 0:  # algebraic model: evaluate on the samples
             y = np.array(model.outputs.map(pt.time_s.size)(np.zeros((0, pt.time_s.size)),
                                                           pt.u, p))
             out.append(y[:ny])
@@ -507,14 +509,9 @@ def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str,
             sim = simulate_bench(model, pt.motion, p, grid, rtol=1e-7, atol=1e-9)
             keep = slice(nw, None)
         else:
-            sim = simulate_bench(model, pt.motion, p, t, rtol=1e-7, atol=1e-9)
+            motion = pt.motion.sampled() if isinstance(pt.motion, FilteredMotion) else pt.motion
+            sim = simulate_bench(model, motion, p, t, rtol=1e-7, atol=1e-9)
             keep = slice(None)
         y = np.vstack([sim.force_N[keep], sim.voltage_V[keep]])
         out.append(y[:ny])
     return out
-
-
-def force_relative_error_percent(sim: np.ndarray, meas: np.ndarray) -> float:
-    """100 ‖F_sim − F_meas‖ / ‖F_meas‖ (the EMPS benchmark's relative error, SPEC §9)."""
-    sim, meas = np.asarray(sim, float), np.asarray(meas, float)
-    return float(100.0 * np.linalg.norm(sim - meas) / np.linalg.norm(meas))
