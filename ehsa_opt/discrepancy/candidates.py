@@ -38,8 +38,10 @@ class Candidate:
     probes : tuple of dict
         Parameter sets whose output change is a signature column each.
     starts : tuple of dict
-        Initial values of the effect parameters for re-identification (one fit
-        start each, combined with the baseline friction).
+        Candidate initial values of the effect parameters for re-identification
+        (combined with the baseline friction); they are screened by forward
+        simulation and IPOPT starts from the best (nonconvex effects such as a
+        gap need a start near the right magnitude).
     needs_generator : bool
         Only testable on rigs that measure the generator (voltage, rotor).
     """
@@ -61,7 +63,8 @@ CANDIDATES: dict[str, Candidate] = {
     "backlash": Candidate(
         "backlash",
         probes=({"backlash_gap_m": 5e-5}, {"backlash_gap_m": 2e-4}),
-        starts=({"backlash_gap_m": 4e-5}, {"backlash_gap_m": 2e-4}),
+        starts=tuple({"backlash_gap_m": g, "backlash_contact_stiffness_N_per_m": k}
+                     for g in (2e-5, 5e-5, 1e-4, 2e-4, 4e-4) for k in (2e6, 1e7)),
         needs_generator=True),
     "asymmetric_friction": Candidate(
         "asymmetric_friction",
@@ -75,13 +78,13 @@ CANDIDATES: dict[str, Candidate] = {
         "compliance",
         probes=({"compliance_stiffness_N_per_m": 1e6, "compliance_damping_Ns_per_m": 1e3},
                 {"compliance_stiffness_N_per_m": 1e7, "compliance_damping_Ns_per_m": 1e3}),
-        starts=({"compliance_stiffness_N_per_m": 1e6, "compliance_damping_Ns_per_m": 1e3},
-                {"compliance_stiffness_N_per_m": 1e7, "compliance_damping_Ns_per_m": 3e3}),
+        starts=tuple({"compliance_stiffness_N_per_m": k, "compliance_damping_Ns_per_m": c}
+                     for k in (3e5, 1e6, 3e6, 1e7, 3e7) for c in (3e2, 3e3)),
         needs_generator=True),
     "voltage_drop": Candidate(
         "voltage_drop",
         probes=({"voltage_drop_V": 0.5},),
-        starts=({"voltage_drop_V": 0.3},),
+        starts=({"voltage_drop_V": 0.1}, {"voltage_drop_V": 0.5}, {"voltage_drop_V": 1.5}),
         needs_generator=True),
 }
 assert set(CANDIDATES) <= set(COMPONENTS)
