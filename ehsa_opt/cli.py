@@ -81,6 +81,21 @@ def _cmd_bench_convert_emps(args: argparse.Namespace) -> int:
     return 0
 
 
+# ------------------------------------------------------------------ discrepancy
+def _cmd_discrepancy(args: argparse.Namespace) -> int:
+    from .discrepancy import DiscrepancySettings, run_discrepancy
+    from .discrepancy_report import write_report
+
+    settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
+                                   max_tests=args.max_tests)
+    res = run_discrepancy(args.data_dir, settings, log=lambda m: print(m, flush=True))
+    js, md = write_report(res, args.out)
+    print(f"effect: {res.effect}; relative force error on {res.evaluation}: "
+          f"{res.error_before:.3f} % -> {res.error_after:.3f} %")
+    print(f"wrote {js} and {md} ({res.seconds:.0f} s)")
+    return 0
+
+
 # ------------------------------------------------------------------ reproduce
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .reproduce import reproduce
@@ -119,6 +134,18 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("out_dir", metavar="OUT_DIR")
     e.add_argument("--overwrite", action="store_true")
     e.set_defaults(func=_cmd_bench_convert_emps)
+
+    d = sub.add_parser("discrepancy", help="find, name and add the missing effect in a model "
+                                           "(localise residuals, rank candidates, re-identify)")
+    d.add_argument("data_dir", metavar="DATA_DIR")
+    d.add_argument("--out", required=True, metavar="OUT_DIR",
+                   help="writes discrepancy.json, report.md and figures/")
+    d.add_argument("--jobs", type=int, default=1, help="parallel candidate fits (default 1)")
+    d.add_argument("--seed", type=int, default=0, help="seed of the held-out split (default 0)")
+    d.add_argument("--top", type=int, default=3, help="candidates re-identified (default 3)")
+    d.add_argument("--max-tests", type=int, default=None,
+                   help="use at most this many tests, spread over the grid")
+    d.set_defaults(func=_cmd_discrepancy)
 
     r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data")
     r.add_argument("--quick", action="store_true", help="fewer starts, shorter roads (minutes)")

@@ -195,6 +195,10 @@ STEPS: list[Step] = [
     Step("harvester", "Harvester equivalent quantities (paper Eqs 1–3)", _step_harvester),
     Step("bench_truth", "Bench model against the embedded data", _step_bench_truth,
          lambda ctx: _data_digest(_data_paths()[0])),
+    Step("discrepancy", "Model discrepancy: find, name and add the missing effect (SPEC §7–9)",
+         lambda ctx: __import__("ehsa_opt.discrepancy_report",
+                                fromlist=["step_discrepancy"]).step_discrepancy(ctx),
+         lambda ctx: [_data_digest(p) for p in _data_paths()]),
 ]
 
 
