@@ -188,6 +188,11 @@ def _step_bench_truth(ctx: Context) -> StepOutput:
     return StepOutput(md, [rel], {"rms_force_error_N": err})
 
 
+def _step_discrepancy(ctx: Context) -> StepOutput:
+    from .discrepancy_report import step_discrepancy  # lazy: it imports this module
+    return step_discrepancy(ctx)
+
+
 #: The pipeline, in order. Later capabilities append their steps here.
 STEPS: list[Step] = [
     Step("data", "Embedded data", _step_data,
@@ -196,8 +201,7 @@ STEPS: list[Step] = [
     Step("bench_truth", "Bench model against the embedded data", _step_bench_truth,
          lambda ctx: _data_digest(_data_paths()[0])),
     Step("discrepancy", "Model discrepancy: find, name and add the missing effect (SPEC §7–9)",
-         lambda ctx: __import__("ehsa_opt.discrepancy_report",
-                                fromlist=["step_discrepancy"]).step_discrepancy(ctx),
+         lambda ctx: _step_discrepancy(ctx),
          lambda ctx: [_data_digest(p) for p in _data_paths()]),
 ]
 

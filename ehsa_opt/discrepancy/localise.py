@@ -237,6 +237,7 @@ def localise(prepared: Sequence[PreparedTest], predictions: Sequence[np.ndarray]
                 stats_[name] = st
         h, hf = _harmonic_share(prepared, res)
         ms = float(np.mean(r_all ** 2))
-        loc.channels[names[ch]] = ChannelMap(names[ch], math.sqrt(ms), max(0.0, 1 - 1 / ms),
+        loc.channels[names[ch]] = ChannelMap(names[ch], math.sqrt(ms),
+                                             max(0.0, 1 - 1 / ms) if ms > 0 else 0.0,
                                              stats_, h, hf, per_test)
     return loc
