@@ -62,6 +62,11 @@ class DiscrepancySettings:
         Use at most this many tests (spread over the grid), e.g. for quick runs.
     max_iter : int
         IPOPT iterations per fit.
+    max_samples : int or None
+        Sine tests longer than this are cropped to their last ``max_samples``
+        samples (whole recorded tests such as EMPS are never cropped): the
+        collocation grows with the samples, and half a cycle already holds a
+        velocity reversal.
     seed : int
         Seeds the held-out split.
     jobs : int
@@ -72,6 +77,7 @@ class DiscrepancySettings:
     top: int = 3
     max_tests: int | None = None
     max_iter: int = 150
+    max_samples: int | None = 1500
     seed: int = 0
     jobs: int = 1
 
@@ -85,6 +91,9 @@ class DiscrepancySettings:
         if self.max_tests is not None and not (isinstance(self.max_tests, int)
                                                and self.max_tests >= 1):
             raise ValueError("DiscrepancySettings: max_tests must be None or an integer >= 1")
+        if self.max_samples is not None and not (isinstance(self.max_samples, int)
+                                                 and self.max_samples >= 50):
+            raise ValueError("DiscrepancySettings: max_samples must be None or an integer >= 50")
         if not (isinstance(self.jobs, int) and self.jobs >= 1):
             raise ValueError(f"DiscrepancySettings: jobs must be an integer >= 1, got {self.jobs!r}")
 
@@ -232,6 +241,17 @@ def split_tests(tests: Sequence[BenchTest], seed: int = 0, max_tests: int | None
     return fit, held
 
 
+def _crop(t: BenchTest, n: int) -> BenchTest:
+    """The last ``n`` samples of a sine test (recorded tests are returned whole)."""
+    if t.excitation != "sine" or t.n_samples <= n:
+        return t
+    from dataclasses import replace
+    k = slice(t.n_samples - n, None)
+    return replace(t, time_s=t.time_s[k], displacement_m=t.displacement_m[k],
+                   force_N=t.force_N[k],
+                   voltage_V=t.voltage_V[k] if t.voltage_V is not None else None)
+
+
 def _tau(r: np.ndarray) -> float:
     """Integrated autocorrelation time (initial positive sequence), ≥ 1."""
     r = r - r.mean()
@@ -327,6 +347,9 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
         data = load_bench(data)
     rig = Rig(data.harvester, data.has_generator, ())
     fit_t, held_t = split_tests(data.tests, settings.seed, settings.max_tests)
+    if settings.max_samples is not None:
+        fit_t = [_crop(t, settings.max_samples) for t in fit_t]
+        held_t = [_crop(t, settings.max_samples) for t in held_t]
     fit_pts = prepare_tests(fit_t, data.has_generator)
     held_pts = prepare_tests(held_t, data.has_generator) if held_t else []
     evaluation = "held-out" if held_pts else "all data"
