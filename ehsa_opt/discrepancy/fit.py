@@ -447,7 +447,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     g_lb = np.concatenate([np.zeros(ng_dyn - n_order), np.zeros(n_order)])
     g_ub = np.concatenate([np.zeros(ng_dyn - n_order), np.full(n_order, np.inf)])
     w = ca.vertcat(*wparts)
-    opts = {"ipopt.print_level": int(__import__("os").environ.get("EHSA_IPOPT_PRINT", "0")), "print_time": False, "ipopt.max_iter": max_iter,
+    opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.max_iter": max_iter,
             "ipopt.tol": 1e-8, "ipopt.acceptable_tol": 1e-5, "ipopt.mu_strategy": "adaptive",
             "ipopt.max_cpu_time": max_cpu_s}
     solver = ca.nlpsol("discrepancy_fit", "ipopt", {"x": w, "f": obj, "g": g}, opts)
