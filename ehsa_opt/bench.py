@@ -62,7 +62,9 @@ class BenchSimulation:
         return float((e["work_in"][-1] - out) / e["work_in_abs"][-1])
 
 
-_INTEGRATOR_CACHE: dict[tuple, ca.Function] = {}
+# values keep a reference to the model: an id() of a garbage-collected model can be
+# reused by a new, different model, which must not get the old integrator
+_INTEGRATOR_CACHE: dict[tuple, tuple[BenchModel, ca.Function]] = {}
 
 
 def _integrator(model: BenchModel, motion: Any, grid: np.ndarray, rtol: float,
@@ -70,8 +72,8 @@ def _integrator(model: BenchModel, motion: Any, grid: np.ndarray, rtol: float,
     """Build (and for sine motions cache) the CVODES integrator."""
     sine = isinstance(motion, SineMotion)
     key = (id(model), len(grid), float(grid[0]), float(grid[-1]), rtol, atol) if sine else None
-    if key is not None and key in _INTEGRATOR_CACHE:
-        return _INTEGRATOR_CACHE[key]
+    if key is not None and key in _INTEGRATOR_CACHE and _INTEGRATOR_CACHE[key][0] is model:
+        return _INTEGRATOR_CACHE[key][1]
     t = ca.MX.sym("t")
     p = ca.MX.sym("p", len(model.param_names))
     if sine:
@@ -95,7 +97,7 @@ def _integrator(model: BenchModel, motion: Any, grid: np.ndarray, rtol: float,
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 500000}
     F = ca.integrator("bench_sim", "cvodes", dae, float(grid[0]), grid[1:].tolist(), opts)
     if key is not None:
-        _INTEGRATOR_CACHE[key] = F
+        _INTEGRATOR_CACHE[key] = (model, F)
     return F
 
 
