@@ -212,6 +212,19 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         print(f"  M = {p['inertia_kg']:.2f} kg, F_v = {p['nut_viscous_Ns_per_m']:.1f} N s/m, "
               f"F_C = {p['nut_coulomb_N']:.2f} N, offset = {p['offset_N']:.2f} N")
     return 0 if ok else 1
+# ------------------------------------------------------------------ discrepancy
+def _cmd_discrepancy(args: argparse.Namespace) -> int:
+    from .discrepancy import DiscrepancySettings, run_discrepancy
+    from .discrepancy_report import write_report
+
+    settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
+                                   max_tests=args.max_tests)
+    res = run_discrepancy(args.data_dir, settings, log=lambda m: print(m, flush=True))
+    js, md = write_report(res, args.out)
+    print(f"effect: {res.effect}; relative force error on {res.evaluation}: "
+          f"{res.error_before:.3f} % -> {res.error_after:.3f} %")
+    print(f"wrote {js} and {md} ({res.seconds:.0f} s)")
+    return 0
 
 
 # ------------------------------------------------------------------ reproduce
@@ -334,6 +347,17 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--jobs", type=int, default=1, help="parallel processes (default 1)")
     i.add_argument("--seed", type=int, default=0, help="seed of the start draws (default 0)")
     i.set_defaults(func=_cmd_identify)
+    d = sub.add_parser("discrepancy", help="find, name and add the missing effect in a model "
+                                           "(localise residuals, rank candidates, re-identify)")
+    d.add_argument("data_dir", metavar="DATA_DIR")
+    d.add_argument("--out", required=True, metavar="OUT_DIR",
+                   help="writes discrepancy.json, report.md and figures/")
+    d.add_argument("--jobs", type=int, default=1, help="parallel candidate fits (default 1)")
+    d.add_argument("--seed", type=int, default=0, help="seed of the held-out split (default 0)")
+    d.add_argument("--top", type=int, default=3, help="candidates re-identified (default 3)")
+    d.add_argument("--max-tests", type=int, default=None,
+                   help="use at most this many tests, spread over the grid")
+    d.set_defaults(func=_cmd_discrepancy)
 
     r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data")
     r.add_argument("--quick", action="store_true", help="fewer starts, shorter roads (minutes)")

@@ -235,8 +235,14 @@ def _design_steps() -> list[Step]:
     ]
 
 
-#: The pipeline, in order: bench data and model (§2) → identification (§3) → §4.1 studies
-#: → design (§4.2) → friction on the optimum (Fig 20, Table 4, Fig 21) → real EMPS data.
+def _step_discrepancy(ctx: Context) -> StepOutput:
+    from .discrepancy_report import step_discrepancy  # lazy: it imports this module
+    return step_discrepancy(ctx)
+
+
+#: The pipeline, in order: bench data and model (§2) → identification (§3) → discrepancy
+#: (backlash; EMPS asymmetric friction) → §4.1 studies → design (§4.2) → friction on the
+#: optimum (Fig 20, Table 4, Fig 21) → real EMPS identification.
 STEPS: list[Step] = [
     Step("data", "Embedded data", _step_data,
          lambda ctx: [_data_digest(ctx_path) for ctx_path in _data_paths()]),
@@ -247,6 +253,8 @@ STEPS: list[Step] = [
          "(paper §3, Table 2, Figs 8–12)",
          lambda ctx: _identify_steps().step_identify_prototype(ctx),
          lambda ctx: _data_digest(_data_paths()[0])),
+    Step("discrepancy", "Model discrepancy: find, name and add the missing effect (SPEC §7–9)",
+         _step_discrepancy, lambda ctx: [_data_digest(p) for p in _data_paths()]),
     Step("qc_paths", "Quarter car: W_k, frequency vs time domain, dissipation bound",
          lambda ctx: _quarter_car_step("step_quarter_car_paths", ctx), lambda ctx: ctx.quick),
     Step("qc_fig13", "Quarter car: frequency responses, no/min/max friction (paper Fig 13)",

@@ -28,8 +28,9 @@ from typing import Any, ClassVar
 
 import casadi as ca
 
-__all__ = ["ParamSpec", "Component", "Backlash", "Compliance", "smooth_ramp", "smooth_step",
-           "COMPONENTS", "make_component"]
+__all__ = ["ParamSpec", "Component", "Backlash", "Compliance", "AsymmetricFriction", "Cogging",
+           "VoltageDrop", "smooth_ramp", "smooth_step", "smooth_abs", "COMPONENTS",
+           "make_component"]
 
 
 @dataclass(frozen=True)
@@ -52,6 +53,11 @@ def smooth_ramp(z: Any, eps: float) -> Any:
 def smooth_step(z: Any, eps: float) -> Any:
     """Heaviside(z) smoothed over ``eps`` (derivative of :func:`smooth_ramp`)."""
     return 0.5 * (1.0 + z / ca.sqrt(z * z + eps * eps))
+
+
+def smooth_abs(z: Any, eps: float) -> Any:
+    """|z| smoothed over ``eps``: √(z² + eps²) − eps (exactly 0 at z = 0)."""
+    return ca.sqrt(z * z + eps * eps) - eps
 
 
 def _ramp_energy(z: Any, eps: float) -> Any:
@@ -173,8 +179,102 @@ class Compliance(Component):
         return p["compliance_damping_Ns_per_m"] * s["delta_dot"] ** 2
 
 
+class AsymmetricFriction(Component):
+    """Direction-dependent Coulomb and viscous friction at the rod (SPEC §7, §9).
+
+    Adds ``ΔF_C tanh²(v/u_s) + Δf_v |v|`` (|·| smoothed) to the rod force, so that
+    the Coulomb level is F_C + ΔF_C for v > 0 and F_C − ΔF_C for v < 0 (likewise
+    f_v ± Δf_v) — the EMPS finding (Janot et al. 2019), traced to screw fatigue.
+    Its power ``f v`` is booked by the model as component dissipation.
+
+    Parameters
+    ----------
+    smoothing_m_per_s : float
+        u_s of the smoothed sign/absolute value, m/s.
+    """
+
+    name = "asymmetric_friction"
+    parameters = (
+        ParamSpec("asym_coulomb_N", "N", 0.0, -100.0, 100.0,
+                  "ΔF_C: Coulomb level is F_C ± ΔF_C for v ≷ 0"),
+        ParamSpec("asym_viscous_Ns_per_m", "N s/m", 0.0, -300.0, 300.0,
+                  "Δf_v: viscous coefficient is f_v ± Δf_v for v ≷ 0"),
+    )
+
+    def __init__(self, smoothing_m_per_s: float = 1e-3) -> None:
+        if not smoothing_m_per_s > 0:
+            raise ValueError("AsymmetricFriction: smoothing_m_per_s must be > 0 (m/s)")
+        self.smoothing_m_per_s = smoothing_m_per_s
+
+    def rod_force(self, s: dict, p: dict) -> Any:
+        v, e = s["v"], self.smoothing_m_per_s
+        sgn = ca.tanh(v / e)
+        return (p["asym_coulomb_N"] * sgn * sgn
+                + p["asym_viscous_Ns_per_m"] * smooth_abs(v, e))
+
+
+class Cogging(Component):
+    """Position-periodic (cogging/detent) torque of the generator rotor.
+
+    τ = T_s sin(n θ) + T_c cos(n θ) = T_cog sin(n θ + φ) with
+    T_cog = √(T_s² + T_c²), φ = atan2(T_c, T_s); on a rigid bench θ = x/r.
+    The sine/cosine form keeps the fit linear in the amplitudes.  The torque is
+    conservative on average; its power τ ω is booked as component power.
+
+    Parameters
+    ----------
+    periods_per_rev : int
+        n, cogging periods per rotor revolution (slots/poles), fixed.
+    """
+
+    name = "cogging"
+    parameters = (
+        ParamSpec("cogging_sin_Nm", "N m", 0.0, -0.1, 0.1, "T_s, sine part of the cogging torque"),
+        ParamSpec("cogging_cos_Nm", "N m", 0.0, -0.1, 0.1,
+                  "T_c, cosine part of the cogging torque"),
+    )
+
+    def __init__(self, periods_per_rev: int = 4) -> None:
+        if int(periods_per_rev) != periods_per_rev or periods_per_rev < 1:
+            raise ValueError("Cogging: periods_per_rev must be a positive integer")
+        self.periods_per_rev = int(periods_per_rev)
+
+    def rotor_torque(self, s: dict, p: dict) -> Any:
+        nth = self.periods_per_rev * s["theta"]
+        return p["cogging_sin_Nm"] * ca.sin(nth) + p["cogging_cos_Nm"] * ca.cos(nth)
+
+
+class VoltageDrop(Component):
+    """Brush or rectifier drop: a smooth dead zone of width ±V_d in the generator emf.
+
+    e' = ramp(e − V_d) − ramp(−e − V_d) (ramp smoothed over ``smoothing_V``); with
+    V_d = 0 this is exactly e.  The drop dissipates (e − e') i.
+    """
+
+    name = "voltage_drop"
+    parameters = (
+        ParamSpec("voltage_drop_V", "V", 0.0, 0.0, 5.0, "V_d, brush/diode forward drop"),
+    )
+
+    def __init__(self, smoothing_V: float = 0.05) -> None:
+        if not smoothing_V > 0:
+            raise ValueError("VoltageDrop: smoothing_V must be > 0 (V)")
+        self.smoothing_V = smoothing_V
+
+    def emf(self, e: Any, s: dict, p: dict) -> Any:
+        vd, eps = p["voltage_drop_V"], self.smoothing_V
+        out = smooth_ramp(e - vd, eps) - smooth_ramp(-e - vd, eps)
+        s["voltage_drop_lost_V"] = e - out  # read back by dissipated_power
+        return out
+
+    def dissipated_power(self, s: dict, p: dict) -> Any:
+        return s["voltage_drop_lost_V"] * s["i"]
+
+
 #: Registry of components by name (later effects register here too).
-COMPONENTS: dict[str, type[Component]] = {"backlash": Backlash, "compliance": Compliance}
+COMPONENTS: dict[str, type[Component]] = {
+    "backlash": Backlash, "compliance": Compliance, "asymmetric_friction": AsymmetricFriction,
+    "cogging": Cogging, "voltage_drop": VoltageDrop}
 
 
 def make_component(name: str, **kwargs: Any) -> Component:

@@ -1,0 +1,150 @@
+import json
+
+import numpy as np
+import pytest
+
+from ehsa_opt.cli import main
+from ehsa_opt.discrepancy import (CANDIDATES, DiscrepancySettings, Rig, fit_group, localise,
+                                  predict, prepare_tests, run_discrepancy, signature_scores,
+                                  split_tests)
+from ehsa_opt.discrepancy.fit import linear_baseline, noise_std
+from ehsa_opt.discrepancy.localise import reversal_times
+from ehsa_opt.models import COMPONENTS
+from ehsa_opt.params import HarvesterParams
+from ehsa_opt.synthetic import SyntheticSpec, generate_bench_tests, write_synthetic
+
+H = HarvesterParams()
+
+
+def _spec(effects, seed=5):
+    return SyntheticSpec(effects=effects, frequencies_hz=(1.5, 2.5, 3.5), loads_ohm=(15.0, 109.0),
+                         cycles=1.0, seed=seed)
+
+
+@pytest.fixture(scope="module")
+def backlash_dir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("bl") / "data"
+    return write_synthetic(d, _spec({"backlash": {}}))
+
+
+@pytest.fixture(scope="module")
+def clean_dir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("clean") / "data"
+    return write_synthetic(d, _spec({}))
+
+
+def test_every_candidate_is_a_registered_component():
+    for name in ("backlash", "asymmetric_friction", "cogging", "compliance", "voltage_drop"):
+        assert name in CANDIDATES and name in COMPONENTS
+
+
+def test_noise_std_recovers_white_noise_on_a_smooth_signal():
+    rng = np.random.default_rng(1)
+    t = np.linspace(0, 2, 2000)
+    y = 300 * np.sin(2 * np.pi * 1.5 * t) + rng.normal(0, 2.0, t.size)
+    y[500:505] += 80.0  # a short peak must not inflate the estimate
+    assert abs(noise_std(y) - 2.0) < 0.15
+
+
+def test_reversal_times():
+    t = np.arange(10.0)
+    v = np.array([1, 1, -1, -1, -1, 1, 1, 1, 1, -1.0])
+    r = reversal_times(t, v)
+    assert np.isnan(r[0]) and np.isnan(r[1])
+    np.testing.assert_allclose(r[2:], [0, 1, 2, 0, 1, 2, 3, 0])
+
+
+def test_localisation_flags_the_structured_coordinate_only():
+    tests = generate_bench_tests(SyntheticSpec(frequencies_hz=(1.0, 2.0), loads_ohm=(47.0,),
+                                               cycles=1.0, seed=2))
+    pts = prepare_tests(tests)
+    # simulated = measured minus noise, minus a structure tied to the rotor angle
+    rng = np.random.default_rng(0)
+    preds = []
+    for pt in pts:
+        y = pt.y - rng.normal(0, 1, pt.y.shape) * pt.sigma[:, None]
+        y[0] -= 6.0 * np.sin(4 * pt.u[0] / H.lead_m_per_rad)  # cogging-like in force
+        preds.append(y)
+    loc = localise(pts, preds, lead_m_per_rad=H.lead_m_per_rad)
+    f = loc.channels["force"]
+    assert f.ranking()[0].coordinate == "rotor_angle"
+    assert f.coordinates["rotor_angle"].structured
+    assert not any(c.structured for c in loc.channels["voltage"].coordinates.values())
+
+
+@pytest.mark.parametrize("effect,params", [
+    ("asymmetric_friction", {"asym_coulomb_N": 6.0, "asym_viscous_Ns_per_m": 30.0}),
+    ("voltage_drop", {"voltage_drop_V": 0.5}),
+])
+def test_signature_ranks_the_hidden_effect_first(effect, params):
+    tests = generate_bench_tests(_spec({effect: params}))
+    pts = prepare_tests(tests)
+    rig = Rig(H, True, ())
+    base = fit_group(pts, rig, [linear_baseline(pts, rig)])
+    assert base.success, base.message
+    pred = predict(pts, rig, base.parameters)
+    sc = signature_scores(pts, rig, base.parameters, pred)
+    best = max(sc, key=lambda n: sc[n]["score"])
+    assert best == effect
+    assert sc[effect]["score"] > 0.5
+
+
+def test_split_holds_out_every_third_test():
+    tests = generate_bench_tests(_spec({}))
+    fit, held = split_tests(tests, seed=0)
+    assert len(fit) == 4 and len(held) == 2
+    assert not {t.file for t in fit} & {t.file for t in held}
+    fit1, held1 = split_tests(tests[:2])
+    assert len(fit1) == 2 and held1 == []
+
+
+def test_backlash_hidden_is_named_and_the_gap_shrinks(backlash_dir, tmp_path):
+    out = tmp_path / "out"
+    assert main(["discrepancy", str(backlash_dir), "--out", str(out)]) == 0
+    doc = json.loads((out / "discrepancy.json").read_text())
+    assert doc["effect"] == "backlash"
+    assert doc["evaluation"] == "held-out"
+    assert doc["error_after"] < 0.3 * doc["error_before"]
+    win = next(c for c in doc["candidates"] if c["effect"] == "backlash")
+    assert abs(win["parameters"]["backlash_gap_m"] / 1e-4 - 1) < 0.2  # truth 1e-4 m
+    assert {c["effect"] for c in doc["candidates"]} == set(CANDIDATES)
+    report = (out / "report.md").read_text()
+    assert "Named effect: `backlash`" in report
+    for fig in ("residual_maps", "zoom", "per_test_errors", "ranking"):
+        assert (out / "figures" / f"discrepancy_{fig}.png").stat().st_size > 1000
+
+
+def test_clean_data_gives_none(clean_dir):
+    res = run_discrepancy(clean_dir, DiscrepancySettings(top=2))
+    assert res.effect == "none"
+    assert res.error_after == res.error_before
+    assert all(not c.earns for c in res.candidates)
+
+
+def test_cli_bad_input(tmp_path, capsys):
+    assert main(["discrepancy", str(tmp_path / "missing"), "--out", str(tmp_path / "o")]) == 2
+    assert "not a directory" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="unknown candidates"):
+        DiscrepancySettings(candidates=("backlash", "gremlins"))
+
+
+@pytest.mark.slow
+def test_emps_direction_dependent_friction():
+    from ehsa_opt.datasets import embedded_data_dir
+    res = run_discrepancy(embedded_data_dir("emps"))
+    assert res.effect == "asymmetric_friction"
+    assert res.evaluation == "all data"
+    assert res.error_after < res.error_before
+    assert 3.0 < res.error_before < 5.5 and 2.5 < res.error_after < 4.5  # paper: 4.08 -> 3.11
+    p = res.winner.fit.parameters
+    fv_pos = p["nut_viscous_Ns_per_m"] + p["asym_viscous_Ns_per_m"]
+    fv_neg = p["nut_viscous_Ns_per_m"] - p["asym_viscous_Ns_per_m"]
+    assert abs(fv_pos - 166.7) < 15 and abs(fv_neg - 240.4) < 15
+
+
+@pytest.mark.slow
+def test_default_data_set_gives_backlash():
+    from ehsa_opt.datasets import embedded_data_dir
+    res = run_discrepancy(embedded_data_dir("bench_prototype"),
+                          DiscrepancySettings(max_tests=6, top=2))
+    assert res.effect == "backlash" and res.error_after < res.error_before
