@@ -39,7 +39,8 @@ from typing import Any, Iterable
 import numpy as np
 import tomli_w
 
-from .params import HarvesterParams, ParameterError, from_mapping, load_toml, nearest_name
+from .params import (HarvesterParams, ParameterError, from_mapping, load_toml, nearest_name,
+                     unknown_name_message)
 
 __all__ = ["BenchDataError", "BenchTest", "BenchData", "load_bench", "write_bench",
            "check_bench", "COLUMNS"]
@@ -153,10 +154,7 @@ def _check_number(value: Any, key: str, where: str) -> float:
 
 
 def _unknown_key(key: str, valid: Iterable[str], where: str) -> BenchDataError:
-    valid = tuple(valid)
-    near = nearest_name(key, valid)
-    hint = f"; did you mean '{near}'?" if near else ""
-    return BenchDataError(f"{where}: unknown key '{key}'{hint} (valid: {', '.join(valid)})")
+    return BenchDataError(unknown_name_message(key, valid, where))
 
 
 def _read_csv(path: Path, need_voltage: bool) -> dict[str, np.ndarray]:
@@ -180,10 +178,8 @@ def _read_csv(path: Path, need_voltage: bool) -> dict[str, np.ndarray]:
                                  f"the header must be {','.join(required)}")
     for col in header:
         if col not in COLUMNS:
-            near = nearest_name(col, COLUMNS)
-            hint = f"; did you mean '{near}'?" if near else ""
-            raise BenchDataError(f"{name}: row 1 (header): unknown column '{col}'{hint} "
-                                 f"(valid: {', '.join(COLUMNS)})")
+            raise BenchDataError(unknown_name_message(col, COLUMNS, f"{name}: row 1 (header)",
+                                                      "column"))
     if len(set(header)) != len(header):
         raise BenchDataError(f"{name}: row 1 (header): duplicate column names {header}")
     body = [ln for ln in lines[1:]]

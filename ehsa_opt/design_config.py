@@ -45,7 +45,7 @@ from typing import Any, Mapping
 
 from .design import DESIGN_VARIABLES, OBJECTIVE_NAMES, DesignSpace
 from .params import (HarvesterParams, ParameterError, RoadParams, VehicleParams,
-                     load_toml, nearest_name)
+                     load_toml, nearest_name, check_keys)
 
 __all__ = ["METHODS", "GoalSpec", "NSGA2Settings", "GoalAttainmentSettings", "DesignConfig",
            "load_design_config", "parse_design_config"]
@@ -60,14 +60,7 @@ _TOP = _PHYSICAL + ("design", "goals", "goal_attainment", "nsga2", "sweep", "tit
 
 
 def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
-    if not isinstance(table, Mapping):
-        raise ParameterError(f"{where}: expected a table")
-    for key in table:
-        if key not in valid:
-            near = nearest_name(key, valid)
-            hint = f"; did you mean '{near}'?" if near else ""
-            raise ParameterError(f"{where}: unknown key '{key}'{hint} (valid: "
-                                 f"{', '.join(valid)})")
+    check_keys(table, valid, where)
 
 
 def _int(value: Any, where: str, minimum: int = 0) -> int:

@@ -17,7 +17,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .params import FrictionParams, HarvesterParams
+from .params import FrictionParams
 
 __all__ = ["simscape_friction", "nut_friction_N", "bearing_friction_Nm", "rod_friction_N"]
 

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .iso2631 import wk_abs2
-from .params import HarvesterParams, ParameterError, RoadParams, VehicleParams
+from .params import HarvesterParams, ParameterError, RoadParams, VehicleParams, check_keys
 from .road import ROAD_BAND_CYCLES_PER_M, dissipation_bound_W, road_velocity_psd
 
 __all__ = ["G", "METRIC_KEYS", "DESIGN_KEYS", "design_arrays", "linear_metrics",
@@ -104,13 +104,7 @@ def design_arrays(design: Mapping[str, ArrayLike] | None,
     """
     base = base or HarvesterParams()
     design = dict(design or {})
-    for key in design:
-        if key not in DESIGN_KEYS:
-            from .params import nearest_name
-            near = nearest_name(key, DESIGN_KEYS)
-            hint = f"; did you mean '{near}'?" if near else ""
-            raise ParameterError(f"design: unknown key '{key}'{hint} (valid: "
-                                 f"{', '.join(DESIGN_KEYS)})")
+    check_keys(design, DESIGN_KEYS, "design")
     if "total_inertia_gcm2" in design and ({"motor_inertia_gcm2", "screw_inertia_gcm2"}
                                            & design.keys()):
         raise ParameterError("design: give either total_inertia_gcm2 or motor_inertia_gcm2/"

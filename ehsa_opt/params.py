@@ -41,6 +41,8 @@ __all__ = [
     "from_mapping",
     "load_toml",
     "nearest_name",
+    "unknown_name_message",
+    "check_keys",
 ]
 
 
@@ -52,6 +54,26 @@ def nearest_name(key: str, valid: list[str] | tuple[str, ...]) -> str | None:
     """Return the valid name closest to ``key`` (for 'did you mean' hints)."""
     match = difflib.get_close_matches(key, list(valid), n=1, cutoff=0.4)
     return match[0] if match else None
+
+
+def unknown_name_message(key: str, valid: Any, where: str, what: str = "key") -> str:
+    """``"{where}: unknown {what} '{key}'; did you mean '...'? (valid: ...)"``."""
+    valid = tuple(valid)
+    near = nearest_name(key, valid)
+    hint = f"; did you mean '{near}'?" if near else ""
+    return f"{where}: unknown {what} '{key}'{hint} (valid: {', '.join(valid)})"
+
+
+def check_keys(table: Any, valid: Any, where: str, error: type[Exception] | None = None) -> None:
+    """Refuse a non-table or any key of ``table`` not in ``valid`` (nearest name in the
+    message). ``error`` is the exception class (default :class:`ParameterError`)."""
+    error = error or ParameterError
+    if not isinstance(table, Mapping):
+        raise error(f"{where}: expected a table of key = value pairs")
+    valid = tuple(valid)
+    for key in table:
+        if key not in valid:
+            raise error(unknown_name_message(key, valid, where))
 
 
 def _spec(unit: str, doc: str, *, gt: float | None = None, ge: float | None = None,
@@ -176,26 +198,27 @@ class HarvesterParams:
         """R = R_e + R_i, Ω."""
         return (self.load_ohm if load_ohm is None else load_ohm) + self.internal_resistance_ohm
 
+    def _coupling(self, load_ohm: float | None) -> tuple[float, float]:
+        """(K_t K_e / r², R) of the electrical coupling; R = inf for open circuit."""
+        kk = self.torque_constant_Nm_per_A * self.voltage_constant_Vs_per_rad
+        return kk / self.lead_m_per_rad ** 2, self.total_resistance_ohm(load_ohm)
+
     def equivalent_damping_Ns_per_m(self, omega_rad_s: Any = 0.0,
                                     load_ohm: float | None = None) -> Any:
         """c_eq(ω) of paper Eq 2, N s/m (0 for open circuit). Vectorised over ω."""
-        R = self.total_resistance_ohm(load_ohm)
+        g, R = self._coupling(load_ohm)
         if math.isinf(R):
             return 0.0 * omega_rad_s
-        r2 = self.lead_m_per_rad ** 2
-        kk = self.torque_constant_Nm_per_A * self.voltage_constant_Vs_per_rad
-        return kk * R / (r2 * (R ** 2 + (self.inductance_H * omega_rad_s) ** 2))
+        return g * R / (R ** 2 + (self.inductance_H * omega_rad_s) ** 2)
 
     def equivalent_stiffness_N_per_m(self, omega_rad_s: Any = 0.0,
                                      load_ohm: float | None = None) -> Any:
         """k_eq(ω) of paper Eq 3, N/m (0 for open circuit). Vectorised over ω."""
-        R = self.total_resistance_ohm(load_ohm)
+        g, R = self._coupling(load_ohm)
         if math.isinf(R):
             return 0.0 * omega_rad_s
-        r2 = self.lead_m_per_rad ** 2
-        kk = self.torque_constant_Nm_per_A * self.voltage_constant_Vs_per_rad
         L = self.inductance_H
-        return kk * L * omega_rad_s ** 2 / (r2 * (R ** 2 + (L * omega_rad_s) ** 2))
+        return g * L * omega_rad_s ** 2 / (R ** 2 + (L * omega_rad_s) ** 2)
 
     def replace(self, **changes: Any) -> "HarvesterParams":
         """A copy with some fields changed (validated again)."""
@@ -314,10 +337,7 @@ class VehicleParams:
     def preset(cls, name: str) -> "VehicleParams":
         """One of :data:`VEHICLE_PRESETS` by name."""
         if name not in VEHICLE_PRESETS:
-            near = nearest_name(name, tuple(VEHICLE_PRESETS))
-            hint = f"; did you mean '{near}'?" if near else ""
-            raise ParameterError(f"vehicle: unknown preset '{name}'{hint} "
-                                 f"(valid: {', '.join(VEHICLE_PRESETS)})")
+            raise ParameterError(unknown_name_message(name, VEHICLE_PRESETS, "vehicle", "preset"))
         return VEHICLE_PRESETS[name]
 
     @property
@@ -393,15 +413,7 @@ def from_mapping(cls: type, mapping: Mapping[str, Any], where: str) -> Any:
     where : str
         Location used in error messages, e.g. ``"problem.toml [harvester]"``.
     """
-    if not isinstance(mapping, Mapping):
-        raise ParameterError(f"{where}: expected a table of key = value pairs")
-    names = [f.name for f in dataclasses.fields(cls)]
-    for key in mapping:
-        if key not in names:
-            near = nearest_name(key, names)
-            hint = f"; did you mean '{near}'?" if near else ""
-            raise ParameterError(f"{where}: unknown key '{key}'{hint} (valid keys: "
-                                 f"{', '.join(names)})")
+    check_keys(mapping, [f.name for f in dataclasses.fields(cls)], where)
     try:
         return cls(**dict(mapping))
     except ParameterError as exc:

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from .params import (FrictionParams, HarvesterParams, ParameterError, RoadParams, VehicleParams,
-                     from_mapping, load_toml, nearest_name)
+                     from_mapping, load_toml, nearest_name, check_keys)
 
 __all__ = ["SimulationSettings", "QuarterCarProblem", "load_problem", "problem_from_mapping"]
 
@@ -78,12 +78,7 @@ class QuarterCarProblem:
 def problem_from_mapping(data: Mapping[str, Any], where: str = "problem",
                          base_dir: str | Path = ".") -> QuarterCarProblem:
     """Build a :class:`QuarterCarProblem` from a parsed TOML mapping."""
-    for key in data:
-        if key not in _TOP_KEYS:
-            near = nearest_name(key, _TOP_KEYS)
-            hint = f"; did you mean '{near}'?" if near else ""
-            raise ParameterError(f"{where}: unknown key '{key}'{hint} (valid: "
-                                 f"{', '.join(_TOP_KEYS)})")
+    check_keys(data, _TOP_KEYS, where)
     if "preset" in data and "vehicle" in data:
         raise ParameterError(f"{where}: give either preset = \"...\" or a [vehicle] table, "
                              "not both")
