@@ -123,6 +123,17 @@ def _hash(obj: Any) -> str:
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
+def _code_digest() -> str:
+    """Hash of the package's Python sources: a changed model or study recomputes its steps
+    instead of serving a stale cached result."""
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*.py")):
+        h.update(str(f.relative_to(root)).encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def _data_digest(path: Path) -> str:
     """Hash of a data directory's files (names, sizes and contents)."""
     h = hashlib.sha256()
@@ -299,11 +310,12 @@ def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs:
     sections = []
     hashes: dict[str, str] = {}
     timings: list[tuple[str, str, float]] = []
+    code = _code_digest()
     t_all = time.perf_counter()
     bar = progress_bar(total=len(steps), desc="reproduce", unit="step")
     for n, step in enumerate(steps, start=1):
         bar.set_postfix_str(step.key)
-        key = _hash({"step": step.key, "version": __version__, "quick": quick,
+        key = _hash({"step": step.key, "version": __version__, "code": code, "quick": quick,
                      "inputs": step.inputs(ctx), "depends": [hashes[d] for d in step.depends]})
         hashes[step.key] = key
         cfile = cache / f"{step.key}.json"
