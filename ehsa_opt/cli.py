@@ -377,6 +377,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (BenchDataError, ParameterError, _UsageError, FileExistsError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("\ninterrupted: finished steps and checkpoints are kept; run the same command "
+              "again to resume", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -39,3 +39,13 @@ def test_console_entry_point_module(tmp_path):
     r = subprocess.run([sys.executable, "-m", "ehsa_opt", "bench", "check", str(tmp_path)],
                        capture_output=True, text=True)
     assert r.returncode == 2 and "bench.toml" in r.stderr
+
+
+def test_interrupt_says_how_to_resume(monkeypatch, capsys, tmp_path):
+    import ehsa_opt.reproduce as rep
+
+    def boom(**kwargs):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(rep, "reproduce", boom)
+    assert main(["reproduce", "--quick", "--out", str(tmp_path)]) == 130
+    assert "run the same command again to resume" in capsys.readouterr().err
