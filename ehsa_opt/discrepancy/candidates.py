@@ -79,7 +79,7 @@ CANDIDATES: dict[str, Candidate] = {
         probes=({"compliance_stiffness_N_per_m": 1e6, "compliance_damping_Ns_per_m": 1e3},
                 {"compliance_stiffness_N_per_m": 1e7, "compliance_damping_Ns_per_m": 1e3}),
         starts=tuple({"compliance_stiffness_N_per_m": k, "compliance_damping_Ns_per_m": c}
-                     for k in (3e5, 1e6, 3e6, 1e7, 3e7) for c in (3e2, 3e3)),
+                     for k in (1e5, 3e5, 1e6, 3e6, 1e7, 3e7, 1e8, 3e8) for c in (3e2, 3e3)),
         needs_generator=True),
     "voltage_drop": Candidate(
         "voltage_drop",

@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -49,7 +49,7 @@ import numpy as np
 from ..data import BenchData, BenchTest, load_bench
 from .candidates import CANDIDATES, signature_scores
 from .fit import (FitOutcome, PreparedTest, Rig, fit_group, force_relative_error_percent,
-                  linear_baseline, predict, prepare_tests)
+                  linear_baseline, polish, predict, prepare_tests)
 from .localise import Localisation, localise
 
 __all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "run_discrepancy",
@@ -383,8 +383,55 @@ def _fit_candidate(args: tuple) -> tuple[str, FitOutcome, list[np.ndarray], list
                     free=free, fixed=first.parameters or starts[0], max_iter=max_iter)
     if not res.parameters:
         return name, res, [], []
-    return (name, res, predict(fit_pts, crig, res.parameters),
-            predict(held_pts, crig, res.parameters) if held_pts else [])
+    pf = predict(fit_pts, crig, res.parameters)
+    res, pf = _match_simulation(fit_pts, crig, res, pf, free or res.free, max_iter)
+    return (name, res, pf, predict(held_pts, crig, res.parameters) if held_pts else [])
+
+
+#: A collocation fit whose simulated SSE exceeds its collocation SSE by more than
+#: this factor is refined (finer collocation grid, then :func:`polish`).
+MISMATCH_RATIO = 1.15
+#: Collocation sub-intervals per sample interval for the refinement.
+REFINE_SUBSTEPS = 3
+
+
+def _match_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, res: FitOutcome,
+                      pf: list[np.ndarray], free: Sequence[str], max_iter: int
+                      ) -> tuple[FitOutcome, list[np.ndarray]]:
+    """Make the reported fit one whose *forward simulation* fits.
+
+    The one-step collocation rule on the 1 kHz sample grid is accurate for a soft
+    or contact-type transmission but not for a stiff continuous one (a 5e7 N/m
+    compliance rings at ≈ 165 Hz on the 47.5 kg rotor-equivalent mass): its optimum
+    then simulates far worse than the collocation says (held-out error 3.3 →
+    4.3 % instead of → 0.7 %).  When the simulated SSE exceeds the collocation SSE
+    by :data:`MISMATCH_RATIO`, the fit is repeated on a grid with
+    :data:`REFINE_SUBSTEPS` sub-intervals per sample, and if the mismatch remains
+    the parameters are polished on the CVODES simulation (:func:`polish`).
+    """
+    t0, seconds0 = time.perf_counter(), res.seconds
+    sse = _sse(fit_pts, pf)
+    if not sse > MISMATCH_RATIO * res.sse:
+        return res, pf
+    notes = [f"simulated SSE {sse:.4g} vs collocation {res.sse:.4g}"]
+    fine = fit_group(fit_pts, crig, [res.parameters], free=list(free), fixed=res.parameters,
+                     max_iter=max_iter, substeps=REFINE_SUBSTEPS)
+    if fine.parameters:
+        pf_fine = predict(fit_pts, crig, fine.parameters)
+        sse_fine = _sse(fit_pts, pf_fine)
+        notes.append(f"{REFINE_SUBSTEPS} sub-steps: {fine.message}, simulated SSE {sse_fine:.4g}")
+        if sse_fine < sse:
+            res, pf, sse = fine, pf_fine, sse_fine
+    if sse > MISMATCH_RATIO * res.sse:
+        po = polish(fit_pts, crig, res.parameters, list(free))
+        notes.append(f"polish on simulation: SSE {po.sse_before:.4g} -> {po.sse_after:.4g} "
+                     f"({po.nfev} simulations)")
+        if po.sse_after < sse:
+            res = replace(res, parameters=po.parameters)
+            pf = predict(fit_pts, crig, res.parameters)
+    return replace(res, message=f"{res.message}, refined on simulation",
+                   starts=[*res.starts, {"refinement": notes}],
+                   seconds=time.perf_counter() - t0 + seconds0), pf
 
 
 # ------------------------------------------------------------------ the workflow
