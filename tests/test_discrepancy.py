@@ -34,7 +34,8 @@ def clean_dir(tmp_path_factory):
 
 
 def test_every_candidate_is_a_registered_component():
-    for name in ("backlash", "asymmetric_friction", "cogging", "compliance", "voltage_drop"):
+    for name in ("backlash", "asymmetric_friction", "cogging", "compliance", "voltage_drop",
+                 "winding_heating"):
         assert name in CANDIDATES and name in COMPONENTS
 
 
@@ -75,6 +76,7 @@ def test_localisation_flags_the_structured_coordinate_only():
 @pytest.mark.parametrize("effect,params", [
     ("asymmetric_friction", {"asym_coulomb_N": 6.0, "asym_viscous_Ns_per_m": 30.0}),
     ("voltage_drop", {"voltage_drop_V": 0.5}),
+    ("winding_heating", {"winding_heating_K_per_J": 3.0}),
 ])
 def test_signature_ranks_the_hidden_effect_first(effect, params):
     tests = generate_bench_tests(_spec({effect: params}))

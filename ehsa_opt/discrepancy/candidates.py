@@ -86,6 +86,13 @@ CANDIDATES: dict[str, Candidate] = {
         probes=({"voltage_drop_V": 0.5},),
         starts=({"voltage_drop_V": 0.1}, {"voltage_drop_V": 0.5}, {"voltage_drop_V": 1.5}),
         needs_generator=True),
+    "winding_heating": Candidate(
+        "winding_heating",
+        probes=({"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 100.0},
+                {"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 0.3}),
+        starts=tuple({"winding_heating_K_per_J": h, "winding_cooling_time_s": tau}
+                     for h in (0.3, 1.0, 3.0, 10.0) for tau in (0.5, 5.0, 50.0)),
+        needs_generator=True),
 }
 assert set(CANDIDATES) <= set(COMPONENTS)
 
