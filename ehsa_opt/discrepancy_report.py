@@ -39,7 +39,8 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
              "ΔBIC = N_eff ln(SSE_effect/SSE_base) + k ln N_eff < 0 on the fit tests **and** on "
              "the held-out tests (SSE of noise-normalised residuals; N_eff = Σ N/τ with τ the "
              "residual autocorrelation time, so coloured residuals do not count as independent "
-             "samples); the winner is the earning candidate with the lowest held-out SSE; "
+             "samples); the winner is the earning candidate with the lowest held-out ΔBIC "
+             "(near-ties go to fewer parameters); "
              "none earning → `none`."
              + (" Too few tests to hold any out: the rule uses all data." if not res.heldout_tests
                 else "") + "\n")

@@ -31,8 +31,10 @@
    (SSE of noise-normalised residuals, k the effect's parameter count).  A
    candidate *earns its parameters* when ΔBIC < 0 on the fit tests and on the
    held-out tests (held-out SSE from forward simulations).  The winner is the
-   earning candidate with the lowest held-out SSE; if none earns, the answer is
-   ``none``.
+   earning candidate with the lowest held-out ΔBIC (fit ΔBIC when nothing is
+   held out) — the k ln N_eff term breaks near-ties in favour of fewer
+   parameters (a backlash with zero gap *is* a compliance, one parameter
+   more); if none earns, the answer is ``none``.
 """
 
 from __future__ import annotations
@@ -207,7 +209,7 @@ class DiscrepancyResult:
                 "effective_samples": self.n_eff,
                 "criterion": "effect earns its parameters iff dBIC = N_eff ln(SSE_eff/SSE_base) "
                              "+ k ln(N_eff) < 0 on the fit tests and on the held-out tests "
-                             "(all data when nothing is held out); winner: lowest held-out SSE",
+                             "(all data when nothing is held out); winner: lowest held-out dBIC",
                 "localisation_before": self.loc_before.as_dict(),
                 "localisation_after": self.loc_after.as_dict() if self.loc_after else None,
                 "per_test": self.per_test_errors(),
@@ -521,7 +523,8 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
             f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
             f"({res.seconds:.1f} s)")
     earning = [c for c in cands.values() if c.earns]
-    winner = min(earning, key=lambda c: c.sse_heldout) if earning else None
+    winner = min(earning, key=lambda c: c.delta_bic_heldout if held_pts else c.delta_bic_fit) \
+        if earning else None
     effect = winner.effect if winner else "none"
     loc1 = None
     if winner is not None:
