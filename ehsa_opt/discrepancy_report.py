@@ -164,10 +164,8 @@ def step_discrepancy(ctx: Context) -> StepOutput:
             md.append("The embedded data hide **backlash** (truth.toml); the workflow must "
                       "name it." + (" Quick mode: 6 of the 21 tests, top 2 candidates." if quick
                                     else " 9 of the 21 tests, top 3 candidates.")
-                      + (f" Simulating the true parameters on the same {res.evaluation} tests "
-                         f"gives {floor:.3f} % (the floor of a perfect re-identification; "
-                         f"ours: {res.error_after:.3f} %)." if floor is not None else "")
-                      + "\n")
+                      + " The error of the true parameters on the same tests is the floor a "
+                        "perfect re-identification reaches.\n")
         else:
             pub = EMPS_REFERENCE
             w = res.winner
@@ -200,5 +198,5 @@ def step_discrepancy(ctx: Context) -> StepOutput:
                       "difference. The ΔF_C/offset split is weakly determined (they differ only "
                       "near v = 0).\n")
         md.append(report_markdown(res, fig_prefix=prefix,
-                                  floor=_floor(res) if name == "bench_prototype" else None))
+                                  floor=results[name].get("error_true_parameters")))
     return StepOutput("\n".join(md), figs, results)
