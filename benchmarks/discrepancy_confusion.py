@@ -36,10 +36,14 @@ CASES: list[tuple[str, dict, int]] = [
     ("voltage_drop", {"voltage_drop_V": 0.7}, 1),
     ("voltage_drop", {"voltage_drop_V": 0.3}, 2),
     ("voltage_drop", {"voltage_drop_V": 0.1}, 3),
+    ("winding_heating", {"winding_heating_K_per_J": 4.0}, 1),
+    ("winding_heating", {"winding_heating_K_per_J": 1.5}, 2),
+    ("winding_heating", {"winding_heating_K_per_J": 0.6}, 3),
     ("none", {}, 1),
     ("none", {}, 2),
 ]
-LABELS = ["backlash", "asymmetric_friction", "cogging", "compliance", "voltage_drop", "none"]
+LABELS = ["backlash", "asymmetric_friction", "cogging", "compliance", "voltage_drop",
+          "winding_heating", "none"]
 
 
 def small_spec(effect: str, params: dict, seed: int) -> SyntheticSpec:
@@ -52,10 +56,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--out", default=None, help="also write the cases as JSON")
+    ap.add_argument("--only", default=None, help="run only the cases of this hidden effect")
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for k, (effect, params, seed) in enumerate(CASES):
+            if args.only and effect != args.only:
+                continue
             d = Path(tmp) / f"case{k}"
             write_synthetic(d, small_spec(effect, params, seed))
             t0 = time.perf_counter()

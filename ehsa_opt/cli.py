@@ -8,6 +8,7 @@ fix; nothing is written half-way.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 from typing import Callable, Sequence
@@ -223,6 +224,9 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
     js, md = write_report(res, args.out)
     print(f"effect: {res.effect}; relative force error on {res.evaluation}: "
           f"{res.error_before:.3f} % -> {res.error_after:.3f} %")
+    floor = json.loads(js.read_text()).get("error_true_parameters")
+    if floor is not None:
+        print(f"true parameters (truth.toml) on the same tests: {floor:.3f} %")
     print(f"wrote {js} and {md} ({res.seconds:.0f} s)")
     return 0
 

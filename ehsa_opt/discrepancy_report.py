@@ -11,7 +11,7 @@ from typing import Any
 from .discrepancy import DiscrepancyResult, DiscrepancySettings, run_discrepancy
 from .reproduce import Context, StepOutput, atomic_write_text
 
-__all__ = ["write_report", "report_markdown", "step_discrepancy"]
+__all__ = ["write_report", "report_markdown", "step_discrepancy", "truth_error"]
 
 #: Published EMPS figures (Janot et al. 2019, SPEC §9).
 _EMPS_PUBLISHED = {"before": 4.08, "after": 3.11, "f_v_pos": 166.7, "f_v_neg": 240.4,
@@ -24,18 +24,23 @@ def _fmt(v: Any, spec: str = ".4g") -> str:
     return format(v, spec)
 
 
-def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/") -> str:
-    """The Markdown report (figures referenced under ``fig_prefix``)."""
+def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
+                    floor: float | None = None) -> str:
+    """The Markdown report (figures referenced under ``fig_prefix``; ``floor``: the
+    error of the true parameters of synthetic data, see :func:`truth_error`)."""
     L = []
     L.append(f"**Named effect: `{res.effect}`** — relative force error on {res.evaluation} "
              f"{res.error_before:.3f} % → {res.error_after:.3f} % "
              f"({len(res.fit_tests)} fit tests, {len(res.heldout_tests)} held-out; "
-             f"run {res.seconds:.0f} s).\n")
+             f"run {res.seconds:.0f} s)."
+             + (f" The true parameters (truth.toml) simulate to {floor:.3f} % on the same "
+                f"tests." if floor is not None else "") + "\n")
     L.append("Decision rule: a candidate earns its parameters when "
              "ΔBIC = N_eff ln(SSE_effect/SSE_base) + k ln N_eff < 0 on the fit tests **and** on "
              "the held-out tests (SSE of noise-normalised residuals; N_eff = Σ N/τ with τ the "
              "residual autocorrelation time, so coloured residuals do not count as independent "
-             "samples); the winner is the earning candidate with the lowest held-out SSE; "
+             "samples); the winner is the earning candidate with the lowest held-out ΔBIC "
+             "(near-ties go to fewer parameters); "
              "none earning → `none`."
              + (" Too few tests to hold any out: the rule uses all data." if not res.heldout_tests
                 else "") + "\n")
@@ -90,12 +95,19 @@ def write_report(res: DiscrepancyResult, out_dir: str | Path) -> tuple[Path, Pat
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     res.plot(out / "figures")
+    floor = _floor(res)
     js = out / "discrepancy.json"
-    atomic_write_text(js, json.dumps(res.as_dict(), indent=2, default=_json_default))
+    atomic_write_text(js, json.dumps({**res.as_dict(), "error_true_parameters": floor},
+                                     indent=2, default=_json_default))
     md = out / "report.md"
     atomic_write_text(md, f"# Model-discrepancy report: {res.data_path}\n\n"
-                      + report_markdown(res))
+                      + report_markdown(res, floor=floor))
     return js, md
+
+
+def _floor(res: DiscrepancyResult) -> float | None:
+    from .datasets import load_truth
+    return truth_error(res, load_truth(res.data_path)) if res.data_path else None
 
 
 def _json_default(o: Any) -> Any:
@@ -105,6 +117,25 @@ def _json_default(o: Any) -> Any:
     if isinstance(o, np.ndarray):
         return o.tolist()
     return str(o)
+
+
+def truth_error(res: DiscrepancyResult, truth: dict | None) -> float | None:
+    """Relative force error (%) on the evaluation tests of a forward simulation with
+    the *true* parameters of synthetic data (``truth.toml``: ``[friction]`` and
+    ``[effects.<name>]``) — the floor a perfect re-identification reaches.  None
+    for measured data."""
+    if not truth or "friction" not in truth:
+        return None
+    from .discrepancy.fit import predict
+    from .discrepancy.workflow import _force_error
+    from .models import make_component
+    effects = truth.get("effects", {})
+    comps = [make_component(n) for n in effects]
+    values = dict(truth["friction"])
+    for c in comps:
+        values.update({**c.defaults(), **effects[c.name]})
+    rig = res.rig.with_components(comps)
+    return _force_error(res.eval_tests, predict(res.eval_tests, rig, values))
 
 
 def step_discrepancy(ctx: Context) -> StepOutput:
@@ -128,9 +159,13 @@ def step_discrepancy(ctx: Context) -> StepOutput:
                          "error_after": res.error_after, "evaluation": res.evaluation}
         md.append(f"### `{name}`\n")
         if name == "bench_prototype":
+            floor = _floor(res)
+            results[name]["error_true_parameters"] = floor
             md.append("The embedded data hide **backlash** (truth.toml); the workflow must "
                       "name it." + (" Quick mode: 6 of the 21 tests, top 2 candidates." if quick
-                                    else " 9 of the 21 tests, top 3 candidates.") + "\n")
+                                    else " 9 of the 21 tests, top 3 candidates.")
+                      + " The error of the true parameters on the same tests is the floor a "
+                        "perfect re-identification reaches.\n")
         else:
             pub = EMPS_REFERENCE
             w = res.winner
@@ -162,5 +197,6 @@ def step_discrepancy(ctx: Context) -> StepOutput:
                       "filtered/decimated least-squares (IDIM-LS) data, hence the small "
                       "difference. The ΔF_C/offset split is weakly determined (they differ only "
                       "near v = 0).\n")
-        md.append(report_markdown(res, fig_prefix=prefix))
+        md.append(report_markdown(res, fig_prefix=prefix,
+                                  floor=results[name].get("error_true_parameters")))
     return StepOutput("\n".join(md), figs, results)

@@ -135,6 +135,7 @@ def test_integrator_cache_is_per_model():
     ("asymmetric_friction", {"asym_coulomb_N": 15.0, "asym_viscous_Ns_per_m": 80.0}),
     ("cogging", {"cogging_sin_Nm": 0.02, "cogging_cos_Nm": -0.01}),
     ("voltage_drop", {"voltage_drop_V": 1.0}),
+    ("winding_heating", {"winding_heating_K_per_J": 10.0}),
 ])
 def test_energy_balance_closes_with_new_components(name, values):
     from ehsa_opt.models import make_component
@@ -164,3 +165,22 @@ def test_asymmetric_friction_levels_by_direction():
     # F_C ± ΔF_C: the extra force is +ΔF_C + Δf_v |v| in both directions
     assert abs(float(f(0.1)) - (3.0 + 10.0 * 0.1)) < 0.02
     assert abs(float(f(-0.1)) - (3.0 + 10.0 * 0.1)) < 0.02
+
+
+def test_winding_heating_raises_the_resistance_by_its_copper_loss():
+    """Analytic check: with τ ≫ the run, ΔT(t) = h ∫ R_i(ΔT) i² dt, and the
+    simulated temperature matches that integral of the simulated current."""
+    from ehsa_opt.models import WindingHeating
+    model = BenchModel(H, [WindingHeating()])
+    assert model.state_names == ["current_A", "winding_temperature_rise_K"]
+    p = model.param_vector(15.0, PROTOTYPE_FRICTION, {"winding_heating_K_per_J": 2.0,
+                                                      "winding_cooling_time_s": 1e4})
+    t = np.arange(0, 1.0, 1e-4)
+    sim = simulate_bench(model, SineMotion(0.015, 3.0), p, t)
+    i, dT = sim.states
+    loss = H.internal_resistance_ohm * (1 + 3.93e-3 * dT) * i ** 2
+    integral = 2.0 * np.concatenate([[0.0], np.cumsum(0.5 * (loss[1:] + loss[:-1]) * np.diff(t))])
+    np.testing.assert_allclose(dT, integral, rtol=2e-3, atol=1e-3)
+    assert dT[-1] > 10.0
+    with pytest.raises(ValueError, match="temperature_coefficient"):
+        WindingHeating(temperature_coefficient_per_K=0.0)

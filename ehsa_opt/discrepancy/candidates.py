@@ -79,12 +79,19 @@ CANDIDATES: dict[str, Candidate] = {
         probes=({"compliance_stiffness_N_per_m": 1e6, "compliance_damping_Ns_per_m": 1e3},
                 {"compliance_stiffness_N_per_m": 1e7, "compliance_damping_Ns_per_m": 1e3}),
         starts=tuple({"compliance_stiffness_N_per_m": k, "compliance_damping_Ns_per_m": c}
-                     for k in (3e5, 1e6, 3e6, 1e7, 3e7) for c in (3e2, 3e3)),
+                     for k in (1e5, 3e5, 1e6, 3e6, 1e7, 3e7, 1e8, 3e8) for c in (3e2, 3e3)),
         needs_generator=True),
     "voltage_drop": Candidate(
         "voltage_drop",
         probes=({"voltage_drop_V": 0.5},),
         starts=({"voltage_drop_V": 0.1}, {"voltage_drop_V": 0.5}, {"voltage_drop_V": 1.5}),
+        needs_generator=True),
+    "winding_heating": Candidate(
+        "winding_heating",
+        probes=({"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 100.0},
+                {"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 0.3}),
+        starts=tuple({"winding_heating_K_per_J": h, "winding_cooling_time_s": tau}
+                     for h in (0.3, 1.0, 3.0, 10.0) for tau in (0.5, 5.0, 50.0)),
         needs_generator=True),
 }
 assert set(CANDIDATES) <= set(COMPONENTS)

@@ -3,11 +3,12 @@ pluggable components."""
 
 from .bench import BenchModel
 from .components import (COMPONENTS, AsymmetricFriction, Backlash, Cogging, Component,
-                         Compliance, ParamSpec, VoltageDrop, make_component)
+                         Compliance, ParamSpec, VoltageDrop, WindingHeating,
+                         make_component)
 from .harvester import (equivalent_damping_Ns_per_m, equivalent_impedance, equivalent_mass_kg,
                         equivalent_stiffness_N_per_m)
 
 __all__ = ["BenchModel", "Component", "ParamSpec", "Backlash", "Compliance", "AsymmetricFriction",
-           "Cogging", "VoltageDrop", "COMPONENTS",
+           "Cogging", "VoltageDrop", "WindingHeating", "COMPONENTS",
            "make_component", "equivalent_mass_kg", "equivalent_damping_Ns_per_m",
            "equivalent_stiffness_N_per_m", "equivalent_impedance"]

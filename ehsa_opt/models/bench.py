@@ -133,14 +133,21 @@ class BenchModel:
         if i_sym is not None:
             states.insert(0, ("current_A", i_sym))
 
-        s: dict[str, Any] = {"x": xr, "v": vr, "a": ar, "theta": theta, "omega": omega}
+        s: dict[str, Any] = {"x": xr, "v": vr, "a": ar, "theta": theta, "omega": omega,
+                             "internal_resistance_ohm": Ri}
+        comp_states = [(c, n, ca.SX.sym(n)) for c in self.components for n in c.states]
+        for _, n, sym in comp_states:
+            if n in s or any(n == m for m, _ in states):
+                raise ValueError(f"BenchModel: component state name '{n}' is taken")
+            s[n] = sym
+            states.append((n, sym))
         if self.transmission is not None:
             s["delta"] = xr - r * theta
             s["delta_dot"] = vr - r * omega
         e = Ke * omega
         for c in self.components:
             e = c.emf(e, s, pc)
-        R = Re + Ri
+        R = Re + Ri + sum((c.extra_resistance_ohm(s, pc) for c in self.components), ca.SX(0))
         if not self.generator:
             i = ca.SX(0)
         else:
@@ -151,6 +158,12 @@ class BenchModel:
         tau_extra = sum((c.rotor_torque(s, pc) for c in self.components), ca.SX(0))
         f_extra = sum((c.rod_force(s, pc) for c in self.components), ca.SX(0))
         rates: dict[str, Any] = {}
+        for c in self.components:
+            rc = c.state_rates(s, pc)
+            if len(rc) != len(c.states):
+                raise ValueError(f"BenchModel: {c.name}.state_rates returned {len(rc)} rates "
+                                 f"for {len(c.states)} states")
+            rates.update(zip(c.states, rc))
         if i_sym is not None:
             rates["current_A"] = (e - R * i_sym) / L
         if self.transmission is not None:

@@ -14,6 +14,11 @@ contributes to one or more of the model's hooks:
     An extra load torque on the rotor, e.g. cogging.
 ``emf``
     A transformation of the generator emf, e.g. a rectifier/brush drop.
+``extra_resistance_ohm``
+    A resistance in series with the winding, e.g. its temperature rise.
+``states`` / ``state_rates``
+    Own differential states of a component (named, start at 0), e.g. a
+    winding temperature; the rates may use every signal including ``i``.
 ``stored_energy`` / ``dissipated_power``
     So that the energy balance of the model still closes.
 
@@ -29,7 +34,7 @@ from typing import Any, ClassVar
 import casadi as ca
 
 __all__ = ["ParamSpec", "Component", "Backlash", "Compliance", "AsymmetricFriction", "Cogging",
-           "VoltageDrop", "smooth_ramp", "smooth_step", "smooth_abs", "COMPONENTS",
+           "VoltageDrop", "WindingHeating", "smooth_ramp", "smooth_step", "smooth_abs", "COMPONENTS",
            "make_component"]
 
 
@@ -79,6 +84,7 @@ class Component:
     name: ClassVar[str] = "component"
     parameters: ClassVar[tuple[ParamSpec, ...]] = ()
     transmission: ClassVar[bool] = False
+    states: ClassVar[tuple[str, ...]] = ()
 
     def coupling_force(self, s: dict, p: dict) -> Any:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -91,6 +97,13 @@ class Component:
 
     def emf(self, e: Any, s: dict, p: dict) -> Any:
         return e
+
+    def extra_resistance_ohm(self, s: dict, p: dict) -> Any:
+        return 0.0
+
+    def state_rates(self, s: dict, p: dict) -> list[Any]:
+        """Time derivatives of :attr:`states` (same order)."""
+        return []
 
     def stored_energy(self, s: dict, p: dict) -> Any:
         return 0.0
@@ -271,10 +284,57 @@ class VoltageDrop(Component):
         return s["voltage_drop_lost_V"] * s["i"]
 
 
+class WindingHeating(Component):
+    """Temperature-dependent winding resistance with a first-order thermal state.
+
+    The winding warms by its own copper loss and cools toward ambient::
+
+        R_i(ΔT) = R_i (1 + α ΔT)
+        dΔT/dt  = h R_i(ΔT) i² − ΔT / τ
+
+    with h = 1/C_th the heating rate per joule (K/J; h = 0 is exactly inert) and
+    τ = R_th C_th the cooling time (s).  The extra resistance α R_i ΔT is a series
+    resistance of the winding; its loss α R_i ΔT i² is booked as component
+    dissipation (the heat leaves the mechanical/electrical energy balance, so the
+    thermal state stores none of it).  ΔT starts at 0 (winding at ambient).
+
+    Parameters
+    ----------
+    temperature_coefficient_per_K : float
+        α of the winding, 1/K (copper 3.93e-3), fixed.
+    """
+
+    name = "winding_heating"
+    states = ("winding_temperature_rise_K",)
+    parameters = (
+        ParamSpec("winding_heating_K_per_J", "K/J", 0.05, 0.0, 10.0,
+                  "h = 1/C_th, temperature rise per joule of copper loss"),
+        ParamSpec("winding_cooling_time_s", "s", 30.0, 0.1, 1e4,
+                  "τ = R_th C_th, thermal time constant of the winding"),
+    )
+
+    def __init__(self, temperature_coefficient_per_K: float = 3.93e-3) -> None:
+        if not temperature_coefficient_per_K > 0:
+            raise ValueError("WindingHeating: temperature_coefficient_per_K must be > 0 (1/K)")
+        self.temperature_coefficient_per_K = temperature_coefficient_per_K
+
+    def extra_resistance_ohm(self, s: dict, p: dict) -> Any:
+        return (self.temperature_coefficient_per_K * s["internal_resistance_ohm"]
+                * s["winding_temperature_rise_K"])
+
+    def state_rates(self, s: dict, p: dict) -> list[Any]:
+        dT = s["winding_temperature_rise_K"]
+        loss = (s["internal_resistance_ohm"] + self.extra_resistance_ohm(s, p)) * s["i"] ** 2
+        return [p["winding_heating_K_per_J"] * loss - dT / p["winding_cooling_time_s"]]
+
+    def dissipated_power(self, s: dict, p: dict) -> Any:
+        return self.extra_resistance_ohm(s, p) * s["i"] ** 2
+
+
 #: Registry of components by name (later effects register here too).
 COMPONENTS: dict[str, type[Component]] = {
     "backlash": Backlash, "compliance": Compliance, "asymmetric_friction": AsymmetricFriction,
-    "cogging": Cogging, "voltage_drop": VoltageDrop}
+    "cogging": Cogging, "voltage_drop": VoltageDrop, "winding_heating": WindingHeating}
 
 
 def make_component(name: str, **kwargs: Any) -> Component:
