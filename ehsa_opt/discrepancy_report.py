@@ -31,8 +31,7 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
     L = []
     L.append(f"**Named effect: `{res.effect}`** — relative force error on {res.evaluation} "
              f"{res.error_before:.3f} % → {res.error_after:.3f} % "
-             f"({len(res.fit_tests)} fit tests, {len(res.heldout_tests)} held-out; "
-             f"run {res.seconds:.0f} s)."
+             f"({len(res.fit_tests)} fit tests, {len(res.heldout_tests)} held-out)."
              + (f" The true parameters (truth.toml) simulate to {floor:.3f} % on the same "
                 f"tests." if floor is not None else "") + "\n")
     L.append("Decision rule: a candidate earns its parameters when "
@@ -62,7 +61,7 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
     L.append(f"\n![residual maps]({fig_prefix}discrepancy_residual_maps.png)\n")
     L.append("### Ranking of the candidates\n")
     L.append("| rank | effect | signature score | χ² | re-identified | ΔBIC fit | ΔBIC held-out | "
-             f"error before (%) | error after (%) | earns |\n|---|---|---|---|---|---|---|---|---|---|")
+             "error before (%) | error after (%) | earns |\n|---|---|---|---|---|---|---|---|---|---|")
     for k, c in enumerate(res.candidates, 1):
         if not c.applicable:
             L.append(f"| {k} | {c.effect} | n/a (rig without generator) | | | | | | | |")

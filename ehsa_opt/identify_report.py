@@ -47,8 +47,8 @@ def step_identify_prototype(ctx):
     lines = [f"Every one of the {len(data)} tests identified separately by direct collocation "
              f"(Radau, degree {opts.degree}, ≤ {opts.max_intervals} intervals) and IPOPT, "
              f"{starts} seeded starts each drawn in the SPEC §2 distributor ranges, "
-             f"{len(ok)}/{len(data)} converged, in {rep.seconds:.1f} s with {ctx.jobs} "
-             f"process(es). The objective is the epigraph of max(δ_V, δ_F) with the smooth "
+             f"{len(ok)}/{len(data)} converged (wall times: the run log at the end). "
+             f"The objective is the epigraph of max(δ_V, δ_F) with the smooth "
              f"squared errors, plus 0.1 × their mean; δ below are Eq 5 as printed.\n",
              "**Friction bounds (paper Table 2).** The paper's Table 2 values are not in the "
              "text we have (paper values not in the text).\n",

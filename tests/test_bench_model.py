@@ -55,7 +55,7 @@ def test_first_harmonic_damping_and_stiffness_with_inductance(load):
     t = np.arange(0, 20 * n_per + 1) / (n_per * f)
     sim = simulate_bench(model, motion, model.param_vector(load), t)
     keep = t >= 10 / f  # steady state
-    tt, x, v, a = t[keep], *motion.evaluate(t[keep])
+    x, v, a = motion.evaluate(t[keep])
     resid = sim.force_N[keep] - h.equivalent_mass_kg() * a
     # first harmonic: resid = c v + k x
     coef, *_ = np.linalg.lstsq(np.column_stack([v, x]), resid, rcond=None)

@@ -70,7 +70,7 @@ def test_cli_nsga2_front_vs_goal_attainment_and_resume(tmp_path):
 
 
 def test_sweep_local_equals_dask_local_cluster():
-    from distributed import Client, LocalCluster
+    from distributed import LocalCluster
     doc = {"harvester": {"load_ohm": 47.0},
            "sweep": {"speed_km_per_h": [50.0, 100.0], "vehicle": ["passenger_car",
                                                                    "single_seater"],
