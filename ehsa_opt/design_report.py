@@ -26,8 +26,9 @@ from .reproduce import Context, StepOutput
 __all__ = ["PAPER_DESIGN_FILE", "PAPER_OPTIMUM", "PAPER_TABLE4", "step_goal_attainment",
            "step_pareto", "step_friction_on_optimum", "design_inputs"]
 
-#: The problem file of paper §4.2 (repository ``problems/``).
-PAPER_DESIGN_FILE = Path(__file__).resolve().parents[1] / "problems" / "paper_design.toml"
+#: The problem file of paper §4.2 (shipped in the package; ``problems/`` at the top of the
+#: repository links to it).
+PAPER_DESIGN_FILE = Path(__file__).resolve().parent / "problems" / "paper_design.toml"
 
 #: Paper §4.2 optimum and changes (text of §4.2 and Fig 19).
 PAPER_OPTIMUM = {"total_inertia_gcm2": 250.0, "lead_mm_per_rev": 7.0,
@@ -49,7 +50,7 @@ def design_inputs(ctx: Context) -> Any:
 def _cfg() -> Any:
     from .design_config import load_design_config
     if not PAPER_DESIGN_FILE.is_file():
-        raise FileNotFoundError(f"{PAPER_DESIGN_FILE} not found (run from a repository checkout)")
+        raise FileNotFoundError(f"{PAPER_DESIGN_FILE} not found (the package is incomplete: reinstall it)")
     return load_design_config(PAPER_DESIGN_FILE)
 
 
