@@ -683,9 +683,8 @@ def test_motion(test: BenchTest, options: IdentifyOptions | None = None) -> Samp
     opt = options or IdentifyOptions()
     n = test.n_samples
     if opt.smoothing is None and opt.smoothing_cutoff_hz is not None:
-        dt = float(np.mean(np.diff(test.time_s)))
-        lam = 1.0 / (dt * (2.0 * math.pi * opt.smoothing_cutoff_hz) ** 4)
-        return SampledMotion(test.time_s, test.displacement_m, lam)
+        return SampledMotion.with_cutoff(test.time_s, test.displacement_m,
+                                         opt.smoothing_cutoff_hz)
     m = n if opt.smoothing is not None else min(n, max(opt.spline_points, n // 10))
     idx = _node_indices(n, m - 1)
     return SampledMotion(test.time_s[idx], test.displacement_m[idx], opt.smoothing)

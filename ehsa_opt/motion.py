@@ -14,7 +14,7 @@ import casadi as ca
 import numpy as np
 from scipy.interpolate import make_smoothing_spline
 
-__all__ = ["SineMotion", "SampledMotion"]
+__all__ = ["SineMotion", "SampledMotion", "FilteredMotion"]
 
 
 @dataclass(frozen=True)
@@ -88,6 +88,17 @@ class SampledMotion:
         object.__setattr__(self, "displacement_m", x)
         object.__setattr__(self, "_spline", make_smoothing_spline(t, x, lam=self.smoothing))
 
+    @classmethod
+    def with_cutoff(cls, time_s: np.ndarray, displacement_m: np.ndarray,
+                    cutoff_hz: float) -> "SampledMotion":
+        """Smoothing spline whose penalty acts like a low-pass at ``cutoff_hz`` (Hz):
+        lam = 1 / (dt (2π f_c)⁴), dt the mean sample step (GCV tends to over-smooth
+        the acceleration of long measured records)."""
+        if not cutoff_hz > 0:
+            raise ValueError(f"SampledMotion.with_cutoff: cutoff_hz must be > 0 Hz, got {cutoff_hz}")
+        dt = float(np.mean(np.diff(np.asarray(time_s, dtype=float))))
+        return cls(time_s, displacement_m, 1.0 / (dt * (2.0 * math.pi * cutoff_hz) ** 4))
+
     def evaluate(self, t: np.ndarray) -> np.ndarray:
         """Array (3, len(t)) of x, v, a from the smoothing spline."""
         t = np.asarray(t, dtype=float)
@@ -100,3 +111,28 @@ class SampledMotion:
         grid = [self.time_s.tolist()]
         return tuple(ca.interpolant(f"motion_{k}", "linear", grid, xva[k].tolist())(t)
                      for k in range(3))
+
+
+class FilteredMotion:
+    """Recorded motion differentiated the way inverse-model identification does it
+    (EMPS reference): zero-phase 4th-order Butterworth low-pass, then central
+    differences.  A CVODES simulation needs a continuous motion: :meth:`sampled`
+    gives a :class:`SampledMotion` through the filtered samples."""
+
+    def __init__(self, time_s: np.ndarray, displacement_m: np.ndarray, cutoff_hz: float) -> None:
+        from scipy.signal import butter, filtfilt
+        t = np.asarray(time_s, float)
+        dt = float(np.median(np.diff(t)))
+        wn = min(2.0 * cutoff_hz * dt, 0.99)
+        b, a = butter(4, wn)
+        x = filtfilt(b, a, np.asarray(displacement_m, float))
+        v = np.gradient(x, t)
+        self.time_s, self.u = t, np.vstack([x, v, np.gradient(v, t)])
+        self.cutoff_hz = cutoff_hz
+
+    def evaluate(self, t: np.ndarray) -> np.ndarray:
+        """Array (3, len(t)) of x, v, a, linearly interpolated between samples."""
+        return np.vstack([np.interp(t, self.time_s, row) for row in self.u])
+
+    def sampled(self) -> SampledMotion:
+        return SampledMotion(self.time_s, self.u[0], smoothing=1e-12)

@@ -184,3 +184,20 @@ def test_winding_heating_raises_the_resistance_by_its_copper_loss():
     assert dT[-1] > 10.0
     with pytest.raises(ValueError, match="temperature_coefficient"):
         WindingHeating(temperature_coefficient_per_K=0.0)
+
+
+def test_sampled_motion_cutoff_differentiates_a_sine():
+    """The cut-off smoothing spline recovers v and a of a noisy sampled sine."""
+    from ehsa_opt.motion import FilteredMotion, SampledMotion
+    rng = np.random.default_rng(0)
+    m = SineMotion(0.015, 1.5)
+    t = np.arange(0, 2.0, 1e-3)
+    x = m.evaluate(t)[0] + rng.normal(0, 2e-6, t.size)
+    inner = (t > 0.2) & (t < 1.8)
+    for motion in (SampledMotion.with_cutoff(t, x, 30.0), FilteredMotion(t, x, 30.0)):
+        est, ref = motion.evaluate(t), m.evaluate(t)
+        for k in (1, 2):
+            err = np.max(np.abs(est[k][inner] - ref[k][inner])) / np.max(np.abs(ref[k]))
+            assert err < 0.05
+    with pytest.raises(ValueError, match="cutoff_hz"):
+        SampledMotion.with_cutoff(t, x, 0.0)

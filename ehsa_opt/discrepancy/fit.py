@@ -36,7 +36,7 @@ from ..data import BenchTest
 from ..identify import force_relative_error_percent
 from ..models import BenchModel
 from ..models.components import Component, ParamSpec
-from ..motion import SampledMotion, SineMotion
+from ..motion import FilteredMotion, SineMotion
 from ..params import FRICTION_NAMES, HarvesterParams
 
 __all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
@@ -136,30 +136,6 @@ def _sine_motion(test: BenchTest) -> SineMotion:
     A = np.column_stack([np.sin(w * t), np.cos(w * t)])
     (a, b), *_ = np.linalg.lstsq(A, test.displacement_m, rcond=None)
     return SineMotion(float(math.hypot(a, b)), float(test.frequency_hz), float(math.atan2(b, a)))
-
-
-class FilteredMotion:
-    """Recorded motion differentiated the way inverse-model identification does it
-    (EMPS reference): zero-phase 4th-order Butterworth low-pass, then central
-    differences.  A CVODES simulation needs a continuous motion: :meth:`sampled`
-    gives a :class:`~ehsa_opt.motion.SampledMotion` through the filtered samples."""
-
-    def __init__(self, time_s: np.ndarray, displacement_m: np.ndarray, cutoff_hz: float) -> None:
-        from scipy.signal import butter, filtfilt
-        t = np.asarray(time_s, float)
-        dt = float(np.median(np.diff(t)))
-        wn = min(2.0 * cutoff_hz * dt, 0.99)
-        b, a = butter(4, wn)
-        x = filtfilt(b, a, np.asarray(displacement_m, float))
-        v = np.gradient(x, t)
-        self.time_s, self.u = t, np.vstack([x, v, np.gradient(v, t)])
-        self.cutoff_hz = cutoff_hz
-
-    def evaluate(self, t: np.ndarray) -> np.ndarray:
-        return np.vstack([np.interp(t, self.time_s, row) for row in self.u])
-
-    def sampled(self) -> SampledMotion:
-        return SampledMotion(self.time_s, self.u[0], smoothing=1e-12)
 
 
 def prepare_tests(tests: Sequence[BenchTest], has_generator: bool = True,
