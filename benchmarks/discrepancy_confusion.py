@@ -17,8 +17,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from ehsa_opt.discrepancy import DiscrepancySettings, run_discrepancy
-from ehsa_opt.synthetic import SyntheticSpec, write_synthetic
+from ehsa_opt.estimation.discrepancy import DiscrepancySettings, run_discrepancy
+from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
 
 CASES: list[tuple[str, dict, int]] = [
     ("backlash", {"backlash_gap_m": 1e-4}, 1),

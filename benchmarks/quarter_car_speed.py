@@ -1,40 +1,55 @@
-"""Speed of the quarter-car evaluation paths (issue 4 acceptance).
+"""Speed of the quarter-car evaluation paths against fair baselines (issues 4 and 16).
 
-1. Time domain with friction: a batch of 64 designs on a 60 s class C road
-   (compiled CasADi step, mapaccum over time, map over designs) against a plain
-   ``scipy.integrate.solve_ivp`` (Radau, numpy right-hand side, the same model)
-   of one design on the same road.  Ratio = baseline s/design ÷ batch s/design.
-2. Frequency domain (frictionless, exact): designs per second of
-   :func:`ehsa_opt.metrics.linear_metrics` on random designs in the paper's box.
+1. Time domain with friction: a batch of designs on a class C road (compiled CasADi
+   step, cached block graph, chunks of designs on 1 or 2 threads) against what a
+   competent user writes with ``scipy.integrate.solve_ivp`` on the same model and road
+   (road by linear interpolation, rtol 1e-6, atol 1e-9), one design each:
+
+   * LSODA on the numpy right-hand side (stiffness switching, no Jacobian needed);
+   * Radau with the analytic Jacobian of the same right-hand side from CasADi.
+
+   Ratios are CPU seconds per design of the baseline ÷ CPU seconds per design of the
+   batch (single-thread batch: no credit for threads), all measured in this run.
+   Accuracy: mean generator power of each against the others (the ODE solvers are
+   references of their own tolerance; the batch is second order at 1 kHz).
+2. Memory: peak RSS of a fresh process simulating 100 designs on a 600 m road at
+   100 km/h (default ``keep_series=False``; and with ``keep_series=True``).
+3. Frequency domain (frictionless, exact): designs per second of
+   :func:`ehsa_opt.vehicle.metrics.linear_metrics` on random designs in the paper's box.
 
 Run from the repository root::
 
-    python benchmarks/quarter_car_speed.py [--baseline-designs 1] [--road-s 60]
+    python benchmarks/quarter_car_speed.py [--road-s 60] [--batch 64]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import subprocess
 import sys
 import time
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
 
-from ehsa_opt.datasets import embedded_data_dir, load_truth  # noqa: E402
-from ehsa_opt.friction import rod_friction_N  # noqa: E402
-from ehsa_opt.metrics import linear_metrics  # noqa: E402
-from ehsa_opt.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams  # noqa: E402
-from ehsa_opt.quarter_car import compiled_step, simulate_quarter_car  # noqa: E402
-from ehsa_opt.road import synthesize_road  # noqa: E402
+from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth  # noqa: E402
+from ehsa_opt.physics.friction import rod_friction_N  # noqa: E402
+from ehsa_opt.physics.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams  # noqa: E402
+from ehsa_opt.physics.quarter_car_model import QuarterCarModel, param_vector  # noqa: E402
+from ehsa_opt.vehicle.metrics import linear_metrics  # noqa: E402
+from ehsa_opt.vehicle.road import synthesize_road  # noqa: E402
+from ehsa_opt.vehicle.simulate import compiled_step, simulate_quarter_car  # noqa: E402
 
 
-def baseline_solve_ivp(vehicle, harvester, friction, t, x0, z0, method="Radau"):
-    """Plain solve_ivp of the same model: numpy RHS, road by linear interpolation."""
+def numpy_rhs(vehicle, harvester, friction, t, x0):
+    """The model's right-hand side in numpy, road by linear interpolation."""
     m2, m1 = vehicle.sprung_mass_kg, vehicle.unsprung_mass_kg
     k2, k1 = vehicle.suspension_stiffness_N_per_m, vehicle.tyre_stiffness_N_per_m
     meq, r = harvester.equivalent_mass_kg(), harvester.lead_m_per_rad
@@ -52,17 +67,67 @@ def baseline_solve_ivp(vehicle, harvester, friction, t, x0, z0, method="Radau"):
         a2, a1 = minv @ np.array([f2, f1])
         return [v2, v1, a2, a1, (ke * v / r - R * i) / L]
 
-    return solve_ivp(rhs, (t[0], t[-1]), z0, method=method, t_eval=t, rtol=1e-6,
-                     atol=1e-9)
+    return rhs
+
+
+def casadi_jacobian(vehicle, harvester, friction):
+    """Analytic ∂f/∂z of the same model (CasADi), as a numpy-returning callable."""
+    model = QuarterCarModel()
+    z, x0 = ca.SX.sym("z", 5), ca.SX.sym("x0")
+    p = param_vector(vehicle, harvester, friction)
+    jac = ca.Function("dfdz", [z], [ca.jacobian(model.ode(z, x0, p), z)])
+    return lambda tt, zz: jac(zz).full()
+
+
+def run_baseline(method, vehicle, harvester, friction, t, x0, z0):
+    rhs = numpy_rhs(vehicle, harvester, friction, t, x0)
+    kw = {"jac": casadi_jacobian(vehicle, harvester, friction)} if method == "Radau" else {}
+    c0 = time.process_time()
+    sol = solve_ivp(rhs, (t[0], t[-1]), z0, method=method, t_eval=t, rtol=1e-6, atol=1e-9,
+                    **kw)
+    return time.process_time() - c0, sol
+
+
+_MEMORY_CHILD = """
+import json, resource, sys, time
+def peak_MB():  # this process's high-water mark (ru_maxrss would include the parent's)
+    try:
+        for line in open("/proc/self/status"):
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+sys.path.insert(0, {root!r})
+import numpy as np
+from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
+from ehsa_opt.physics.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams
+from ehsa_opt.vehicle.simulate import simulate_quarter_car
+fr = FrictionParams(**load_truth(embedded_data_dir())["friction"])
+hs = [HarvesterParams(load_ohm=float(r)) for r in np.geomspace(5, 500, 100)]
+base = peak_MB()
+t0 = time.perf_counter()
+sim = simulate_quarter_car(VehicleParams(), hs, fr, RoadParams(length_m=600.0,
+                           speed_km_per_h=100.0, seed=0), warn=False{extra})
+print(json.dumps({{"peak_MB": peak_MB(), "before_MB": base,
+                  "wall_s": time.perf_counter() - t0,
+                  "ok": bool(sim.success)}}))
+"""
+
+
+def peak_rss(extra: str = "") -> dict:
+    code = _MEMORY_CHILD.format(root=str(ROOT), extra=extra)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--road-s", type=float, default=60.0, help="road duration, s (default 60)")
     ap.add_argument("--batch", type=int, default=64, help="designs per batch (default 64)")
-    ap.add_argument("--baseline-designs", type=int, default=1,
-                    help="designs run by the solve_ivp baseline (default 1)")
     ap.add_argument("--freq-designs", type=int, default=20000)
+    ap.add_argument("--skip-memory", action="store_true")
     args = ap.parse_args()
 
     vehicle = VehicleParams()
@@ -75,18 +140,30 @@ def main() -> None:
     loads = rng.uniform(5.0, 200.0, args.batch)
     designs = [HarvesterParams(load_ohm=float(x)) for x in loads]
 
-    t0 = time.perf_counter()
+    w0 = time.perf_counter()
     compiled_step(1.0 / fs)
-    t_compile = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    sim = simulate_quarter_car(vehicle, designs, friction, road, settle_s=0.0,
-                               sample_rate_hz=fs, keep_series=False, warn=False)
-    t_batch = time.perf_counter() - t0
-    per_design = t_batch / args.batch
+    t_compile = time.perf_counter() - w0  # gcc runs in a child process: wall time
+    batch = {}
+    for threads in (1, 2):
+        warm = RoadParams(iso_class="C", speed_km_per_h=speed, length_m=50.0, seed=0)
+        simulate_quarter_car(vehicle, designs, friction, warm, settle_s=0.0, sample_rate_hz=fs,
+                             warn=False, threads=threads)  # builds the (cached) graphs
+        c0, w0 = time.process_time(), time.perf_counter()
+        sim = simulate_quarter_car(vehicle, designs, friction, road, settle_s=0.0,
+                                   sample_rate_hz=fs, warn=False, threads=threads)
+        batch[threads] = (time.process_time() - c0, time.perf_counter() - w0, sim)
+    cpu1, wall1, sim = batch[1]
+    cpu2, wall2, sim2 = batch[2]
+    same = all(np.array_equal(sim.metrics[k], sim2.metrics[k], equal_nan=True)
+               for k in sim.metrics)
+    per_design = cpu1 / args.batch
     print(f"road: class C, {speed:g} km/h, {args.road_s:g} s, {sim.stats['steps']} steps at "
-          f"{fs:g} Hz; friction = embedded data set's truth; compiled: {sim.stats['compiled']}")
-    print(f"batch ({args.batch} designs, with friction): {t_batch:.2f} s "
-          f"({per_design * 1e3:.1f} ms/design), one-off compile {t_compile:.2f} s")
+          f"{fs:g} Hz; friction = embedded data set's truth; compiled: {sim.stats['compiled']}"
+          f" (one-off C compile {t_compile:.2f} s wall)")
+    print(f"batch of {args.batch} designs with friction: 1 thread {cpu1:.2f} s CPU / "
+          f"{wall1:.2f} s wall ({per_design * 1e3:.1f} ms CPU per design); 2 threads "
+          f"{cpu2:.2f} s CPU / {wall2:.2f} s wall (wall x{wall1 / wall2:.2f}); identical "
+          f"metrics: {same}")
 
     # Same signal as the batch (settle 0 on a periodic road: the road plus its first
     # sample again, starting at rest on the road's first elevation).
@@ -94,20 +171,32 @@ def main() -> None:
     x0 = np.concatenate([prof.elevation_m, prof.elevation_m[:1]])
     t = np.arange(x0.size) / fs
     z0 = np.array([x0[0], x0[0], 0.0, 0.0, 0.0])
-    times = []
-    for k in range(args.baseline_designs):
-        t0 = time.perf_counter()
-        sol = baseline_solve_ivp(vehicle, designs[k], friction, t, x0, z0)
-        times.append(time.perf_counter() - t0)
-        p_base = float(np.mean(designs[k].load_ohm * sol.y[4][1:] ** 2))
-        p_fast = float(sim.metrics["power_W"][k])
-        print(f"solve_ivp Radau, design {k}: {times[-1]:.1f} s, nfev {sol.nfev}, "
-              f"status {sol.status}; mean power {p_base:.2f} W vs batch {p_fast:.2f} W "
-              f"({100 * (p_fast / p_base - 1):+.2f} %)")
-    base = float(np.mean(times))
-    print(f"time-domain speed-up per design: {base / per_design:.0f}x "
-          f"(baseline {base:.1f} s/design, batch {per_design * 1e3:.1f} ms/design; "
-          "target >= 100x)")
+    h0 = designs[0]
+    p_fast = float(sim.metrics["power_W"][0])
+    powers = {"batch (1 kHz)": p_fast}
+    ratios = {}
+    for method, label in (("LSODA", "LSODA, numpy RHS"),
+                          ("Radau", "Radau, numpy RHS + CasADi analytic Jacobian")):
+        dt, sol = run_baseline(method, vehicle, h0, friction, t, x0, z0)
+        p = float(np.mean(h0.load_ohm * sol.y[4][1:] ** 2))
+        powers[method] = p
+        ratios[method] = dt / per_design
+        print(f"solve_ivp {label}: {dt:.1f} s CPU, nfev {sol.nfev}, njev {sol.njev}, "
+              f"status {sol.status}; mean power {p:.4f} W, batch {p_fast:.4f} W "
+              f"({100 * (p_fast / p - 1):+.3f} %)")
+    print(f"LSODA vs Radau+Jacobian mean power: "
+          f"{100 * (powers['LSODA'] / powers['Radau'] - 1):+.3f} %")
+    print("time-domain speed-up per design (CPU, batch on 1 thread): "
+          + ", ".join(f"x{r:.0f} vs {m}" for m, r in ratios.items())
+          + f"; batch on 2 threads, wall time: x{ratios['LSODA'] * cpu1 / wall2:.0f} vs LSODA")
+
+    if not args.skip_memory:
+        d = peak_rss()
+        s = peak_rss(", keep_series=True")
+        print(f"memory, 100 designs on a 600 m road at 100 km/h: peak RSS {d['peak_MB']:.0f} MB "
+              f"with the default keep_series=False (process before the batch "
+              f"{d['before_MB']:.0f} MB; {d['wall_s']:.1f} s wall; acceptance < 600 MB); "
+              f"{s['peak_MB']:.0f} MB with keep_series=True")
 
     n = args.freq_designs
     design = {"total_inertia_gcm2": rng.uniform(250, 1e4, n),

@@ -8,19 +8,83 @@ fix; nothing is written half-way.
 from __future__ import annotations
 
 import argparse
+import errno
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Callable, Sequence
 
-from .data import BenchDataError
-from .params import ParameterError
+from .datasets.bench_format import BenchDataError
+from .physics.params import ParameterError
 
 __all__ = ["main", "build_parser"]
 
 
 class _UsageError(Exception):
     """A CLI-level input error (printed without a traceback)."""
+
+
+def _count(minimum: int) -> Callable[[str], int]:
+    """argparse type: an integer >= ``minimum`` (0 or a negative is refused, never replaced)."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"'{text}' is not an integer") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"{value} must be >= {minimum}")
+        return value
+    return parse
+
+
+_POSITIVE, _NON_NEGATIVE = _count(1), _count(0)
+
+
+def _check_output_dir(path: str, option: str) -> None:
+    """Refuse an output folder that cannot be used, before any work is done."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise _UsageError(f"{option} {p}: exists and is not a directory; give a folder "
+                          f"(a new one is created)")
+    probe = p
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir():
+        raise _UsageError(f"{option} {p}: {probe} is a file, so the folder cannot be created; "
+                          f"choose another path")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise _UsageError(f"{option} {p}: {probe} is not writable; choose a folder you can "
+                          f"write to or fix its permissions")
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """``--out`` and ``--checkpoint`` are checked before any computation starts."""
+    for attr, option in (("out", "--out"), ("checkpoint", "--checkpoint")):
+        value = getattr(args, attr, None)
+        if isinstance(value, str) and value:
+            _check_output_dir(value, option)
+
+
+def _os_error_message(exc: OSError) -> str:
+    """What went wrong with which file, and the fix."""
+    name = exc.filename or "(file)"
+    if exc.filename2:
+        name = f"{name} -> {exc.filename2}"
+    code = exc.errno
+    if code in (errno.ENOSPC, getattr(errno, "EDQUOT", -1)):
+        fix = ("no space left on the device; free some space or choose --out on another disk, "
+               "then run the same command again (finished steps and checkpoints are kept)")
+    elif code in (errno.EACCES, errno.EPERM, errno.EROFS):
+        fix = (f"{exc.strerror or 'permission denied'}; choose a folder you can write to "
+               f"(--out) or fix its permissions")
+    elif code == errno.ENOENT:
+        fix = "not found; check the path"
+    elif code in (errno.EISDIR, errno.ENOTDIR):
+        fix = f"{exc.strerror}; a file and a folder have the same name — check the path"
+    else:
+        fix = f"{exc.strerror or exc}; check the path, its permissions and free space"
+    return f"{name}: {fix}"
 
 
 def _parse_effect_params(items: Sequence[str]) -> dict[str, float]:
@@ -39,9 +103,9 @@ def _parse_effect_params(items: Sequence[str]) -> dict[str, float]:
 
 # ------------------------------------------------------------------ bench
 def _cmd_bench_generate(args: argparse.Namespace) -> int:
-    from .models import COMPONENTS, make_component
-    from .progress import progress_bar
-    from .synthetic import SyntheticSpec, write_synthetic
+    from .datasets.synthetic import SyntheticSpec, write_synthetic
+    from .physics import COMPONENTS, make_component
+    from .utils.progress import progress_bar
 
     effect_params = _parse_effect_params(args.effect_param)
     effects: dict[str, dict[str, float]] = {}
@@ -70,13 +134,13 @@ def _cmd_bench_generate(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench_check(args: argparse.Namespace) -> int:
-    from .data import check_bench
-    print(check_bench(args.data_dir))
+    from .datasets.bench_format import check_bench
+    print(check_bench(args.data_dir, lenient=args.lenient))
     return 0
 
 
 def _cmd_bench_convert_emps(args: argparse.Namespace) -> int:
-    from .emps import convert_emps
+    from .datasets.emps import convert_emps
     out = convert_emps(args.source_dir, args.out_dir, overwrite=args.overwrite)
     print(f"wrote EMPS bench data to {out}")
     return 0
@@ -113,13 +177,17 @@ def _design_figures(outcome: dict, out_dir: Path) -> list[Path]:
 
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
-    from .design_config import check_method, load_design_config
-    from .optimize import check_out_dir, optimize
-    from .progress import progress_bar
-    from .sweep import executor
+    from .design.config import check_method, load_design_config
+    from .design.optimize import check_out_dir, optimize
+    from .design.sweep import executor
+    from .utils.progress import progress_bar
 
     cfg = load_design_config(args.problem)
     method = check_method(args.method or cfg.method)
+    frictions = None
+    if args.friction:
+        from .datasets.friction_source import load_friction
+        frictions = [load_friction(spec) for spec in args.friction]
     out = check_out_dir(args.out)
     gens = args.gens or cfg.nsga2.gens
     import contextlib
@@ -133,7 +201,9 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         outcome = optimize(cfg, method, out_dir=out, pop=args.pop, gens=args.gens,
                            seed=args.seed, checkpoint=args.checkpoint, resume=args.resume,
                            stop_after=args.stop_after,
-                           mapper=mapper if args.scheduler else None, progress=tick)
+                           mapper=mapper if args.scheduler else None, progress=tick,
+                           frictions=frictions, friction_mode=args.friction_mode,
+                           friction_labels=tuple(args.friction or ()))
     _design_figures(outcome, out / "figures")
     d, o = outcome["design"], outcome["objectives"]
     m = outcome["metrics"]
@@ -150,20 +220,28 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
               f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
               f"{outcome.get('front_vs_goal_attainment')}")
+    if "time_domain_check" in outcome:
+        chk = outcome["time_domain_check"]
+        print(f"time-domain check with friction ({chk['n_designs']} designs, "
+              f"{chk['road']['length_m']:g} m road): worst |error| of the fast path "
+              + ", ".join(f"{k} {100 * v:.2f} %" for k, v in chk["worst_abs_rel_error"].items())
+              + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")
     print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
                                             else ""))
     return 0 if outcome["success"] or args.stop_after else 1
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from . import plots
-    from .params import load_toml
-    from .plots.design import sweep_lines
-    from .reproduce import atomic_write_text
-    from .sweep import parse_sweep, rows_to_csv, run_sweep
     import time
 
-    spec = parse_sweep(load_toml(args.problem), args.problem)
+    from . import plots
+    from .design.sweep import parse_sweep, rows_to_csv, run_sweep
+    from .physics.params import load_toml
+    from .plots.design import sweep_lines
+    from .utils.io import atomic_write_text
+
+    spec = parse_sweep(load_toml(args.problem), args.problem,
+                       friction_from=_friction_file(args.friction))
     t0 = time.perf_counter()
     rows = run_sweep(spec, jobs=args.jobs, scheduler=args.scheduler)
     dt = time.perf_counter() - t0
@@ -178,26 +256,47 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         x = spec.design[0][0]
         plots.save(sweep_lines(rows, x, ys, [h for h in hue if h != x] or ["vehicle"]),
                    out / "sweep.png")
+    bad = [r for r in rows if float(r.get("road_holding", 0.0)) > 1.0]
+    if bad:
+        worst = max(bad, key=lambda r: float(r["road_holding"]))
+        print(f"warning: road holding > 1 in {len(bad)} of {len(rows)} cases (worst "
+              f"{float(worst['road_holding']):.2f}: " + ", ".join(
+                  f"{k} = {worst[k]}" for k in ("vehicle", "iso_class", "speed_km_per_h",
+                                                "friction") if k in worst)
+              + "): the tyre would leave the ground and the linear tyre model is invalid "
+                "there", file=sys.stderr)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
     print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
     return 0
+def _friction_file(spec: str | None) -> str | None:
+    """``--friction FILE`` of sweep (a case suffix makes no sense: the sweep names cases)."""
+    if spec is None:
+        return None
+    from .datasets.friction_source import parse_friction_spec
+    path, case = parse_friction_spec(spec)
+    if str(path) != spec:
+        raise _UsageError(f"sweep --friction {spec}: give the file only; the cases come from "
+                          f"[sweep] friction = [\"none\", \"min\", \"best\", \"max\"]")
+    return spec
+
+
 # ------------------------------------------------------------------ identify
 def _cmd_identify(args: argparse.Namespace) -> int:
-    import json
+    from .datasets.bench_format import load_bench
+    from .estimation.bounds import identification_json
+    from .estimation.identify import identify
+    from .utils.io import atomic_write_json
+    from .utils.progress import progress_bar
 
-    from .data import load_bench
-    from .identify import identify
-    from .progress import progress_bar
-    from .reproduce import atomic_write_text
-
-    data = load_bench(args.data_dir)  # refuses bad data before any solve
+    data = load_bench(args.data_dir, lenient=args.lenient)  # refuses bad data before solving
     out = Path(args.out)
     with progress_bar(total=len(data.tests), desc="identify", unit="test") as bar:
         rep = identify(data, starts=args.starts, jobs=args.jobs, seed=args.seed,
                        progress=lambda k: bar.update(1))
     out.mkdir(parents=True, exist_ok=True)
     rep.plot(out)
-    atomic_write_text(out / "identification.json", json.dumps(rep.to_json(), indent=1))
+    doc = identification_json(rep)
+    atomic_write_json(out / "identification.json", doc)
     ok = sum(f.success for f in rep.fits)
     print(f"identified {ok}/{len(rep.fits)} tests in {rep.seconds:.1f} s "
           f"({args.starts} starts each); results in {out / 'identification.json'}")
@@ -212,18 +311,32 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         p = rep.fits[0].parameters
         print(f"  M = {p['inertia_kg']:.2f} kg, F_v = {p['nut_viscous_Ns_per_m']:.1f} N s/m, "
               f"F_C = {p['nut_coulomb_N']:.2f} N, offset = {p['offset_N']:.2f} N")
+    env = doc.get("friction_envelope")
+    if env:
+        import numpy as np
+        v = np.array(env["velocity_m_per_s"], dtype=float)
+        at = [x for x in (0.02, 0.05, 0.1, 0.2, 0.3) if x <= v.max()]
+        print("  rod friction (N) at " + ", ".join(f"{x:g}" for x in at) + " m/s:")
+        for case in ("min", "best", "max"):
+            vals = np.interp(at, v, np.array(env["sets_rod_N"][case], dtype=float))
+            print(f"    {case:<5s} " + "  ".join(f"{x:7.1f}" for x in vals))
+        for case in ("min", "max"):
+            vals = np.interp(at, v, np.array(env["paper_method"]["rod_N"][case], dtype=float))
+            print(f"    paper {case} " + "  ".join(f"{x:7.1f}" for x in vals)
+                  + "  (paper's per-parameter method)")
+        print(f"  friction sets min/best/max: {out / 'identification.json'}:CASE "
+              f"(--friction, or [friction] from = ... in a problem file)")
     return 0 if ok else 1
 # ------------------------------------------------------------------ discrepancy
 def _cmd_discrepancy(args: argparse.Namespace) -> int:
-    from .discrepancy import DiscrepancySettings, run_discrepancy
-    from .discrepancy_report import write_report
+    from .estimation.discrepancy import DiscrepancySettings, run_discrepancy
+    from .pipeline.discrepancy_report import write_report
 
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
                                    max_tests=args.max_tests)
     res = run_discrepancy(args.data_dir, settings, log=lambda m: print(m, flush=True))
     js, md = write_report(res, args.out)
-    print(f"effect: {res.effect}; relative force error on {res.evaluation}: "
-          f"{res.error_before:.3f} % -> {res.error_after:.3f} %")
+    print(res.message)
     floor = json.loads(js.read_text()).get("error_true_parameters")
     if floor is not None:
         print(f"true parameters (truth.toml) on the same tests: {floor:.3f} %")
@@ -233,30 +346,60 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ reproduce
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from .reproduce import reproduce
-    report = reproduce(out_dir=args.out, quick=args.quick, jobs=args.jobs)
+    from .pipeline.reproduce import reproduce
+    report = reproduce(out_dir=args.out, quick=args.quick, jobs=args.jobs,
+                       data_dir=args.data, vehicle=args.vehicle)
     print(f"report: {report}")
     return 0
+
+
+def _in_file(path: str, func: Callable, *a, **kw):
+    """Call ``func``; a ParameterError that does not name ``path`` gets it prefixed."""
+    try:
+        return func(*a, **kw)
+    except ParameterError as exc:
+        if str(path) in str(exc):
+            raise
+        raise ParameterError(f"{path}: {exc}") from None
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import json
     import warnings
 
-    from .problem import load_problem
-    from .quarter_car import RoadHoldingWarning, simulate_quarter_car
+    from .datasets.problem_file import load_problem
+    from .vehicle.simulate import RoadHoldingWarning, simulate_quarter_car
     prob = load_problem(args.problem)
+    if args.friction:
+        import dataclasses
+
+        from .datasets.friction_source import load_friction
+        prob = dataclasses.replace(prob, friction=load_friction(args.friction))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RoadHoldingWarning)
-        sim = simulate_quarter_car(prob.vehicle, prob.harvester, prob.friction, prob.road,
-                                   settle_s=prob.simulation.settle_s,
-                                   sample_rate_hz=prob.simulation.sample_rate_hz,
-                                   base_dir=prob.base_dir, keep_series=False)
+        sim = _in_file(args.problem, simulate_quarter_car, prob.vehicle, prob.harvester,
+                       prob.friction, prob.road,
+                       settle_s=prob.simulation.settle_s,
+                       sample_rate_hz=prob.simulation.sample_rate_hz,
+                       base_dir=prob.base_dir, keep_series=False)
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
-    m = sim.metrics_of(0)
+    m = dict(sim.metrics_of(0))
     if not sim.success:
         raise ValueError(f"{args.problem}: simulation failed: {sim.message}")
+    # load power R_e i² is instantaneous, so its peak gives the peak current and the peak
+    # terminal voltage i R_e exactly
+    r_e = prob.harvester.load_ohm
+    pk = float(m["peak_power_W"])
+    m["peak_current_A"] = (pk / r_e) ** 0.5 if r_e > 0 else None
+    m["peak_terminal_voltage_V"] = (pk * r_e) ** 0.5 if r_e > 0 else None
+    for key, limit, unit in (("peak_terminal_voltage_V", prob.simulation.rated_voltage_V, "V"),
+                             ("peak_current_A", prob.simulation.rated_current_A, "A")):
+        if limit is not None and m[key] is not None and m[key] > limit:
+            what = "terminal voltage" if unit == "V" else "current"
+            print(f"warning: peak {what} {m[key]:.3g} {unit} exceeds the rated {limit:g} "
+                  f"{unit} ([simulation] rated_{'voltage_V' if unit == 'V' else 'current_A'} "
+                  f"of {args.problem})", file=sys.stderr)
     if args.json:
         out = dict(m)
         out["road"] = sim.road_source
@@ -273,6 +416,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             ("power absorbed by the damper (W)", m["dissipated_power_W"]),
             ("dissipation bound (W)", m["dissipation_bound_W"]),
             ("peak power (W)", m["peak_power_W"]),
+            ("peak terminal voltage i R_e (V)", m["peak_terminal_voltage_V"]),
+            ("peak current (A)", m["peak_current_A"]),
             ("energy balance residual (%)", 100.0 * m["energy_residual"])]
     print(f"{args.problem}: {sim.road_source}, "
           f"{'frictionless' if prob.friction is None else 'with friction'}, "
@@ -288,15 +433,19 @@ def build_parser() -> argparse.ArgumentParser:
         prog="ehsa-opt",
         description="Identify, simulate and optimally design ball-screw energy-harvesting "
                     "shock absorbers.")
+    from .utils.version import __version__
+    parser.add_argument("--version", action="version", version=f"ehsa-opt {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     bench = sub.add_parser("bench", help="generate, check or convert bench data")
     bsub = bench.add_subparsers(dest="bench_command", required=True, metavar="ACTION")
     g = bsub.add_parser("generate", help="write synthetic bench data for the paper's 21 tests")
     g.add_argument("out_dir", metavar="OUT_DIR")
-    g.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
-    g.add_argument("--effect", action="append", default=[],
-                   help="hide a physical effect in the data (repeatable), e.g. backlash")
+    g.add_argument("--seed", type=_NON_NEGATIVE, default=0, help="noise seed (default 0)")
+    from .physics.components import COMPONENTS
+    g.add_argument("--effect", action="append", default=[], metavar="EFFECT",
+                   help="hide a physical effect in the data (repeatable): "
+                        + ", ".join(sorted(COMPONENTS)))
     g.add_argument("--effect-param", action="append", default=[], metavar="NAME=VALUE",
                    help="override an effect parameter, e.g. backlash_gap_m=2e-4")
     g.add_argument("--noise-force-N", type=float, default=2.0, help="force noise std (N)")
@@ -306,6 +455,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.set_defaults(func=_cmd_bench_generate)
     c = bsub.add_parser("check", help="validate a bench data directory")
     c.add_argument("data_dir", metavar="DATA_DIR")
+    c.add_argument("--lenient", action="store_true",
+                   help="report signals that contradict bench.toml (frequency, amplitude, "
+                        "units) as warnings instead of refusing the data")
     c.set_defaults(func=_cmd_bench_check)
     e = bsub.add_parser("convert-emps", help="convert the raw EMPS CSVs to bench format")
     e.add_argument("source_dir", metavar="SOURCE_DIR")
@@ -317,56 +469,80 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("problem", metavar="PROBLEM.toml")
     o.add_argument("--method", default=None,
                    help="goal-attainment or nsga2 (default: [design] method of the file)")
-    o.add_argument("--pop", type=int, default=None, help="NSGA-II population (default [nsga2])")
-    o.add_argument("--gens", type=int, default=None, help="NSGA-II generations (total)")
-    o.add_argument("--seed", type=int, default=None, help="NSGA-II seed")
+    o.add_argument("--pop", type=_POSITIVE, default=None,
+                   help="NSGA-II population (default [nsga2])")
+    o.add_argument("--gens", type=_POSITIVE, default=None, help="NSGA-II generations (total)")
+    o.add_argument("--seed", type=_NON_NEGATIVE, default=None, help="NSGA-II seed")
     o.add_argument("--checkpoint", default=None, metavar="DIR",
                    help="save the NSGA-II state after every generation (atomic)")
     o.add_argument("--resume", default=None, metavar="DIR",
                    help="continue an NSGA-II run from its checkpoint")
-    o.add_argument("--stop-after", type=int, default=None, metavar="G",
+    o.add_argument("--stop-after", type=_POSITIVE, default=None, metavar="G",
                    help="stop after G generations (as if interrupted; resume later)")
     o.add_argument("--scheduler", default=None, metavar="ADDR",
                    help="evaluate populations on a Dask cluster, e.g. tcp://127.0.0.1:8786")
+    o.add_argument("--friction", action="append", default=None, metavar="ID.json[:CASE]",
+                   help="design with this friction (identification result, case min|best|max;"
+                        " repeatable); default: the file's [friction] table, else none")
+    o.add_argument("--friction-mode", default=None, choices=("at", "worst", "mean"),
+                   help="combine several friction sets: worst case (default) or mean")
     o.add_argument("--out", required=True, metavar="OUT_DIR")
     o.set_defaults(func=_cmd_optimize)
 
     w = sub.add_parser("sweep", help="design-space study: [sweep] grid, tidy CSV + figure")
     w.add_argument("problem", metavar="PROBLEM.toml")
-    w.add_argument("--jobs", type=int, default=1, help="local worker processes (default 1)")
+    w.add_argument("--jobs", type=_POSITIVE, default=1, help="local worker processes (default 1)")
     w.add_argument("--scheduler", default=None, metavar="ADDR",
                    help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
     w.add_argument("--out", required=True, metavar="OUT_DIR")
+    w.add_argument("--friction", default=None, metavar="FILE",
+                   help="take the sweep's min/best/max friction sets from this "
+                        "identification.json (overrides [sweep] friction_from)")
     w.set_defaults(func=_cmd_sweep)
 
     s = sub.add_parser("simulate", help="simulate a quarter car with the harvester on a road")
     s.add_argument("problem", metavar="PROBLEM.toml")
     s.add_argument("--json", action="store_true", help="print one JSON object of metrics")
+    s.add_argument("--friction", default=None, metavar="FILE[:CASE]",
+                   help="friction from an identification.json (CASE min|best|max, default "
+                        "best); overrides the problem file's [friction]")
     s.set_defaults(func=_cmd_simulate)
     i = sub.add_parser("identify", help="identify the friction of every bench test (paper §3)")
     i.add_argument("data_dir", metavar="DATA_DIR")
     i.add_argument("--out", required=True, metavar="OUT_DIR",
                    help="output folder (identification.json and figures)")
-    i.add_argument("--starts", type=int, default=4, help="multistart points per test (default 4)")
-    i.add_argument("--jobs", type=int, default=1, help="parallel processes (default 1)")
-    i.add_argument("--seed", type=int, default=0, help="seed of the start draws (default 0)")
+    i.add_argument("--starts", type=_POSITIVE, default=4,
+                   help="multistart points per test (default 4)")
+    i.add_argument("--jobs", type=_POSITIVE, default=1, help="parallel processes (default 1)")
+    i.add_argument("--seed", type=_NON_NEGATIVE, default=0,
+                   help="seed of the start draws (default 0)")
+    i.add_argument("--lenient", action="store_true",
+                   help="use data whose signals contradict bench.toml (warnings, not errors)")
     i.set_defaults(func=_cmd_identify)
     d = sub.add_parser("discrepancy", help="find, name and add the missing effect in a model "
                                            "(localise residuals, rank candidates, re-identify)")
     d.add_argument("data_dir", metavar="DATA_DIR")
     d.add_argument("--out", required=True, metavar="OUT_DIR",
                    help="writes discrepancy.json, report.md and figures/")
-    d.add_argument("--jobs", type=int, default=1, help="parallel candidate fits (default 1)")
-    d.add_argument("--seed", type=int, default=0, help="seed of the held-out split (default 0)")
-    d.add_argument("--top", type=int, default=3, help="candidates re-identified (default 3)")
-    d.add_argument("--max-tests", type=int, default=None,
+    d.add_argument("--jobs", type=_POSITIVE, default=1, help="parallel candidate fits (default 1)")
+    d.add_argument("--seed", type=_NON_NEGATIVE, default=0,
+                   help="seed of the held-out split (default 0)")
+    d.add_argument("--top", type=_POSITIVE, default=3, help="candidates re-identified (default 3)")
+    d.add_argument("--max-tests", type=_POSITIVE, default=None,
                    help="use at most this many tests, spread over the grid")
     d.set_defaults(func=_cmd_discrepancy)
 
-    r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data")
+    r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data "
+                                         "or on your own bench data (--data)")
+    r.add_argument("--data", default=None, metavar="DATA_DIR",
+                   help="your bench data directory (bench.toml + CSVs; your harvester from its "
+                        "[harvester]) instead of the embedded data")
+    r.add_argument("--vehicle", default=None, metavar="PROBLEM.toml",
+                   help="problem file whose preset / [vehicle] is the vehicle of the studies "
+                        "and the design (default: passenger car)")
     r.add_argument("--quick", action="store_true", help="fewer starts, shorter roads (minutes)")
     r.add_argument("--out", default="results/latest", help="output folder (default results/latest)")
-    r.add_argument("--jobs", type=int, default=2, help="parallel processes (default 2)")
+    r.add_argument("--jobs", type=_POSITIVE, default=2, help="parallel processes (default 2)")
     r.set_defaults(func=_cmd_reproduce)
     return parser
 
@@ -376,10 +552,33 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     func: Callable[[argparse.Namespace], int] = args.func
+    from .utils.process import die_with_parent
+    die_with_parent()  # pool workers forked from here on die with this process
     try:
-        return func(args)
+        _check_outputs(args)
+        out = getattr(args, "out", None)
+        if not out:
+            return func(args)
+        from .utils.lock import LOCK_NAME, output_lock
+        created = not Path(out).exists()
+        try:
+            with output_lock(out):  # one run per output folder
+                return func(args)
+        finally:  # a refused run leaves no empty folder behind
+            if created and Path(out).is_dir() and \
+                    [f.name for f in Path(out).iterdir()] == [LOCK_NAME]:
+                (Path(out) / LOCK_NAME).unlink(missing_ok=True)
+                Path(out).rmdir()
     except (BenchDataError, ParameterError, _UsageError, FileExistsError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"error: {_os_error_message(exc)}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print("error: out of memory; reduce the problem (shorter road, lower sample rate, "
+              "fewer tests or designs, --jobs 1) or run on a machine with more memory",
+              file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("\ninterrupted: finished steps and checkpoints are kept; run the same command "

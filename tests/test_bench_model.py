@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from ehsa_opt import (BenchModel, FrictionParams, HarvesterParams, SineMotion, simulate_bench)
-from ehsa_opt.friction import nut_friction_N
-from ehsa_opt.models import Backlash, Compliance
-from ehsa_opt.synthetic import PROTOTYPE_FRICTION
+from ehsa_opt.physics.friction import nut_friction_N
+from ehsa_opt.physics import Backlash, Compliance
+from ehsa_opt.datasets.synthetic import PROTOTYPE_FRICTION
 
 H = HarvesterParams()
 
@@ -138,7 +138,7 @@ def test_integrator_cache_is_per_model():
     ("winding_heating", {"winding_heating_K_per_J": 10.0}),
 ])
 def test_energy_balance_closes_with_new_components(name, values):
-    from ehsa_opt.models import make_component
+    from ehsa_opt.physics import make_component
     model = BenchModel(H, [make_component(name)])
     p = model.param_vector(15.0, PROTOTYPE_FRICTION, values)
     t = np.arange(0, 2.0 / 1.5, 1e-3)
@@ -156,7 +156,7 @@ def test_energy_balance_closes_with_new_components(name, values):
 
 
 def test_asymmetric_friction_levels_by_direction():
-    from ehsa_opt.models import AsymmetricFriction
+    from ehsa_opt.physics import AsymmetricFriction
     comp = AsymmetricFriction()
     import casadi as ca
     v = ca.SX.sym("v")
@@ -170,7 +170,7 @@ def test_asymmetric_friction_levels_by_direction():
 def test_winding_heating_raises_the_resistance_by_its_copper_loss():
     """Analytic check: with τ ≫ the run, ΔT(t) = h ∫ R_i(ΔT) i² dt, and the
     simulated temperature matches that integral of the simulated current."""
-    from ehsa_opt.models import WindingHeating
+    from ehsa_opt.physics import WindingHeating
     model = BenchModel(H, [WindingHeating()])
     assert model.state_names == ["current_A", "winding_temperature_rise_K"]
     p = model.param_vector(15.0, PROTOTYPE_FRICTION, {"winding_heating_K_per_J": 2.0,
@@ -188,7 +188,7 @@ def test_winding_heating_raises_the_resistance_by_its_copper_loss():
 
 def test_sampled_motion_cutoff_differentiates_a_sine():
     """The cut-off smoothing spline recovers v and a of a noisy sampled sine."""
-    from ehsa_opt.motion import FilteredMotion, SampledMotion
+    from ehsa_opt.physics.motion import FilteredMotion, SampledMotion
     rng = np.random.default_rng(0)
     m = SineMotion(0.015, 1.5)
     t = np.arange(0, 2.0, 1e-3)

@@ -42,7 +42,7 @@ def test_console_entry_point_module(tmp_path):
 
 
 def test_interrupt_says_how_to_resume(monkeypatch, capsys, tmp_path):
-    import ehsa_opt.reproduce as rep
+    import ehsa_opt.pipeline.reproduce as rep
 
     def boom(**kwargs):
         raise KeyboardInterrupt

@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ehsa_opt.data import BenchDataError, BenchTest, load_bench, write_bench
-from ehsa_opt.datasets import embedded_data_dir
-from ehsa_opt.synthetic import SyntheticSpec, generate_bench_tests, write_synthetic
+from ehsa_opt.datasets.bench_format import BenchDataError, BenchTest, load_bench, write_bench
+from ehsa_opt.datasets.embedded import embedded_data_dir
+from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests, write_synthetic
 
 
 @pytest.fixture(scope="module")
@@ -188,9 +188,15 @@ def test_written_directory_is_spec_format(small_dir, tmp_path):
     # a directory written by hand to the SPEC format (minimal keys) is accepted
     d = tmp_path / "hand"
     d.mkdir()
+    from ehsa_opt.physics.params import HarvesterParams
+    h = HarvesterParams()
     t = np.linspace(0, 1, 50)
-    x = 0.015 * np.sin(2 * np.pi * t)
-    rows = "\n".join(f"{a},{b},{c},{e}" for a, b, c, e in zip(t, x, 100 * x, 10 * x))
+    w = 2 * np.pi
+    x, v = 0.015 * np.sin(w * t), 0.015 * w * np.cos(w * t)
+    # signals the harvester of bench.toml can produce (the physics checks look at them)
+    force = -h.equivalent_mass_kg() * w ** 2 * x + h.equivalent_damping_Ns_per_m(w, 47.0) * v
+    volt = h.voltage_constant_Vs_per_rad * v / h.lead_m_per_rad * 47.0 / 53.6
+    rows = "\n".join(f"{a},{b},{c},{e}" for a, b, c, e in zip(t, x, force, volt))
     (d / "a.csv").write_text("time_s,displacement_m,force_N,voltage_V\n" + rows + "\n")
     (d / "bench.toml").write_text('[harvester]\nlead_mm_per_rev = 5.0\n[[test]]\nfile = "a.csv"\n'
                                   'frequency_hz = 1.0\namplitude_m = 0.015\nload_ohm = 47.0\n')

@@ -9,7 +9,7 @@ import pytest
 
 from ehsa_opt.design import (PAPER_BOX, DesignProblem, DesignSpace, dominates_by, hypervolume,
                              non_dominated, pick_preferred, run_nsga2, solve_goal_attainment)
-from ehsa_opt.params import ParameterError
+from ehsa_opt.physics.params import ParameterError
 
 
 class Parabolas:
@@ -151,7 +151,7 @@ def test_nsga2_resume_gives_identical_front(tmp_path):
     assert resumed.to_csv_text() == straight.to_csv_text()
     assert [h["hv"] for h in resumed.history] == [h["hv"] for h in straight.history]
     # the checkpoint dir holds only the finished state file (atomic writes leave no temp)
-    assert sorted(f.name for f in (tmp_path / "ck").iterdir()) == ["algorithm.pkl"]
+    assert sorted(f.name for f in (tmp_path / "ck").iterdir()) == ["nsga2_checkpoint.npz"]
     with pytest.raises(ParameterError, match="pass the same --pop"):
         run_nsga2(_problem(), pop_size=20, n_gen=6, seed=5, resume=tmp_path / "ck")
     with pytest.raises(ParameterError, match="no checkpoint"):
@@ -160,3 +160,122 @@ def test_nsga2_resume_gives_identical_front(tmp_path):
                           Parabolas())
     with pytest.raises(ParameterError, match="different problem"):
         run_nsga2(other, pop_size=16, n_gen=6, seed=5, resume=tmp_path / "ck")
+
+
+# ----------------------------------------------------------------------------- checkpoints
+def _checkpointed(tmp_path, stop_after=3):
+    ck = tmp_path / "ck"
+    run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7, checkpoint=ck, stop_after=stop_after)
+    return ck, ck / "nsga2_checkpoint.npz"
+
+
+@pytest.mark.parametrize("stop", [1, 2, 5, 7])
+def test_resume_from_data_checkpoint_is_byte_identical_at_any_generation(tmp_path, stop):
+    straight = run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7)
+    ck, _ = _checkpointed(tmp_path, stop)
+    # interrupted twice: resume, stop again, resume to the end
+    mid = min(stop + 1, 7)
+    if mid > stop:
+        run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7, resume=ck, stop_after=mid)
+    resumed = run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7, resume=ck)
+    assert resumed.to_csv_text() == straight.to_csv_text()
+    assert resumed.history == straight.history
+    assert resumed.stats["n_eval"] == straight.stats["n_eval"]
+
+
+def test_checkpoint_is_data_without_pickle(tmp_path):
+    _, f = _checkpointed(tmp_path)
+    with np.load(f, allow_pickle=False) as z:  # loads without pickle: no object arrays
+        assert {"header", "pop_X", "pop_F", "archive_F"} <= set(z.files)
+        assert all(z[k].dtype != object for k in z.files)
+
+
+def _rewrite_npz(src, dst, change):
+    with np.load(src, allow_pickle=False) as z:
+        arrays = {k: z[k].copy() for k in z.files}
+    change(arrays)
+    with open(dst, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def test_altered_checkpoint_is_refused(tmp_path):
+    ck, f = _checkpointed(tmp_path)
+
+    def one_number(arrays):
+        arrays["pop_F"][3, 1] *= 1.0 + 1e-9
+
+    _rewrite_npz(f, f, one_number)
+    with pytest.raises(ParameterError, match="SHA-256.*altered") as err:
+        run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7, resume=ck)
+    assert str(f) in str(err.value) and "--checkpoint" in str(err.value)
+
+
+def test_altered_header_is_refused(tmp_path):
+    import json
+    ck, f = _checkpointed(tmp_path)
+
+    def history(arrays):
+        head = json.loads(bytes(arrays["header"]).decode())
+        head["history"][0]["hv"] += 0.5
+        arrays["header"] = np.frombuffer(json.dumps(head).encode(), dtype=np.uint8)
+
+    _rewrite_npz(f, f, history)
+    with pytest.raises(ParameterError, match="altered"):
+        run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7, resume=ck)
+
+
+@pytest.mark.parametrize("keep", [0.0, 0.3, 0.9])
+def test_truncated_checkpoint_is_refused(tmp_path, keep):
+    ck, f = _checkpointed(tmp_path)
+    blob = f.read_bytes()
+    f.write_bytes(blob[:int(keep * len(blob))])
+    with pytest.raises(ParameterError, match="truncated|not an NSGA-II") as err:
+        run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7, resume=ck)
+    assert str(f) in str(err.value)
+
+
+def test_foreign_and_legacy_checkpoints_are_refused(tmp_path):
+    import pickle
+    ck = tmp_path / "ck"
+    ck.mkdir()
+    f = ck / "nsga2_checkpoint.npz"
+    with open(f, "wb") as fh:  # a valid npz from elsewhere
+        np.savez(fh, pop_X=np.zeros((4, 2)))
+    with pytest.raises(ParameterError, match="not an NSGA-II checkpoint"):
+        run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7, resume=ck)
+    f.write_text("pop_X,pop_F\n1,2\n")  # not a zip at all
+    with pytest.raises(ParameterError, match="truncated|not an NSGA-II"):
+        run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7, resume=ck)
+    f.unlink()
+
+    class Boom:
+        def __reduce__(self):
+            return (pytest.fail, ("the old pickle checkpoint was loaded",))
+
+    (ck / "algorithm.pkl").write_bytes(pickle.dumps({"algorithm": Boom()}))
+    with pytest.raises(ParameterError, match="old pickle format"):
+        run_nsga2(_problem(), pop_size=16, n_gen=8, seed=7, resume=ck)
+
+
+def test_no_pickle_loads_in_the_package():
+    import pathlib
+    import re
+    pkg = pathlib.Path(__file__).resolve().parent.parent / "ehsa_opt"
+    hits = [str(p) for p in pkg.rglob("*.py")
+            if re.search(r"pickle\.loads?\(|allow_pickle\s*=\s*True", p.read_text())]
+    assert hits == []
+
+
+def test_incremental_archive_equals_filtering_everything():
+    from ehsa_opt.design.pareto import update_archive
+    rng = np.random.default_rng(0)
+    for trial in range(60):
+        m = int(rng.integers(2, 5))
+        A = np.zeros((0, m))
+        for _ in range(10):
+            C = rng.integers(0, 6, (int(rng.integers(0, 12)), m)).astype(float)  # ties, dups
+            U = np.vstack([A, C])
+            A_new, changed = update_archive(A, C)
+            assert np.array_equal(A_new, U[non_dominated(U)])
+            assert changed == (not np.array_equal(A_new, A))
+            A = A_new

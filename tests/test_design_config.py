@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from ehsa_opt.cli import main
-from ehsa_opt.design_config import load_design_config, parse_design_config
-from ehsa_opt.params import ParameterError
-from ehsa_opt.sweep import executor
+from ehsa_opt.design.config import load_design_config, parse_design_config
+from ehsa_opt.physics.params import ParameterError
+from ehsa_opt.design.sweep import executor
 
 PAPER = Path(__file__).resolve().parents[1] / "problems" / "paper_design.toml"
 

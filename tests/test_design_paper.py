@@ -11,10 +11,10 @@ import pytest
 
 from ehsa_opt.cli import main
 from ehsa_opt.design import OBJECTIVE_NAMES, solve_goal_attainment
-from ehsa_opt.design_config import load_design_config
-from ehsa_opt.optimize import build_problem, goals_and_weights
-from ehsa_opt.params import ParameterError
-from ehsa_opt.sweep import SweepSpec, parse_sweep, run_sweep, rows_to_csv
+from ehsa_opt.design.config import load_design_config
+from ehsa_opt.design.optimize import build_problem, goals_and_weights
+from ehsa_opt.physics.params import ParameterError
+from ehsa_opt.design.sweep import SweepSpec, parse_sweep, run_sweep, rows_to_csv
 
 PAPER = Path(__file__).resolve().parents[1] / "problems" / "paper_design.toml"
 DESIGN_KEYS = ["total_inertia_gcm2", "lead_mm_per_rev", "speed_constant_rpm_per_V", "load_ohm"]
@@ -122,7 +122,7 @@ def test_resume_after_12_of_25_generations_is_exact(paper, tmp_path):
 def test_nsga2_on_dask_equals_local(paper):
     from distributed import Client, LocalCluster
     from ehsa_opt.design import run_nsga2
-    from ehsa_opt.sweep import executor
+    from ehsa_opt.design.sweep import executor
     cfg, problem, _, _, _ = paper
     calls = []
 
@@ -140,3 +140,22 @@ def test_nsga2_on_dask_equals_local(paper):
         dask = run_nsga2(p_dask, pop_size=16, n_gen=4, seed=3)
     assert calls and max(calls) == 4
     assert dask.to_csv_text() == local.to_csv_text()
+
+
+def test_cli_refuses_an_altered_checkpoint_with_exit_2(tmp_path, capsys):
+    from ehsa_opt.cli import main
+    ck, out = tmp_path / "ck", tmp_path / "out"
+    base = ["optimize", str(PAPER), "--method", "nsga2", "--pop", "8", "--gens", "3",
+            "--out", str(out)]
+    assert main(base + ["--checkpoint", str(ck), "--stop-after", "1"]) == 0
+    f = ck / "nsga2_checkpoint.npz"
+    with np.load(f, allow_pickle=False) as z:
+        arrays = {k: z[k].copy() for k in z.files}
+    arrays["pop_X"][0, 0] = 0.5 if arrays["pop_X"][0, 0] != 0.5 else 0.25  # one number
+    with open(f, "wb") as fh:
+        np.savez(fh, **arrays)
+    capsys.readouterr()
+    assert main(base + ["--resume", str(ck)]) == 2
+    err = capsys.readouterr().err
+    assert str(f) in err and "altered" in err and f"--checkpoint {ck}" in err
+    assert "Traceback" not in err

@@ -4,14 +4,14 @@ import numpy as np
 import pytest
 
 from ehsa_opt.cli import main
-from ehsa_opt.discrepancy import (CANDIDATES, DiscrepancySettings, Rig, fit_group, localise,
+from ehsa_opt.estimation.discrepancy import (CANDIDATES, DiscrepancySettings, Rig, fit_group, localise,
                                   predict, prepare_tests, run_discrepancy, signature_scores,
                                   split_tests)
-from ehsa_opt.discrepancy.fit import linear_baseline, noise_std
-from ehsa_opt.discrepancy.localise import reversal_times
-from ehsa_opt.models import COMPONENTS
-from ehsa_opt.params import HarvesterParams
-from ehsa_opt.synthetic import SyntheticSpec, generate_bench_tests, write_synthetic
+from ehsa_opt.estimation.discrepancy.fit import linear_baseline, noise_std
+from ehsa_opt.estimation.discrepancy.localise import reversal_times
+from ehsa_opt.physics import COMPONENTS
+from ehsa_opt.physics.params import HarvesterParams
+from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests, write_synthetic
 
 H = HarvesterParams()
 
@@ -133,22 +133,29 @@ def test_cli_bad_input(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_emps_direction_dependent_friction():
-    from ehsa_opt.datasets import embedded_data_dir
+def test_emps_validated_on_the_pulses_record():
+    """EMPS is fitted on the estimation record and judged on data/emps/validation.
+    Changed by issue 12: asymmetric friction lowers the fit-record error (paper
+    4.08 -> 3.11 %) but removes only ~2 % of the validation error above noise, so
+    the held-out rule no longer names it (it was named on the fit record alone)."""
+    from ehsa_opt.datasets.embedded import embedded_data_dir
     res = run_discrepancy(embedded_data_dir("emps"))
-    assert res.effect == "asymmetric_friction"
-    assert res.evaluation == "all data"
-    assert res.error_after < res.error_before
-    assert 3.0 < res.error_before < 5.5 and 2.5 < res.error_after < 4.5  # paper: 4.08 -> 3.11
-    p = res.winner.fit.parameters
+    assert res.evaluation == "validation set" and len(res.heldout_tests) == 1
+    asym = next(c for c in res.candidates if c.effect == "asymmetric_friction")
+    assert asym.fitted and asym.delta_bic_fit < 0  # better on the estimation record
+    p = asym.fit.parameters
     fv_pos = p["nut_viscous_Ns_per_m"] + p["asym_viscous_Ns_per_m"]
     fv_neg = p["nut_viscous_Ns_per_m"] - p["asym_viscous_Ns_per_m"]
     assert abs(fv_pos - 166.7) < 15 and abs(fv_neg - 240.4) < 15
+    v = res.validation
+    assert 5.0 < v["open_loop_reference_parameters"]["percent_of_norm_q"] < 7.5
+    assert v["open_loop_final"]["percent_of_norm_q"] < 15.0
+    assert res.effect in ("none", "asymmetric_friction") or res.effects
 
 
 @pytest.mark.slow
 def test_default_data_set_gives_backlash():
-    from ehsa_opt.datasets import embedded_data_dir
+    from ehsa_opt.datasets.embedded import embedded_data_dir
     res = run_discrepancy(embedded_data_dir("bench_prototype"),
                           DiscrepancySettings(max_tests=6, top=2))
     assert res.effect == "backlash" and res.error_after < res.error_before
@@ -161,7 +168,7 @@ def test_default_data_set_gives_backlash():
 
 
 def test_split_friction_keeps_the_rod_equivalent_friction():
-    from ehsa_opt.discrepancy.workflow import split_friction
+    from ehsa_opt.estimation.discrepancy.refit import split_friction
     r = H.lead_m_per_rad
     p = {"nut_breakaway_N": 80.0, "nut_coulomb_N": 50.0, "nut_breakaway_velocity_m_per_s": 0.01,
          "nut_viscous_Ns_per_m": 200.0, "bearing_breakaway_Nm": 0.004,
@@ -176,3 +183,97 @@ def test_split_friction_keeps_the_rod_equivalent_friction():
     assert q["bearing_breakaway_velocity_rad_per_s"] == 1.0
     with pytest.raises(ValueError, match="share"):
         split_friction(p, 1.5, r)
+
+
+# ------------------------------------------------------------------ issue 12
+def test_decision_rule_needs_a_gain_beyond_the_noise_floor():
+    from ehsa_opt.estimation.discrepancy.refit import earns, excess_reduction
+    # 8.35 -> 8.33 % with a 1 % noise floor: 0.2 % of the excess, refused
+    assert excess_reduction(8.35, 8.33, 1.0) < 0.01
+    assert not earns(8.35, 8.33, 1.0, -10.0, -10.0)
+    # a refit that makes the held-out error worse never earns, whatever the BIC says
+    assert excess_reduction(43.1, 44.6, 1.0) < 0
+    assert not earns(43.1, 44.6, 1.0, -1e4, -1e4)
+    # down to the noise floor: the whole excess removed
+    assert excess_reduction(5.0, 1.0, 1.0) == pytest.approx(1.0)
+    assert earns(5.0, 1.0, 1.0, -50.0, -20.0)
+    assert not earns(5.0, 1.0, 1.0, -50.0, 3.0)  # no held-out evidence
+
+
+def _residual_case(extra, seed=3):
+    """Clean tests with a known term added to the measured force; the 'model' is the
+    noise-free simulation (so the residual is the term plus noise)."""
+    tests = generate_bench_tests(SyntheticSpec(frequencies_hz=(0.8, 2.0, 3.2),
+                                               loads_ohm=(22.0, 100.0), cycles=1.0, seed=seed,
+                                               noise_force_N=0.0, noise_voltage_V=0.0))
+    pts = prepare_tests(tests)
+    rng = np.random.default_rng(seed)
+    preds = [pt.y.copy() for pt in pts]
+    for pt in pts:
+        pt.y = pt.y.copy()
+        pt.y[0] = pt.y[0] + extra(pt) + rng.normal(0, 2.0, pt.y.shape[1])
+        pt.sigma = np.array([2.0, 0.05])
+    return pts, preds
+
+
+def test_term_discovery_names_a_rough_spot_in_words():
+    from ehsa_opt.estimation.discrepancy import discover_term
+    def rough(pt):
+        x, v, _ = pt.u
+        return 20.0 * np.tanh(v / 1e-3) * ((x > 0.004) & (x < 0.010))
+    pts, preds = _residual_case(rough)
+    term = discover_term(pts[:4], preds[:4], pts[4:], preds[4:], lead_m_per_rad=H.lead_m_per_rad)
+    assert term.group == "stroke"
+    lo, hi = term.quantity["stroke_mm"]
+    assert 2.0 < lo < 6.0 and 8.0 < hi < 12.0, term.description
+    assert "opposing the motion" in term.description
+    assert term.error_after < 0.6 * term.error_before  # held-out gain
+
+
+def test_term_discovery_finds_a_force_channel_lag():
+    from ehsa_opt.estimation.discrepancy import discover_term
+    def lag(pt):
+        return np.interp(pt.time_s - 0.004, pt.time_s, pt.y[0]) - pt.y[0]
+    pts, preds = _residual_case(lag)
+    term = discover_term(pts[:4], preds[:4], pts[4:], preds[4:], lead_m_per_rad=H.lead_m_per_rad)
+    assert term.group == "lag"
+    assert abs(term.quantity["lag_ms"] - 4.0) < 0.3, term.description
+    assert "delayed" in term.description
+    assert term.error_after < 0.5 * term.error_before
+
+
+def test_rotor_period_read_off_the_residual_spectrum():
+    from ehsa_opt.estimation.discrepancy.localise import best_rotor_period
+    pts, preds = _residual_case(lambda pt: 5.0 * np.sin(12 * pt.u[0] / H.lead_m_per_rad + 0.3))
+    assert best_rotor_period(pts, preds, lead_m_per_rad=H.lead_m_per_rad) == 12
+
+
+@pytest.mark.slow
+def test_rough_spot_gets_no_catalogue_name(tmp_path):
+    """An out-of-catalogue rough spot is answered 'none of the catalogue' with the term."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+    spec = importlib.util.spec_from_file_location(
+        "bench_dh", Path(__file__).parents[1] / "benchmarks" / "discrepancy_heldout.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["bench_dh"] = mod
+    spec.loader.exec_module(mod)
+    d = tmp_path / "case"
+    mod.make_case(d, "heldout", {"bench_rough_spot": {"rough_force_N": 15.0}}, None, 15)
+    res = run_discrepancy(d, DiscrepancySettings(seed=15, top=2, max_effects=2))
+    assert res.effect == "none of the catalogue" and res.effects == []
+    assert res.term.earns and res.term.group == "stroke"
+    assert res.term.error_after < res.term.error_before
+
+
+@pytest.mark.slow
+def test_two_effects_are_named_in_turn(tmp_path):
+    d = write_synthetic(tmp_path / "d", SyntheticSpec(
+        effects={"asymmetric_friction": {"asym_coulomb_N": 8.0},
+                 "voltage_drop": {"voltage_drop_V": 1.0}},
+        frequencies_hz=(0.8, 2.0, 3.2), loads_ohm=(22.0, 100.0), cycles=1.0, seed=15))
+    res = run_discrepancy(d, DiscrepancySettings(seed=15, top=2, max_effects=2))
+    assert set(res.effects) == {"asymmetric_friction", "voltage_drop"}
+    errs = [res.error_before] + [s["error_after"] for s in res.steps]
+    assert errs[0] > errs[1] > errs[2]

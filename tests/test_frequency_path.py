@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import scipy.linalg as sl
 
-from ehsa_opt.iso2631 import (ISO2631_WK_TABLE, wk_abs2, wk_exact, wk_exact_tf, wk_fit_error,
+from ehsa_opt.vehicle.iso2631 import (ISO2631_WK_TABLE, wk_abs2, wk_exact, wk_exact_tf, wk_fit_error,
                               wk_state_space)
-from ehsa_opt.metrics import METRIC_KEYS, linear_metrics
-from ehsa_opt.params import HarvesterParams, ParameterError, RoadParams, VehicleParams
-from ehsa_opt.road import dissipation_bound_W, road_psd_m3, road_velocity_psd
+from ehsa_opt.vehicle.metrics import METRIC_KEYS, linear_metrics
+from ehsa_opt.physics.params import HarvesterParams, ParameterError, RoadParams, VehicleParams
+from ehsa_opt.vehicle.road import dissipation_bound_W, road_psd_m3, road_velocity_psd
 
 
 # ----------------------------------------------------------------------------- W_k
@@ -45,7 +45,7 @@ def test_wk_state_space_fit_is_stable_and_reports_its_error():
 
 
 def test_time_domain_wk_filter_matches_exact_weighting_within_fit_error():
-    from ehsa_opt.iso2631 import weighted_rms_fft, wk_filter
+    from ehsa_opt.vehicle.iso2631 import weighted_rms_fft, wk_filter
     rng = np.random.default_rng(0)
     fs = 1000.0
     x = rng.normal(size=60000)

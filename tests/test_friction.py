@@ -3,8 +3,8 @@ import math
 import casadi as ca
 import numpy as np
 
-from ehsa_opt.friction import rod_friction_N, simscape_friction
-from ehsa_opt.params import FrictionParams, HarvesterParams
+from ehsa_opt.physics.friction import rod_friction_N, simscape_friction
+from ehsa_opt.physics.params import FrictionParams, HarvesterParams
 
 P = (60.0, 40.0, 0.01, 150.0)
 

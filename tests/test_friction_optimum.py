@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from ehsa_opt.design_config import load_design_config
-from ehsa_opt.friction_optimum import friction_on_optimum
-from ehsa_opt.params import FrictionParams
-from ehsa_opt.sweep import default_friction_sets, parse_sweep, rows_to_csv, run_sweep
+from ehsa_opt.design.config import load_design_config
+from ehsa_opt.design.friction_optimum import friction_on_optimum
+from ehsa_opt.physics.params import FrictionParams
+from ehsa_opt.design.sweep import default_friction_sets, parse_sweep, rows_to_csv, run_sweep
 
 PAPER = Path(__file__).resolve().parents[1] / "problems" / "paper_design.toml"
 OPT = {"total_inertia_gcm2": 250.0, "lead_mm_per_rev": 5.0, "speed_constant_rpm_per_V": 29.8,

@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 
 from ehsa_opt.cli import main
-from ehsa_opt.datasets import embedded_data_dir
-from ehsa_opt.emps import EMPS_REFERENCE
-from ehsa_opt.friction import rod_friction_N
-from ehsa_opt.identify import (IdentifyOptions, eq5_delta, fit_tests,
+from ehsa_opt.datasets.embedded import embedded_data_dir
+from ehsa_opt.datasets.emps import EMPS_REFERENCE
+from ehsa_opt.physics.friction import rod_friction_N
+from ehsa_opt.estimation.identify import (IdentifyOptions, eq5_delta, fit_tests,
                                force_relative_error_percent, identify, simulate_tests)
-from ehsa_opt.models import BenchModel
-from ehsa_opt.models.components import Backlash
-from ehsa_opt.params import FRICTION_NAMES, HarvesterParams
-from ehsa_opt.synthetic import (PROTOTYPE_FRICTION, SyntheticSpec, generate_bench_tests,
+from ehsa_opt.physics import BenchModel
+from ehsa_opt.physics.components import Backlash
+from ehsa_opt.physics.params import FRICTION_NAMES, HarvesterParams
+from ehsa_opt.datasets.synthetic import (PROTOTYPE_FRICTION, SyntheticSpec, generate_bench_tests,
                                 write_synthetic)
 
 

@@ -2,7 +2,7 @@ import math
 
 import pytest
 
-from ehsa_opt.params import (FrictionParams, HarvesterParams, ParameterError, RoadParams,
+from ehsa_opt.physics.params import (FrictionParams, HarvesterParams, ParameterError, RoadParams,
                              VehicleParams, from_mapping)
 
 

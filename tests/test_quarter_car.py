@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from ehsa_opt.cli import main
-from ehsa_opt.datasets import embedded_data_dir, load_truth
-from ehsa_opt.metrics import METRIC_KEYS, linear_metrics
-from ehsa_opt.params import FrictionParams, HarvesterParams, ParameterError, RoadParams, \
+from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
+from ehsa_opt.vehicle.metrics import METRIC_KEYS, linear_metrics
+from ehsa_opt.physics.params import FrictionParams, HarvesterParams, ParameterError, RoadParams, \
     VehicleParams
-from ehsa_opt.problem import load_problem
-from ehsa_opt.quarter_car import RoadHoldingWarning, simulate_quarter_car
-from ehsa_opt.road import octave_band_check, road_profile, road_psd_m3, synthesize_road
+from ehsa_opt.datasets.problem_file import load_problem
+from ehsa_opt.vehicle.simulate import RoadHoldingWarning, simulate_quarter_car
+from ehsa_opt.vehicle.road import octave_band_check, road_profile, road_psd_m3, synthesize_road
 
 TRUE_FRICTION = FrictionParams(**load_truth(embedded_data_dir())["friction"])
 LOADS = (10.0, 47.0, 100.0)
@@ -87,7 +87,7 @@ def test_friction_energy_balance_and_efficiency_bound(preset):
 def test_time_step_agrees_with_an_accurate_reference_integrator():
     from scipy.integrate import solve_ivp
 
-    from ehsa_opt.friction import rod_friction_N
+    from ehsa_opt.physics.friction import rod_friction_N
     vehicle, h = VehicleParams(), HarvesterParams(load_ohm=47.0)
     road = RoadParams(iso_class="C", speed_km_per_h=100, length_m=60.0, seed=2)
     sim = simulate_quarter_car(vehicle, h, TRUE_FRICTION, road, settle_s=0.0, warn=False)
@@ -196,3 +196,66 @@ def test_bad_problem_files_are_refused(tmp_path, capsys, text, match):
     assert main(["simulate", str(f)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error:") and match in err
+
+
+# ----------------------------------------------------------------------------- batch machinery
+def test_batch_graph_is_built_once_and_reused():
+    from ehsa_opt.vehicle import simulate as sim_mod
+    vehicle = VehicleParams()
+    hs = [HarvesterParams(load_ohm=r) for r in (12.0, 30.0, 80.0, 150.0)]
+    road = RoadParams(length_m=120.0, seed=11)
+    first = simulate_quarter_car(vehicle, hs, TRUE_FRICTION, road, warn=False)
+    builds = sim_mod.batch_graph_cache_info().misses
+    # same structure (step, chunk size), other designs and a road of another length:
+    # the cached graph serves it, nothing is rebuilt
+    again = simulate_quarter_car(vehicle, [h.replace(load_ohm=2 * h.load_ohm) for h in hs],
+                                 TRUE_FRICTION, RoadParams(length_m=170.0, seed=12), warn=False)
+    assert sim_mod.batch_graph_cache_info().misses == builds
+    assert sim_mod.batch_graph_cache_info().hits >= 1
+    assert first.success and again.success
+    assert not np.allclose(first.metrics["power_W"], again.metrics["power_W"])
+
+
+def test_keep_series_off_by_default_same_metrics_and_threads_do_not_matter():
+    vehicle = VehicleParams()
+    hs = [HarvesterParams(load_ohm=r) for r in (8.0, 25.0, 60.0, 200.0, 900.0)]
+    road = RoadParams(length_m=150.0, seed=5, speed_km_per_h=70.0)
+    default = simulate_quarter_car(vehicle, hs, TRUE_FRICTION, road, warn=False)
+    assert default.series == {}
+    full = simulate_quarter_car(vehicle, hs, TRUE_FRICTION, road, warn=False, keep_series=True,
+                                threads=1)
+    some = simulate_quarter_car(vehicle, hs, TRUE_FRICTION, road, warn=False, threads=2,
+                                keep_series=("load_power_W", "x2_m"))
+    for key in default.metrics:
+        assert np.array_equal(default.metrics[key], full.metrics[key], equal_nan=True), key
+        assert np.array_equal(default.metrics[key], some.metrics[key], equal_nan=True), key
+    assert sorted(some.series) == ["load_power_W", "x2_m"]
+    n = full.time_s.size
+    for name, arr in full.series.items():
+        assert arr.shape == (5, n), name
+    assert np.array_equal(some.series["x2_m"], full.series["x2_m"])
+    # the series are those the metrics were taken from
+    assert np.allclose(full.series["load_power_W"].mean(axis=1), full.metrics["power_W"],
+                       rtol=1e-12)
+    with pytest.raises(ParameterError, match="keep_series names"):
+        simulate_quarter_car(vehicle, hs[0], None, road, keep_series=("nope",))
+    with pytest.raises(ValueError, match="keep_series=True"):
+        default.plot()
+
+
+def test_batch_padding_and_chunks_match_one_design_at_a_time():
+    """A batch split in chunks and padded to whole blocks gives each design the
+    trajectory it has alone (no cross-talk between designs or chunks)."""
+    from ehsa_opt.physics.quarter_car_model import param_vector
+    from ehsa_opt.vehicle.simulate import simulate_batch
+    vehicle = VehicleParams()
+    frs = [TRUE_FRICTION, None, TRUE_FRICTION]
+    params = np.stack([param_vector(vehicle, HarvesterParams(load_ohm=r), f)
+                       for r, f in zip((10.0, 47.0, 300.0), frs)], axis=1)
+    t = np.arange(1301) * 1e-3  # 1300 steps: not a whole number of blocks
+    x0 = 0.01 * np.sin(2 * np.pi * 2.0 * t) + 0.003 * np.sin(2 * np.pi * 13.0 * t)
+    zt, y, _ = simulate_batch(params, x0, 1e-3, threads=2)
+    assert zt.shape == (3, 5, 1300) and y.shape[0] == 3 and y.shape[2] == 1300
+    for b in range(3):
+        z1, y1, _ = simulate_batch(params[:, [b]], x0, 1e-3, threads=1)
+        assert np.array_equal(z1[0], zt[b]) and np.array_equal(y1[0], y[b])

@@ -2,7 +2,7 @@
 
 import pytest
 
-from ehsa_opt.reproduce import Step, StepOutput, reproduce
+from ehsa_opt.pipeline.reproduce import Step, StepOutput, reproduce
 
 
 def _steps(calls, fail_second=False):

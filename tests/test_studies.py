@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from ehsa_opt.params import FRICTION_NAMES, HarvesterParams, RoadParams, VehicleParams
-from ehsa_opt.studies import (force_velocity_loops, friction_cases, paper_optimum_harvester,
+from ehsa_opt.physics.params import FRICTION_NAMES, HarvesterParams, RoadParams, VehicleParams
+from ehsa_opt.vehicle.studies import (force_velocity_loops, friction_cases, paper_optimum_harvester,
                               road_study, stepped_sine_response)
 
 
@@ -45,7 +45,7 @@ def test_stepped_sine_frictionless_matches_linear_transmissibility():
     study = stepped_sine_response(vehicle, h, fc, [47.0], freqs, amplitude_m=0.01,
                                   settle_min_s=4.0)
     # linear transmissibility |X2/X0| from Eqs 2–3 with the full impedance
-    from ehsa_opt.models.harvester import equivalent_impedance
+    from ehsa_opt.physics.harvester import equivalent_impedance
     w = 2 * np.pi * freqs
     s = 1j * w
     dyn = vehicle.suspension_stiffness_N_per_m + s * equivalent_impedance(h, w)

@@ -14,10 +14,12 @@ __all__ = ["goal_attainment_history", "pareto_projections", "parallel_coordinate
            "hypervolume_history", "friction_on_optimum", "sweep_lines"]
 
 _LABELS = {
-    "total_inertia_gcm2": "J_t (g cm²)", "lead_mm_per_rev": "lead (mm/rev)",
-    "speed_constant_rpm_per_V": "k_n (rpm/V)", "load_ohm": "R_e (Ω)",
-    "comfort": "α (comfort)", "road_holding": "η_rh (road holding)",
-    "inverse_power": "1/ρ_g", "inverse_efficiency": "1/η_g",
+    "total_inertia_gcm2": "total inertia J_t (g cm²)", "lead_mm_per_rev": "screw lead (mm/rev)",
+    "speed_constant_rpm_per_V": "generator speed constant k_n (rpm/V)",
+    "load_ohm": "load resistance R_e (Ω)",
+    "comfort": "comfort α = W_k rms / g (–)", "road_holding": "road holding η_rh (–)",
+    "inverse_power": "inverse dimensionless power 1/ρ_g (–)",
+    "inverse_efficiency": "inverse efficiency 1/η_g (–)",
     "power_W": "power (W)", "efficiency": "efficiency (–)",
     "comfort_weighted_rms_m_s2": "W_k rms accel. (m/s²)",
 }
@@ -105,12 +107,23 @@ def pareto_projections(pr: Any, ga: Mapping[str, float] | None = None,
                        label="prototype")
         ax.set_xlabel(_label(names[i]), fontsize=8)
         ax.set_ylabel(_label(names[j]), fontsize=8)
-        ax.grid(alpha=0.3)
+        # log axes where the front spans more than a decade: the knee, the goal-attainment
+        # point and the prototype sit near the minima and would otherwise overlap
+        from matplotlib.ticker import NullFormatter
+        for col, setter, axis in ((i, ax.set_xscale, ax.xaxis), (j, ax.set_yscale, ax.yaxis)):
+            vals = pr.F[:, col]
+            if np.all(vals > 0) and vals.max() > 3 * vals.min():
+                setter("log")
+                axis.set_minor_formatter(NullFormatter())
+        ax.grid(alpha=0.3, which="both")
     for ax in axes.ravel()[len(pairs):]:
         ax.set_visible(False)
-    axes[0, 0].legend(fontsize=7)
-    fig.suptitle("Pareto front, 2-D projections (all objectives minimised)", fontsize=10)
-    fig.tight_layout()
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, ncol=len(labels), loc="lower center",
+               frameon=False, bbox_to_anchor=(0.5, -0.01))
+    fig.suptitle("Pareto front, 2-D projections (all objectives minimised; log axes where "
+                 "the front spans more than a factor 3)", fontsize=10)
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     return fig
 
 
@@ -162,9 +175,10 @@ def hypervolume_history(histories: Mapping[str, Sequence[Mapping[str, float]]],
         if "hv_archive" in h[0]:
             ax.plot([r["n_eval"] for r in h], [r["hv_archive"] for r in h], "--",
                     color=line.get_color(), label=f"{name}: all evaluated (archive)")
-    ax.set_xlabel("evaluations")
-    ax.set_ylabel("hypervolume (normalised)")
-    ref = "" if reference is None else f", ref. {list(np.round(reference, 3))}"
+    ax.set_xlabel("objective evaluations (designs simulated)")
+    ax.set_ylabel("hypervolume of the normalised front (–)")
+    ref = ("" if reference is None else
+           ", reference point (" + ", ".join(f"{float(x):g}" for x in np.ravel(reference)) + ")")
     ax.set_title(f"Hypervolume of F/F(prototype){ref}", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)

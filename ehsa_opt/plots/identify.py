@@ -11,7 +11,8 @@ import numpy as np
 from . import bench_fit, save
 
 __all__ = ["iterations_objective", "iterations_parameters", "objective_vs_parameter",
-           "bounds_figure", "identifiability_figure", "fit_result", "report_figures"]
+           "bounds_figure", "identifiability_figure", "fit_result", "report_figures",
+           "friction_bounds"]
 
 
 def iterations_objective(result: Any, title: str = "") -> Any:
@@ -42,6 +43,7 @@ def iterations_parameters(result: Any, title: str = "") -> Any:
     for ax, (name, vals) in zip(axes.ravel(), pars.items()):
         ax.plot(vals, "o-", ms=2.5, color="C2")
         ax.set_title(name, fontsize=7)
+        ax.set_xlabel("IPOPT iteration", fontsize=7)
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
     for ax in axes.ravel()[n:]:
@@ -73,8 +75,10 @@ def objective_vs_parameter(report: Any, name: str = "bearing_viscous_Nms_per_rad
     return fig
 
 
-def bounds_figure(report: Any) -> Any:
-    """Fig 12: per-test identified values and the min/max bounds of each parameter."""
+def bounds_figure(report: Any, truth: Any = None) -> Any:
+    """Fig 12: per-test identified values (x: each test's frequency and load) and the
+    per-parameter min/max bounds (the paper's method); ``truth``: a mapping of the true
+    values of synthetic data, drawn as a dashed line."""
     names = list(report.bounds)
     n = len(names)
     cols = 4 if n > 4 else max(n, 1)
@@ -84,26 +88,33 @@ def bounds_figure(report: Any) -> Any:
     for ax, name in zip(axes.ravel(), names):
         vals = [f.parameters[name] for _, f in good]
         xs = np.arange(len(vals))
-        ax.plot(xs, vals, "o", ms=3, color="C0")
+        ax.plot(xs, vals, "o", ms=3, color="C0", label="per-test fit")
         lo, hi = report.bounds[name]
-        ax.axhline(lo, color="C3", lw=1)
+        ax.axhline(lo, color="C3", lw=1, label="min / max over the tests")
         ax.axhline(hi, color="C3", lw=1)
+        if truth and name in truth:
+            ax.axhline(float(truth[name]), color="k", ls="--", lw=1, label="truth")
         ax.set_title(name, fontsize=7)
-        ax.set_xlabel("test #", fontsize=7)
-        ax.tick_params(labelsize=7)
+        ax.set_xticks(xs)
+        ax.set_xticklabels([t.label.replace(" ohm", " Ω") for t, _ in good], rotation=90,
+                           fontsize=5)
+        ax.tick_params(axis="y", labelsize=7)
         ax.grid(alpha=0.3)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
-    fig.suptitle("Identified friction per test and lower/upper bounds (paper Fig 12, Table 2)",
-                 fontsize=10)
-    fig.tight_layout()
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, ncol=3, loc="lower center", frameon=False,
+               bbox_to_anchor=(0.5, -0.02))
+    fig.suptitle("Identified friction per test (x: test frequency, load) and the "
+                 "per-parameter bounds, paper's method (paper Fig 12, Table 2)", fontsize=10)
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     return fig
 
 
 def identifiability_figure(report: Any) -> Any:
     """Relative Fisher eigenvalues per test, and the rod friction against its split."""
-    from ..friction import bearing_friction_Nm, nut_friction_N, rod_friction_N
-    from ..params import FRICTION_NAMES
+    from ..physics.friction import bearing_friction_Nm, nut_friction_N, rod_friction_N
+    from ..physics.params import FRICTION_NAMES
 
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 3.8))
     good = [(t, f) for t, f in zip(report.data.tests, report.fits)
@@ -115,8 +126,8 @@ def identifiability_figure(report: Any) -> Any:
         rtol = good[0][1].identifiability.get("threshold", 1e-6)
         a1.axhline(rtol, color="C3", ls="--", lw=1, label="identifiability threshold")
         a1.legend(fontsize=8)
-    a1.set_xlabel("test #")
-    a1.set_ylabel("eigenvalue / largest")
+    a1.set_xlabel("test number (file order)")
+    a1.set_ylabel("Fisher eigenvalue / largest (–)")
     a1.set_title("Fisher information spectrum per test (scaled parameters)", fontsize=9)
     a1.grid(alpha=0.3, which="both")
     r = report.data.harvester.lead_m_per_rad
@@ -133,7 +144,7 @@ def identifiability_figure(report: Any) -> Any:
                     label="bearings T_b/r" if lab else None)
         a2.set_xlabel("rod velocity (m/s)")
         a2.set_ylabel("friction force at the rod (N)")
-        a2.legend(fontsize=8)
+        a2.legend(fontsize=8, loc="upper left", framealpha=0.9)
         a2.grid(alpha=0.3)
         a2.set_title("All tests: the total is tight, its split is not", fontsize=9)
     fig.tight_layout()
@@ -142,19 +153,19 @@ def identifiability_figure(report: Any) -> Any:
 
 def fit_result(result: Any, tests: Sequence[Any] | None = None, harvester: Any = None,
                **kw: Any) -> list[Any]:
-    """Figures of one :class:`~ehsa_opt.identify.FitResult`: Figs 8, 9 (and 11 if
+    """Figures of one :class:`~ehsa_opt.estimation.identify.FitResult`: Figs 8, 9 (and 11 if
     ``tests`` and ``harvester`` are given)."""
     figs = [iterations_objective(result), iterations_parameters(result)]
     if tests is not None and harvester is not None and result.success:
-        from ..identify import simulate_tests
+        from ..estimation.identify import simulate_tests
         preds = simulate_tests(tests[:1], harvester, result.parameters, **kw)
         figs.append(bench_fit(tests[0], preds[0], title="Measured vs simulated (paper Fig 11)"))
     return figs
 
 
 def report_figures(report: Any, out_dir: Path) -> list[Path]:
-    """All identification figures of an :class:`~ehsa_opt.identify.IdentificationReport`."""
-    from ..identify import simulate_tests
+    """All identification figures of an :class:`~ehsa_opt.estimation.identify.IdentificationReport`."""
+    from ..estimation.identify import simulate_tests
 
     out_dir = Path(out_dir)
     paths = []
@@ -172,7 +183,10 @@ def report_figures(report: Any, out_dir: Path) -> list[Path]:
                       out_dir / "fig09_parameter_iterations.png"))
     name = ("bearing_viscous_Nms_per_rad" if report.data.has_generator
             else "nut_viscous_Ns_per_m")
-    paths.append(save(objective_vs_parameter(report, name), out_dir / "fig10_objective_vs_tv.png"))
+    several = len(good) >= 2  # Figs 10 and 12 compare tests: not drawn for a single test
+    if several:
+        paths.append(save(objective_vs_parameter(report, name),
+                          out_dir / "fig10_objective_vs_tv.png"))
     pr = simulate_tests([t], report.data.harvester, f.parameters,
                         has_generator=report.data.has_generator)[0]
     paths.append(save(bench_fit(t, pr, title=f"Measured vs simulated, {t.label} (paper Fig 11); "
@@ -180,7 +194,11 @@ def report_figures(report: Any, out_dir: Path) -> list[Path]:
                                 + (f", δ_V = {f.delta_V:.3f}" if f.delta_V is not None else "")
                                 + f", rel. error {f.force_relative_error_percent:.2f} %"),
                       out_dir / "fig11_measured_vs_simulated.png"))
-    paths.append(save(bounds_figure(report), out_dir / "fig12_bounds.png"))
+    if several:
+        from ..datasets.embedded import load_truth
+        truth = (load_truth(report.data.path) or {}).get("friction") \
+            if getattr(report.data, "path", None) else None
+        paths.append(save(bounds_figure(report, truth), out_dir / "fig12_bounds.png"))
     paths.append(save(identifiability_figure(report), out_dir / "identifiability.png"))
     if report.joint is not None and report.joint.success and report.holdout_files:
         held = [x for x in tests if x.file == report.holdout_files[0]]
@@ -192,3 +210,39 @@ def report_figures(report: Any, out_dir: Path) -> list[Path]:
                                     f"{err['force_relative_error_percent']:.2f} %"),
                           out_dir / "joint_fit_holdout.png"))
     return paths
+
+
+def friction_bounds(fb: Any, truth: Any = None, title: str = "") -> Any:
+    """Rod friction F_ns(v) + T_b(v/r)/r against velocity: per-test fits, the
+    data-supported envelope and sets, the paper's per-parameter sets (and the truth of
+    synthetic data)."""
+    from ..physics.friction import rod_friction_N
+    v = np.asarray(fb.velocity_m_per_s)
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.0))
+    for a, paper in ((ax, False), (ax2, True)):
+        for k, row in enumerate(fb.per_test_N):
+            a.plot(v, row, color="0.75", lw=0.7,
+                   label="per-test fits (up to each test's peak velocity)" if k == 0 else None)
+        a.fill_between(v, fb.lower_N, fb.upper_N, color="C0", alpha=0.2,
+                       label="envelope with 95 % Fisher bands")
+        a.plot(v, fb.sets_rod_N["min"], "C0--", lw=1.3, label="data-supported min set")
+        a.plot(v, fb.sets_rod_N["best"], "C2-", lw=1.5, label="best (joint fit)")
+        a.plot(v, fb.sets_rod_N["max"], "C3--", lw=1.3, label="data-supported max set")
+        if paper and fb.paper_rod_N:
+            a.plot(v, fb.paper_rod_N["min"], "C4:", lw=1.6, label="paper's method: min")
+            a.plot(v, fb.paper_rod_N["max"], "C1:", lw=1.6, label="paper's method: max")
+        if truth is not None:
+            a.plot(v, np.asarray(rod_friction_N(v, truth, fb.lead_m_per_rad), dtype=float),
+                   "k-", lw=0.9, label="truth (synthetic data)")
+        a.set_xlabel("rod velocity (m/s)")
+        a.set_ylabel("friction force at the rod (N)")
+        a.grid(alpha=0.3)
+    handles, labels = ax2.get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, loc="lower center", ncol=4, frameon=False,
+               bbox_to_anchor=(0.5, -0.02))
+    ax.set_title("Data-supported bounds", fontsize=10)
+    ax2.set_title("Beside the paper's per-parameter bounds", fontsize=10)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout(rect=(0, 0.12, 1, 1))
+    return fig

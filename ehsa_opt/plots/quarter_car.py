@@ -52,10 +52,15 @@ def fig13_frequency_response(study: Any) -> Any:
     for a in ax:
         a.set_xlabel("road frequency (Hz)")
         a.grid(True, which="both", alpha=0.3)
-    ax[1].legend(fontsize=7, ncol=1)
-    fig.suptitle(f"Stepped sine, road amplitude {1e3 * study.amplitude_m:g} mm "
-                 f"(friction: {study.friction_source})", fontsize=9)
-    fig.tight_layout()
+    handles, labels = ax[1].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=7, ncol=len(study.cases), loc="lower center",
+               frameon=False, bbox_to_anchor=(0.5, -0.01))
+    va = getattr(study, "velocity_amplitude_m_per_s", None)
+    road = (f"road sine of constant velocity amplitude {1e3 * va:.1f} mm/s (displacement "
+            f"{1e3 * study.amplitude_m:.3g} mm at 1 Hz, falling as 1/f)" if va else
+            f"road sine amplitude {1e3 * study.amplitude_m:g} mm")
+    fig.suptitle(f"Stepped sine: {road}\nfriction: {study.friction_source}", fontsize=9)
+    fig.tight_layout(rect=(0, 0.1 if len(labels) > 6 else 0.06, 1, 1))
     return fig
 
 
@@ -139,15 +144,23 @@ def fig21_power_history(study: Any, seconds: float = 10.0) -> Any:
     """Paper Fig 21: instantaneous power, no/min/max friction."""
     sim = study.sim
     fig, ax = plt.subplots(figsize=(10, 3.8))
-    n = min(sim.time_s.size, int(seconds * sim.stats["sample_rate_hz"]))
+    p = np.asarray(sim.series["load_power_W"])
+    t = np.asarray(sim.time_s)
+    # the window contains the largest reported peak (metric window, after settling)
+    peaks = np.asarray(sim.metrics["peak_power_W"], dtype=float)
+    i_pk = int(np.argmax(peaks))
+    k_pk = int(np.argmin(np.abs(p[i_pk] - peaks[i_pk])))
+    n = min(t.size, int(seconds * sim.stats["sample_rate_hz"]))
+    lo = int(np.clip(k_pk - n // 2, 0, max(t.size - n, 0)))
+    sl = slice(lo, lo + n)
     for i, case in enumerate(study.cases):
-        ax.plot(sim.time_s[:n], sim.series["load_power_W"][i, :n],
-                color=_CASE_COLOURS.get(case, f"C{i}"), lw=0.7,
-                label=f"{case}: mean {sim.metrics['power_W'][i]:.1f} W, peak "
+        ax.plot(t[sl], p[i, sl], color=_CASE_COLOURS.get(case, f"C{i}"), lw=0.7,
+                label=f"{case} friction: mean {sim.metrics['power_W'][i]:.1f} W, peak "
                       f"{sim.metrics['peak_power_W'][i]:.0f} W")
+    ax.plot([t[k_pk]], [p[i_pk, k_pk]], "kv", ms=6, label="largest peak")
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("power in R_e (W)")
-    ax.legend(fontsize=8)
+    ax.set_ylabel("instantaneous power in the load R_e (W)")
+    ax.legend(fontsize=8, loc="upper left", framealpha=0.9)
     ax.set_title(f"{study.title} — {sim.road_source}", fontsize=9)
     fig.tight_layout()
     return fig
@@ -162,7 +175,7 @@ def wk_figure(f_hz: np.ndarray, exact: np.ndarray, fit: np.ndarray, table: dict,
     ax.loglog(list(table), list(table.values()), "o", ms=4, color="C0",
               label="ISO 2631-1 table")
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("|W_k|")
+    ax.set_ylabel("comfort weighting |W_k| (–)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -1,0 +1,206 @@
+"""Benchmark: the friction-aware fast path (stochastic equivalent linearisation,
+``ehsa_opt.vehicle.equivalent``) against the exact time-domain simulation.
+
+Validation set (issue 14):
+  designs   prototype, paper optimum (§4.2), our optimum (goal attainment of
+            problems/paper_design.toml, frictionless) and the 16 corners of the
+            Table 3 box (design.PAPER_BOX)                                  -> 19
+  friction  none and the embedded data's true friction × 0.5 / × 1 / × 2
+            (min / best / max)                                              -> 4
+  roads     ISO 8608 classes B–D at 30–130 km/h, 400 m, seeded.
+
+Nothing of the fast path is tuned on this set (no correction factor; its
+quadrature was checked against scipy's adaptive quadrature in the tests).  Still,
+the roads looked at while developing it (DEVELOPMENT) are reported apart from the
+HELD_OUT roads (other seeds, speeds and class/speed pairs); quote the held-out
+figures.
+
+Prints the error table (worst and median |relative error| of power, efficiency,
+comfort, road holding), the worst cases, errors by speed and friction level,
+and designs per second of both paths (time domain: the batched compiled
+simulation on the validation roads; fast path: the same pairs in one vectorised
+call, and a 4000-design population).
+
+Run from the repository root:  python benchmarks/friction_fast_path.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth  # noqa: E402
+from ehsa_opt.design import OBJECTIVE_NAMES  # noqa: E402,F401
+from ehsa_opt.design.config import load_design_config  # noqa: E402
+from ehsa_opt.design.goal import solve_goal_attainment  # noqa: E402
+from ehsa_opt.design.optimize import build_problem, goals_and_weights  # noqa: E402
+from ehsa_opt.design.problem import PAPER_BOX  # noqa: E402
+from ehsa_opt.physics.params import HarvesterParams  # noqa: E402
+from ehsa_opt.vehicle.equivalent import friction_metrics  # noqa: E402
+from ehsa_opt.vehicle.fast_path_check import (  # noqa: E402
+    CHECK_METRICS,
+    RoadCase,
+    check_case,
+    scaled_friction,
+    summarise,
+)
+
+DEVELOPMENT = [RoadCase("C", 70.0, 1), RoadCase("B", 30.0, 1), RoadCase("D", 130.0, 1),
+               RoadCase("C", 100.0, 1)]
+HELD_OUT = [RoadCase("B", 50.0, 11), RoadCase("B", 110.0, 12), RoadCase("C", 30.0, 13),
+            RoadCase("C", 90.0, 14), RoadCase("D", 50.0, 15), RoadCase("D", 110.0, 16),
+            RoadCase("B", 130.0, 17), RoadCase("D", 30.0, 18)]
+FRICTION_SCALES = {"none": 0.0, "min (x0.5)": 0.5, "best (x1)": 1.0, "max (x2)": 2.0}
+
+
+def designs() -> dict[str, HarvesterParams]:
+    cfg = load_design_config(ROOT / "problems" / "paper_design.toml")
+    problem = build_problem(cfg)
+    goals, weights, _ = goals_and_weights(cfg, problem)
+    ga = solve_goal_attainment(problem, goals, weights, cfg.prototype_design,
+                               n_starts=cfg.goal_attainment.n_starts,
+                               seed=cfg.goal_attainment.seed)
+    base = cfg.harvester
+    out = {"prototype": base,
+           "paper optimum": HarvesterParams.from_design(250.0, 7.0, 29.8, 75.0, base),
+           "our optimum": HarvesterParams.from_design(**ga.design, base=base)}
+    for corner in itertools.product((0, 1), repeat=PAPER_BOX.n):
+        d = {k: float(v) for k, v in PAPER_BOX.from_unit(np.array(corner, float)).items()}
+        out["corner " + "".join("LH"[c] for c in corner)] = HarvesterParams.from_design(
+            **d, base=base)
+    return out
+
+
+def settled(r: dict) -> np.ndarray:
+    """Pairs whose design's frictionless time-domain run agrees with the exact linear
+    path within 2 % on every metric on that road.  Otherwise (undamped corners of the
+    box: R_e = 10 kΩ with a high k_n leaves almost no damping) the finite periodic road
+    and the 2 s pre-roll do not give a steady-state reference: the time domain itself is
+    not converged there, whatever the friction."""
+    bad_design = set()
+    for i in np.flatnonzero(r["friction_index"] == 0):
+        if max(abs(r[f"error_{k}"][i]) for k in CHECK_METRICS) > 0.02:
+            bad_design.add(int(r["harvester_index"][i]))
+    return np.array([int(h) not in bad_design for h in r["harvester_index"]])
+
+
+def masked(r: dict, keep: np.ndarray) -> dict:
+    return {k: (v[keep] if isinstance(v, np.ndarray) else v) for k, v in r.items()}
+
+
+def table(title: str, results: list) -> dict:
+    s = summarise(results)
+    print(f"\n{title}: {s['power_W']['n']} cases")
+    print(f"  {'metric':<14}{'worst |err| %':>15}{'median |err| %':>16}")
+    for k in CHECK_METRICS:
+        print(f"  {k:<14}{100 * s[k]['worst']:>15.2f}{100 * s[k]['median']:>16.3f}")
+    return s
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="2 development + 2 held-out roads")
+    args = ap.parse_args()
+    dev, held = (DEVELOPMENT[:2], HELD_OUT[:2]) if args.quick else (DEVELOPMENT, HELD_OUT)
+    from ehsa_opt.physics.params import VehicleParams
+    vehicle = VehicleParams()
+    truth = load_truth(embedded_data_dir("bench_prototype"))["friction"]
+    frictions = [scaled_friction(truth, s) for s in FRICTION_SCALES.values()]
+    hs = designs()
+    names = list(hs)
+    print(f"{len(names)} designs x {len(frictions)} friction sets x {len(dev)} development "
+          f"+ {len(held)} held-out roads (400 m)")
+    # warm-up: compile the time-domain step once (not timed)
+    check_case(vehicle, RoadCase("C", 130.0, 0, 60.0), [hs["prototype"]], frictions[:1])
+    res = {}
+    for label, cases in (("development", dev), ("held-out", held)):
+        res[label] = []
+        for case in cases:
+            r = check_case(vehicle, case, list(hs.values()), frictions)
+            res[label].append((case, r))
+            worst = {k: np.max(np.abs(r[f"error_{k}"])) for k in CHECK_METRICS}
+            print(f"  {label:<12} {case.iso_class} {case.speed_km_per_h:5.0f} km/h seed "
+                  f"{case.seed:2d}: worst |err| " + ", ".join(
+                      f"{k} {100 * v:.2f} %" for k, v in worst.items())
+                  + f"  (time {r['time_wall_s']:.1f} s, fast {r['fast_wall_s']:.3f} s)")
+    unsettled = [(c, np.unique(r["harvester_index"][~settled(r)])) for c, r in
+                 res["development"] + res["held-out"]]
+    print("\nreference not settled (frictionless time domain vs exact linear path > 2 %):")
+    for c, idx in unsettled:
+        if idx.size:
+            print(f"  {c.iso_class} {c.speed_km_per_h:5.0f} km/h: "
+                  + ", ".join(names[i] for i in idx))
+    raw = [r for _, r in res["development"] + res["held-out"]]
+    table("ALL pairs, including unsettled references", raw)
+    # the unsettled designs with friction: friction is then their main damping
+    with_f = [masked(r, ~settled(r) & (r["friction_index"] > 0)) for r in raw]
+    table("UNSETTLED-frictionless designs, friction pairs only (friction damps them)",
+          with_f)
+    for j, lab in list(enumerate(FRICTION_SCALES))[1:]:
+        table(f"  ... at friction {lab}", [masked(r, ~settled(r) & (r["friction_index"] == j))
+                                          for r in raw])
+    res = {lab: [(c, masked(r, settled(r))) for c, r in v] for lab, v in res.items()}
+    table("DEVELOPMENT roads (settled references)", [r for _, r in res["development"]])
+    table("HELD-OUT roads (settled references)", [r for _, r in res["held-out"]])
+    allres = res["development"] + res["held-out"]
+    table("ALL (settled references)", [r for _, r in allres])
+
+    print("\nworst 8 cases (power or comfort), all roads:")
+    rows = []
+    for case, r in allres:
+        for i in range(len(r["error_power_W"])):
+            rows.append((max(abs(r["error_power_W"][i]), abs(r["error_comfort"][i])), case,
+                         names[r["harvester_index"][i]],
+                         list(FRICTION_SCALES)[r["friction_index"][i]],
+                         r["error_power_W"][i], r["error_comfort"][i],
+                         r["time_power_W"][i]))
+    for e, case, n, f, ep, ec, p in sorted(rows, key=lambda t: -t[0])[:8]:
+        print(f"  {case.iso_class} {case.speed_km_per_h:5.0f} km/h  {n:<16} {f:<11} power "
+              f"{100 * ep:+6.2f} % ({p:8.2f} W), comfort {100 * ec:+6.2f} %")
+    print("\nworst |err| % by speed (power / comfort):")
+    for spd in sorted({c.speed_km_per_h for c, _ in allres}):
+        sub = [r for c, r in allres if c.speed_km_per_h == spd]
+        s = summarise(sub)
+        print(f"  {spd:5.0f} km/h: {100 * s['power_W']['worst']:6.2f} / "
+              f"{100 * s['comfort']['worst']:6.2f}")
+    print("worst |err| % by friction level (power / comfort):")
+    for j, lab in enumerate(FRICTION_SCALES):
+        ep = np.concatenate([np.abs(r["error_power_W"][r["friction_index"] == j])
+                             for _, r in allres])
+        ec = np.concatenate([np.abs(r["error_comfort"][r["friction_index"] == j])
+                             for _, r in allres])
+        print(f"  {lab:<11}: {100 * ep.max():6.2f} / {100 * ec.max():6.2f}")
+
+    # speed: designs per second
+    n_pairs = sum(r["n_pairs"] for r in raw)
+    t_time = sum(r["time_wall_s"] for r in raw)
+    t_fast = sum(r["fast_wall_s"] for r in raw)
+    rng = np.random.default_rng(0)
+    pop = {k: v for k, v in PAPER_BOX.from_unit(rng.random((4000, PAPER_BOX.n))).items()}
+    base = hs["prototype"]
+    pop.update(internal_resistance_ohm=base.internal_resistance_ohm,
+               inductance_H=base.inductance_H)
+    from ehsa_opt.physics.params import RoadParams
+    t0 = time.perf_counter()
+    friction_metrics(vehicle, RoadParams("C", 70.0), pop, frictions[3], n_freq=256)
+    t_pop = time.perf_counter() - t0
+    rate_time = n_pairs / t_time
+    print("\nspeed (designs per second):")
+    print(f"  time domain (batched, compiled, 400 m roads): {rate_time:10.2f} /s "
+          f"({t_time / n_pairs * 1e3:.1f} ms per design)")
+    print(f"  fast path, validation pairs:                  {n_pairs / t_fast:10.0f} /s  "
+          f"-> {n_pairs / t_fast / rate_time:7.0f} x")
+    print(f"  fast path, 4000-design population (max fr.):  {4000 / t_pop:10.0f} /s  "
+          f"-> {4000 / t_pop / rate_time:7.0f} x")
+
+
+if __name__ == "__main__":
+    main()

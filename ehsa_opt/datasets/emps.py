@@ -1,0 +1,71 @@
+"""The EMPS real ball-screw data set (Janot, Gautier & Brunot 2019), converted to the
+bench format (SPEC §9): displacement = measured load-side position, force =
+g_τ × controller output voltage, no voltage column (the rig has no generator).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .bench_format import BenchTest, write_bench
+
+__all__ = ["GAIN_N_PER_V", "EMPS_REFERENCE", "convert_emps"]
+
+#: Drive gain g_τ (N/V): force on the load side = g_τ × controller voltage.
+GAIN_N_PER_V = 35.15065188248547
+
+#: Published reference (inverse model, least squares; SPEC §9).
+EMPS_REFERENCE = {
+    "inertia_kg": 95.11, "viscous_Ns_per_m": 203.5, "coulomb_N": 20.39, "offset_N": -3.16,
+    "force_relative_error_percent": 4.08,
+    "direction_dependent": {"viscous_pos_Ns_per_m": 166.7, "viscous_neg_Ns_per_m": 240.4,
+                            "coulomb_pos_N": 20.14, "coulomb_neg_N": 20.63,
+                            "force_relative_error_percent": 3.11},
+}
+
+CITATION = ("A. Janot, M. Gautier, M. Brunot, 'Data Set and Reference Models of EMPS', "
+            "2019 Workshop on Nonlinear System Identification Benchmarks, Eindhoven.")
+
+
+def _read(path: Path) -> tuple[list[str], np.ndarray]:
+    with path.open() as fh:
+        header = fh.readline().strip().split(",")
+    return header, np.loadtxt(path, delimiter=",", skiprows=1)
+
+
+def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = False) -> Path:
+    """Convert ``emps_estimation.csv`` (and the validation set) to bench format.
+
+    Writes ``out_dir/bench.toml`` + ``emps_estimation.csv`` and
+    ``out_dir/validation/`` with the pulse test (``pulses.csv`` keeps the external
+    pulse force, which the model does not contain).
+    """
+    src = Path(source_dir)
+    h, est = _read(src / "emps_estimation.csv")
+    if h[:4] != ["time_s", "position_m", "reference_position_m", "control_voltage_V"]:
+        raise ValueError(f"{src / 'emps_estimation.csv'}: unexpected header {h}")
+    rig = {"name": "EMPS", "has_generator": False,
+           "description": "Electro-Mechanical Positioning System (Maxon DC motor + Star ball "
+                          "screw + load), 1 kHz; force = g_tau * controller voltage, g_tau = "
+                          f"{GAIN_N_PER_V} N/V. {CITATION}"}
+    test = BenchTest(file="emps_estimation.csv", frequency_hz=None, amplitude_m=None,
+                     load_ohm=None, excitation="recorded", time_s=est[:, 0],
+                     displacement_m=est[:, 1], force_N=GAIN_N_PER_V * est[:, 3],
+                     description="estimation trajectory (position-controlled, ~25 s)")
+    hv, val = _read(src / "emps_validation_pulses.csv")
+    vtest = BenchTest(file="emps_validation_pulses.csv", frequency_hz=None, amplitude_m=None,
+                      load_ohm=None, excitation="recorded", time_s=val[:, 0],
+                      displacement_m=val[:, 1], force_N=GAIN_N_PER_V * val[:, 3],
+                      description="validation with external force pulses (not in the model); "
+                                  "pulse force in pulses.csv")
+    pulses = "time_s,pulse_force_N\n" + "\n".join(
+        f"{t:.9g},{f:.9g}" for t, f in zip(val[:, 0], val[:, 4]))
+    out = Path(out_dir)
+    readme = (out / "README.md").read_text() if (out / "README.md").exists() else ""
+    write_bench(out, [test], rig=rig, overwrite=overwrite,
+                extra_files={"README.md": readme} if readme else None)
+    write_bench(out / "validation", [vtest], rig=rig, overwrite=True,
+                extra_files={"pulses.csv": pulses + "\n"})
+    return out

@@ -1,0 +1,105 @@
+"""Friction from an identification result: one meaning of ``min`` / ``best`` / ``max``
+everywhere (``simulate``, ``sweep``, ``optimize``, ``reproduce``).
+
+An ``identification.json`` written by ``ehsa-opt identify`` carries a table
+``friction_sets`` with one :class:`~ehsa_opt.physics.params.FrictionParams` per case
+(SPEC §7 names)::
+
+    "friction_sets": {"min": {"nut_coulomb_N": ..., ...}, "best": {...}, "max": {...},
+                      "method": "..."}
+
+A problem file refers to it with ``[friction] from = "out/identification.json"`` and
+``case = "min" | "best" | "max"`` (path relative to the problem file); the CLI with
+``--friction FILE[:CASE]`` (case ``best`` by default).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..physics.params import FRICTION_NAMES, FrictionParams, ParameterError, from_mapping
+
+__all__ = ["FRICTION_CASES", "parse_friction_spec", "load_friction_sets", "load_friction",
+           "friction_from_table"]
+
+#: The friction cases an identification result provides.
+FRICTION_CASES: tuple[str, ...] = ("min", "best", "max")
+
+
+def parse_friction_spec(spec: str | Path) -> tuple[Path, str]:
+    """Split ``FILE[:CASE]`` into the file and the case (default ``best``)."""
+    text = str(spec)
+    path, sep, case = text.rpartition(":")
+    if not sep or case not in FRICTION_CASES:
+        if sep and not Path(text).exists() and "/" not in case:
+            raise ParameterError(f"--friction {text}: unknown case '{case}'; use "
+                                 f"FILE:{'|'.join(FRICTION_CASES)}")
+        return Path(text), "best"
+    return Path(path), case
+
+
+def load_friction_sets(path: str | Path) -> dict[str, FrictionParams]:
+    """The ``min``/``best``/``max`` friction sets of an ``identification.json``.
+
+    Raises
+    ------
+    ParameterError
+        File missing or unreadable, not JSON, or without ``friction_sets`` (with the
+        command that makes one).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ParameterError(f"{path}: identification result not found; make one with "
+                             f"`ehsa-opt identify DATA_DIR --out DIR` (DIR/identification.json)")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ParameterError(f"{path}: not a JSON identification result ({exc}); pass the "
+                             f"identification.json written by `ehsa-opt identify`") from None
+    sets = doc.get("friction_sets") if isinstance(doc, Mapping) else None
+    if not isinstance(sets, Mapping):
+        raise ParameterError(f"{path}: no 'friction_sets' table (written by an older ehsa_opt "
+                             f"or not an identification result); re-run `ehsa-opt identify`")
+    out = {}
+    for case in FRICTION_CASES:
+        if not isinstance(sets.get(case), Mapping):
+            raise ParameterError(f"{path}: friction_sets has no '{case}' case; re-run "
+                                 f"`ehsa-opt identify`")
+        values = {k: v for k, v in sets[case].items() if k in FRICTION_NAMES}
+        out[case] = from_mapping(FrictionParams, values, f"{path} friction_sets.{case}")
+    return out
+
+
+def load_friction(spec: str | Path, case: str | None = None) -> FrictionParams:
+    """One friction set from ``FILE[:CASE]`` (or ``FILE`` and ``case``)."""
+    path, parsed = parse_friction_spec(spec)
+    case = case or parsed
+    if case not in FRICTION_CASES:
+        raise ParameterError(f"{path}: unknown friction case '{case}'; use one of "
+                             f"{', '.join(FRICTION_CASES)}")
+    return load_friction_sets(path)[case]
+
+
+def friction_from_table(table: Mapping[str, Any], where: str,
+                        base_dir: str | Path = ".") -> FrictionParams:
+    """A problem file's ``[friction]`` table: either the eight values, or ``from`` (an
+    identification.json, relative to ``base_dir``) with an optional ``case``."""
+    if not isinstance(table, Mapping):
+        raise ParameterError(f"{where}: [friction] must be a table")
+    if "from" not in table:
+        return from_mapping(FrictionParams, table, where)
+    extra = sorted(set(table) - {"from", "case"})
+    if extra:
+        raise ParameterError(f"{where}: with 'from', only 'case' may be given (found "
+                             f"{', '.join(extra)}); put the values in [friction] or use 'from'")
+    src, case = table["from"], table.get("case", "best")
+    if not isinstance(src, str) or not isinstance(case, str):
+        raise ParameterError(f"{where}: 'from' and 'case' must be strings, e.g. from = "
+                             f"\"out/identification.json\", case = \"max\"")
+    path = Path(src) if Path(src).is_absolute() else Path(base_dir) / src
+    try:
+        return load_friction(path, case)
+    except ParameterError as exc:
+        raise ParameterError(f"{where}: {exc}") from None

@@ -1,0 +1,182 @@
+"""The library of candidate effects and their residual signatures.
+
+A candidate is a registered :class:`~ehsa_opt.physics.components.Component`
+(``COMPONENTS``) plus what the workflow needs to test it: *probe* parameter sets
+whose simulated output changes (Δy = y(baseline + effect at probe) − y(baseline))
+are the candidate's signature, and *starts* for its re-identification.
+
+Ranking (a score test, linearised): the baseline's normalised residual r is
+projected onto the signature columns after removing what a refit of the
+baseline friction would absorb anyway (the columns tanh(v/u_c), Stribeck(v), v
+of the force, plus a and 1 on a rig without generator).  The score is the share
+of the residual energy the signature explains, ‖P r‖²/‖r‖²; the χ² statistic
+‖P r‖² (≈ number of columns for pure noise) is reported beside it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from ...physics import COMPONENTS, make_component
+from .fit import PreparedTest, Rig, predict
+from .localise import best_rotor_period
+
+__all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for"]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A candidate effect: its component name, signature probes and fit starts.
+
+    Attributes
+    ----------
+    name : str
+        Registered component name.
+    probes : tuple of dict
+        Parameter sets whose output change is a signature column each.
+    starts : tuple of dict
+        Candidate initial values of the effect parameters for re-identification
+        (combined with the baseline friction); they are screened by forward
+        simulation and IPOPT starts from the best (nonconvex effects such as a
+        gap need a start near the right magnitude).
+    needs_generator : bool
+        Only testable on rigs that measure the generator (voltage, rotor).
+    """
+
+    name: str
+    probes: tuple[dict, ...]
+    starts: tuple[dict, ...]
+    needs_generator: bool = False
+
+    def applicable(self, rig: Rig) -> bool:
+        return rig.has_generator or not self.needs_generator
+
+    def component(self, **kwargs):
+        return make_component(self.name, **kwargs)
+
+
+#: The candidate library (every name is a registered component).
+CANDIDATES: dict[str, Candidate] = {
+    "backlash": Candidate(
+        "backlash",
+        probes=({"backlash_gap_m": 5e-5}, {"backlash_gap_m": 2e-4}),
+        starts=tuple({"backlash_gap_m": float(g), "backlash_contact_stiffness_N_per_m": k}
+                     for g in np.geomspace(1e-5, 2e-3, 9) for k in (2e6, 2e7)),
+        needs_generator=True),
+    "asymmetric_friction": Candidate(
+        "asymmetric_friction",
+        probes=({"asym_coulomb_N": 5.0}, {"asym_viscous_Ns_per_m": 30.0}),
+        starts=({"asym_coulomb_N": 0.5, "asym_viscous_Ns_per_m": 1.0},
+                {"asym_coulomb_N": -0.5, "asym_viscous_Ns_per_m": -1.0})),
+    "cogging": Candidate(
+        "cogging",
+        probes=({"cogging_sin_Nm": 0.005}, {"cogging_cos_Nm": 0.005}),
+        starts=({"cogging_sin_Nm": 1e-3, "cogging_cos_Nm": 1e-3},
+                {"cogging_sin_Nm": 2e-2, "cogging_cos_Nm": -2e-2})),
+    "compliance": Candidate(
+        "compliance",
+        probes=({"compliance_stiffness_N_per_m": 1e6, "compliance_damping_Ns_per_m": 1e3},
+                {"compliance_stiffness_N_per_m": 1e7, "compliance_damping_Ns_per_m": 1e3}),
+        starts=tuple({"compliance_stiffness_N_per_m": k, "compliance_damping_Ns_per_m": c}
+                     for k in np.geomspace(1e4, 1e9, 11) for c in (3e2, 3e3)),
+        needs_generator=True),
+    "voltage_drop": Candidate(
+        "voltage_drop",
+        probes=({"voltage_drop_V": 0.5},),
+        starts=tuple({"voltage_drop_V": v} for v in (0.05, 0.2, 0.5, 1.0, 2.0, 3.0)),
+        needs_generator=True),
+    "winding_heating": Candidate(
+        "winding_heating",
+        probes=({"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 100.0},
+                {"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 0.3}),
+        starts=tuple({"winding_heating_K_per_J": h, "winding_cooling_time_s": tau}
+                     for h in (0.3, 1.0, 3.0, 10.0) for tau in (0.5, 5.0, 50.0)),
+        needs_generator=True),
+}
+assert set(CANDIDATES) <= set(COMPONENTS)
+
+
+def candidate_names() -> list[str]:
+    """Names of the candidate library, in ranking-table order."""
+    return list(CANDIDATES)
+
+
+def _absorbed_columns(pt: PreparedTest, rig: Rig, u_brk: float) -> np.ndarray:
+    """Columns (stacked channels) a baseline refit absorbs, normalised by σ."""
+    x, v, a = pt.u
+    N = v.size
+    ust, uc = math.sqrt(2) * u_brk, u_brk / 10
+    cols = [np.tanh(v / uc), np.exp(-(v / ust) ** 2) * v / ust, v]
+    if not rig.has_generator:
+        cols += [a, np.ones(N)]
+    F = np.column_stack(cols) / pt.sigma[0]
+    ny = pt.y.shape[0]
+    return np.vstack([F] + [np.zeros_like(F)] * (ny - 1))
+
+
+def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[str, float],
+                     baseline_pred: Sequence[np.ndarray], names: Sequence[str] | None = None,
+                     components: dict | None = None) -> dict[str, dict]:
+    """Score each candidate's signature against the baseline residual.
+
+    ``rig`` may already hold effects (a later round of the workflow): the
+    candidate is added to them.  ``components`` maps a name to the component
+    instance to use (e.g. a cogging with the period found in the residual).
+
+    Returns
+    -------
+    dict name → {"score", "chi2", "columns", "applicable"}; inapplicable
+    candidates (e.g. voltage_drop on a rig without generator) get score NaN.
+    """
+    names = list(names or CANDIDATES)
+    r = np.concatenate([((pt.y - yp) / pt.sigma[:, None]).ravel() for pt, yp in
+                        zip(prepared, baseline_pred)])
+    u_brk = float(baseline.get("nut_breakaway_velocity_m_per_s", 0.01))
+    B = np.vstack([_absorbed_columns(pt, rig, u_brk) for pt in prepared])
+    Qb, _ = np.linalg.qr(B)
+    r_perp = r - Qb @ (Qb.T @ r)
+    total = float(r_perp @ r_perp)
+    out: dict[str, dict] = {}
+    for name in names:
+        cand = CANDIDATES[name]
+        comp = (components or {}).get(name) or cand.component()
+        taken = {c.name for c in rig.components}
+        clash = name in taken or (comp.transmission and any(c.transmission
+                                                            for c in rig.components))
+        if not cand.applicable(rig) or clash:
+            out[name] = {"score": math.nan, "chi2": math.nan, "columns": 0, "applicable": False}
+            continue
+        crig = rig.with_components([*rig.components, comp])
+        spec_defaults = {q.name: q.default for q in crig.model().param_specs.values()}
+        cols = []
+        for probe in cand.probes:
+            vals = {**spec_defaults, **baseline, **probe}
+            pred = predict(prepared, crig, vals)
+            cols.append(np.concatenate([((yp - yb) / pt.sigma[:, None]).ravel() for pt, yp, yb
+                                        in zip(prepared, pred, baseline_pred)]))
+        S = np.column_stack(cols)
+        S = S - Qb @ (Qb.T @ S)
+        Qs, Rs = np.linalg.qr(S)
+        keep = np.abs(np.diag(Rs)) > 1e-9 * max(np.abs(np.diag(Rs)).max(), 1e-300)
+        Qs = Qs[:, keep]
+        proj = float(np.sum((Qs.T @ r_perp) ** 2))
+        out[name] = {"score": proj / total if total > 0 else 0.0, "chi2": proj,
+                     "columns": int(keep.sum()), "applicable": True}
+    return out
+
+
+def components_for(names: Sequence[str], prepared: Sequence[PreparedTest],
+                    preds: Sequence[np.ndarray], lead: float) -> dict:
+    """Candidate components configured from the residual (cogging period)."""
+    out = {}
+    for n in names:
+        if n == "cogging":
+            out[n] = CANDIDATES[n].component(
+                periods_per_rev=best_rotor_period(prepared, preds, lead_m_per_rad=lead))
+        else:
+            out[n] = CANDIDATES[n].component()
+    return out

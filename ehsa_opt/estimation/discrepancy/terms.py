@@ -1,0 +1,330 @@
+"""Data-driven discovery of a missing force term when no catalogue effect earns.
+
+The force residual r = F_measured − F_model of the fit tests is regressed on a
+library of physically meaningful features (:func:`feature_library`), grouped by
+what they would mean:
+
+``stroke``
+    Gaussian bumps in stroke position x, alone (a force that depends on where the
+    rod is, both directions) and times tanh(v/u) (friction-like, opposing the motion
+    over part of the stroke: a rough spot, a dent, a worn section).
+``rotor_angle``
+    sin/cos(k θ), θ = x/r, k = 1 … 24 (a force periodic in the rotor angle: cogging
+    of another period, a periodic lead error, an eccentric rotor).
+``lag``
+    dF̂/dt of the model force: F(t − τ) ≈ F(t) − τ dF/dt, so a coefficient −τ is a
+    force channel delayed by τ relative to the displacement.  A pure time shift of
+    the model force (searched on ±20 ms) competes with the sparse term: when it
+    explains the fit set better, the lag is proposed as the exact shift.
+``current``
+    i|i| and i³ of the model current (i ≈ V̂/R_load): a generator constant
+    falling with current (magnetic saturation).
+``velocity``
+    tanh(v/u), v, v|v|, a, 1: a friction or inertia law of another shape.
+
+The sparse regression is scikit-learn's :class:`~sklearn.linear_model.LassoCV`
+(contiguous folds, so neighbouring samples do not leak between folds) on
+standardised columns, followed by a least-squares refit on the selected columns
+(removes the lasso's shrinkage).  The group carrying most of the fitted term's
+energy names it, in words.  The term's *held-out gain* is measured like a
+catalogue effect's: the held-out force prediction plus the term, against the
+held-out measurement.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from .fit import PreparedTest, force_relative_error_percent
+
+__all__ = ["TermProposal", "feature_library", "discover_term", "GROUPS"]
+
+#: Feature groups of the library, in the order they are described.
+GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity")
+#: Gaussian bumps over the stroke.
+N_STROKE_BUMPS = 16
+#: Highest rotor-angle harmonic, periods per revolution.
+MAX_ROTOR_PERIODS = 24
+#: Highest rotor-angle harmonic of the current-modulated columns i·sin/cos(k θ).
+MAX_CURRENT_PERIODS = 4
+
+
+@dataclass
+class TermProposal:
+    """A data-driven force term (mirrors ``OptimizeResult``: ``success``, ``message``).
+
+    Attributes
+    ----------
+    description : str
+        The term in words, e.g. "force term localised at stroke 4–10 mm, both
+        directions".
+    group : str
+        The feature group carrying most of the term (see module docstring).
+    group_shares : dict
+        Share of the fitted term's energy per group.
+    columns : dict
+        Selected feature → coefficient (N per unit feature).
+    error_before, error_after : float
+        Held-out relative force error (%) of the model without / with the term.
+    sse_before, sse_after : float
+        Held-out SSE of the noise-normalised force residual.
+    quantity : dict
+        The named quantity (e.g. ``{"lag_ms": 3.1}``, ``{"stroke_mm": [4, 10]}``).
+    """
+
+    success: bool
+    message: str
+    description: str = ""
+    group: str = ""
+    group_shares: dict[str, float] = field(default_factory=dict)
+    columns: dict[str, float] = field(default_factory=dict)
+    error_before: float = math.nan
+    error_after: float = math.nan
+    sse_before: float = math.nan
+    sse_after: float = math.nan
+    quantity: dict = field(default_factory=dict)
+    earns: bool = False
+
+    def as_dict(self) -> dict:
+        return {"description": self.description, "group": self.group,
+                "group_shares": self.group_shares, "columns": self.columns,
+                "error_before": self.error_before, "error_after": self.error_after,
+                "sse_before": self.sse_before, "sse_after": self.sse_after,
+                "quantity": self.quantity, "earns_on_heldout": self.earns,
+                "message": self.message}
+
+
+def _stroke_centres(pts: Sequence[PreparedTest]) -> tuple[np.ndarray, float]:
+    x = np.concatenate([pt.u[0] for pt in pts])
+    lo, hi = np.percentile(x, [0.5, 99.5])
+    c = np.linspace(lo, hi, N_STROKE_BUMPS)
+    return c, float(c[1] - c[0])
+
+
+def feature_library(pt: PreparedTest, pred: np.ndarray, *, lead_m_per_rad: float,
+                    centres: np.ndarray, width_m: float, u_s: float = 2e-3
+                    ) -> tuple[np.ndarray, list[str], list[str]]:
+    """Feature columns of one test (N samples × features), their names and groups."""
+    x, v, a = pt.u
+    sg = np.tanh(v / u_s)
+    cols, names, groups = [], [], []
+
+    def add(col: np.ndarray, name: str, group: str) -> None:
+        cols.append(col)
+        names.append(name)
+        groups.append(group)
+
+    for c in centres:
+        bump = np.exp(-0.5 * ((x - c) / width_m) ** 2)
+        add(bump, f"bump(x={1e3 * c:.1f} mm)", "stroke")
+        add(bump * sg, f"bump(x={1e3 * c:.1f} mm)*sign(v)", "stroke")
+    th = x / lead_m_per_rad
+    for k in range(1, MAX_ROTOR_PERIODS + 1):
+        add(np.sin(k * th), f"sin({k} theta)", "rotor_angle")
+        add(np.cos(k * th), f"cos({k} theta)", "rotor_angle")
+    if pred.shape[0] > 1 and "load_ohm" in pt.fixed:
+        i = pred[1] / pt.fixed["load_ohm"]
+        for k in range(1, MAX_CURRENT_PERIODS + 1):
+            add(i * np.sin(k * th), f"i*sin({k} theta)", "rotor_angle")
+            add(i * np.cos(k * th), f"i*cos({k} theta)", "rotor_angle")
+    add(np.gradient(pred[0], pt.time_s), "dF/dt", "lag")
+    if pred.shape[0] > 1 and "load_ohm" in pt.fixed:
+        add(i * np.abs(i), "i|i|", "current")
+        add(i ** 3, "i^3", "current")
+    add(sg, "sign(v)", "velocity")
+    add(v, "v", "velocity")
+    add(v * np.abs(v), "v|v|", "velocity")
+    add(a, "a", "velocity")
+    add(np.ones_like(v), "1", "velocity")
+    return np.column_stack(cols), names, groups
+
+
+def _stack(pts, preds, lead, centres, width):
+    Xs, ys, ws = [], [], []
+    names = groups = None
+    for pt, yp in zip(pts, preds):
+        X, names, groups = feature_library(pt, yp, lead_m_per_rad=lead, centres=centres,
+                                           width_m=width)
+        w = 1.0 / pt.sigma[0]  # noise-weighted, like the fits
+        Xs.append(X * w)
+        ys.append((pt.y[0] - yp[0]) * w)
+        ws.append(np.full(pt.y.shape[1], w))
+    return np.vstack(Xs), np.concatenate(ys), np.concatenate(ws), names, groups
+
+
+def _describe(group: str, sel: dict[str, float], centres: np.ndarray, width: float,
+              coef_full: np.ndarray, names: list[str]) -> tuple[str, dict]:
+    if group == "lag":
+        tau_ms = -1e3 * sel.get("dF/dt", 0.0)
+        word = "delayed" if tau_ms > 0 else "ahead"
+        return (f"force channel {word} by ≈ {abs(tau_ms):.1f} ms relative to displacement",
+                {"lag_ms": tau_ms})
+    if group == "stroke":
+        xs = np.linspace(centres[0] - width, centres[-1] + width, 400)
+        even = np.zeros_like(xs)
+        odd = np.zeros_like(xs)
+        for n, b in zip(names, coef_full):
+            if not n.startswith("bump(") or b == 0.0:
+                continue
+            c = 1e-3 * float(n[len("bump(x="):].split(" mm")[0])
+            prof = b * np.exp(-0.5 * ((xs - c) / width) ** 2)
+            if n.endswith("*sign(v)"):
+                odd += prof
+            else:
+                even += prof
+        prof = odd if np.max(np.abs(odd)) >= np.max(np.abs(even)) else even
+        peak = float(np.max(np.abs(prof)))
+        k = np.flatnonzero(np.abs(prof) >= 0.5 * peak)
+        lo, hi = 1e3 * xs[k[0]], 1e3 * xs[k[-1]]
+        kind = ("opposing the motion (friction-like), both directions" if prof is odd and
+                prof[np.argmax(np.abs(prof))] > 0 else "same sign in both directions"
+                if prof is even else "direction-dependent")
+        return (f"force term localised at stroke {lo:.1f} to {hi:.1f} mm (displacement), "
+                f"{kind}, peak ≈ {peak:.1f} N", {"stroke_mm": [lo, hi], "peak_N": peak})
+    if group == "rotor_angle":
+        amp: dict[tuple[bool, int], float] = {}
+        for n, b in sel.items():
+            if "theta" in n:
+                key = (n.startswith("i*"), int(n.split("(")[1].split(" ")[0]))
+                amp[key] = math.hypot(amp.get(key, 0.0), b)
+        (cur, k) = max(amp, key=amp.get)
+        if cur:
+            return (f"force term periodic in rotor angle, {k} per revolution, proportional to "
+                    f"the current (a transmission ratio varying with angle: lead error, "
+                    f"eccentricity), ≈ {amp[(cur, k)]:.2f} N/A",
+                    {"periods_per_rev": k, "amplitude_N_per_A": amp[(cur, k)]})
+        return (f"force term periodic in rotor angle, {k} per revolution, amplitude ≈ "
+                f"{amp[(cur, k)]:.2f} N", {"periods_per_rev": k, "amplitude_N": amp[(cur, k)]})
+    if group == "current":
+        return ("force term in the current (i|i|, i³): a generator constant changing with "
+                "current (e.g. magnetic saturation)", {k: v for k, v in sel.items()})
+    return ("velocity/acceleration-dependent force of another shape (friction or inertia "
+            "law)", {k: v for k, v in sel.items()})
+
+
+def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarray],
+                  eval_pts: Sequence[PreparedTest], eval_preds: Sequence[np.ndarray], *,
+                  lead_m_per_rad: float, seed: int = 0) -> TermProposal:
+    """Sparse regression of the fit tests' force residual on :func:`feature_library`;
+    the term's gain is measured on ``eval_pts`` (the held-out tests).
+
+    Returns a :class:`TermProposal` (``earns`` is left to the caller's decision rule).
+    """
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.linear_model import LassoCV
+
+    centres, width = _stroke_centres(list(fit_pts) + list(eval_pts))
+    X, y, _, names, groups = _stack(fit_pts, fit_preds, lead_m_per_rad, centres, width)
+    scale = np.sqrt(np.mean(X ** 2, axis=0))
+    scale[scale == 0] = 1.0
+    Xs = X / scale
+    try:
+        with warnings.catch_warnings():  # a path point short of convergence is harmless:
+            warnings.simplefilter("ignore", ConvergenceWarning)  # the support is refitted
+            lasso = LassoCV(cv=5, alphas=30, max_iter=3000, tol=1e-3, fit_intercept=False,
+                            random_state=seed).fit(Xs, y)
+    except ValueError as exc:
+        return TermProposal(False, f"sparse regression failed: {exc}")
+    support = np.flatnonzero(np.abs(lasso.coef_) > 1e-10)
+    if support.size == 0:
+        return TermProposal(True, "the sparse regression selects no feature (residual is noise)")
+    # least-squares refit on the support (debiased)
+    b, *_ = np.linalg.lstsq(X[:, support], y, rcond=None)
+    coef = np.zeros(X.shape[1])
+    coef[support] = b
+    term_fit = X[:, support] @ b
+    shares = {}
+    for g in GROUPS:
+        idx = [k for k in support if groups[k] == g]
+        if idx:
+            part = X[:, idx] @ coef[idx]
+            shares[g] = float(part @ part)
+    tot = sum(shares.values()) or 1.0
+    shares = {g: v / tot for g, v in shares.items()}
+    group = max(shares, key=shares.get)
+    # the proposed term is the dominant group's selected columns alone, refitted
+    # (what the words name; the other groups' small pieces would overfit the fit set)
+    support = np.array([k for k in support if groups[k] == group])
+    b, *_ = np.linalg.lstsq(X[:, support], y, rcond=None)
+    coef = np.zeros(X.shape[1])
+    coef[support] = b
+    term_fit = X[:, support] @ b
+    sel = {names[k]: float(coef[k]) for k in support}
+    desc, qty = _describe(group, sel, centres, width, coef, names)
+    lag = _shift_lag(fit_pts, fit_preds)
+    if lag is not None and lag[1] < float((y - term_fit) @ (y - term_fit)):
+        # a pure time shift of the model force explains the fit set better than the
+        # sparse term: propose the lag (exact shift, not its first-order Taylor term)
+        return _lag_proposal(lag, eval_pts, eval_preds, shares, float(y @ y))
+    # the held-out gain of the whole selected term
+    sse_b = sse_a = 0.0
+    pb, pa, ym = [], [], []
+    for pt, yp in zip(eval_pts, eval_preds):
+        Xe, _, _ = feature_library(pt, yp, lead_m_per_rad=lead_m_per_rad, centres=centres,
+                                   width_m=width)
+        corr = Xe @ coef
+        r0 = (pt.y[0] - yp[0]) / pt.sigma[0]
+        r1 = (pt.y[0] - yp[0] - corr) / pt.sigma[0]
+        sse_b += float(r0 @ r0)
+        sse_a += float(r1 @ r1)
+        pb.append(yp[0])
+        pa.append(yp[0] + corr)
+        ym.append(pt.y[0])
+    m = np.concatenate(ym)
+    e0 = force_relative_error_percent(np.concatenate(pb), m)
+    e1 = force_relative_error_percent(np.concatenate(pa), m)
+    return TermProposal(True, f"{support.size} of {X.shape[1]} features selected "
+                              f"(fit-set SSE {float(y @ y):.4g} -> "
+                              f"{float((y - term_fit) @ (y - term_fit)):.4g})",
+                        desc, group, shares, {names[k]: float(coef[k]) for k in support},
+                        e0, e1, sse_b, sse_a, qty)
+
+
+#: Lags searched by :func:`_shift_lag`, s.
+LAG_GRID_S = np.arange(-0.02, 0.02001, 0.0002)
+
+
+def _shifted(pt: PreparedTest, pred: np.ndarray, tau: float) -> np.ndarray:
+    """The model force delayed by ``tau`` (linear interpolation)."""
+    return np.interp(pt.time_s - tau, pt.time_s, pred[0])
+
+
+def _shift_lag(pts, preds) -> tuple[float, float] | None:
+    """The delay τ of the force channel (on :data:`LAG_GRID_S`) minimising the fit-set
+    SSE of (F − F̂(t − τ))/σ, and that SSE; None when τ = 0 is best."""
+    sses = []
+    for tau in LAG_GRID_S:
+        sses.append(sum(float(np.sum(((pt.y[0] - _shifted(pt, yp, tau)) / pt.sigma[0]) ** 2))
+                        for pt, yp in zip(pts, preds)))
+    k = int(np.argmin(sses))
+    if abs(LAG_GRID_S[k]) < 1e-9:
+        return None
+    return float(LAG_GRID_S[k]), float(sses[k])
+
+
+def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
+    tau = lag[0]
+    pb, pa, ym = [], [], []
+    sse_b = sse_a = 0.0
+    for pt, yp in zip(eval_pts, eval_preds):
+        sh = _shifted(pt, yp, tau)
+        sse_b += float(np.sum(((pt.y[0] - yp[0]) / pt.sigma[0]) ** 2))
+        sse_a += float(np.sum(((pt.y[0] - sh) / pt.sigma[0]) ** 2))
+        pb.append(yp[0])
+        pa.append(sh)
+        ym.append(pt.y[0])
+    m = np.concatenate(ym)
+    word = "delayed" if tau > 0 else "ahead"
+    return TermProposal(True, f"time shift of the model force (fit-set SSE {sse_fit0:.4g} -> "
+                              f"{lag[1]:.4g})",
+                        f"force channel {word} by ≈ {1e3 * abs(tau):.1f} ms relative to "
+                        f"displacement", "lag", shares, {"lag_s": tau},
+                        force_relative_error_percent(np.concatenate(pb), m),
+                        force_relative_error_percent(np.concatenate(pa), m), sse_b, sse_a,
+                        {"lag_ms": 1e3 * tau})

@@ -1,0 +1,501 @@
+"""The model-discrepancy workflow (SPEC §7–9): localise, rank, re-identify, decide —
+round after round, then propose a data-driven term for what no catalogue effect explains.
+
+1. **Split** the tests into fit and held-out tests (every third test of the
+   (load, frequency) grid, offset drawn from the seed).  A data directory with a
+   ``validation/`` sub-directory (EMPS) is held out as a whole instead.  With
+   fewer than 3 tests and no validation set nothing is held out and the decision
+   uses all data — the result says so.
+2. **Baseline**: identify the base model (friction; inertia and offset without
+   generator) on the fit tests, started from a linear least-squares solution.
+3. **Localise** the residual (:func:`~.localise.localise`) and read initial
+   values off it (the cogging period from the residual's spectrum in rotor angle,
+   :func:`~.localise.best_rotor_period`).
+4. **Rank** the candidates by their signature score (:func:`~.candidates.signature_scores`).
+5. **Re-identify** the top candidates (:func:`~.refit.fit_candidate`: multistart
+   screened by forward simulation over the realistic ranges, effect-only stage,
+   nut/bearing friction split for transmission effects, full refit, refinement
+   on the simulation).
+6. **Decide** (:func:`~.refit.earns`): a candidate *earns* when its refit removes
+   at least :data:`~.refit.MIN_EXCESS_REDUCTION` of the held-out relative force
+   error above the noise floor (the error the measurement noise alone gives) and
+   ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff < 0 on the fit tests and on the
+   held-out tests (N_eff = Σ N/τ, τ the residual autocorrelation time).  Among
+   the earning candidates the one with the largest held-out SSE drop is added.
+7. **Repeat** from 3 with the effect in the model (the remaining candidates are
+   added on top of it) until nothing earns or ``max_effects`` are named.
+8. **Outside the catalogue**: the remaining force residual is regressed on a
+   library of physical features (:func:`~.terms.discover_term`); the term is
+   reported when it earns by the same rule.  No catalogue effect earned but the
+   term does → ``effect = "none of the catalogue"`` with the term in words.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...datasets.bench_format import BenchData, load_bench
+from .candidates import CANDIDATES, components_for, signature_scores
+from .fit import (
+    FitOutcome,
+    PreparedTest,
+    Rig,
+    fit_group,
+    force_relative_error_percent,
+    linear_baseline,
+    predict,
+    prepare_tests,
+)
+from .localise import Localisation, localise
+from .refit import (
+    MIN_EXCESS_REDUCTION,
+    MIN_SSE_EXCESS,
+    _crop,
+    _dbic,
+    _force_error,
+    _sse,
+    compatible,
+    earns,
+    effective_samples,
+    excess_reduction,
+    fit_candidate,
+    force_noise_floor_percent,
+    split_tests,
+)
+from .refit import _load_split, _spread
+from .lag import try_lag
+from .terms import TermProposal, discover_term
+
+__all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "run_discrepancy",
+           "split_tests", "effective_samples", "NONE_OF_CATALOGUE"]
+
+#: The answer when the residual is structured but no catalogue effect earns.
+NONE_OF_CATALOGUE = "none of the catalogue"
+
+
+@dataclass(frozen=True)
+class DiscrepancySettings:
+    """Settings of :func:`run_discrepancy`.
+
+    Attributes
+    ----------
+    candidates : tuple of str
+        Candidate effects to consider (default: the whole library).
+    top : int
+        How many of the best-ranked candidates are re-identified per round.
+    max_effects : int
+        At most this many effects are named (rounds of the search).
+    max_tests : int or None
+        Use at most this many tests (spread over the grid), e.g. for quick runs.
+    max_fit_tests : int or None
+        Candidate re-identifications use at most this many of the fit tests
+        (spread over the grid; the decision always uses all held-out tests) — the
+        wall-time and memory budget of a large grid.
+    max_iter : int
+        IPOPT iterations per fit.
+    max_samples : int or None
+        Sine tests longer than this are cropped to their last ``max_samples``
+        samples (whole recorded tests such as EMPS are never cropped).
+    seed : int
+        Seeds the held-out split and the sparse regression's folds.
+    jobs : int
+        Parallel processes for the candidate re-identifications.
+    discover : bool
+        Run the data-driven term discovery on the final residual.
+    """
+
+    candidates: tuple[str, ...] = (*CANDIDATES, "force_lag")
+    top: int = 3
+    max_effects: int = 3
+    max_tests: int | None = None
+    max_fit_tests: int | None = 8
+    max_iter: int = 150
+    max_samples: int | None = 1500
+    seed: int = 0
+    jobs: int = 1
+    discover: bool = True
+
+    def __post_init__(self) -> None:
+        unknown = [c for c in self.candidates if c not in CANDIDATES and c != "force_lag"]
+        if unknown:
+            raise ValueError(f"DiscrepancySettings: unknown candidates {unknown} "
+                             f"(known: {', '.join(CANDIDATES)})")
+        for name in ("top", "max_effects", "jobs"):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and v >= 1):
+                raise ValueError(f"DiscrepancySettings: {name} must be an integer >= 1, "
+                                 f"got {v!r}")
+        for name in ("max_tests", "max_fit_tests"):
+            v = getattr(self, name)
+            if v is not None and not (isinstance(v, int) and v >= 1):
+                raise ValueError(f"DiscrepancySettings: {name} must be None or an integer >= 1")
+        if self.max_samples is not None and not (isinstance(self.max_samples, int)
+                                                 and self.max_samples >= 50):
+            raise ValueError("DiscrepancySettings: max_samples must be None or an integer >= 50")
+
+
+@dataclass
+class CandidateResult:
+    """One candidate in one round: its rank score, re-identification and errors."""
+
+    effect: str
+    applicable: bool
+    score: float
+    chi2: float
+    round: int = 1
+    fitted: bool = False
+    fit: FitOutcome | None = None
+    error_before: float = math.nan  # relative force error, % (evaluation set)
+    error_after: float = math.nan
+    excess_reduction: float = math.nan
+    delta_bic_fit: float = math.nan
+    delta_bic_heldout: float = math.nan
+    sse_heldout: float = math.nan
+    earns: bool = False
+    parameters: dict[str, float] = field(default_factory=dict)
+    intervals: dict[str, tuple[float, float] | None] = field(default_factory=dict)
+    per_test_after: list[float] = field(default_factory=list)
+    predictions: list[np.ndarray] | None = None
+    rig: Rig | None = None
+
+    def as_dict(self) -> dict:
+        return {"effect": self.effect, "round": self.round, "applicable": self.applicable,
+                "score": self.score, "chi2": self.chi2, "re_identified": self.fitted,
+                "error_before": self.error_before, "error_after": self.error_after,
+                "excess_error_reduction": self.excess_reduction,
+                "delta_bic_fit": self.delta_bic_fit, "delta_bic_heldout": self.delta_bic_heldout,
+                "earns_its_parameters": self.earns, "parameters": self.parameters,
+                "intervals_95": {k: list(v) if v else None for k, v in self.intervals.items()},
+                "ipopt_status": self.fit.message if self.fit else None,
+                "fit_seconds": self.fit.seconds if self.fit else None}
+
+
+@dataclass
+class DiscrepancyResult:
+    """Outcome of the workflow (mirrors ``OptimizeResult``: ``success``, ``message``).
+
+    Attributes
+    ----------
+    effect : str
+        The named effects joined by " + ", ``"none"`` (the residual is noise) or
+        ``"none of the catalogue"`` (structured, explained by the proposed term).
+    effects : list of str
+        The named effects in the order they were added.
+    error_before, error_after : float
+        Relative force error (%) on the evaluation set before and after the named
+        effects (after = before when none).
+    evaluation : str
+        ``"held-out"``, ``"validation set"`` or ``"all data"``.
+    candidates : list of CandidateResult
+        All rounds, each in rank order.
+    steps : list of dict
+        Per named effect: effect, error after adding it, parameters.
+    term : TermProposal or None
+        The data-driven term proposed for the final residual.
+    noise_floor : float
+        Relative force error (%) of the measurement noise alone (evaluation set).
+    """
+
+    success: bool
+    message: str
+    effect: str
+    error_before: float
+    error_after: float
+    evaluation: str
+    candidates: list[CandidateResult]
+    baseline: FitOutcome
+    rig: Rig
+    fit_tests: list[PreparedTest]
+    heldout_tests: list[PreparedTest]
+    baseline_pred: list[np.ndarray]
+    loc_before: Localisation
+    loc_after: Localisation | None
+    n_eff: dict[str, float]
+    seconds: float
+    data_path: str = ""
+    effects: list[str] = field(default_factory=list)
+    steps: list[dict] = field(default_factory=list)
+    term: TermProposal | None = None
+    noise_floor: float = math.nan
+    validation: dict | None = None
+
+    @property
+    def winner(self) -> CandidateResult | None:
+        """The last named effect's result (its predictions are the final model's)."""
+        named = [c for c in self.candidates if self.effects and c.earns
+                 and c.effect == self.effects[-1]]
+        return named[-1] if named else None
+
+    @property
+    def eval_tests(self) -> list[PreparedTest]:
+        return self.heldout_tests or self.fit_tests
+
+    def per_test_errors(self) -> list[dict]:
+        """Relative force error per test, before and after, fit and held-out."""
+        rows = []
+        w = self.winner
+        allp = self.fit_tests + self.heldout_tests
+        for k, pt in enumerate(allp):
+            before = force_relative_error_percent(self.baseline_pred[k][0], pt.y[0])
+            after = (force_relative_error_percent(w.predictions[k][0], pt.y[0])
+                     if w is not None and w.predictions is not None else before)
+            rows.append({"test": pt.test.label, "file": pt.test.file,
+                         "set": "fit" if k < len(self.fit_tests) else "held-out",
+                         "error_before": before, "error_after": after})
+        return rows
+
+    def as_dict(self) -> dict:
+        return {"effect": self.effect, "effects": self.effects, "steps": self.steps,
+                "error_before": self.error_before, "error_after": self.error_after,
+                "evaluation": self.evaluation, "noise_floor_percent": self.noise_floor,
+                "success": self.success, "message": self.message, "data": self.data_path,
+                "fit_tests": [p.test.file for p in self.fit_tests],
+                "heldout_tests": [p.test.file for p in self.heldout_tests],
+                "baseline": {"parameters": self.baseline.parameters,
+                             "ipopt_status": self.baseline.message,
+                             "fit_seconds": self.baseline.seconds},
+                "effective_samples": self.n_eff,
+                "criterion": {
+                    "rule": "an effect (or a discovered term) is named only if its refit removes "
+                            "at least min_excess_reduction of the held-out relative force error "
+                            "above the noise floor, 1 - sqrt(e1^2 - en^2)/sqrt(e0^2 - en^2), and "
+                            "dBIC = N_eff ln(SSE_new/SSE_old) + k ln(N_eff) < 0 on the fit and "
+                            "on the held-out tests; effects are added one at a time (largest "
+                            "held-out SSE drop first) until none earns",
+                    "min_excess_reduction": MIN_EXCESS_REDUCTION,
+                    "noise_floor_percent": self.noise_floor},
+                "term": self.term.as_dict() if self.term else None,
+                "validation": self.validation,
+                "localisation_before": self.loc_before.as_dict(),
+                "localisation_after": self.loc_after.as_dict() if self.loc_after else None,
+                "per_test": self.per_test_errors(),
+                "candidates": [c.as_dict() for c in self.candidates],
+                "seconds": self.seconds}
+
+    def plot(self, out_dir: str | Path) -> list[Path]:
+        """Write the report's figures into ``out_dir`` (delegates to plots.discrepancy)."""
+        from ...plots import discrepancy as pd
+        return pd.all_figures(self, Path(out_dir))
+
+
+# ------------------------------------------------------------------ the workflow
+def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings | None = None,
+                    log: Any = None) -> DiscrepancyResult:
+    """Run the workflow on a bench data directory (see module docstring).
+
+    Parameters
+    ----------
+    data : BenchData or path
+    settings : DiscrepancySettings
+    log : callable, optional
+        Progress messages (e.g. ``print``).
+    """
+    t_start = time.perf_counter()
+    settings = settings or DiscrepancySettings()
+    say = log or (lambda msg: None)
+    if not isinstance(data, BenchData):
+        data = load_bench(data)
+    rig = Rig(data.harvester, data.has_generator, ())
+    lead = data.harvester.lead_m_per_rad
+    fit_t, held_t, evaluation = _load_split(data, settings)
+    if settings.max_samples is not None:
+        fit_t = [_crop(t, settings.max_samples) for t in fit_t]
+        held_t = [_crop(t, settings.max_samples) for t in held_t]
+    fit_pts = prepare_tests(fit_t, data.has_generator)
+    held_pts = prepare_tests(held_t, data.has_generator) if held_t else []
+    sub_pts = _spread(fit_pts, settings.max_fit_tests)
+    say(f"{len(fit_pts)} fit tests ({len(sub_pts)} for candidate fits), "
+        f"{len(held_pts)} {evaluation} tests")
+
+    lb = linear_baseline(fit_pts, rig)
+    base = fit_group(fit_pts, rig, [lb], max_iter=settings.max_iter)
+    if not base.parameters:
+        raise RuntimeError(f"baseline identification failed: {base.message}")
+    say(f"baseline: {base.message}, chi2/N {base.objective:.3g} ({base.seconds:.1f} s)")
+    base_fit_pred = predict(fit_pts, rig, base.parameters)
+    base_held_pred = predict(held_pts, rig, base.parameters) if held_pts else []
+    loc0 = localise(fit_pts + held_pts, base_fit_pred + base_held_pred, lead_m_per_rad=lead)
+    n_eff_fit = effective_samples(fit_pts, base_fit_pred)
+    n_eff_held = effective_samples(held_pts, base_held_pred) if held_pts else math.nan
+    eval_pts = held_pts or fit_pts
+    floor = force_noise_floor_percent(eval_pts)
+    err0 = _force_error(eval_pts, base_held_pred or base_fit_pred)
+
+    cur_rig, cur_params = rig, dict(base.parameters)
+    cur_fit, cur_held = base_fit_pred, base_held_pred
+    cur_err, effects, steps, all_cands = err0, [], [], []
+    if settings.discover and "force_lag" in settings.candidates:
+        lagged = try_lag(fit_pts, held_pts, rig, base, cur_fit, cur_held, floor, n_eff_fit,
+                          n_eff_held, err0, settings, say)
+        if lagged is not None:
+            fit_pts, held_pts, base_l, cur_fit, cur_held, cur_err, fields = lagged
+            cand = CandidateResult(**fields)
+            all_cands.append(cand)
+            eval_pts = held_pts or fit_pts
+            cur_params = dict(base_l.parameters)
+            effects.append("force_lag")
+            steps.append({"effect": "force_lag", "error_after": cur_err,
+                          "excess_reduction": cand.excess_reduction,
+                          "parameters": cand.parameters})
+            n_eff_fit = effective_samples(fit_pts, cur_fit)
+            n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
+            # the report compares on the re-aligned tests from here on
+            sub_pts = _spread(fit_pts, settings.max_fit_tests)
+            base_fit_pred = predict(fit_pts, rig, base.parameters)
+            base_held_pred = predict(held_pts, rig, base.parameters) if held_pts else []
+    remaining = [n for n in settings.candidates if n in CANDIDATES]
+    for rnd in range(1, settings.max_effects + 1):
+        comps = components_for(remaining, fit_pts, cur_fit, lead)
+        sub_pred = [cur_fit[next(k for k, q in enumerate(fit_pts) if q is p)] for p in sub_pts]
+        scores = signature_scores(sub_pts, cur_rig, cur_params, sub_pred, remaining, comps)
+        order = sorted(remaining, key=lambda n: (not scores[n]["applicable"],
+                                                 -np.nan_to_num(scores[n]["score"])))
+        cands = {n: CandidateResult(n, scores[n]["applicable"], scores[n]["score"],
+                                    scores[n]["chi2"], len(effects) + 1,
+                                    error_before=cur_err) for n in order}
+        chosen = [n for n in order if scores[n]["applicable"]
+                  and compatible(cur_rig, comps[n])][:settings.top]
+        say(f"round {rnd} ranking: " + ", ".join(f"{n} {scores[n]['score']:.3g}" for n in order))
+        args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts, cur_rig,
+                 cur_params, settings.max_iter) for n in chosen]
+        outs = _run_fits(args, settings.jobs)
+        sse_fit, sse_held = _sse(fit_pts, cur_fit), (_sse(held_pts, cur_held) if held_pts
+                                                      else math.nan)
+        for name, res, pf, ph, crig in outs:
+            c = cands[name]
+            c.fitted, c.fit, c.rig = True, res, crig
+            if not pf:
+                say(f"{name}: re-identification failed ({res.message})")
+                continue
+            comp_params = [q.name for q in comps[name].parameters]
+            k = len(comp_params)
+            c.parameters = {n: res.parameters[n] for n in comp_params}
+            c.intervals = {n: res.interval(n) for n in c.parameters}
+            c.delta_bic_fit = _dbic(_sse(fit_pts, pf), sse_fit, k, n_eff_fit)
+            if held_pts:
+                c.sse_heldout = _sse(held_pts, ph)
+                c.delta_bic_heldout = _dbic(c.sse_heldout, sse_held, k, n_eff_held)
+                c.error_after = _force_error(held_pts, ph)
+            else:
+                c.sse_heldout = _sse(fit_pts, pf)
+                c.delta_bic_heldout = c.delta_bic_fit
+                c.error_after = _force_error(fit_pts, pf)
+            c.excess_reduction = excess_reduction(cur_err, c.error_after, floor)
+            n_obs, sse0 = sum(pt.y.size for pt in eval_pts), (sse_held if held_pts else sse_fit)
+            c.earns = earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
+                            1 - (c.sse_heldout - n_obs) / (sse0 - n_obs)
+                            if sse0 > (1 + MIN_SSE_EXCESS) * n_obs else None)
+            c.predictions = pf + ph
+            c.per_test_after = [force_relative_error_percent(y[0], pt.y[0])
+                                for y, pt in zip(c.predictions, fit_pts + held_pts)]
+            say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
+                f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
+                f"(excess reduced {100 * c.excess_reduction:.0f} %; {res.seconds:.1f} s)")
+        all_cands += [cands[n] for n in order]
+        earning = [c for c in cands.values() if c.earns]
+        if not earning:
+            break
+        win = min(earning, key=lambda c: c.sse_heldout)
+        if settings.discover:
+            rival = _term(fit_pts, cur_fit, eval_pts, cur_held or cur_fit, lead, settings.seed,
+                          floor, n_eff_held if held_pts else n_eff_fit)
+            ex_win = math.sqrt(max(win.error_after ** 2 - floor ** 2, 0.0))
+            ex_term = math.sqrt(max(rival.error_after ** 2 - floor ** 2, 0.0))
+            if (rival.earns and rival.group != "velocity"
+                    and ex_term < TERM_PREFERENCE * ex_win):
+                say(f"round {rnd}: {win.effect} earns ({win.error_after:.3f} %) but a data-driven "
+                    f"term explains the residual far better ({rival.error_after:.3f} %): "
+                    f"{rival.description}")
+                win.earns = False
+                break
+        effects.append(win.effect)
+        remaining.remove(win.effect)
+        cur_rig, cur_params = win.rig, dict(win.fit.parameters)
+        cur_fit = win.predictions[:len(fit_pts)]
+        cur_held = win.predictions[len(fit_pts):]
+        n_eff_fit = effective_samples(fit_pts, cur_fit)
+        n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
+        cur_err = win.error_after
+        steps.append({"effect": win.effect, "error_after": cur_err,
+                      "excess_reduction": win.excess_reduction, "parameters": win.parameters})
+        say(f"round {rnd}: added {win.effect}, {evaluation} error {cur_err:.3f} %")
+        if not remaining:
+            break
+    term = None
+    if settings.discover:
+        term = _term(fit_pts, cur_fit, eval_pts, cur_held or cur_fit, lead, settings.seed,
+                     floor, n_eff_held if held_pts else n_eff_fit)
+        if term.columns:
+            say(f"term: {term.description}; {evaluation} error {term.error_before:.3f} -> "
+                f"{term.error_after:.3f} % ({'earns' if term.earns else 'does not earn'})")
+    if effects:
+        effect = " + ".join(effects)
+    else:
+        effect = NONE_OF_CATALOGUE if term is not None and term.earns else "none"
+    loc1 = localise(fit_pts + held_pts, cur_fit + cur_held, lead_m_per_rad=lead) \
+        if effects else None
+    ok = base.success and all(c.fit is not None and c.fit.parameters
+                              for c in all_cands if c.fitted)
+    msg = (f"effect {effect}: relative force error on {evaluation} "
+           f"{err0:.3f} % -> {cur_err:.3f} % (noise floor {floor:.3f} %)")
+    if effect == NONE_OF_CATALOGUE:
+        msg += f"; proposed term: {term.description}"
+    validation = None
+    if evaluation == "validation set" and not rig.has_generator:
+        from .openloop import validation_summary
+        validation = validation_summary(held_pts[0].test, base.parameters, cur_params, err0,
+                                        cur_err)
+        msg += (f"; open-loop position error on the validation record "
+                f"{validation['open_loop_final']['percent_of_norm_q']:.2f} % of |q| "
+                f"(reference parameters "
+                f"{validation['open_loop_reference_parameters']['percent_of_norm_q']:.2f} %)")
+    return DiscrepancyResult(
+        ok, msg, effect, err0, cur_err, evaluation, all_cands, base, rig, fit_pts, held_pts,
+        base_fit_pred + base_held_pred, loc0, loc1, {"fit": n_eff_fit, "heldout": n_eff_held},
+        time.perf_counter() - t_start, str(getattr(data, "path", "")), effects, steps, term,
+        floor, validation)
+
+
+#: A catalogue effect that earns is still not named when the data-driven term leaves
+#: less than this share of the effect's remaining error above the noise floor (the
+#: catalogue name would point at the wrong part: e.g. backlash for a lagging force
+#: channel).  Not applied to a term of the ``velocity`` group: a friction law of another
+#: shape is what the catalogue's friction effects are (its constant column *is* a
+#: direction-dependent Coulomb level, collinear with the offset).
+TERM_PREFERENCE = 0.5
+
+
+def _term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> TermProposal:
+    """The data-driven term of the current residual, judged by the decision rule."""
+    term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead, seed=seed)
+    if term.columns:
+        d_b = _dbic(term.sse_after, term.sse_before, len(term.columns), n_eff)
+        term.earns = earns(term.error_before, term.error_after, floor, d_b, d_b)
+    return term
+
+
+def _fit_one(a: tuple) -> tuple:
+    name, comp, starts, sub_pts, fit_pts, held_pts, rig, params, max_iter = a
+    _, res, _, _ = fit_candidate(name, comp, starts, sub_pts, [], rig, params, max_iter)
+    crig = rig.with_components([*rig.components, comp])
+    if not res.parameters:
+        return name, res, [], [], crig
+    pf = predict(fit_pts, crig, res.parameters)
+    ph = predict(held_pts, crig, res.parameters) if held_pts else []
+    return name, res, pf, ph, crig
+
+
+def _run_fits(args: list[tuple], jobs: int) -> list[tuple]:
+    if jobs > 1 and len(args) > 1:
+        import multiprocessing as mp
+        with ProcessPoolExecutor(max_workers=min(jobs, len(args)),
+                                 mp_context=mp.get_context("fork")) as ex:
+            return list(ex.map(_fit_one, args))
+    return [_fit_one(a) for a in args]

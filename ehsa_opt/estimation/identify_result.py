@@ -1,0 +1,244 @@
+"""Result types of the identification (:mod:`ehsa_opt.estimation.identify`): the fit of
+a group of tests (:class:`FitResult`), simulated signals (:class:`Prediction`) and the
+whole procedure's report (:class:`IdentificationReport`), plus the Eq 5 metrics."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..datasets.bench_format import BenchData, BenchTest
+from ..physics.friction import rod_friction_N
+from ..physics.params import FRICTION_NAMES
+
+__all__ = ["Prediction", "FitResult", "IdentificationReport", "eq5_delta",
+           "force_relative_error_percent", "test_errors", "summarise_identifiability"]
+
+_BEARING = FRICTION_NAMES[4:]
+
+
+def eq5_delta(simulated: Any, measured: Any) -> float:
+    """Paper Eq 5 as printed: δ = sqrt( (1/N) Σ |(S_s − S_e) / max|S_e|| )."""
+    s, m = np.asarray(simulated, float), np.asarray(measured, float)
+    if s.shape != m.shape or s.size == 0:
+        raise ValueError(f"eq5_delta: shapes differ or empty ({s.shape} vs {m.shape})")
+    return float(np.sqrt(np.mean(np.abs((s - m) / np.max(np.abs(m))))))
+
+
+def force_relative_error_percent(simulated: Any, measured: Any) -> float:
+    """‖F_s − F_e‖₂ / ‖F_e‖₂ in % (the EMPS reference's figure of merit)."""
+    s, m = np.asarray(simulated, float), np.asarray(measured, float)
+    if s.shape != m.shape or s.size == 0:
+        raise ValueError(f"force_relative_error_percent: shapes differ ({s.shape} vs {m.shape})")
+    return float(100.0 * np.linalg.norm(s - m) / np.linalg.norm(m))
+
+
+# ====================================================================== results
+@dataclass
+class Prediction:
+    """Simulated signals of one test on its own time grid."""
+
+    file: str
+    time_s: np.ndarray
+    force_N: np.ndarray
+    voltage_V: np.ndarray | None
+
+
+@dataclass
+class FitResult:
+    """Result of :func:`fit_tests` (mirrors ``scipy.optimize.OptimizeResult``).
+
+    Attributes
+    ----------
+    success : bool
+        True if at least one start converged (IPOPT success).
+    message : str
+    status : str
+        IPOPT ``return_status`` of the kept start.
+    parameters : dict[str, float]
+        Every model parameter except ``load_ohm`` (NaN if no start succeeded).
+    delta_F, delta_V : float or None
+        Paper Eq 5 (as printed) over all the fitted tests' samples (δ_V None
+        without voltage); max over tests.
+    force_relative_error_percent : float or None
+    per_test : list[dict]
+        file, delta_F, delta_V, force_relative_error_percent per test.
+    starts : list[dict]
+        Every start: initial, final, objective, success, status, iterations, seconds.
+    history : dict
+        Best start per iteration: ``objective``, ``rms_F``, ``rms_V`` (lists),
+        ``parameters`` (name → list).
+    nit : int
+    varied : list[str]
+    identifiability : dict or None
+        See :func:`~ehsa_opt.estimation.identifiability.fisher_identifiability`.
+    path : str
+        ``"rigid"`` (states integrated once, parameters-only NLP) or
+        ``"collocation"`` (states are collocation unknowns).
+    """
+
+    success: bool
+    message: str
+    status: str
+    parameters: dict[str, float]
+    delta_F: float | None
+    delta_V: float | None
+    force_relative_error_percent: float | None
+    per_test: list[dict]
+    starts: list[dict]
+    history: dict
+    nit: int
+    varied: list[str] = field(default_factory=list)
+    identifiability: dict | None = None
+    objective: float = math.nan
+    seconds: float = 0.0
+    path: str = "collocation"
+
+    def __getitem__(self, key: str) -> Any:  # OptimizeResult-like access
+        return getattr(self, key)
+
+    def plot(self, tests: Sequence[BenchTest] | None = None, harvester: Any = None,
+             **kw: Any) -> Any:
+        """Figures 8–9 (and 11 when ``tests`` are given); see :mod:`ehsa_opt.plots.identify`."""
+        from ..plots import identify as P
+        return P.fit_result(self, tests=tests, harvester=harvester, **kw)
+
+
+
+@dataclass
+class IdentificationReport:
+    """Result of :func:`identify`: per-test fits, bounds, identifiability, joint fit.
+
+    Attributes
+    ----------
+    data : BenchData
+    fits : list[FitResult]
+        One per test (paper procedure).
+    bounds : dict[str, list[float]]
+        Min and max of each parameter over the successful per-test fits (Table 2).
+    joint : FitResult or None
+        One parameter set for the training tests.
+    holdout_files : list[str]
+    holdout_errors : list[dict]
+        Eq 5 and relative error of the joint fit on the held-out tests.
+    identifiable : dict
+        Summary of the identifiability analysis (see :meth:`to_json`).
+    seconds : float
+    """
+
+    data: BenchData
+    fits: list[FitResult]
+    bounds: dict[str, list[float]]
+    joint: FitResult | None
+    holdout_files: list[str]
+    holdout_errors: list[dict]
+    identifiable: dict
+    seconds: float = 0.0
+    starts: int = 0
+
+    @property
+    def success(self) -> bool:
+        return any(f.success for f in self.fits)
+
+    def to_json(self) -> dict:
+        """The CLI contract: ``{"tests": [...], "bounds": {...}, "identifiable": {...}}``."""
+        tests = []
+        gen = self.data.has_generator
+        for t, f in zip(self.data.tests, self.fits):
+            params = {k: v for k, v in f.parameters.items()
+                      if gen or k not in _BEARING}
+            tests.append({"file": t.file, "frequency_hz": t.frequency_hz, "load_ohm": t.load_ohm,
+                          "parameters": params if f.success else None,
+                          "delta_F": f.delta_F, "delta_V": f.delta_V,
+                          "force_relative_error_percent": f.force_relative_error_percent,
+                          "success": f.success, "status": f.status, "message": f.message,
+                          "nit": f.nit, "starts": f.starts, "path": f.path})
+        joint = None
+        if self.joint is not None:
+            joint = {"success": self.joint.success, "parameters": self.joint.parameters,
+                     "train_files": [r["file"] for r in self.joint.per_test],
+                     "train": self.joint.per_test, "holdout": self.holdout_errors}
+        return _jsonable({"data_dir": str(self.data.path), "rig": self.data.rig_name,
+                          "has_generator": gen, "tests": tests, "bounds": self.bounds,
+                          "identifiable": self.identifiable, "joint_fit": joint,
+                          "seconds": self.seconds})
+
+    def plot(self, out_dir: str | Path) -> list[Path]:
+        """Write Figs 8–12, the identifiability picture and the joint fit to ``out_dir``."""
+        from ..plots import identify as P
+        return P.report_figures(self, Path(out_dir))
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+
+def test_errors(tests: Sequence[BenchTest], preds: Sequence[Prediction]) -> list[dict]:
+    """Eq 5 δ_F, δ_V and the force relative error of each test on its full grid."""
+    rows = []
+    for t, pr in zip(tests, preds):
+        rows.append({"file": t.file,
+                     "delta_F": eq5_delta(pr.force_N, t.force_N),
+                     "delta_V": (eq5_delta(pr.voltage_V, t.voltage_V)
+                                 if pr.voltage_V is not None else None),
+                     "force_relative_error_percent": force_relative_error_percent(pr.force_N,
+                                                                                  t.force_N)})
+    return rows
+
+
+
+def summarise_identifiability(data: BenchData, fits: Sequence[FitResult]) -> dict:
+    """Across tests: which directions are weak, spread of raw parameters against the
+    spread of the identifiable rod friction, and the rigid-bench voltage finding."""
+    good = [(t, f) for t, f in zip(data.tests, fits) if f.success and f.identifiability]
+    if not good:
+        return {"note": "no successful fit to analyse"}
+    weak_counts: dict[str, int] = {}
+    for _, f in good:
+        seen = set()
+        for d in f.identifiability["directions"]:
+            if not d["identifiable"]:
+                seen.add(" / ".join(sorted(d["main"])))
+        for s in seen:
+            weak_counts[s] = weak_counts.get(s, 0) + 1
+    r = data.harvester.lead_m_per_rad
+    spread = {}
+    for n in good[0][1].varied:
+        vals = np.array([f.parameters[n] for _, f in good])
+        spread[n] = float(np.std(vals) / max(abs(np.mean(vals)), 1e-300))
+    rod_spread = {}
+    if "nut_coulomb_N" in good[0][1].varied:
+        for v in (0.02, 0.05, 0.1):
+            vals = np.array([float(rod_friction_N(v, [f.parameters[n] for n in FRICTION_NAMES],
+                                                  r)) for _, f in good])
+            rod_spread[f"{v:g}"] = {"mean_N": float(vals.mean()),
+                                    "relative_spread": float(vals.std() / abs(vals.mean()))}
+    per_test = [{"file": t.file, "condition_number": f.identifiability["condition_number"],
+                 "non_identifiable": f.identifiability["non_identifiable"],
+                 "combinations": f.identifiability["combinations"]} for t, f in good]
+    voltage_note = None
+    if data.has_generator:
+        voltage_note = ("On a rigid bench the winding current obeys L di/dt = K_e v/r − R i "
+                        "with v prescribed: δ_V does not depend on any friction parameter. "
+                        "Where δ_V > δ_F the minimax max(δ_V, δ_F) is flat in the friction; "
+                        "the identification minimises t + w·mean(J) so that the force error "
+                        "still decides the friction.")
+    return {"non_identifiable_directions": weak_counts, "relative_spread_of_parameters": spread,
+            "rod_friction_spread_by_velocity_m_per_s": rod_spread, "per_test": per_test,
+            "voltage_independent_of_friction": voltage_note}

@@ -1,0 +1,27 @@
+"""Symbolic models: the harvester's equivalent quantities, the bench model and its
+pluggable components."""
+
+from .bench_model import BenchModel
+from .components import (
+                         COMPONENTS,
+                         AsymmetricFriction,
+                         Backlash,
+                         Cogging,
+                         Compliance,
+                         Component,
+                         ParamSpec,
+                         VoltageDrop,
+                         WindingHeating,
+                         make_component,
+)
+from .harvester import (
+                         equivalent_damping_Ns_per_m,
+                         equivalent_impedance,
+                         equivalent_mass_kg,
+                         equivalent_stiffness_N_per_m,
+)
+
+__all__ = ["BenchModel", "Component", "ParamSpec", "Backlash", "Compliance", "AsymmetricFriction",
+           "Cogging", "VoltageDrop", "WindingHeating", "COMPONENTS",
+           "make_component", "equivalent_mass_kg", "equivalent_damping_Ns_per_m",
+           "equivalent_stiffness_N_per_m", "equivalent_impedance"]

@@ -1,0 +1,348 @@
+"""Physical effects that plug into the bench model (SPEC §7–8).
+
+A :class:`Component` adds named parameters (with units and bounds) and
+contributes to one or more of the model's hooks:
+
+``coupling_force``  (transmission components only)
+    The axial force through the nut–screw transmission as a function of the
+    relative displacement δ = x − rθ and velocity δ̇ = v − rω.  A transmission
+    component turns the rigid screw into a two-body system (rod, rotor).
+``rod_force``
+    An extra force at the rod (measured by the load cell), e.g. direction-
+    dependent friction.
+``rotor_torque``
+    An extra load torque on the rotor, e.g. cogging.
+``emf``
+    A transformation of the generator emf, e.g. a rectifier/brush drop.
+``extra_resistance_ohm``
+    A resistance in series with the winding, e.g. its temperature rise.
+``states`` / ``state_rates``
+    Own differential states of a component (named, start at 0), e.g. a
+    winding temperature; the rates may use every signal including ``i``.
+``stored_energy`` / ``dissipated_power``
+    So that the energy balance of the model still closes.
+
+The bench model never needs rewriting to add an effect: write a subclass, list
+it in ``BenchModel(components=[...])``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import casadi as ca
+
+__all__ = ["ParamSpec", "Component", "Backlash", "Compliance", "AsymmetricFriction", "Cogging",
+           "VoltageDrop", "WindingHeating", "smooth_ramp", "smooth_step", "smooth_abs", "COMPONENTS",
+           "make_component"]
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """A named model parameter with unit, default and admissible bounds."""
+
+    name: str
+    unit: str
+    default: float
+    lower: float
+    upper: float
+    doc: str = ""
+
+
+def smooth_ramp(z: Any, eps: float) -> Any:
+    """max(z, 0) smoothed over a width ``eps``: ½ (z + √(z² + eps²))."""
+    return 0.5 * (z + ca.sqrt(z * z + eps * eps))
+
+
+def smooth_step(z: Any, eps: float) -> Any:
+    """Heaviside(z) smoothed over ``eps`` (derivative of :func:`smooth_ramp`)."""
+    return 0.5 * (1.0 + z / ca.sqrt(z * z + eps * eps))
+
+
+def smooth_abs(z: Any, eps: float) -> Any:
+    """|z| smoothed over ``eps``: √(z² + eps²) − eps (exactly 0 at z = 0)."""
+    return ca.sqrt(z * z + eps * eps) - eps
+
+
+def _ramp_energy(z: Any, eps: float) -> Any:
+    """∫ smooth_ramp dz, zero at z → −∞ up to a constant (used for stored energy)."""
+    s = ca.sqrt(z * z + eps * eps)
+    return 0.25 * (z * z + z * s + eps * eps * ca.asinh(z / eps))
+
+
+class Component:
+    """Base class of a model component (see module docstring for the hooks).
+
+    Subclasses set ``name`` and ``parameters`` and override the hooks they need.
+    Hook arguments: ``s`` a dict of signals (``t, x, v, a`` of the rod;
+    ``theta, omega`` of the rotor; ``i`` the current; ``delta, delta_dot`` the
+    transmission deflection when elastic) and ``p`` a dict of this component's
+    parameters by name (symbolic).
+    """
+
+    name: ClassVar[str] = "component"
+    parameters: ClassVar[tuple[ParamSpec, ...]] = ()
+    transmission: ClassVar[bool] = False
+    states: ClassVar[tuple[str, ...]] = ()
+
+    def coupling_force(self, s: dict, p: dict) -> Any:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def rod_force(self, s: dict, p: dict) -> Any:
+        return 0.0
+
+    def rotor_torque(self, s: dict, p: dict) -> Any:
+        return 0.0
+
+    def emf(self, e: Any, s: dict, p: dict) -> Any:
+        return e
+
+    def extra_resistance_ohm(self, s: dict, p: dict) -> Any:
+        return 0.0
+
+    def state_rates(self, s: dict, p: dict) -> list[Any]:
+        """Time derivatives of :attr:`states` (same order)."""
+        return []
+
+    def stored_energy(self, s: dict, p: dict) -> Any:
+        return 0.0
+
+    def dissipated_power(self, s: dict, p: dict) -> Any:
+        return 0.0
+
+    def defaults(self) -> dict[str, float]:
+        return {q.name: q.default for q in self.parameters}
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+class Backlash(Component):
+    """Axial play between nut and screw with a stiff, damped contact (SPEC §8).
+
+    With δ = x − rθ and h = b/2 (half the gap)::
+
+        pen(δ)   = ramp(δ − h) − ramp(−δ − h)
+        f_c      = k_c pen(δ) + c_c δ̇ [step(δ − h) + step(−δ − h)]
+
+    ramp/step are smoothed over ``smoothing_m`` so the model stays smooth for IPOPT.
+    At each reversal the rotor coasts through the gap, then the contact closes
+    with a short force peak.
+    """
+
+    name = "backlash"
+    transmission = True
+    parameters = (
+        ParamSpec("backlash_gap_m", "m", 1e-4, 0.0, 2e-3, "total axial play b"),
+        ParamSpec("backlash_contact_stiffness_N_per_m", "N/m", 5e6, 1e4, 1e9,
+                  "contact stiffness k_c"),
+        ParamSpec("backlash_contact_damping_Ns_per_m", "N s/m", 8e3, 0.0, 1e5,
+                  "contact damping c_c"),
+    )
+
+    def __init__(self, smoothing_m: float = 2e-6) -> None:
+        if not smoothing_m > 0:
+            raise ValueError("Backlash: smoothing_m must be > 0 (m)")
+        self.smoothing_m = smoothing_m
+
+    def _parts(self, s: dict, p: dict) -> tuple[Any, Any, Any]:
+        h = 0.5 * p["backlash_gap_m"]
+        d, e = s["delta"], self.smoothing_m
+        pen = smooth_ramp(d - h, e) - smooth_ramp(-d - h, e)
+        ind = smooth_step(d - h, e) + smooth_step(-d - h, e)
+        return h, pen, ind
+
+    def coupling_force(self, s: dict, p: dict) -> Any:
+        _, pen, ind = self._parts(s, p)
+        return (p["backlash_contact_stiffness_N_per_m"] * pen
+                + p["backlash_contact_damping_Ns_per_m"] * s["delta_dot"] * ind)
+
+    def stored_energy(self, s: dict, p: dict) -> Any:
+        h, e, d = 0.5 * p["backlash_gap_m"], self.smoothing_m, s["delta"]
+        return p["backlash_contact_stiffness_N_per_m"] * (
+            _ramp_energy(d - h, e) + _ramp_energy(-d - h, e))
+
+    def dissipated_power(self, s: dict, p: dict) -> Any:
+        _, _, ind = self._parts(s, p)
+        return p["backlash_contact_damping_Ns_per_m"] * s["delta_dot"] ** 2 * ind
+
+
+class Compliance(Component):
+    """Axial compliance of screw and mounts in series with the transmission.
+
+    f_c = k_s δ + c_s δ̇ with δ = x − rθ.
+    """
+
+    name = "compliance"
+    transmission = True
+    parameters = (
+        ParamSpec("compliance_stiffness_N_per_m", "N/m", 2e6, 1e4, 1e9, "axial stiffness k_s"),
+        ParamSpec("compliance_damping_Ns_per_m", "N s/m", 1e3, 0.0, 1e5, "axial damping c_s"),
+    )
+
+    def coupling_force(self, s: dict, p: dict) -> Any:
+        return (p["compliance_stiffness_N_per_m"] * s["delta"]
+                + p["compliance_damping_Ns_per_m"] * s["delta_dot"])
+
+    def stored_energy(self, s: dict, p: dict) -> Any:
+        return 0.5 * p["compliance_stiffness_N_per_m"] * s["delta"] ** 2
+
+    def dissipated_power(self, s: dict, p: dict) -> Any:
+        return p["compliance_damping_Ns_per_m"] * s["delta_dot"] ** 2
+
+
+class AsymmetricFriction(Component):
+    """Direction-dependent Coulomb and viscous friction at the rod (SPEC §7, §9).
+
+    Adds ``ΔF_C tanh²(v/u_s) + Δf_v |v|`` (|·| smoothed) to the rod force, so that
+    the Coulomb level is F_C + ΔF_C for v > 0 and F_C − ΔF_C for v < 0 (likewise
+    f_v ± Δf_v) — the EMPS finding (Janot et al. 2019), traced to screw fatigue.
+    Its power ``f v`` is booked by the model as component dissipation.
+
+    Parameters
+    ----------
+    smoothing_m_per_s : float
+        u_s of the smoothed sign/absolute value, m/s.
+    """
+
+    name = "asymmetric_friction"
+    parameters = (
+        ParamSpec("asym_coulomb_N", "N", 0.0, -100.0, 100.0,
+                  "ΔF_C: Coulomb level is F_C ± ΔF_C for v ≷ 0"),
+        ParamSpec("asym_viscous_Ns_per_m", "N s/m", 0.0, -300.0, 300.0,
+                  "Δf_v: viscous coefficient is f_v ± Δf_v for v ≷ 0"),
+    )
+
+    def __init__(self, smoothing_m_per_s: float = 1e-3) -> None:
+        if not smoothing_m_per_s > 0:
+            raise ValueError("AsymmetricFriction: smoothing_m_per_s must be > 0 (m/s)")
+        self.smoothing_m_per_s = smoothing_m_per_s
+
+    def rod_force(self, s: dict, p: dict) -> Any:
+        v, e = s["v"], self.smoothing_m_per_s
+        sgn = ca.tanh(v / e)
+        return (p["asym_coulomb_N"] * sgn * sgn
+                + p["asym_viscous_Ns_per_m"] * smooth_abs(v, e))
+
+
+class Cogging(Component):
+    """Position-periodic (cogging/detent) torque of the generator rotor.
+
+    τ = T_s sin(n θ) + T_c cos(n θ) = T_cog sin(n θ + φ) with
+    T_cog = √(T_s² + T_c²), φ = atan2(T_c, T_s); on a rigid bench θ = x/r.
+    The sine/cosine form keeps the fit linear in the amplitudes.  The torque is
+    conservative on average; its power τ ω is booked as component power.
+
+    Parameters
+    ----------
+    periods_per_rev : int
+        n, cogging periods per rotor revolution (slots/poles), fixed.
+    """
+
+    name = "cogging"
+    parameters = (
+        ParamSpec("cogging_sin_Nm", "N m", 0.0, -0.1, 0.1, "T_s, sine part of the cogging torque"),
+        ParamSpec("cogging_cos_Nm", "N m", 0.0, -0.1, 0.1,
+                  "T_c, cosine part of the cogging torque"),
+    )
+
+    def __init__(self, periods_per_rev: int = 4) -> None:
+        if int(periods_per_rev) != periods_per_rev or periods_per_rev < 1:
+            raise ValueError("Cogging: periods_per_rev must be a positive integer")
+        self.periods_per_rev = int(periods_per_rev)
+
+    def rotor_torque(self, s: dict, p: dict) -> Any:
+        nth = self.periods_per_rev * s["theta"]
+        return p["cogging_sin_Nm"] * ca.sin(nth) + p["cogging_cos_Nm"] * ca.cos(nth)
+
+
+class VoltageDrop(Component):
+    """Brush or rectifier drop: a smooth dead zone of width ±V_d in the generator emf.
+
+    e' = ramp(e − V_d) − ramp(−e − V_d) (ramp smoothed over ``smoothing_V``); with
+    V_d = 0 this is exactly e.  The drop dissipates (e − e') i.
+    """
+
+    name = "voltage_drop"
+    parameters = (
+        ParamSpec("voltage_drop_V", "V", 0.0, 0.0, 5.0, "V_d, brush/diode forward drop"),
+    )
+
+    def __init__(self, smoothing_V: float = 0.05) -> None:
+        if not smoothing_V > 0:
+            raise ValueError("VoltageDrop: smoothing_V must be > 0 (V)")
+        self.smoothing_V = smoothing_V
+
+    def emf(self, e: Any, s: dict, p: dict) -> Any:
+        vd, eps = p["voltage_drop_V"], self.smoothing_V
+        out = smooth_ramp(e - vd, eps) - smooth_ramp(-e - vd, eps)
+        s["voltage_drop_lost_V"] = e - out  # read back by dissipated_power
+        return out
+
+    def dissipated_power(self, s: dict, p: dict) -> Any:
+        return s["voltage_drop_lost_V"] * s["i"]
+
+
+class WindingHeating(Component):
+    """Temperature-dependent winding resistance with a first-order thermal state.
+
+    The winding warms by its own copper loss and cools toward ambient::
+
+        R_i(ΔT) = R_i (1 + α ΔT)
+        dΔT/dt  = h R_i(ΔT) i² − ΔT / τ
+
+    with h = 1/C_th the heating rate per joule (K/J; h = 0 is exactly inert) and
+    τ = R_th C_th the cooling time (s).  The extra resistance α R_i ΔT is a series
+    resistance of the winding; its loss α R_i ΔT i² is booked as component
+    dissipation (the heat leaves the mechanical/electrical energy balance, so the
+    thermal state stores none of it).  ΔT starts at 0 (winding at ambient).
+
+    Parameters
+    ----------
+    temperature_coefficient_per_K : float
+        α of the winding, 1/K (copper 3.93e-3), fixed.
+    """
+
+    name = "winding_heating"
+    states = ("winding_temperature_rise_K",)
+    parameters = (
+        ParamSpec("winding_heating_K_per_J", "K/J", 0.05, 0.0, 10.0,
+                  "h = 1/C_th, temperature rise per joule of copper loss"),
+        ParamSpec("winding_cooling_time_s", "s", 30.0, 0.1, 1e4,
+                  "τ = R_th C_th, thermal time constant of the winding"),
+    )
+
+    def __init__(self, temperature_coefficient_per_K: float = 3.93e-3) -> None:
+        if not temperature_coefficient_per_K > 0:
+            raise ValueError("WindingHeating: temperature_coefficient_per_K must be > 0 (1/K)")
+        self.temperature_coefficient_per_K = temperature_coefficient_per_K
+
+    def extra_resistance_ohm(self, s: dict, p: dict) -> Any:
+        return (self.temperature_coefficient_per_K * s["internal_resistance_ohm"]
+                * s["winding_temperature_rise_K"])
+
+    def state_rates(self, s: dict, p: dict) -> list[Any]:
+        dT = s["winding_temperature_rise_K"]
+        loss = (s["internal_resistance_ohm"] + self.extra_resistance_ohm(s, p)) * s["i"] ** 2
+        return [p["winding_heating_K_per_J"] * loss - dT / p["winding_cooling_time_s"]]
+
+    def dissipated_power(self, s: dict, p: dict) -> Any:
+        return self.extra_resistance_ohm(s, p) * s["i"] ** 2
+
+
+#: Registry of components by name (later effects register here too).
+COMPONENTS: dict[str, type[Component]] = {
+    "backlash": Backlash, "compliance": Compliance, "asymmetric_friction": AsymmetricFriction,
+    "cogging": Cogging, "voltage_drop": VoltageDrop, "winding_heating": WindingHeating}
+
+
+def make_component(name: str, **kwargs: Any) -> Component:
+    """Instantiate a registered component by name, with a helpful error."""
+    if name not in COMPONENTS:
+        from .params import nearest_name
+        near = nearest_name(name, tuple(COMPONENTS))
+        hint = f"; did you mean '{near}'?" if near else ""
+        raise ValueError(f"unknown effect '{name}'{hint} (known: {', '.join(COMPONENTS)})")
+    return COMPONENTS[name](**kwargs)
+

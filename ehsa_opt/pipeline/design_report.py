@@ -1,0 +1,344 @@
+"""Reproduce-pipeline steps of the design studies (paper §4.2, Figs 17–20, Table 4).
+
+Steps (``(ctx) -> StepOutput``):
+
+``step_goal_attainment``
+    Goal attainment on ``problems/paper_design.toml`` (Figs 17–19) with the
+    paper's numbers beside ours and the physics that explains the gap.
+``step_pareto``
+    NSGA-II front on the same problem, hypervolume per generation, knee, the
+    goal-attainment point against the front.
+``step_friction_on_optimum``
+    The optimum with no/min/max friction over speed (Fig 20, Table 4), time domain.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..design import OBJECTIVE_NAMES
+from .base import Context, StepOutput
+
+__all__ = ["PAPER_DESIGN_FILE", "PAPER_OPTIMUM", "PAPER_TABLE4", "step_goal_attainment",
+           "step_pareto", "step_friction_on_optimum", "design_inputs"]
+
+#: The problem file of paper §4.2 (shipped in the package; ``problems/`` at the top of the
+#: repository links to it).
+PAPER_DESIGN_FILE = Path(__file__).resolve().parent.parent / "problems" / "paper_design.toml"
+
+#: Paper §4.2 optimum and changes (text of §4.2 and Fig 19).
+PAPER_OPTIMUM = {"total_inertia_gcm2": 250.0, "lead_mm_per_rev": 7.0,
+                 "speed_constant_rpm_per_V": 29.8, "load_ohm": 75.0,
+                 "comfort_improvement_pct": 23.86, "road_holding_improvement_pct": 26.91,
+                 "power_W": (100.0, 162.0), "efficiency_pct": (36.0, 81.0)}
+
+#: Paper Table 4 (100 km/h): no / min / max friction.
+PAPER_TABLE4 = {"power_W": (174.9, 148.61, 110.1), "efficiency_pct": (81.0, 67.58, 49.64),
+                "comfort_change_pct": (None, 0.57, -15.01),
+                "road_holding_change_pct": (None, 1.7, 7.83)}
+
+
+def design_inputs(ctx: Context) -> Any:
+    """Cache key of the design steps: the problem file's text and the data/vehicle."""
+    text = PAPER_DESIGN_FILE.read_text() if PAPER_DESIGN_FILE.is_file() else None
+    return [text, ctx.inputs()] if (ctx.custom_data or ctx.vehicle_file) else text
+
+
+def _cfg(ctx: Context | None = None) -> Any:
+    """The paper's design problem; with ``reproduce --vehicle`` its vehicle replaced."""
+    import dataclasses
+
+    from ..design.config import load_design_config
+    if not PAPER_DESIGN_FILE.is_file():
+        raise FileNotFoundError(f"{PAPER_DESIGN_FILE} not found (the package is incomplete: reinstall it)")
+    cfg = load_design_config(PAPER_DESIGN_FILE)
+    if ctx is not None and ctx.vehicle_file is not None:
+        vehicle, name = ctx.vehicle()
+        cfg = dataclasses.replace(cfg, vehicle=vehicle, vehicle_name=name)
+    return cfg
+
+
+def _not_applicable(ctx: Context) -> StepOutput | None:
+    if ctx.has_generator:
+        return None
+    return StepOutput("Not applicable: the bench rig has no generator, so the design of a "
+                      "harvester (inertia, lead, generator constant, load) has nothing to "
+                      "start from in these data.\n", [], {"applicable": False})
+
+
+def step_goal_attainment(ctx: Context) -> StepOutput:
+    """Goal attainment on the paper's problem; results carry ``design`` and
+    ``optimum_harvester`` (HarvesterParams fields, read by the Fig 21 step)."""
+    from .. import plots
+    from ..design.optimize import build_problem, objectives_at, optimize
+    from ..physics.params import HarvesterParams
+    from ..plots.design import goal_attainment_history
+
+    if (na := _not_applicable(ctx)) is not None:
+        return na
+    cfg = _cfg(ctx)
+    out = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")
+    ga = out.goal_attainment
+    assert ga is not None
+    figs = []
+    for which, name in (("design", "fig17_design_history.png"),
+                        ("mass", "fig18_equivalent_mass.png"),
+                        ("objectives", "fig19_objective_history.png")):
+        rel = f"figures/{name}"
+        plots.save(goal_attainment_history(ga, which), ctx.out_dir / rel)
+        figs.append(rel)
+    proto = out["prototype"]["objectives"]
+    pm = out["prototype"]["metrics"]
+    om = out["metrics"]
+    ch = out["goal_attainment"]["changes"]
+    d = out["design"]
+    box = cfg.space
+    at_lower = {n: math.isclose(d[n], lo, rel_tol=1e-6)
+                for n, lo in zip(box.names, box.lower)}
+    P = PAPER_OPTIMUM
+    Ri = cfg.harvester.internal_resistance_ohm
+    # physics of the efficiency and power gap
+    ri_paper = P["load_ohm"] * (100.0 / P["efficiency_pct"][1] - 1.0)
+    re_paper0 = ri_paper * P["efficiency_pct"][0] / (100.0 - P["efficiency_pct"][0])
+    # the paper's design evaluated by our model
+    problem = build_problem(cfg)
+    paper_design = {k: P[k] for k in ("total_inertia_gcm2", "lead_mm_per_rev",
+                                      "speed_constant_rpm_per_V", "load_ohm")}
+    pd_out = objectives_at(problem, paper_design)
+    gamma_paper = max((pd_out[k] - g) / w for k, g, w in
+                      zip(OBJECTIVE_NAMES, ga.goals, ga.weights) if w > 0)
+    rows = [
+        "| | prototype (ours) | optimum (ours) | paper's optimum in our model | paper |",
+        "|---|---|---|---|---|",
+        f"| J_t (g cm²) | {cfg.harvester.total_inertia_gcm2:.0f} | {d['total_inertia_gcm2']:.1f}"
+        f"{' (lower bound)' if at_lower['total_inertia_gcm2'] else ''} | 250 | 250 (lower bound) |",
+        f"| lead (mm/rev) | {cfg.harvester.lead_mm_per_rev:.1f} | {d['lead_mm_per_rev']:.2f}"
+        f"{' (lower bound)' if at_lower['lead_mm_per_rev'] else ''} | 7 | ≈ 7 |",
+        f"| k_n (rpm/V) | {cfg.harvester.speed_constant_rpm_per_V:.1f} | "
+        f"{d['speed_constant_rpm_per_V']:.1f}"
+        f"{' (lower bound)' if at_lower['speed_constant_rpm_per_V'] else ''} | 29.8 | "
+        f"29.8 (lower bound) |",
+        f"| R_e (Ω) | {cfg.harvester.load_ohm:.0f} | {d['load_ohm']:.1f} | 75 | ≈ 75 |",
+        f"| comfort α | {proto['comfort']:.4f} | {out['objectives']['comfort']:.4f} "
+        f"(**{ch['comfort_improvement_pct']:+.2f} %**) | {pd_out['comfort']:.4f} "
+        f"({100 * (1 - pd_out['comfort'] / proto['comfort']):+.2f} %) | +23.86 % |",
+        f"| road holding η_rh | {proto['road_holding']:.4f} | "
+        f"{out['objectives']['road_holding']:.4f} (**{ch['road_holding_improvement_pct']:+.2f} "
+        f"%**) | {pd_out['road_holding']:.4f} "
+        f"({100 * (1 - pd_out['road_holding'] / proto['road_holding']):+.2f} %) | +26.91 % |",
+        f"| power (W) | {pm['power_W']:.1f} | **{om['power_W']:.1f}** | "
+        f"{pd_out['power_W']:.1f} | 100 → 162 |",
+        f"| efficiency (%) | {100 * pm['efficiency']:.1f} | **{100 * om['efficiency']:.1f}** | "
+        f"{100 * pd_out['efficiency']:.1f} | 36 → 81 |",
+        f"| W_k rms acceleration (m/s²) | {pm['comfort_weighted_rms_m_s2']:.3f} | "
+        f"{om['comfort_weighted_rms_m_s2']:.3f} | {pd_out['comfort_weighted_rms_m_s2']:.3f} | – |",
+        f"| attainment factor γ | 0 (goals) | **{ga.gamma:+.4f}** | {gamma_paper:+.4f} | – |",
+    ]
+    binding = [k for k, g, w in zip(OBJECTIVE_NAMES, ga.goals, ga.weights)
+               if w > 0 and abs((ga.objectives[k] - g) / w - ga.gamma) < 1e-5]
+    md = (
+        f"Goal attainment (`fgoalattain` semantics: min γ s.t. F_i − w_i γ ≤ goal_i, SLSQP "
+        f"with vectorised finite-difference gradients, {ga.stats['n_starts']} starts) on "
+        f"`problems/paper_design.toml`: {cfg.vehicle_name} quarter car, class "
+        f"{cfg.road.iso_class} at {cfg.road.speed_km_per_h:g} km/h, frictionless, exact "
+        f"frequency-domain metrics; box of paper Table 3; goals = the prototype's objectives, "
+        f"weights |goal| (so γ is the worst relative change). Status: "
+        f"{'converged' if ga.success else 'FAILED'} ({ga.message}); all starts reached "
+        f"γ within {np.ptp([s['gamma'] for s in ga.starts if s['feasible']]):.1e}. Binding "
+        f"objectives at the optimum: {', '.join(binding)}.\n\n" + "\n".join(rows) + "\n\n"
+        f"**Agreement.** J_t and k_n end at their lower bounds, as in the paper "
+        f"({'both' if at_lower['total_inertia_gcm2'] and at_lower['speed_constant_rpm_per_V'] else 'NOT both'}"
+        f" here): the smallest inertance (less high-frequency transmission) and the strongest "
+        f"motor (largest K_e = K_t, so the needed damping K²/(r² R) comes with a large R_e, "
+        f"i.e. high efficiency).\n\n"
+        f"**Why power and efficiency differ.** For the frictionless linear model the "
+        f"efficiency is exactly η_g = R_e/(R_e + R_i) (the inductance stores energy "
+        f"reversibly), and the power absorbed by the damper is the road's dissipation bound "
+        f"P_diss = π² k1 G_d(n0) n0² V = {pm['dissipation_bound_W']:.1f} W, independent of the "
+        f"design (our evaluation: {pm['dissipated_power_W']:.2f} W at the prototype, "
+        f"{om['dissipated_power_W']:.2f} W at the optimum). So harvested power = η_g · P_diss "
+        f"can only grow through efficiency: from {pm['power_W']:.1f} W at "
+        f"{100 * pm['efficiency']:.1f} % to at most {pm['dissipation_bound_W']:.1f} W. The "
+        f"paper's 100 → 162 W (+62 %) with 36 → 81 % efficiency (×2.25) is inconsistent "
+        f"with a design-invariant P_diss; its efficiencies imply R_i = 75·(1/0.81 − 1) = "
+        f"{ri_paper:.1f} Ω (not the {Ri:g} Ω of Table 1) and an initial load R_e ≈ "
+        f"{re_paper0:.1f} Ω. With our R_i = {Ri:g} Ω the prototype at R_e = "
+        f"{cfg.harvester.load_ohm:g} Ω already has {100 * pm['efficiency']:.1f} %, so power "
+        f"improves by at most {100 * (pm['dissipation_bound_W'] / pm['power_W'] - 1):.1f} %; "
+        f"the goal attainment therefore spends its effort balancing {' and '.join(binding)}, "
+        f"which gives a larger R_e ({d['load_ohm']:.0f} Ω) than the paper's 75 Ω and the "
+        f"smallest lead: a lead of 7 mm/rev with R_e = 75 Ω (the paper's design, column 4) "
+        f"improves comfort and road holding more but gives γ = {gamma_paper:+.4f} because "
+        f"its power/efficiency is worse. Vehicle, road seed and R_e of the prototype are "
+        f"our assumptions (SPEC §4, §6), so absolute values differ from the paper's.\n\n"
+        + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
+    from dataclasses import asdict
+    h_opt = HarvesterParams.from_design(d["total_inertia_gcm2"], d["lead_mm_per_rev"],
+                                        d["speed_constant_rpm_per_V"], d["load_ohm"],
+                                        base=cfg.harvester)
+    res = {"design": d, "objectives": out["objectives"], "metrics": om, "gamma": ga.gamma,
+           "optimum_harvester": asdict(h_opt),
+           "prototype": {"objectives": proto, "metrics": pm}, "success": ga.success,
+           "at_lower_bound": at_lower, "binding": binding, "paper_design_in_our_model": pd_out}
+    return StepOutput(md, figs, res)
+
+
+def step_pareto(ctx: Context) -> StepOutput:
+    from .. import plots
+    from ..design.optimize import optimize
+    from ..plots.design import (
+        hypervolume_history,
+        parallel_coordinates,
+        pareto_projections,
+    )
+
+    if (na := _not_applicable(ctx)) is not None:
+        return na
+    cfg = _cfg(ctx)
+    # quick: a small run; full: larger than the file's 40 × 25 for a denser front
+    pop, gens = (24, 12) if ctx.quick else (max(cfg.nsga2.pop, 100), max(cfg.nsga2.gens, 60))
+    out = optimize(cfg, "nsga2", out_dir=ctx.out_dir / "design_nsga2", pop=pop, gens=gens)
+    pr = out.result
+    ga_obj = out["goal_attainment"]["objectives"]
+    ga_full = {**out["goal_attainment"]["design"], **ga_obj}
+    proto = out["prototype"]["objectives"]
+    figs = []
+    for fig, name in ((pareto_projections(pr, ga_obj, proto), "pareto_projections.png"),
+                      (parallel_coordinates(pr, ga_full), "pareto_parallel.png"),
+                      (hypervolume_history({f"NSGA-II {pop}×{gens}": pr.history},
+                                           pr.hv_reference), "pareto_hypervolume.png")):
+        rel = f"figures/{name}"
+        plots.save(fig, ctx.out_dir / rel)
+        figs.append(rel)
+    f_ga = np.array([ga_obj[k] for k in OBJECTIVE_NAMES])
+    ratio = pr.F / f_ga
+    n_dom = int(np.sum(np.all(ratio < 0.99, axis=1)))
+    best = float(np.min(np.max(ratio, axis=1)))
+    k = pr.preferred
+    hv = pr.history
+    md = (
+        f"pymoo NSGA-II ({pop} × {gens}, seed {cfg.nsga2.seed}) on the same problem "
+        f"(variables scaled to the unit cube, log for J_t, k_n, R_e), {pr.F.shape[0]} "
+        f"non-dominated designs. Hypervolume of F/F(prototype) against the reference point "
+        f"{pr.hv_reference.tolist()}: {hv[0]['hv']:.4g} after {hv[0]['n_eval']} evaluations → "
+        f"{hv[-1]['hv']:.4g} after {hv[-1]['n_eval']} (population front; NSGA-II's crowding "
+        f"truncation can lower it between generations); archive of every non-dominated design "
+        f"evaluated: {hv[-1]['hv_archive']:.4g} ({hv[-1]['n_archive']} designs).\n\n"
+        f"**Goal-attainment point against the front:** {n_dom} front points dominate it by "
+        f"more than 1 % in all four objectives (acceptance: 0); the front point closest to "
+        f"dominating it has max_i F_i/F_i,GA = {best:.4f} (> 0.99 means no 1 % domination).\n\n"
+        f"| | J_t (g cm²) | lead (mm/rev) | k_n (rpm/V) | R_e (Ω) | α | η_rh | 1/ρ_g | 1/η_g |\n"
+        f"|---|---|---|---|---|---|---|---|---|\n"
+        + "".join(
+            f"| {name} | {dd['total_inertia_gcm2']:.1f} | {dd['lead_mm_per_rev']:.2f} | "
+            f"{dd['speed_constant_rpm_per_V']:.1f} | {dd['load_ohm']:.1f} | {oo['comfort']:.4f} | "
+            f"{oo['road_holding']:.4f} | {oo['inverse_power']:.1f} | "
+            f"{oo['inverse_efficiency']:.4f} |\n"
+            for name, dd, oo in (
+                ("prototype", out["prototype"]["design"], proto),
+                ("goal attainment", out["goal_attainment"]["design"], ga_obj),
+                (f"NSGA-II {pr.pick}", {n: float(v[k]) for n, v in pr.designs.items()},
+                 dict(zip(OBJECTIVE_NAMES, pr.F[k].tolist()))))) + "\n"
+        + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
+    res = {"n_front": int(pr.F.shape[0]), "n_dominating_ga_by_1pct": n_dom,
+           "closest_ratio": best, "hv_history": hv, "pop": pop, "gens": gens}
+    return StepOutput(md, figs, res)
+
+
+def step_friction_on_optimum(ctx: Context) -> StepOutput:
+    from .. import plots
+    from ..design.friction_optimum import friction_on_optimum
+    from ..design.sweep import default_friction_sets
+    from ..physics.params import HarvesterParams
+    from ..plots.design import friction_on_optimum as fig_fn
+
+    if (na := _not_applicable(ctx)) is not None:
+        return na
+    cfg = _cfg(ctx)
+    ga = ctx.results.get("design", {}).get("design")  # the goal-attainment step
+    if ga is None:
+        from ..design.optimize import optimize
+        ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")["design"]
+    sets, source = default_friction_sets(ctx.results.get("identification"))
+    speeds = (30.0, 70.0, 100.0, 130.0) if ctx.quick else (30.0, 50.0, 70.0, 90.0, 100.0,
+                                                            110.0, 130.0)
+    length = 300.0 if ctx.quick else 1000.0
+    rows = friction_on_optimum(cfg, ga, sets, speeds, road_length_m=length, jobs=ctx.jobs)
+    paper_design = {k: PAPER_OPTIMUM[k] for k in ("total_inertia_gcm2", "lead_mm_per_rev",
+                                                  "speed_constant_rpm_per_V", "load_ohm")}
+    rows_paper = friction_on_optimum(cfg, paper_design, sets, (100.0,), road_length_m=length,
+                                     jobs=1)
+    pp = {r["friction"]: r for r in rows_paper}
+    rel = "figures/fig20_friction_on_optimum.png"
+    plots.save(fig_fn(rows), ctx.out_dir / rel)
+    at100 = {r["friction"]: r for r in rows if r["speed_km_per_h"] == 100.0}
+    T = PAPER_TABLE4
+    lines = ["| at 100 km/h | no friction (ours / paper) | min friction (ours / paper) | "
+             "max friction (ours / paper) |", "|---|---|---|---|"]
+
+    def cell(case: str, key: str, j: int, fmt: str) -> str:
+        ours = at100.get(case, {}).get(key)
+        paper = T[key][j]
+        o = "–" if ours is None or (case == "none" and "change" in key) else format(ours, fmt)
+        p = "–" if paper is None else format(paper, fmt)
+        return f"{o} / {p}"
+    for key, lab, fmt in (("power_W", "power (W)", ".1f"),
+                          ("efficiency_pct", "efficiency (%)", ".2f"),
+                          ("comfort_change_pct", "comfort change (%)", "+.2f"),
+                          ("road_holding_change_pct", "road holding change (%)", "+.2f")):
+        lines.append(f"| {lab} | " + " | ".join(cell(c, key, j, fmt) for j, c in
+                                               enumerate(("none", "min", "max"))) + " |")
+    h_opt = HarvesterParams.from_design(ga["total_inertia_gcm2"], ga["lead_mm_per_rev"],
+                                        ga["speed_constant_rpm_per_V"], ga["load_ohm"],
+                                        base=cfg.harvester)
+    c_opt = float(h_opt.equivalent_damping_Ns_per_m(0.0))
+    c_paper = float(HarvesterParams.from_design(250.0, 7.0, 29.8, 75.0, base=cfg.harvester)
+                    .equivalent_damping_Ns_per_m(0.0))
+    none100 = at100.get("none", {})
+    check = ""
+    if none100:
+        check = (f"Check: frictionless at 100 km/h the time domain gives "
+                 f"{none100['power_W']:.2f} W and α = {none100['comfort']:.4f}, the exact "
+                 f"frequency path {none100['linear_power_W']:.2f} W and α = "
+                 f"{none100['linear_comfort']:.4f}; energy balance closes to "
+                 f"{max(abs(r['energy_residual']) for r in rows):.1e} (relative) in every run.\n\n")
+    explain = (
+        f"**Against the paper.** Friction costs power and efficiency as in the paper "
+        f"(efficiency falls from R_e/(R_e+R_i) = {none100.get('efficiency_pct', float('nan')):.1f} % "
+        f"because part of the damper's work goes into friction). Comfort and road holding "
+        f"*improve* with friction here, while the paper found comfort 15 % worse at maximum "
+        f"friction: our optimum is lightly damped (low-frequency c_eq = K_t K_e/(r² R) = "
+        f"{c_opt:.0f} N s/m with R_e = {ga['load_ohm']:.0f} Ω and a "
+        f"{ga['lead_mm_per_rev']:.0f} mm/rev lead, against {c_paper:.0f} N s/m for the "
+        f"paper's 7 mm/rev, 75 Ω), so the friction's extra damping helps the "
+        f"{cfg.vehicle_name} body mode. The paper's own design in our model (second table) "
+        f"is damped more, and there friction does worsen comfort "
+        f"({pp.get('min', {}).get('comfort_change_pct', float('nan')):+.2f} % / "
+        f"{pp.get('max', {}).get('comfort_change_pct', float('nan')):+.2f} %) while improving "
+        f"road holding ({pp.get('min', {}).get('road_holding_change_pct', float('nan')):+.2f} % / "
+        f"{pp.get('max', {}).get('road_holding_change_pct', float('nan')):+.2f} %): the "
+        f"paper's signs. Absolute powers differ because P_diss = π² k1 G_d n0² V is set by "
+        f"our tyre stiffness and the class-C mean roughness (140 W at 100 km/h), below the "
+        f"paper's 174.9 W frictionless value. The friction sets are ours ({source}).\n\n")
+    md = (f"The goal-attainment optimum ({', '.join(f'{k} = {v:.4g}' for k, v in ga.items())}) "
+          f"simulated in the time domain with friction, {cfg.vehicle_name} quarter car, class "
+          f"{cfg.road.iso_class}, {len(speeds)} speeds, {length:g} m roads. Friction sets: "
+          f"{source}. Sign convention as the paper's: a positive change is an improvement "
+          f"(lower α or η_rh than without friction).\n\n" + "\n".join(lines) + "\n\n"
+          + "| paper's design (J_t 250, lead 7, k_n 29.8, R_e 75) in our model, 100 km/h "
+            "| no friction | min friction | max friction |\n|---|---|---|---|\n"
+          + "".join(f"| {lab} | " + " | ".join(
+              ("–" if (c == "none" and "change" in key) else format(pp[c][key], fmt))
+              for c in ("none", "min", "max")) + " |\n"
+              for key, lab, fmt in (("power_W", "power (W)", ".1f"),
+                                    ("efficiency_pct", "efficiency (%)", ".2f"),
+                                    ("comfort_change_pct", "comfort change (%)", "+.2f"),
+                                    ("road_holding_change_pct", "road holding change (%)",
+                                     "+.2f")))
+          + "\n" + check + explain + f"![fig20]({rel})\n")
+    return StepOutput(md, [rel], {"rows": rows, "friction_source": source,
+                                  "paper_design_rows": rows_paper})

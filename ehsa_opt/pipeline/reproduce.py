@@ -1,0 +1,226 @@
+"""``ehsa-opt reproduce``: the paper end to end on the embedded data, one report.
+
+The pipeline is a list of :class:`Step` s.  Each step gets a :class:`Context`
+(output folder, quick flag, jobs, results of earlier steps), returns a
+:class:`StepOutput` (Markdown section, figures, JSON-able results), and is cached
+in ``OUT/cache/<step>.json`` under a hash of its inputs: a re-run after an
+interruption skips finished steps (the log says so) and gives the same report.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+from ..utils.io import atomic_write_bytes, atomic_write_text
+from ..utils.progress import progress_bar
+from ..utils.version import __version__
+from .base import Context, Step, StepOutput, code_digest, data_digest, hash_json
+from .bench_report import step_bench_truth, step_data, step_harvester
+
+__all__ = ["Step", "StepOutput", "Context", "STEPS", "reproduce", "atomic_write_text",
+           "atomic_write_bytes"]
+
+
+def _identify_steps():
+    from . import identify_report
+    return identify_report
+
+
+def _quarter_car_step(name: str, ctx: Context) -> StepOutput:
+    from . import quarter_car_report
+    return getattr(quarter_car_report, name)(ctx)
+
+
+def _qc_inputs(ctx: Context) -> Any:
+    from .quarter_car_report import friction_inputs
+    return friction_inputs(ctx)
+
+
+def _design_steps() -> list[Step]:
+    from .design_report import (
+        design_inputs,
+        step_friction_on_optimum,
+        step_goal_attainment,
+        step_pareto,
+    )
+    return [
+        Step("design", "Optimal design by goal attainment (paper §4.2, Figs 17–19)",
+             step_goal_attainment, design_inputs),
+        Step("design_pareto", "Pareto front of the design problem (NSGA-II)", step_pareto,
+             design_inputs, depends=("design",)),
+        Step("design_friction", "Friction on the optimised design (paper Fig 20, Table 4)",
+             step_friction_on_optimum, lambda ctx: [design_inputs(ctx), _qc_inputs(ctx)],
+             depends=("design", "identification")),
+    ]
+
+
+def _robust_step(ctx: Context) -> StepOutput:
+    from .robust_design_report import step_robust_design
+    return step_robust_design(ctx)
+
+
+def _robust_inputs(ctx: Context) -> Any:
+    from .robust_design_report import robust_inputs
+    return robust_inputs(ctx)
+
+
+def _step_discrepancy(ctx: Context) -> StepOutput:
+    from .discrepancy_report import (
+        step_discrepancy,  # lazy: heavy imports only when run
+    )
+    return step_discrepancy(ctx)
+
+
+#: The pipeline, in order: bench data and model (§2) → identification (§3) → discrepancy
+#: (backlash; EMPS asymmetric friction) → §4.1 studies → design (§4.2) → friction on the
+#: optimum (Fig 20, Table 4, Fig 21) → real EMPS identification.
+STEPS: list[Step] = [
+    Step("data", "Bench data", step_data,
+         lambda ctx: [data_digest(ctx_path) for ctx_path in _data_paths(ctx)]),
+    Step("harvester", "Harvester equivalent quantities (paper Eqs 1–3)", step_harvester,
+         lambda ctx: ctx.inputs()),
+    Step("bench_truth", "Bench model against the data", step_bench_truth,
+         lambda ctx: data_digest(_data_paths(ctx)[0])),
+    Step("identification", "Friction identification on the bench data "
+         "(paper §3, Table 2, Figs 8–12)",
+         lambda ctx: _identify_steps().step_identify_prototype(ctx),
+         lambda ctx: data_digest(_data_paths(ctx)[0])),
+    Step("discrepancy", "Model discrepancy: find, name and add the missing effect (SPEC §7–9)",
+         _step_discrepancy, lambda ctx: [data_digest(p) for p in _data_paths(ctx)]),
+    Step("qc_paths", "Quarter car: W_k, frequency vs time domain, dissipation bound",
+         lambda ctx: _quarter_car_step("step_quarter_car_paths", ctx),
+         lambda ctx: [ctx.quick, ctx.inputs()]),
+    Step("qc_fig13", "Quarter car: frequency responses, no/min/max friction (paper Fig 13)",
+         lambda ctx: _quarter_car_step("step_fig13", ctx), _qc_inputs,
+         depends=("identification",)),
+    Step("qc_fig14", "Harvester force–velocity loops and equivalent damping (paper Fig 14)",
+         lambda ctx: _quarter_car_step("step_fig14", ctx), _qc_inputs,
+         depends=("identification",)),
+    Step("qc_fig15_16", "Class C at 100 km/h with equal damping slopes (paper Figs 15/16)",
+         lambda ctx: _quarter_car_step("step_fig15_16", ctx), _qc_inputs,
+         depends=("identification",)),
+    *_design_steps(),
+    Step("robust_design", "Design with friction in the loop (fast friction-aware path, "
+         "robust optimum, price of ignoring friction)", lambda ctx: _robust_step(ctx),
+         lambda ctx: _robust_inputs(ctx), depends=("design", "identification")),
+    Step("qc_fig21", "Power time history of the optimised design (paper Fig 21)",
+         lambda ctx: _quarter_car_step("step_fig21", ctx), _qc_inputs,
+         depends=("identification", "design")),
+    Step("identify_emps", "Friction identification on the real EMPS data (SPEC §9)",
+         lambda ctx: _identify_steps().step_identify_emps(ctx),
+         lambda ctx: data_digest(_data_paths(ctx)[1])),
+]
+
+#: Steps that only make sense on the embedded data (EMPS beside its published reference).
+EMBEDDED_ONLY = ("identify_emps",)
+
+
+def _data_paths(ctx: Context | None = None) -> list[Path]:
+    from ..datasets.embedded import embedded_data_dir
+    if ctx is not None and ctx.custom_data:
+        return [ctx.bench_dir]
+    return [embedded_data_dir("bench_prototype"), embedded_data_dir("emps")]
+
+
+def _write_tables(out: Path, key: str, markdown: str) -> list[Path]:
+    """Every Markdown table of a step's section as ``OUT/tables/<step>_<k>.csv``."""
+    import csv
+    import io
+    from .base import markdown_tables
+    paths = []
+    for k, table in enumerate(markdown_tables(markdown), start=1):
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerows(table)
+        path = out / "tables" / f"{key}_{k}.csv"
+        atomic_write_text(path, buf.getvalue())
+        paths.append(path)
+    return paths
+
+
+def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs: int = 2,
+              steps: list[Step] | None = None, log: Callable[[str], None] | None = None,
+              data_dir: str | Path | None = None, vehicle: str | Path | None = None) -> Path:
+    """Run the pipeline and write ``OUT/REPORT.md`` (every table also as
+    ``OUT/tables/<step>_<k>.csv``); returns its path.
+
+    Steps whose inputs did not change since a previous run in the same ``out_dir``
+    are taken from ``OUT/cache`` (logged as cached) after verifying each entry
+    (:class:`~.cache.StepCache`: digest, step, inputs, figures); one run per folder
+    (:func:`~ehsa_opt.utils.lock.output_lock`).  ``data_dir``: a user's bench
+    data directory instead of the embedded data (validated first); ``vehicle``: a
+    problem file whose ``preset`` / ``[vehicle]`` replaces the passenger car.
+    """
+    from ..utils.lock import output_lock
+    with output_lock(out_dir):
+        return _reproduce(out_dir, quick, jobs, steps, log, data_dir, vehicle)
+
+
+def _reproduce(out_dir: str | Path, quick: bool, jobs: int, steps: list[Step] | None,
+               log: Callable[[str], None] | None, data_dir: str | Path | None = None,
+               vehicle: str | Path | None = None) -> Path:
+    from .cache import StepCache, remove_stale_temp_files
+    from tqdm.auto import tqdm
+    log = log or tqdm.write  # prints above the progress bar
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    cache = StepCache(out, log)
+    for f in remove_stale_temp_files(out):  # we hold the lock: nobody else writes here
+        log(f"removed {f} (a partial write of an interrupted run)")
+    ctx = Context(out, quick, jobs, data_dir=None if data_dir is None else Path(data_dir),
+                  vehicle_file=None if vehicle is None else Path(vehicle))
+    if data_dir is not None:
+        ctx.bench()  # refuses bad data (file, row, fix) before any step runs
+    if vehicle is not None:
+        ctx.vehicle()
+    if steps is None:
+        steps = [s for s in STEPS if not (ctx.custom_data and s.key in EMBEDDED_ONLY)]
+    sections = []
+    hashes: dict[str, str] = {}
+    timings: list[tuple[str, str, float]] = []
+    code = code_digest()
+    t_all = time.perf_counter()
+    bar = progress_bar(total=len(steps), desc="reproduce", unit="step")
+    for n, step in enumerate(steps, start=1):
+        bar.set_postfix_str(step.key)
+        key = hash_json({"step": step.key, "version": __version__, "code": code, "quick": quick,
+                     "inputs": step.inputs(ctx), "depends": [hashes[d] for d in step.depends]})
+        hashes[step.key] = key
+        cached = cache.load(step.key, key)
+        if cached is not None:
+            log(f"[{n}/{len(steps)}] {step.title}: cached (hash {key}), not recomputed")
+            output = StepOutput(cached["markdown"], cached["figures"], cached["results"])
+            timings.append((step.title, "cached", float(cached.get("seconds", 0.0))))
+        else:
+            log(f"[{n}/{len(steps)}] {step.title} ...")
+            t0 = time.perf_counter()
+            output = step.run(ctx)
+            dt = time.perf_counter() - t0
+            # the results later steps see are those a resumed run would read back
+            stored = cache.store(step.key, key, {"markdown": output.markdown,
+                                                 "figures": output.figures,
+                                                 "results": output.results, "seconds": dt})
+            output = StepOutput(stored["markdown"], stored["figures"], stored["results"])
+            log(f"[{n}/{len(steps)}] {step.title}: done in {dt:.1f} s")
+            timings.append((step.title, "computed", dt))
+        bar.update(1)
+        ctx.results[step.key] = output.results
+        _write_tables(out, step.key, output.markdown)
+        sections.append(f"## {n}. {step.title}\n\n{output.markdown}")
+    bar.close()
+    rows = "\n".join(f"| {t} | {how} | {sec:.1f} |" for t, how, sec in timings)
+    sections.append("## Run log\n\n| step | this run | compute time (s) |\n|---|---|---|\n"
+                    + rows + "\n")
+    mode = "quick" if quick else "full"
+    head = ("# ehsa_opt reproduction report\n\nBowen, Viñolas & Olazagoitia (2019), *The "
+            "influence of friction parameters in a ball-screw energy-harvesting shock "
+            "absorber*, reproduced on "
+            + (f"the bench data in `{ctx.bench_dir}`" if ctx.custom_data else "the embedded data")
+            + (f" with the vehicle of `{ctx.vehicle_file}`" if ctx.vehicle_file else "")
+            + f" ({mode} mode, ehsa_opt {__version__}). Every table is also a CSV file in "
+            f"`tables/` (`<step>_<k>.csv`).\n\n")
+    report = out / "REPORT.md"
+    atomic_write_text(report, head + "\n".join(sections))
+    log(f"report written in {time.perf_counter() - t_all:.1f} s: {report}")
+    return report

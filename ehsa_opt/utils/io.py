@@ -1,0 +1,83 @@
+"""Atomic file writes (temporary file in the same folder, then rename): a reader never
+sees a half-written result, and an interrupted write leaves the old file intact.
+
+Files get the user's umask (``tempfile.mkstemp`` creates them 0600; they are chmod-ed to
+``0o666 & ~umask`` like any file ``open()`` creates).  :func:`atomic_write_json` writes
+standard JSON: non-finite floats become ``null`` (never a bare ``NaN``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+__all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "json_safe",
+           "current_umask"]
+
+
+def current_umask() -> int:
+    """The process umask, read without changing it where the OS allows."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    old = os.umask(0o022)
+    os.umask(old)
+    return old
+
+
+def _write(path: str | Path, data: bytes) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~current_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def atomic_write_text(path: str | Path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` via a temporary file, fsync and rename."""
+    _write(path, text.encode("utf-8"))
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` via a temporary file, fsync and rename."""
+    _write(path, bytes(data))
+
+
+def json_safe(obj: Any) -> Any:
+    """A copy of ``obj`` for standard JSON: non-finite floats → None, tuples → lists,
+    numpy scalars/arrays → Python numbers/lists."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, (str, int, bool)) or obj is None:
+        return obj
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if hasattr(obj, "tolist"):  # numpy arrays and scalars
+        return json_safe(obj.tolist())
+    try:
+        return json_safe(float(obj))
+    except (TypeError, ValueError):
+        return str(obj)
+
+
+def atomic_write_json(path: str | Path, obj: Any, indent: int | None = 1) -> None:
+    """Write ``obj`` as standard JSON (no NaN/Infinity: they become ``null``)."""
+    atomic_write_text(path, json.dumps(json_safe(obj), indent=indent, allow_nan=False))

@@ -1,0 +1,57 @@
+"""Worker processes die with their parent.
+
+:func:`die_with_parent` installs a fork hook: every child forked afterwards (the
+``fork``-context process pools of identify, discrepancy and sweep) asks the Linux kernel
+to send it SIGKILL when its parent dies (``prctl(PR_SET_PDEATHSIG)``), so a ``kill -9``
+of ``ehsa-opt`` leaves no orphaned workers.  Elsewhere a daemon thread in the child
+polls ``os.getppid()`` and exits when the parent has gone.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import sys
+import threading
+import time
+
+__all__ = ["die_with_parent"]
+
+_PR_SET_PDEATHSIG = 1
+_installed = False
+_forker = 0  # pid of the process that is forking (set just before each fork)
+
+
+def _watch(parent: int) -> None:
+    while True:
+        if os.getppid() != parent:
+            os._exit(1)
+        time.sleep(0.5)
+
+
+def _in_child(parent: int) -> None:
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):
+            threading.Thread(target=_watch, args=(parent,), daemon=True).start()
+    else:
+        threading.Thread(target=_watch, args=(parent,), daemon=True).start()
+    if os.getppid() != parent:  # the parent died before the prctl took effect
+        os._exit(1)
+
+
+def die_with_parent() -> None:
+    """Make every process forked from now on die when this process dies (idempotent)."""
+    global _installed
+    if _installed or not hasattr(os, "register_at_fork"):
+        return
+    _installed = True
+
+    def before() -> None:
+        global _forker
+        _forker = os.getpid()
+
+    os.register_at_fork(before=before, after_in_child=lambda: _in_child(_forker))

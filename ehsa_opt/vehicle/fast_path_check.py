@@ -1,0 +1,101 @@
+"""Validation of the friction-aware fast path against the time-domain simulation.
+
+The set (issue 14): designs × friction sets × roads.  Each road case (class, speed,
+seed) runs every design–friction pair in one batched time-domain call
+(:func:`~ehsa_opt.vehicle.simulate.simulate_quarter_car`, the reference) and in one
+vectorised fast-path call (:func:`~ehsa_opt.vehicle.equivalent.friction_metrics`);
+the relative errors of comfort, road holding, power and efficiency are tabulated.
+Used by ``benchmarks/friction_fast_path.py`` and the robust-design report step.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..physics.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams
+from .equivalent import friction_metrics
+from .simulate import RoadHoldingWarning, simulate_quarter_car
+
+__all__ = ["CHECK_METRICS", "RoadCase", "scaled_friction", "check_case", "summarise"]
+
+#: Metrics compared (fast path vs time domain).
+CHECK_METRICS: tuple[str, ...] = ("power_W", "efficiency", "comfort", "road_holding")
+
+
+@dataclass(frozen=True)
+class RoadCase:
+    """One road of the validation set."""
+
+    iso_class: str
+    speed_km_per_h: float
+    seed: int
+    length_m: float = 400.0
+
+    def road(self) -> RoadParams:
+        return RoadParams(self.iso_class, self.speed_km_per_h, length_m=self.length_m,
+                          seed=self.seed)
+
+
+def scaled_friction(friction: FrictionParams | Mapping[str, float], scale: float
+                    ) -> FrictionParams:
+    """``friction`` with its force/torque levels and viscous terms × ``scale``
+    (breakaway velocities unchanged)."""
+    values = friction.__dict__ if isinstance(friction, FrictionParams) else dict(friction)
+    return FrictionParams(**{k: (v * scale if "velocity" not in k else v)
+                             for k, v in values.items()})
+
+
+def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[HarvesterParams],
+               frictions: Sequence[FrictionParams], *, n_freq: int = 256
+               ) -> dict[str, np.ndarray | float]:
+    """Fast path vs time domain for every (harvester, friction) pair on one road.
+
+    Returns
+    -------
+    dict
+        ``fast_<metric>``, ``time_<metric>``, ``error_<metric>`` (relative, signed)
+        arrays over the pairs (harvester-major), ``harvester_index``,
+        ``friction_index``, and ``fast_wall_s`` / ``time_wall_s``.
+    """
+    hs = [h for h in harvesters for _ in frictions]
+    fs = [f for _ in harvesters for f in frictions]
+    road = case.road()
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RoadHoldingWarning)
+        sim = simulate_quarter_car(vehicle, hs, fs, road, keep_series=False)
+    t_time = time.perf_counter() - t0
+    fields = ("motor_inertia_gcm2", "screw_inertia_gcm2", "lead_mm_per_rev",
+              "internal_resistance_ohm", "voltage_constant_Vs_per_rad",
+              "torque_constant_Nm_per_A", "inductance_H", "load_ohm")
+    design = {k: np.array([getattr(h, k) for h in hs]) for k in fields}
+    t0 = time.perf_counter()
+    fast = friction_metrics(vehicle, road, design, fs, n_freq=n_freq)
+    t_fast = time.perf_counter() - t0
+    out: dict[str, np.ndarray | float] = {
+        "harvester_index": np.repeat(np.arange(len(harvesters)), len(frictions)),
+        "friction_index": np.tile(np.arange(len(frictions)), len(harvesters)),
+        "fast_wall_s": t_fast, "time_wall_s": t_time, "n_pairs": float(len(hs))}
+    for k in CHECK_METRICS:
+        td = np.asarray(sim.metrics[k], float)
+        fp = np.asarray(fast[k], float)
+        out[f"fast_{k}"], out[f"time_{k}"] = fp, td
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[f"error_{k}"] = np.where(td != 0.0, fp / td - 1.0, fp - td)
+    return out
+
+
+def summarise(results: Sequence[Mapping[str, np.ndarray | float]]) -> dict[str, dict]:
+    """Worst and median |relative error| per metric over a list of :func:`check_case`
+    results."""
+    summary = {}
+    for k in CHECK_METRICS:
+        e = np.abs(np.concatenate([np.asarray(r[f"error_{k}"]) for r in results]))
+        summary[k] = {"worst": float(np.max(e)), "median": float(np.median(e)),
+                      "n": int(e.size)}
+    return summary

@@ -1,0 +1,389 @@
+"""The paper's §4.1 quarter-car studies (Figs 13–16) and Fig 21, as functions.
+
+Each study returns a small result object (with ``.plot()`` delegating to
+:mod:`ehsa_opt.plots.quarter_car`).  All heavy lifting is the compiled batch
+simulation of :mod:`ehsa_opt.vehicle.simulate` (designs × friction cases in one call).
+
+Friction cases (:func:`friction_cases`): "none", "min", "max".  They come from
+the identification results when given (``friction_min`` / ``friction_max``
+mappings of the eight friction names); otherwise, until identification lands,
+"max" is the embedded bench data set's true friction and "min" that friction
+scaled by 0.3 (forces, torques and viscous coefficients; breakaway velocities
+kept) — labelled as such in every output.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+from scipy import signal
+
+from ..datasets.embedded import embedded_data_dir, load_truth
+from ..physics.bench_model import BenchModel
+from ..physics.bench_sim import simulate_bench
+from ..physics.motion import SineMotion
+from ..physics.params import (
+    FRICTION_NAMES,
+    FrictionParams,
+    HarvesterParams,
+    RoadParams,
+    VehicleParams,
+)
+from ..physics.quarter_car_model import PARAM_NAMES, STATE_NAMES, param_vector
+from .road import road_psd_m3
+from .simulate import QuarterCarSimulation, simulate_batch, simulate_quarter_car
+
+__all__ = ["FrictionCases", "friction_cases", "paper_optimum_harvester",
+           "FrequencyResponseStudy", "stepped_sine_response", "ForceVelocityStudy",
+           "force_velocity_loops", "RoadStudy", "road_study", "equivalent_damping_slope",
+           "PAPER_FIG14_RANGES", "MIN_FRICTION_SCALE"]
+
+#: The paper's equivalent damping ranges of Fig 14 (min–max friction), N s/m.
+PAPER_FIG14_RANGES = {"open circuit": (293.0, 2306.0), "short circuit": (2862.0, 6208.0)}
+
+#: Scale of the "min" friction when identification results are absent.
+MIN_FRICTION_SCALE = 0.3
+
+
+@dataclass(frozen=True)
+class FrictionCases:
+    """No / min / max friction and where they come from."""
+
+    cases: dict[str, FrictionParams | None]
+    source: str
+
+
+def friction_cases(identification: Mapping[str, Any] | None = None,
+                   method: str = "data") -> FrictionCases:
+    """The study's friction cases.
+
+    Parameters
+    ----------
+    identification : mapping, optional
+        ``ctx.results["identification"]``; used when it has ``friction_min`` and
+        ``friction_max`` (mappings of the eight friction names, or sequences in
+        :data:`~ehsa_opt.physics.params.FRICTION_NAMES` order): the data-supported sets
+        of :mod:`ehsa_opt.estimation.bounds`.
+    method : {"data", "paper"}
+        "paper": the per-parameter min/max over the tests (``paper_friction_min`` /
+        ``paper_friction_max``), the paper's method, which over-states the spread.
+    """
+    if method not in ("data", "paper"):
+        raise ValueError(f"friction_cases: method must be 'data' or 'paper', got {method!r}")
+    lo, hi = (("friction_min", "friction_max") if method == "data"
+              else ("paper_friction_min", "paper_friction_max"))
+    if identification and identification.get(lo) and identification.get(hi):
+        def build(values: Any) -> FrictionParams:
+            if isinstance(values, Mapping):
+                return FrictionParams(**{k: float(values[k]) for k in FRICTION_NAMES})
+            return FrictionParams.from_array(values)  # sequence in FRICTION_NAMES order
+        label = ("identified, data-supported: rod friction at/below and at/above the envelope "
+                 "of the per-test fits (ehsa_opt.estimation.bounds)"
+                 if method == "data" and "friction_method" in identification else
+                 "identified, paper's method: per-parameter min/max over the bench tests")
+        return FrictionCases({"none": None, "min": build(identification[lo]),
+                              "max": build(identification[hi])}, label)
+    truth = FrictionParams(**load_truth(embedded_data_dir())["friction"])
+    scaled = {k: (v if "velocity" in k else MIN_FRICTION_SCALE * v)
+              for k, v in truth.as_dict().items()}
+    return FrictionCases({"none": None, "min": FrictionParams(**scaled), "max": truth},
+                         "embedded data set's TRUE friction as 'max' and "
+                         f"×{MIN_FRICTION_SCALE} of it as 'min' (identification not available)")
+
+
+def paper_optimum_harvester() -> HarvesterParams:
+    """The paper's goal-attainment optimum (§4.2): J_t = 250 g cm², k_n = 29.8 rpm/V,
+    p = 7 mm/rev, R_e = 75 Ω (the design the paper's Fig 21 uses)."""
+    return HarvesterParams.from_design(250.0, 7.0, 29.8, 75.0)
+
+
+def _fundamental(sig: np.ndarray, t: np.ndarray, f: float) -> np.ndarray:
+    """Amplitude of the component at ``f`` over whole cycles (last axis)."""
+    w = 2.0 * math.pi * f
+    c = 2.0 * np.mean(sig * np.cos(w * t), axis=-1)
+    s = 2.0 * np.mean(sig * np.sin(w * t), axis=-1)
+    return np.hypot(c, s)
+
+
+# --------------------------------------------------------------------------- Fig 13
+@dataclass
+class FrequencyResponseStudy:
+    """Stepped-sine responses (paper Fig 13).
+
+    Attributes
+    ----------
+    frequencies_hz : ndarray (F,)
+    loads_ohm : list of float (L,)
+    cases : list of str (C,)
+    voltage_amplitude_V : ndarray (C, L, F)
+        Fundamental amplitude of the generator voltage V_g = R_e i.
+    sprung_transmissibility : ndarray (C, L, F)
+        Fundamental amplitude of x2 divided by the road amplitude.
+    amplitude_m : float
+        Road sine amplitude (constant-displacement input), or the amplitude at 1 Hz of a
+        constant-velocity input.
+    velocity_amplitude_m_per_s : float or None
+        Road velocity amplitude of a constant-velocity input (displacement
+        v / (2π f), falling with frequency like a real road); None = constant displacement.
+    """
+
+    frequencies_hz: np.ndarray
+    loads_ohm: list[float]
+    cases: list[str]
+    voltage_amplitude_V: np.ndarray
+    sprung_transmissibility: np.ndarray
+    amplitude_m: float
+    friction_source: str
+    vehicle: VehicleParams
+    stats: dict = field(default_factory=dict)
+    velocity_amplitude_m_per_s: float | None = None
+
+    def plot(self) -> Any:
+        from ..plots.quarter_car import fig13_frequency_response
+        return fig13_frequency_response(self)
+
+
+def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
+                          frictions: FrictionCases, loads_ohm: Sequence[float],
+                          frequencies_hz: Sequence[float], amplitude_m: float = 0.01,
+                          sample_rate_hz: float = 1000.0, settle_cycles: float = 6.0,
+                          settle_min_s: float = 3.0, measure_cycles: int = 4,
+                          velocity_amplitude_m_per_s: float | None = None
+                          ) -> FrequencyResponseStudy:
+    """Generator voltage and sprung-mass displacement vs road sine frequency.
+
+    With ``velocity_amplitude_m_per_s`` the road is a sine of constant *velocity*
+    amplitude (displacement v / (2π f): it falls with frequency like a road's, ISO 8608
+    slope −1 in velocity terms flat), so the voltages stay physical at high frequency;
+    otherwise the displacement amplitude is ``amplitude_m`` at every frequency.
+
+    For each frequency one compiled batch simulates every (friction case, load)
+    pair: the road is x0 = A sin(2π f t) (amplitude ramped in over the first half
+    of the settling time); after max(settle_cycles, settle_min_s)
+    the fundamental amplitudes over ``measure_cycles`` whole cycles are taken
+    (friction makes the system nonlinear, hence simulation, not Eqs 2–3).
+    """
+    cases = list(frictions.cases)
+    pairs = [(c, r) for c in cases for r in loads_ohm]
+    params = np.stack([param_vector(vehicle, harvester.replace(load_ohm=float(r)),
+                                    frictions.cases[c]) for c, r in pairs], axis=1)
+    freqs = np.asarray(frequencies_hz, dtype=float)
+    volt = np.empty((len(cases), len(loads_ohm), freqs.size))
+    trans = np.empty_like(volt)
+    h = 1.0 / sample_rate_hz
+    steps = 0
+    re = params[PARAM_NAMES.index("load_ohm")]
+    for k, f in enumerate(freqs):
+        t_settle = max(settle_cycles / f, settle_min_s)
+        n_cyc = max(1, int(round(t_settle * f)))
+        t_settle = n_cyc / f
+        n_total = int(round((t_settle + measure_cycles / f) * sample_rate_hz))
+        t = np.arange(n_total + 1) * h
+        # amplitude ramped in over the first half of the settling time (raised cosine):
+        # the body mode is then hardly excited by the start
+        t_ramp = 0.5 * t_settle
+        env = np.where(t < t_ramp, 0.5 * (1.0 - np.cos(math.pi * t / t_ramp)), 1.0)
+        amp = (amplitude_m if velocity_amplitude_m_per_s is None
+               else velocity_amplitude_m_per_s / (2.0 * math.pi * f))
+        x0 = amp * env * np.sin(2.0 * math.pi * f * t)
+        zt, _, _ = simulate_batch(params, x0, h)
+        steps += n_total * len(pairs)
+        tt = t[1:]
+        keep = tt > t_settle + 0.5 * h
+        tk = tt[keep]
+        # use whole cycles only
+        n_keep = int(math.floor((tk[-1] - tk[0] + h) * f + 1e-9) / f * sample_rate_hz)
+        tk = tk[:n_keep]
+        x2 = zt[:, STATE_NAMES.index("x2_m"), keep][:, :n_keep]
+        vg = re[:, None] * zt[:, STATE_NAMES.index("current_A"), keep][:, :n_keep]
+        volt[:, :, k] = _fundamental(vg, tk, f).reshape(len(cases), len(loads_ohm))
+        trans[:, :, k] = (_fundamental(x2, tk, f) / amp).reshape(len(cases),
+                                                                  len(loads_ohm))
+    a_ref = (amplitude_m if velocity_amplitude_m_per_s is None
+             else velocity_amplitude_m_per_s / (2.0 * math.pi))
+    return FrequencyResponseStudy(freqs, [float(r) for r in loads_ohm], cases, volt, trans,
+                                  a_ref, frictions.source, vehicle,
+                                  {"step_designs": steps}, velocity_amplitude_m_per_s)
+
+
+# --------------------------------------------------------------------------- Fig 14
+@dataclass
+class ForceVelocityStudy:
+    """Force–velocity loops of the harvester (paper Fig 14).
+
+    Attributes
+    ----------
+    loops : dict
+        ``(circuit, case) -> (velocity m/s, force N)`` over one steady cycle.
+    equivalent_damping_Ns_per_m : dict
+        ``(circuit, case) -> c_eq = ∮F dx / (π ω A²)`` (energy-equivalent).
+    """
+
+    loops: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]]
+    equivalent_damping_Ns_per_m: dict[tuple[str, str], float]
+    amplitude_m: float
+    frequency_hz: float
+    friction_source: str
+
+    def plot(self) -> Any:
+        from ..plots.quarter_car import fig14_force_velocity
+        return fig14_force_velocity(self)
+
+
+def force_velocity_loops(harvester: HarvesterParams, frictions: FrictionCases,
+                         amplitude_m: float = 0.015, frequency_hz: float = 1.5,
+                         samples_per_cycle: int = 400) -> ForceVelocityStudy:
+    """Bench-like sine stroke of the harvester, open (R_e → ∞) and short circuit (R_e = 0).
+
+    Uses the rigid :class:`~ehsa_opt.physics.bench_model.BenchModel` (same harvester
+    physics as the quarter car).  Open circuit is R_e = 10⁹ Ω (i ≈ 0).
+    """
+    model = BenchModel(harvester)
+    loops, ceq = {}, {}
+    w = 2.0 * math.pi * frequency_hz
+    t = np.linspace(0.0, 2.0 / frequency_hz, 2 * samples_per_cycle + 1)
+    motion = SineMotion(amplitude_m, frequency_hz)
+    for circuit, load in (("open circuit", 1e9), ("short circuit", 0.0)):
+        for case in ("min", "max"):
+            p = model.param_vector(load, frictions.cases[case])
+            sim = simulate_bench(model, motion, p, t)
+            sl = slice(samples_per_cycle, None)  # second cycle (steady)
+            v, f, x = sim.velocity_m_per_s[sl], sim.force_N[sl], sim.displacement_m[sl]
+            work = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x)))
+            loops[(circuit, case)] = (v, f)
+            ceq[(circuit, case)] = work / (math.pi * w * amplitude_m ** 2)
+    return ForceVelocityStudy(loops, ceq, amplitude_m, frequency_hz, frictions.source)
+
+
+# --------------------------------------------------------------------------- Figs 15/16/21
+#: Series :func:`equivalent_damping_slope` needs (``keep_series`` of the simulation).
+_SLOPE_SERIES = ("damper_force_N", "stroke_velocity_m_s")
+
+
+def equivalent_damping_slope(sim: QuarterCarSimulation) -> np.ndarray:
+    """Least-squares slope through the origin of the non-inertial damper force vs
+    stroke velocity, Σ F v / Σ v² (N s/m), per design: the 'damping slope'."""
+    f = sim.series["damper_force_N"]
+    v = sim.series["stroke_velocity_m_s"]
+    return np.sum(f * v, axis=1) / np.sum(v * v, axis=1)
+
+
+@dataclass
+class RoadStudy:
+    """Road simulation per friction case (paper Figs 15/16, 21).
+
+    Attributes
+    ----------
+    sim : QuarterCarSimulation
+        One design per case (order of ``cases``), series kept.
+    cases : list of str
+    loads_ohm : list of float
+        Load per case (re-tuned when ``retuned``).
+    slopes_Ns_per_m : ndarray
+        Equivalent damping slope per case.
+    target_slope_Ns_per_m : float or None
+    reachable : list of bool
+        Whether the re-tuning reached the target slope.
+    road_psd : dict
+        ``n_cycles_per_m``, ``synth_m3`` (Welch estimate), ``target_m3``.
+    stroke_velocity_psd : dict
+        ``f_hz`` and per-case PSD, (m/s)²/Hz.
+    """
+
+    sim: QuarterCarSimulation
+    cases: list[str]
+    loads_ohm: list[float]
+    slopes_Ns_per_m: np.ndarray
+    target_slope_Ns_per_m: float | None
+    reachable: list[bool]
+    road_psd: dict
+    stroke_velocity_psd: dict
+    friction_source: str
+    title: str = ""
+
+    @property
+    def average_power_W(self) -> np.ndarray:
+        return self.sim.metrics["power_W"]
+
+    def power_drop_percent(self) -> dict[str, float]:
+        """Average power change of each case against 'none', %."""
+        p = self.average_power_W
+        ref = p[self.cases.index("none")]
+        return {c: 100.0 * (p[i] / ref - 1.0) for i, c in enumerate(self.cases)}
+
+    def plot(self) -> Any:
+        from ..plots.quarter_car import fig15_road_study
+        return fig15_road_study(self)
+
+    def plot_power(self) -> Any:
+        from ..plots.quarter_car import fig21_power_history
+        return fig21_power_history(self)
+
+
+def road_study(vehicle: VehicleParams, harvester: HarvesterParams, frictions: FrictionCases,
+               road: RoadParams, *, retune: bool = True, n_loads: int = 24,
+               max_load_factor: float = 200.0, settle_s: float = 2.0,
+               sample_rate_hz: float = 1000.0, title: str = "") -> RoadStudy:
+    """Simulate each friction case on ``road``; optionally re-tune R_e per case.
+
+    Re-tuning (paper Figs 15/16): the frictionless case keeps ``harvester.load_ohm``
+    and sets the target damping slope (:func:`equivalent_damping_slope`); each
+    friction case evaluates ``n_loads`` loads from that value up to
+    ``max_load_factor`` times it in one batch and interpolates (log R_e) to the
+    load whose slope matches.  If friction alone already exceeds the target the
+    largest load is used and ``reachable`` is False.
+    """
+    cases = list(frictions.cases)
+    r0 = harvester.load_ohm
+    loads = {c: r0 for c in cases}
+    reachable = [True] * len(cases)
+    target = None
+    if retune:
+        grid = np.geomspace(r0, r0 * max_load_factor, n_loads)
+        hs, fs_ = [harvester], [None]
+        for c in cases:
+            if frictions.cases[c] is None:
+                continue
+            hs += [harvester.replace(load_ohm=float(r)) for r in grid]
+            fs_ += [frictions.cases[c]] * n_loads
+        scan = simulate_quarter_car(vehicle, hs, [f or FrictionParams() for f in fs_], road,
+                                    settle_s=settle_s, sample_rate_hz=sample_rate_hz,
+                                    warn=False, keep_series=_SLOPE_SERIES)
+        slopes = equivalent_damping_slope(scan)
+        target = float(slopes[0])
+        j = 1
+        for i, c in enumerate(cases):
+            if frictions.cases[c] is None:
+                continue
+            s = slopes[j:j + n_loads]  # decreasing with the load
+            j += n_loads
+            if s[-1] > target:
+                loads[c], reachable[i] = float(grid[-1]), False
+            elif s[0] < target:
+                loads[c] = float(grid[0])
+            else:
+                k = int(np.flatnonzero(s <= target)[0])
+                x0_, x1_ = math.log(grid[k - 1]), math.log(grid[k])
+                frac = (s[k - 1] - target) / (s[k - 1] - s[k])
+                loads[c] = float(math.exp(x0_ + frac * (x1_ - x0_)))
+    hs = [harvester.replace(load_ohm=loads[c]) for c in cases]
+    fr = [frictions.cases[c] or FrictionParams() for c in cases]
+    sim = simulate_quarter_car(vehicle, hs, fr, road, settle_s=settle_s,
+                               sample_rate_hz=sample_rate_hz, warn=False, keep_series=True)
+    slopes = equivalent_damping_slope(sim)
+    # PSDs: road (spatial, Welch) and stroke velocity (temporal, Welch)
+    v = road.speed_m_per_s
+    dx = v / sample_rate_hz
+    nper = min(sim.road_m.size, 8192)
+    n_sp, g_sp = signal.welch(sim.road_m, fs=1.0 / dx, nperseg=nper)
+    sel = n_sp > 0
+    road_psd = {"n_cycles_per_m": n_sp[sel], "synth_m3": g_sp[sel],
+                "target_m3": road_psd_m3(n_sp[sel], road.iso_class)}
+    f_v, p_v = signal.welch(sim.series["stroke_velocity_m_s"], fs=sample_rate_hz,
+                            nperseg=min(sim.road_m.size, 4096), axis=-1)
+    return RoadStudy(sim, cases, [loads[c] for c in cases], slopes, target, reachable,
+                     road_psd, {"f_hz": f_v, "psd": p_v}, frictions.source, title)
+

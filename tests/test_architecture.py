@@ -1,0 +1,146 @@
+"""The package's layout keeps its promises (docs/architecture.md): no import cycle,
+lower rooms never import higher ones, no module over 600 lines, no collocation/IPOPT
+builder outside the estimation room, no pickle loads of output files."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parent.parent / "ehsa_opt"
+
+#: Rooms from the bottom up; a module may import its own room and rooms below it.
+ROOMS = ["utils", "physics", "datasets", "estimation", "vehicle", "design", "plots",
+         "pipeline", "cli"]
+
+
+def module_name(path: Path) -> str:
+    rel = path.relative_to(PKG.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Edges module -> imported ehsa_opt module, from every import statement (also the
+    ones inside functions), except imports of ``ehsa_opt.plots`` (results delegate
+    ``.plot()`` to it lazily)."""
+    modules = {module_name(p): p for p in PKG.rglob("*.py")}
+    graph: dict[str, set[str]] = {m: set() for m in modules}
+    for mod, path in modules.items():
+        is_pkg = path.name == "__init__.py"
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            targets: list[str] = []
+            if isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = mod.split(".") if is_pkg else mod.split(".")[:-1]
+                    base = base[: len(base) - node.level + 1]
+                    stem = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    stem = node.module or ""
+                for alias in node.names:
+                    cand = f"{stem}.{alias.name}"
+                    targets.append(cand if cand in modules else stem)
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            for t in targets:
+                while t and t not in modules:
+                    t = t.rpartition(".")[0]
+                if t and t != mod and not t.startswith("ehsa_opt.plots"):
+                    graph[mod].add(t)
+    return graph
+
+
+def room(mod: str) -> str | None:
+    parts = mod.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def test_no_import_cycles() -> None:
+    graph = import_graph()
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    cycles: list[list[str]] = []
+    counter = [0]
+
+    def strong(v: str) -> None:  # Tarjan
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                strong(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(sorted(comp))
+
+    for v in graph:
+        if v not in index:
+            strong(v)
+    assert not cycles, f"import cycles: {cycles}"
+
+
+def test_rooms_import_downwards_only() -> None:
+    bad = []
+    for mod, targets in import_graph().items():
+        r = room(mod)
+        if r not in ROOMS:
+            continue
+        for t in targets:
+            rt = room(t)
+            if rt in ROOMS and ROOMS.index(rt) > ROOMS.index(r):
+                bad.append(f"{mod} -> {t}")
+    assert not bad, "a lower room imports a higher one:\n" + "\n".join(bad)
+
+
+def test_every_module_is_in_a_room() -> None:
+    stray = [m for m in import_graph() if room(m) is not None and room(m) not in ROOMS
+             and m.count(".") >= 1 and m.split(".")[1] not in ("__main__",)]
+    assert not stray, f"modules outside the rooms of docs/architecture.md: {stray}"
+
+
+@pytest.mark.parametrize("path", sorted(PKG.rglob("*.py")),
+                         ids=lambda p: str(p.relative_to(PKG)))
+def test_module_size(path: Path) -> None:
+    n = len(path.read_text(encoding="utf-8").splitlines())
+    assert n <= 600, f"{path.relative_to(PKG)} has {n} lines (limit 600): split it by concern"
+
+
+def test_collocation_only_in_estimation() -> None:
+    offenders = [str(p.relative_to(PKG)) for p in PKG.rglob("*.py")
+                 if "nlpsol(" in p.read_text(encoding="utf-8")
+                 and p.relative_to(PKG).parts[0] != "estimation"]
+    assert not offenders, f"IPOPT/nlpsol builders outside ehsa_opt/estimation: {offenders}"
+
+
+
+
+def test_no_pickle_loads_or_eval() -> None:
+    """No module can run code from a file a user may receive: no ``pickle.load(s)`` and no
+    Python ``eval(`` (CasADi's ``Callback.eval`` method and ``def eval`` are not it)."""
+    import re
+    pattern = re.compile(r"pickle\.loads?\(|(?<![.\w])(?<!def )eval\(")
+    offenders = []
+    for p in sorted(PKG.rglob("*.py")):
+        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), start=1):
+            code = line.split("#", 1)[0]
+            if pattern.search(code):
+                offenders.append(f"{p.relative_to(PKG)}:{n}: {line.strip()}")
+    assert not offenders, "code-executing loads:\n" + "\n".join(offenders)
