@@ -348,7 +348,8 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .pipeline.reproduce import reproduce
     report = reproduce(out_dir=args.out, quick=args.quick, jobs=args.jobs,
-                       data_dir=args.data, vehicle=args.vehicle)
+                       data_dir=args.data, vehicle=args.vehicle,
+                       friction_bounds=args.friction_bounds)
     print(f"report: {report}")
     return 0
 
@@ -540,6 +541,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--vehicle", default=None, metavar="PROBLEM.toml",
                    help="problem file whose preset / [vehicle] is the vehicle of the studies "
                         "and the design (default: passenger car)")
+    r.add_argument("--friction-bounds", choices=("data", "paper"), default="data",
+                   help="min/max friction sets of the studies and the design: 'data' = the "
+                        "envelope of the rod friction the data support (default), 'paper' = the "
+                        "paper's per-parameter min/max over the tests (over-states the spread)")
     r.add_argument("--quick", action="store_true", help="fewer starts, shorter roads (minutes)")
     r.add_argument("--out", default="results/latest", help="output folder (default results/latest)")
     r.add_argument("--jobs", type=_POSITIVE, default=2, help="parallel processes (default 2)")

@@ -43,3 +43,27 @@ def test_changed_inputs_invalidate_the_cache(tmp_path):
     reproduce(tmp_path, steps=changed, log=lambda m: None)
     # step one's inputs changed, and step two depends on it: both recomputed
     assert calls == ["one", "two", "one", "two"]
+
+
+def test_friction_bounds_choice_reruns_only_what_uses_the_friction_sets(tmp_path):
+    """--friction-bounds paper reaches the steps downstream of the identification
+    (they see ctx.friction_bounds) and re-runs them; the identification itself is reused."""
+    seen = []
+
+    def ident(ctx):
+        seen.append(("identification", ctx.friction_bounds))
+        return StepOutput("identified", [], {"value": 1})
+
+    def study(ctx):
+        seen.append(("study", ctx.friction_bounds))
+        return StepOutput(f"bounds = {ctx.friction_bounds}", [], {})
+
+    steps = [Step("identification", "Identification", ident),
+             Step("study", "A study", study, depends=("identification",))]
+    reproduce(tmp_path, steps=steps, log=lambda m: None)
+    report = reproduce(tmp_path, steps=steps, log=lambda m: None, friction_bounds="paper")
+    assert seen == [("identification", "data"), ("study", "data"), ("study", "paper")]
+    text = report.read_text()
+    assert "bounds = paper" in text and "paper's per-parameter method" in text
+    with pytest.raises(ValueError, match="friction_bounds must be one of data, paper"):
+        reproduce(tmp_path / "x", steps=steps, friction_bounds="widest")

@@ -61,14 +61,15 @@ DESIGN_KEYS: tuple[str, ...] = tuple(
 _CASE_KEYS = ("vehicle", "iso_class", "speed_km_per_h", "friction")
 
 
-def default_friction_sets(identification: Mapping[str, Any] | None = None
-                          ) -> tuple[dict[str, FrictionParams], str]:
+def default_friction_sets(identification: Mapping[str, Any] | None = None,
+                          method: str = "data") -> tuple[dict[str, FrictionParams], str]:
     """Friction sets 'min' and 'max' and a note on where they come from
     (:func:`ehsa_opt.vehicle.studies.friction_cases`: the identification step's bounds
-    when given, else the embedded data set's true friction as 'max' and a scaled
-    copy as 'min', labelled)."""
+    when given — ``method`` "data" (data-supported) or "paper" (per-parameter) — else
+    the embedded data set's true friction as 'max' and a scaled copy as 'min',
+    labelled)."""
     from ..vehicle.studies import friction_cases
-    fc = friction_cases(identification)
+    fc = friction_cases(identification, method)
     return {k: v for k, v in fc.cases.items() if v is not None}, fc.source
 
 

@@ -11,7 +11,10 @@ from pathlib import Path
 from typing import Any, Callable
 
 __all__ = ["Step", "StepOutput", "Context", "hash_json", "code_digest", "data_digest",
-           "markdown_tables"]
+           "markdown_tables", "FRICTION_BOUNDS"]
+
+#: Values of :attr:`Context.friction_bounds` (``reproduce --friction-bounds``).
+FRICTION_BOUNDS = ("data", "paper")
 
 
 @dataclass
@@ -45,6 +48,10 @@ class Context:
     vehicle_file : Path or None
         A problem file whose ``preset`` / ``[vehicle]`` is the vehicle of the §4 studies
         and of the design (``reproduce --vehicle``); None = the paper's passenger car.
+    friction_bounds : {"data", "paper"}
+        Which identified min/max friction sets drive the §4 studies and the design
+        (``reproduce --friction-bounds``): "data" = the data-supported envelope of the rod
+        friction (default), "paper" = the paper's per-parameter min/max over the tests.
     """
 
     out_dir: Path
@@ -53,7 +60,13 @@ class Context:
     results: dict[str, dict] = field(default_factory=dict)
     data_dir: Path | None = None
     vehicle_file: Path | None = None
+    friction_bounds: str = "data"
     _bench: Any = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.friction_bounds not in FRICTION_BOUNDS:
+            raise ValueError(f"friction_bounds must be one of {', '.join(FRICTION_BOUNDS)}, "
+                             f"got {self.friction_bounds!r}")
 
     @property
     def custom_data(self) -> bool:

@@ -263,7 +263,8 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
     if ga is None:
         from ..design.optimize import optimize
         ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")["design"]
-    sets, source = default_friction_sets(ctx.results.get("identification"))
+    sets, source = default_friction_sets(ctx.results.get("identification"),
+                                           ctx.friction_bounds)
     speeds = (30.0, 70.0, 100.0, 130.0) if ctx.quick else (30.0, 50.0, 70.0, 90.0, 100.0,
                                                             110.0, 130.0)
     length = 300.0 if ctx.quick else 1000.0

@@ -110,7 +110,7 @@ def step_quarter_car_paths(ctx: Context) -> StepOutput:
 def step_fig13(ctx: Context) -> StepOutput:
     if (na := _not_applicable(ctx)) is not None:
         return na
-    fc = friction_cases(ctx.results.get("identification"))
+    fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
     # log grid plus points around the body (~1.1 Hz) and wheel-hop (~8 Hz) modes, so the
     # resonances are resolved in quick mode too
     freqs = np.unique(np.round(np.concatenate([
@@ -155,7 +155,7 @@ def step_fig13(ctx: Context) -> StepOutput:
 def step_fig14(ctx: Context) -> StepOutput:
     if (na := _not_applicable(ctx)) is not None:
         return na
-    fc = friction_cases(ctx.results.get("identification"))
+    fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
     study = force_velocity_loops(ctx.harvester(), fc)
     rel = "figures/fig14_force_velocity.png"
     plots.save(study.plot(), ctx.out_dir / rel)
@@ -198,7 +198,7 @@ def _compare_ranges(res: dict) -> str:
 
 
 def _road_step(ctx: Context, preset: str, fig: str, load: float) -> tuple[str, list[str], dict]:
-    fc = friction_cases(ctx.results.get("identification"))
+    fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
     vehicle, preset = ((VehicleParams.preset(preset), preset) if preset != "user"
                        else ctx.vehicle())
     preset = preset.replace(" ", "_").replace(".", "_")
@@ -253,7 +253,7 @@ def step_fig15_16(ctx: Context) -> StepOutput:
 def step_fig21(ctx: Context) -> StepOutput:
     if (na := _not_applicable(ctx)) is not None:
         return na
-    fc = friction_cases(ctx.results.get("identification"))
+    fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
     design = ctx.results.get("design", {}).get("optimum_harvester")
     if design:
         h = HarvesterParams(**design)

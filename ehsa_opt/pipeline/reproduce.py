@@ -141,7 +141,8 @@ def _write_tables(out: Path, key: str, markdown: str) -> list[Path]:
 
 def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs: int = 2,
               steps: list[Step] | None = None, log: Callable[[str], None] | None = None,
-              data_dir: str | Path | None = None, vehicle: str | Path | None = None) -> Path:
+              data_dir: str | Path | None = None, vehicle: str | Path | None = None,
+              friction_bounds: str = "data") -> Path:
     """Run the pipeline and write ``OUT/REPORT.md`` (every table also as
     ``OUT/tables/<step>_<k>.csv``); returns its path.
 
@@ -150,16 +151,18 @@ def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs:
     (:class:`~.cache.StepCache`: digest, step, inputs, figures); one run per folder
     (:func:`~ehsa_opt.utils.lock.output_lock`).  ``data_dir``: a user's bench
     data directory instead of the embedded data (validated first); ``vehicle``: a
-    problem file whose ``preset`` / ``[vehicle]`` replaces the passenger car.
+    problem file whose ``preset`` / ``[vehicle]`` replaces the passenger car;
+    ``friction_bounds``: "data" (data-supported min/max friction sets, default) or
+    "paper" (the paper's per-parameter min/max) for the §4 studies and the design.
     """
     from ..utils.lock import output_lock
     with output_lock(out_dir):
-        return _reproduce(out_dir, quick, jobs, steps, log, data_dir, vehicle)
+        return _reproduce(out_dir, quick, jobs, steps, log, data_dir, vehicle, friction_bounds)
 
 
 def _reproduce(out_dir: str | Path, quick: bool, jobs: int, steps: list[Step] | None,
                log: Callable[[str], None] | None, data_dir: str | Path | None = None,
-               vehicle: str | Path | None = None) -> Path:
+               vehicle: str | Path | None = None, friction_bounds: str = "data") -> Path:
     from .cache import StepCache, remove_stale_temp_files
     from tqdm.auto import tqdm
     log = log or tqdm.write  # prints above the progress bar
@@ -169,7 +172,8 @@ def _reproduce(out_dir: str | Path, quick: bool, jobs: int, steps: list[Step] | 
     for f in remove_stale_temp_files(out):  # we hold the lock: nobody else writes here
         log(f"removed {f} (a partial write of an interrupted run)")
     ctx = Context(out, quick, jobs, data_dir=None if data_dir is None else Path(data_dir),
-                  vehicle_file=None if vehicle is None else Path(vehicle))
+                  vehicle_file=None if vehicle is None else Path(vehicle),
+                  friction_bounds=friction_bounds)
     if data_dir is not None:
         ctx.bench()  # refuses bad data (file, row, fix) before any step runs
     if vehicle is not None:
@@ -178,14 +182,20 @@ def _reproduce(out_dir: str | Path, quick: bool, jobs: int, steps: list[Step] | 
         steps = [s for s in STEPS if not (ctx.custom_data and s.key in EMBEDDED_ONLY)]
     sections = []
     hashes: dict[str, str] = {}
+    downstream: set[str] = set()
     timings: list[tuple[str, str, float]] = []
     code = code_digest()
     t_all = time.perf_counter()
     bar = progress_bar(total=len(steps), desc="reproduce", unit="step")
     for n, step in enumerate(steps, start=1):
         bar.set_postfix_str(step.key)
+        # the friction-bounds choice reaches every step downstream of the identification
+        if any(d == "identification" or d in downstream for d in step.depends):
+            downstream.add(step.key)
         key = hash_json({"step": step.key, "version": __version__, "code": code, "quick": quick,
-                     "inputs": step.inputs(ctx), "depends": [hashes[d] for d in step.depends]})
+                         "inputs": step.inputs(ctx), "depends": [hashes[d] for d in step.depends],
+                         **({"friction_bounds": friction_bounds}
+                            if step.key in downstream and friction_bounds != "data" else {})})
         hashes[step.key] = key
         cached = cache.load(step.key, key)
         if cached is not None:
@@ -218,6 +228,8 @@ def _reproduce(out_dir: str | Path, quick: bool, jobs: int, steps: list[Step] | 
             "absorber*, reproduced on "
             + (f"the bench data in `{ctx.bench_dir}`" if ctx.custom_data else "the embedded data")
             + (f" with the vehicle of `{ctx.vehicle_file}`" if ctx.vehicle_file else "")
+            + (", min/max friction by the paper's per-parameter method"
+               if friction_bounds == "paper" else "")
             + f" ({mode} mode, ehsa_opt {__version__}). Every table is also a CSV file in "
             f"`tables/` (`<step>_<k>.csv`).\n\n")
     report = out / "REPORT.md"

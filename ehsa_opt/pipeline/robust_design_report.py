@@ -120,7 +120,8 @@ def step_robust_design(ctx: Context) -> StepOutput:
     quick = ctx.quick
     cfg = _cfg()
     cfg = dataclasses.replace(cfg, n_freq=128 if quick else 512)
-    sets, source = default_friction_sets(ctx.results.get("identification"))
+    sets, source = default_friction_sets(ctx.results.get("identification"),
+                                           ctx.friction_bounds)
     frictions = (sets["min"], sets["max"])
     plain = build_problem(cfg)
     robust = build_problem(cfg, frictions=frictions, friction_mode="worst")
