@@ -119,7 +119,7 @@ def main() -> None:
     print(f"{len(names)} designs x {len(frictions)} friction sets x {len(dev)} development "
           f"+ {len(held)} held-out roads (400 m)")
     # warm-up: compile the time-domain step once (not timed)
-    check_case(vehicle, RoadCase("C", 130.0, 0, 60.0), [hs["prototype"]], frictions[:1])
+    check_case(vehicle, RoadCase("C", 130.0, 0, 100.0), [hs["prototype"]], frictions[:1])
     res = {}
     for label, cases in (("development", dev), ("held-out", held)):
         res[label] = []

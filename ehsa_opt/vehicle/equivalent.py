@@ -31,6 +31,14 @@ with c_f: the friction-aware evaluation costs about 1.3 linear ones.  Friction t
 dissipates E[F_f v] = c_f σ_v², included in ``dissipated_power_W`` so the
 efficiency is the generator's share, as in the time-domain path.
 
+Sticking: with a strong Coulomb friction v is not Gaussian (excess mass near
+v = 0), E[F_C sgn(v) v] = F_C E|v| falls below F_C σ√(2/π) and the Gaussian c_f
+is too high.  By default the Gaussian fixed point is then corrected by the
+energy-envelope (stochastic-averaging) density of the strut's amplitude
+(:mod:`ehsa_opt.vehicle.averaging`), whose two modal constants come from the
+linear path's σ_v(0) and σ_v(c_f) (secant), iterated; it equals the Gaussian value
+for weak or viscous friction.
+
 Validity: the linearisation assumes a Gaussian v; where Coulomb friction makes
 the strut stick for long stretches (slow, smooth roads, high F_C) the true v is
 far from Gaussian and errors grow — ``benchmarks/friction_fast_path.py``
@@ -47,6 +55,7 @@ from numpy.typing import ArrayLike
 
 from ..physics.params import FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError, \
     RoadParams, VehicleParams
+from .averaging import averaged_damping
 from .metrics import design_arrays, linear_metrics
 
 __all__ = ["law_equivalent_damping", "friction_equivalent_damping_Ns_per_m", "friction_array",
@@ -152,7 +161,8 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
                      design: Mapping[str, ArrayLike] | None = None,
                      friction: Any = None, *, n_freq: int = 256,
                      base: HarvesterParams | None = None, rtol: float = 1e-6,
-                     max_iter: int = 60, iteration_n_freq: int = 64
+                     max_iter: int = 60, iteration_n_freq: int = 64,
+                     non_gaussian: bool = True, averaging_iter: int = 8
                      ) -> dict[str, np.ndarray]:
     """Metrics of the quarter car with friction by equivalent linearisation.
 
@@ -171,13 +181,21 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
         Shared grid points while iterating (the fixed point c_f is then evaluated
         exactly by ``linear_metrics`` at ``n_freq`` on a grid refined around the
         poles with c_f).
+    non_gaussian : bool
+        Correct the Gaussian c_f for the non-Gaussian (sticking) velocity by the
+        energy-envelope density of :mod:`ehsa_opt.vehicle.averaging` (default);
+        False gives the plain Gaussian equivalent linearisation.
+    averaging_iter : int
+        Iteration limit of that correction (secant update of the mode's linear
+        damping; stops when c_f changes by < 10⁻⁵).
 
     Returns
     -------
     dict of ndarray
         The keys of ``linear_metrics`` (``dissipated_power_W`` includes the
         friction, ``efficiency`` is the generator's share) plus
-        ``friction_damping_Ns_per_m`` (c_f), ``friction_power_W`` (E[F_f v]),
+        ``friction_damping_Ns_per_m`` (c_f), ``friction_damping_gaussian_Ns_per_m``
+        (the Gaussian fixed point's c_f), ``friction_power_W`` (E[F_f v]),
         ``iterations`` and ``converged`` (1.0/0.0).
     """
     d = design_arrays(design, base)
@@ -194,6 +212,7 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
     has_f = ~np.all(fr[:, [0, 1, 3, 4, 5, 7]] == 0.0, axis=1)
     iters = np.zeros(n)
     conv = np.ones(n, dtype=bool)
+    c_gauss = np.zeros(n)
 
     def solver(index: np.ndarray, sigma_v_of: Any) -> np.ndarray:
         rows = np.arange(index.size)
@@ -238,7 +257,23 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
             iters[gi] = it
             conv[gi] = done & ~locked
         cf = friction_equivalent_damping_Ns_per_m(np.exp(s_sol), fr[index], r[index])
-        return np.where(has_f[index], cf, 0.0)
+        cf = np.where(has_f[index], cf, 0.0)
+        c_gauss[index] = cf
+        if non_gaussian and act.size:
+            # energy-envelope correction: secant (c, σ_c) of the linear path, iterated
+            gi = index[act]
+            s0, c, sc = np.exp(s_hi[act]), cf[act], np.exp(s_sol[act])
+            todo = np.arange(act.size)
+            for _ in range(averaging_iter):
+                cn = averaged_damping(s0[todo], sc[todo], c[todo], fr[gi[todo]], r[gi[todo]])
+                moved = np.abs(cn - c[todo]) > 1e-5 * np.abs(c[todo])
+                c[todo] = cn
+                todo = todo[moved]
+                if todo.size == 0:
+                    break
+                sc[todo] = sigma_v_of(c[todo], act[todo])
+            cf[act] = c
+        return cf
 
     first = linear_metrics(vehicle, road, full, n_freq=min(n_freq, iteration_n_freq),
                            base=base, friction_damping_solver=solver)
@@ -247,6 +282,7 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
                        friction_damping_Ns_per_m=cf.reshape(shape))
     m = {k: np.broadcast_to(np.asarray(v), shape).reshape(-1) for k, v in m.items()}
     m["friction_power_W"] = cf * m["stroke_velocity_rms_m_s"] ** 2
+    m["friction_damping_gaussian_Ns_per_m"] = c_gauss
     m["iterations"] = iters
     m["converged"] = conv.astype(float)
     return {k: np.asarray(v).reshape(shape) for k, v in m.items()}
