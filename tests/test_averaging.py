@@ -105,8 +105,9 @@ def test_friction_metrics_correction_lowers_damping_and_gaussian_option():
                         nut_breakaway_velocity_m_per_s=0.01, nut_viscous_Ns_per_m=300.0)
     ng = friction_metrics(veh, road, None, fr)
     g = friction_metrics(veh, road, None, fr, non_gaussian=False)
+    # (the final grid is refined around each run's own c_f: equal to grid accuracy)
     assert g["friction_damping_Ns_per_m"] == pytest.approx(
-        float(ng["friction_damping_gaussian_Ns_per_m"]), rel=1e-9)
+        float(ng["friction_damping_gaussian_Ns_per_m"]), rel=1e-5)
     assert 0.9 * g["friction_damping_Ns_per_m"] < ng["friction_damping_Ns_per_m"] \
         < g["friction_damping_Ns_per_m"]
     assert ng["stroke_velocity_rms_m_s"] > g["stroke_velocity_rms_m_s"]

@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 from scipy.special import i0e, i1e
 
-__all__ = ["harmonic_terms", "averaged_damping"]
+__all__ = ["harmonic_terms", "amplitude_terms", "averaged_damping"]
 
 _SQRT_2E = math.sqrt(2.0 * math.e)
 
@@ -141,15 +141,42 @@ def _rod_terms(amplitude: np.ndarray, p: np.ndarray, r: np.ndarray
     return d_n + d_b, phi_n + phi_b
 
 
-_N_AMP = 96
+_N_AMP = 48
 _Y, _WY = np.polynomial.legendre.leggauss(_N_AMP)
 _Y_MAX = 12.0
 _Y = 0.5 * _Y_MAX * (_Y + 1.0)
 _WY = 0.5 * _Y_MAX * _WY
 
 
+def amplitude_terms(scale: Any, friction: np.ndarray, lead_m_per_rad: Any
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Amplitude nodes and the friction's cycle averages on them (reusable).
+
+    Parameters
+    ----------
+    scale : array_like (n,)
+        Spread of the amplitude density, m/s (about the rms stroke velocity): the
+        nodes are Gauss–Legendre points on [0, 12·scale].
+    friction : ndarray (n, 8)
+        Friction sets in :data:`~ehsa_opt.physics.params.FRICTION_NAMES` order.
+    lead_m_per_rad : array_like (n,)
+        r = lead/2π, m/rad.
+
+    Returns
+    -------
+    (ndarray, ndarray, ndarray), each (n, 48)
+        Nodes V (m/s), ⟨F v⟩(V) (W) and Φ(V) (W s) of nut + bearing at the rod.
+    """
+    v = np.asarray(scale, dtype=float)[:, None] * _Y
+    p = np.moveaxis(np.asarray(friction, dtype=float), -1, 0)[:, :, None]
+    d, phi = _rod_terms(v, p, np.asarray(lead_m_per_rad, dtype=float)[:, None])
+    return v, d, phi
+
+
 def averaged_damping(sigma0: Any, sigma_c: Any, c: Any, friction: np.ndarray,
-                     lead_m_per_rad: Any) -> np.ndarray:
+                     lead_m_per_rad: Any,
+                     terms: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                     ) -> np.ndarray:
     """Friction's equivalent damping under the energy-envelope density (module doc).
 
     Parameters
@@ -164,6 +191,9 @@ def averaged_damping(sigma0: Any, sigma_c: Any, c: Any, friction: np.ndarray,
         Friction sets in :data:`~ehsa_opt.physics.params.FRICTION_NAMES` order.
     lead_m_per_rad : array_like (n,)
         r = lead/2π, m/rad.
+    terms : tuple, optional
+        :func:`amplitude_terms` of these rows (default: computed with scale σ_c);
+        reused across the secant iteration, whose σ_c moves only a little.
 
     Returns
     -------
@@ -173,16 +203,14 @@ def averaged_damping(sigma0: Any, sigma_c: Any, c: Any, friction: np.ndarray,
     s0 = np.asarray(sigma0, dtype=float)[:, None]
     sc = np.asarray(sigma_c, dtype=float)[:, None]
     cc = np.asarray(c, dtype=float)[:, None]
-    r = np.asarray(lead_m_per_rad, dtype=float)[:, None]
-    p = np.moveaxis(np.asarray(friction, dtype=float), -1, 0)[:, :, None]
     # 1/(c_lin σ₀²) = (σ₀² − σ_c²)/(c σ_c² σ₀²), ≥ 0 (0: the Gaussian limit at σ₀)
     gap = np.maximum(s0 ** 2 - sc ** 2, 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = np.where(cc > 0.0, gap / (cc * sc ** 2 * s0 ** 2), 0.0)
     inv = np.where(np.isfinite(inv), inv, 0.0)
-    scale = np.minimum(sc, s0)          # the density's spread is about σ_c
-    v = scale * _Y
-    d, phi = _rod_terms(v, p, r)
+    if terms is None:   # the density's spread is about σ_c
+        terms = amplitude_terms(np.minimum(sc, s0)[:, 0], friction, lead_m_per_rad)
+    v, d, phi = terms
     expo = -0.5 * (v / s0) ** 2 - phi * inv
     expo -= expo.max(axis=1, keepdims=True)
     w = _WY * v * np.exp(expo)          # p(V) dV ∝ V exp(−…) dV
