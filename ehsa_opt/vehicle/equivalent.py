@@ -198,7 +198,7 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
         is not grid-converged for weakly damped designs (tens of % on power).
     averaging_iter : int
         Iteration limit of that correction (secant update of the mode's linear
-        damping; stops when c_f changes by < 10⁻⁵).
+        damping; stops when c_f changes by < 10·rtol).
 
     Returns
     -------
@@ -224,6 +224,10 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
     iters = np.zeros(n)
     conv = np.ones(n, dtype=bool)
     c_gauss = np.zeros(n)
+    hint_s = np.full(n, np.nan)   # the first pass's log σ_v (Gaussian) and corrected c_f
+    hint_c = np.full(n, np.nan)
+    # tolerance of the pass: loose on the coarse first pass when a second one follows
+    tol = [max(rtol, 1e-3) if resolve_on_final_grid else rtol]
 
     def solver(index: np.ndarray, sigma_v_of: Any) -> np.ndarray:
         rows = np.arange(index.size)
@@ -238,8 +242,18 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
                 return np.log(sigma_v_of(cf, act[sub])) - s
 
             every = np.arange(act.size)
-            a, b = s_hi[act] - math.log(1e4), s_hi[act].copy()
+            lo_full = s_hi[act] - math.log(1e4)
+            a, b = lo_full.copy(), s_hi[act].copy()
+            hint = hint_s[gi]
+            near = np.isfinite(hint)
+            # second pass: a ×e^{±0.5} bracket around the first pass's σ_v, else the full one
+            a[near] = np.maximum(a[near], hint[near] - 0.5)
+            b[near] = np.minimum(b[near], hint[near] + 0.5)
             ga, gb = g(every, a), g(every, b)
+            wide = np.flatnonzero(near & ~((ga > 0.0) & (gb < 0.0)))
+            if wide.size:
+                a[wide], b[wide] = lo_full[wide], s_hi[act][wide]
+                ga[wide], gb[wide] = g(wide, a[wide]), g(wide, b[wide])
             # locked strut: even σ = 1e-4 σ₀ is not small enough → report the lower end
             locked = ga <= 0.0
             x = np.where(locked, a, b)
@@ -263,8 +277,9 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
                 b[todo] = np.where(pos, b[todo], xn)
                 gb[todo] = np.where(pos, np.where(sd == 1, 0.5 * fb, fb), gn)
                 side[todo] = np.where(pos, 1, -1)
-                done[todo] = (np.abs(gn) < rtol) | (np.abs(b[todo] - a[todo]) < rtol)
+                done[todo] = (np.abs(gn) < tol[0]) | (np.abs(b[todo] - a[todo]) < tol[0])
             s_sol[act] = x
+            hint_s[gi] = x
             iters[gi] = it
             conv[gi] = done & ~locked
         cf = friction_equivalent_damping_Ns_per_m(np.exp(s_sol), fr[index], r[index])
@@ -277,22 +292,28 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
             todo = np.arange(act.size)
             # amplitude nodes and cycle averages once, on the Gaussian σ_v's scale
             vt, dt, pt = amplitude_terms(np.minimum(sc, s0), fr[gi], r[gi])
+            prev = np.flatnonzero(np.isfinite(hint_c[gi]))
+            if prev.size:  # second pass: start from the first pass's corrected c_f
+                c[prev] = hint_c[gi[prev]]
+                sc[prev] = sigma_v_of(c[prev], act[prev])
             for _ in range(averaging_iter):
                 cn = averaged_damping(s0[todo], sc[todo], c[todo], fr[gi[todo]], r[gi[todo]],
                                       terms=(vt[todo], dt[todo], pt[todo]))
-                moved = np.abs(cn - c[todo]) > 1e-5 * np.abs(c[todo])
+                moved = np.abs(cn - c[todo]) > 10.0 * tol[0] * np.abs(c[todo])
                 c[todo] = cn
                 todo = todo[moved]
                 if todo.size == 0:
                     break
                 sc[todo] = sigma_v_of(c[todo], act[todo])
             cf[act] = c
+            hint_c[gi] = c
         return cf
 
     first = linear_metrics(vehicle, road, full, n_freq=min(n_freq, iteration_n_freq),
                            base=base, friction_damping_solver=solver)
     cf = np.broadcast_to(first["friction_damping_Ns_per_m"], shape).reshape(-1)
     if resolve_on_final_grid:
+        tol[0] = rtol
         # the fixed point again on the final grid, refined around the poles with the
         # first c_f (the first grid is refined around the frictionless poles, far
         # too narrow for a weakly damped design that friction damps)
