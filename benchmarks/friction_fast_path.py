@@ -114,6 +114,8 @@ def table(title: str, results: list) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="2 development + 2 held-out roads")
+    ap.add_argument("--gaussian", action="store_true",
+                    help="the plain Gaussian equivalent linearisation (no averaging correction)")
     args = ap.parse_args()
     dev, held = (DEVELOPMENT[:2], HELD_OUT[:2]) if args.quick else (DEVELOPMENT, HELD_OUT)
     from ehsa_opt.physics.params import VehicleParams
@@ -130,7 +132,8 @@ def main() -> None:
     for label, cases in (("development", dev), ("held-out", held)):
         res[label] = []
         for case in cases:
-            r = check_case(vehicle, case, list(hs.values()), frictions, fast_repeats=7)
+            r = check_case(vehicle, case, list(hs.values()), frictions, fast_repeats=7,
+                           non_gaussian=not args.gaussian)
             res[label].append((case, r))
             worst = {k: np.max(np.abs(r[f"error_{k}"])) for k in CHECK_METRICS}
             print(f"  {label:<12} {case.iso_class} {case.speed_km_per_h:5.0f} km/h seed "

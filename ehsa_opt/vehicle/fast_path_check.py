@@ -52,7 +52,8 @@ def scaled_friction(friction: FrictionParams | Mapping[str, float], scale: float
 
 def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[HarvesterParams],
                frictions: Sequence[FrictionParams], *, n_freq: int = 256,
-               fast_repeats: int = 1) -> dict[str, np.ndarray | float]:
+               fast_repeats: int = 1, non_gaussian: bool = True
+               ) -> dict[str, np.ndarray | float]:
     """Fast path vs time domain for every (harvester, friction) pair on one road.
 
     Parameters
@@ -62,6 +63,9 @@ def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[Harv
         first call, ``fast_wall_median_s`` the median (robust to a shared machine's
         load, which a single call of a few ms is not; the time-domain call lasts
         seconds and is timed once).
+    non_gaussian : bool
+        Passed to :func:`~ehsa_opt.vehicle.equivalent.friction_metrics` (False: the
+        plain Gaussian equivalent linearisation, for comparison).
 
     Returns
     -------
@@ -86,7 +90,8 @@ def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[Harv
     walls = []
     for _ in range(max(1, int(fast_repeats))):
         t0 = time.perf_counter()
-        fast = friction_metrics(vehicle, road, design, fs, n_freq=n_freq)
+        fast = friction_metrics(vehicle, road, design, fs, n_freq=n_freq,
+                                non_gaussian=non_gaussian)
         walls.append(time.perf_counter() - t0)
     t_fast = walls[0]
     out: dict[str, np.ndarray | float] = {
