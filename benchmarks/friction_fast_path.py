@@ -81,10 +81,16 @@ def designs() -> dict[str, HarvesterParams]:
 
 def settled(r: dict) -> np.ndarray:
     """Pairs whose design's frictionless time-domain run agrees with the exact linear
-    path within 2 % on every metric on that road.  Otherwise (undamped corners of the
-    box: R_e = 10 kΩ with a high k_n leaves almost no damping) the finite periodic road
-    and the 2 s pre-roll do not give a steady-state reference: the time domain itself is
-    not converged there, whatever the friction."""
+    path within 2 % on every metric on that road.  Otherwise the design is undamped:
+    the 12 box corners with R_e = 10 kΩ or k_n = 11900 rpm/V have c_e = k²/(r² R) of
+    0–16 N s/m, modal damping ratios ζ ≤ 0.2 % and decay times 12 s to 10⁸ s (eigenvalues
+    of the linear model; the frictionless quarter car has no other damping).  Their
+    stationary response to the road PSD grows as 1/ζ (unbounded as ζ → 0), so neither a
+    400 m periodic road with a 2 s pre-roll nor any finer time step gives a steady-state
+    reference; it is not a numerical failure of the time-domain path.  With friction
+    they are not a fair reference either: once the strut sticks the locked quarter car
+    (body + wheel on the tyre) is undamped again, so their friction pairs are reported
+    apart and excluded."""
     bad_design = set()
     for i in np.flatnonzero(r["friction_index"] == 0):
         if max(abs(r[f"error_{k}"][i]) for k in CHECK_METRICS) > 0.02:
@@ -108,6 +114,8 @@ def table(title: str, results: list) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="2 development + 2 held-out roads")
+    ap.add_argument("--gaussian", action="store_true",
+                    help="the plain Gaussian equivalent linearisation (no averaging correction)")
     args = ap.parse_args()
     dev, held = (DEVELOPMENT[:2], HELD_OUT[:2]) if args.quick else (DEVELOPMENT, HELD_OUT)
     from ehsa_opt.physics.params import VehicleParams
@@ -119,12 +127,13 @@ def main() -> None:
     print(f"{len(names)} designs x {len(frictions)} friction sets x {len(dev)} development "
           f"+ {len(held)} held-out roads (400 m)")
     # warm-up: compile the time-domain step once (not timed)
-    check_case(vehicle, RoadCase("C", 130.0, 0, 60.0), [hs["prototype"]], frictions[:1])
+    check_case(vehicle, RoadCase("C", 130.0, 0, 100.0), [hs["prototype"]], frictions[:1])
     res = {}
     for label, cases in (("development", dev), ("held-out", held)):
         res[label] = []
         for case in cases:
-            r = check_case(vehicle, case, list(hs.values()), frictions)
+            r = check_case(vehicle, case, list(hs.values()), frictions, fast_repeats=7,
+                           non_gaussian=not args.gaussian)
             res[label].append((case, r))
             worst = {k: np.max(np.abs(r[f"error_{k}"])) for k in CHECK_METRICS}
             print(f"  {label:<12} {case.iso_class} {case.speed_km_per_h:5.0f} km/h seed "
@@ -183,23 +192,29 @@ def main() -> None:
     n_pairs = sum(r["n_pairs"] for r in raw)
     t_time = sum(r["time_wall_s"] for r in raw)
     t_fast = sum(r["fast_wall_s"] for r in raw)
+    t_fast_med = sum(r["fast_wall_median_s"] for r in raw)
     rng = np.random.default_rng(0)
     pop = {k: v for k, v in PAPER_BOX.from_unit(rng.random((4000, PAPER_BOX.n))).items()}
     base = hs["prototype"]
     pop.update(internal_resistance_ohm=base.internal_resistance_ohm,
                inductance_H=base.inductance_H)
     from ehsa_opt.physics.params import RoadParams
-    t0 = time.perf_counter()
-    friction_metrics(vehicle, RoadParams("C", 70.0), pop, frictions[3], n_freq=256)
-    t_pop = time.perf_counter() - t0
+    t_pops = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        friction_metrics(vehicle, RoadParams("C", 70.0), pop, frictions[3], n_freq=256)
+        t_pops.append(time.perf_counter() - t0)
+    t_pop = float(np.median(t_pops))
     rate_time = n_pairs / t_time
     print("\nspeed (designs per second):")
     print(f"  time domain (batched, compiled, 400 m roads): {rate_time:10.2f} /s "
           f"({t_time / n_pairs * 1e3:.1f} ms per design)")
-    print(f"  fast path, validation pairs:                  {n_pairs / t_fast:10.0f} /s  "
+    print(f"  fast path, validation pairs (first call):     {n_pairs / t_fast:10.0f} /s  "
           f"-> {n_pairs / t_fast / rate_time:7.0f} x")
-    print(f"  fast path, 4000-design population (max fr.):  {4000 / t_pop:10.0f} /s  "
-          f"-> {4000 / t_pop / rate_time:7.0f} x")
+    print(f"  fast path, validation pairs (median of 7):    {n_pairs / t_fast_med:10.0f} /s  "
+          f"-> {n_pairs / t_fast_med / rate_time:7.0f} x")
+    print(f"  fast path, 4000-design population (max fr.,   {4000 / t_pop:10.0f} /s  "
+          f"-> {4000 / t_pop / rate_time:7.0f} x\n   median of 3)")
 
 
 if __name__ == "__main__":

@@ -81,7 +81,8 @@ def test_viscous_friction_is_exact_damping():
 def test_fixed_point_and_energy_balance():
     road = RoadParams("C", 70.0)
     fr = _truth(2.0)
-    fast = friction_metrics(VEHICLE, road, DESIGNS, fr)
+    # the Gaussian fixed point (non_gaussian=False); the averaged one: test_averaging.py
+    fast = friction_metrics(VEHICLE, road, DESIGNS, fr, non_gaussian=False)
     assert np.all(fast["converged"] == 1.0)
     r = DESIGNS["lead_mm_per_rev"] * 1e-3 / (2 * math.pi)
     sig = fast["stroke_velocity_rms_m_s"]
@@ -89,7 +90,8 @@ def test_fixed_point_and_energy_balance():
     again = linear_metrics(VEHICLE, road, DESIGNS, friction_damping_Ns_per_m=cf)
     # the fixed point holds to the accuracy of the iteration's coarser grid
     np.testing.assert_allclose(again["stroke_velocity_rms_m_s"], sig, rtol=1e-2)
-    fine = friction_metrics(VEHICLE, road, DESIGNS, fr, iteration_n_freq=1024, n_freq=1024)
+    fine = friction_metrics(VEHICLE, road, DESIGNS, fr, iteration_n_freq=1024, n_freq=1024,
+                            non_gaussian=False)
     cf = friction_equivalent_damping_Ns_per_m(fine["stroke_velocity_rms_m_s"], fr, r)
     again = linear_metrics(VEHICLE, road, DESIGNS, friction_damping_Ns_per_m=cf, n_freq=1024)
     np.testing.assert_allclose(again["stroke_velocity_rms_m_s"],
@@ -222,3 +224,21 @@ def test_cli_optimize_with_friction_checks_time_domain(tmp_path, capsys):
                  f"{ident}:min", "--friction", f"{ident}:max", "--friction-mode", "at",
                  "--out", str(tmp_path / "o3")]) != 0
     assert "exactly one" in capsys.readouterr().err
+
+
+def test_weakly_damped_designs_grid_converged():
+    # designs with almost no electrical damping (R_e = 10 kΩ, k_n high): friction is
+    # their only damping; the fixed point is solved again on the final grid refined
+    # around the damped poles, so the default grid agrees with a 2048-point one
+    road = RoadParams("B", 30.0)
+    design = {"load_ohm": np.array([1e4, 3e3, 47.0]),
+              "speed_constant_rpm_per_V": np.array([11900.0, 3000.0, 69.7]),
+              "total_inertia_gcm2": np.array([9000.0, 300.0, 301.0]),
+              "lead_mm_per_rev": np.array([5.3, 20.0, 5.0])}
+    fr = _truth(0.5)
+    ref = friction_metrics(VEHICLE, road, design, fr, iteration_n_freq=2048, n_freq=2048)
+    got = friction_metrics(VEHICLE, road, design, fr)
+    for key in ("power_W", "comfort", "road_holding", "stroke_velocity_rms_m_s"):
+        np.testing.assert_allclose(got[key], ref[key], rtol=1e-2, err_msg=key)
+    old = friction_metrics(VEHICLE, road, design, fr, resolve_on_final_grid=False)
+    assert np.max(np.abs(old["power_W"] / ref["power_W"] - 1.0)) > 0.05  # the failure fixed
