@@ -200,8 +200,17 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
         # rotor speed crosses it within a sample) and lets the collocation cheat
         # between samples: it stays at the baseline value
         free = [n for n in free if n != "bearing_breakaway_velocity_rad_per_s"]
-    res = fit_group(fit_pts, crig, [first.parameters] if first.parameters else starts,
-                    free=free, fixed=first.parameters or starts[0], max_iter=max_iter)
+    # stage 2 starts from the effect-only fit and, for a transmission effect, also from
+    # the screened start with the baseline friction: the baseline friction absorbed part
+    # of the effect, so the effect-only fit can settle in a degenerate optimum (e.g. a
+    # zero backlash gap on the default data) from which the joint fit does not escape,
+    # while the joint fit from the raw start finds the effect (core.solve_starts keeps
+    # the best converged start)
+    stage2 = [first.parameters] if first.parameters else []
+    if component.transmission or not stage2:
+        stage2.append(starts[0])
+    res = fit_group(fit_pts, crig, stage2, free=free, fixed=first.parameters or starts[0],
+                    max_iter=max_iter)
     if not res.parameters and first.parameters:
         res = first  # the effect-only fit is still a valid (smaller) model
     if not res.parameters:
