@@ -103,6 +103,24 @@ def _fd_objectives(problem: DesignProblem, u: np.ndarray, h: float
     return f0, J
 
 
+class _MemoObjectives:
+    """``u -> (F, J)`` by :func:`_fd_objectives` on the clipped unit point, memoised
+    (SLSQP asks for the same point for the objective and the constraints); ``nfev``
+    counts designs evaluated (2n + 1 per new point)."""
+
+    def __init__(self, problem: DesignProblem, fd_step: float) -> None:
+        self.problem, self.fd_step, self.nfev = problem, fd_step, 0
+        self._cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def __call__(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        key = np.asarray(u, float).tobytes()
+        if key not in self._cache:
+            u = np.asarray(u, float)
+            self._cache[key] = _fd_objectives(self.problem, np.clip(u, 0.0, 1.0), self.fd_step)
+            self.nfev += 2 * u.size + 1
+        return self._cache[key]
+
+
 def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
                           weights: Sequence[float] | None = None,
                           start: Mapping[str, float] | None = None, *, n_starts: int = 6,
@@ -154,18 +172,11 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
                else np.full(n, 0.5)).astype(float)
     starts_u = [np.clip(u_start, 0.0, 1.0)] + [rng.random(n) for _ in range(n_starts - 1)]
     t0 = time.perf_counter()
-    nfev = 0
+    runs_fj: list[_MemoObjectives] = []  # their evaluation counts make nfev
     runs = []
     for k, u0 in enumerate(starts_u):
-        cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
-
-        def fj(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            nonlocal nfev
-            key = np.asarray(u, float).tobytes()
-            if key not in cache:
-                cache[key] = _fd_objectives(problem, np.clip(u, 0.0, 1.0), fd_step)
-                nfev += 2 * n + 1
-            return cache[key]
+        fj = _MemoObjectives(problem, fd_step)
+        runs_fj.append(fj)
 
         F0 = fj(u0)[0]
         gamma0 = float(np.max(np.where(w > 0, (F0 - g) / np.where(w > 0, w, 1.0), -np.inf)))
@@ -205,15 +216,8 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
     refined = None
     if refine and best["feasible"] and np.any(w > 0):
         gstar = best["gamma"]
-        cache2: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
-
-        def fj2(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            nonlocal nfev
-            key = np.asarray(u, float).tobytes()
-            if key not in cache2:
-                cache2[key] = _fd_objectives(problem, np.clip(u, 0.0, 1.0), fd_step)
-                nfev += 2 * n + 1
-            return cache2[key]
+        fj2 = _MemoObjectives(problem, fd_step)
+        runs_fj.append(fj2)
 
         cap = g + w * gstar + 1e-9 * scale
         hist2: list[tuple[np.ndarray, float]] = []
@@ -255,7 +259,7 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
         success=success, message=msg, gamma=float(best["gamma"]), design=d,
         objectives=objectives, goals=g, weights=w, objective_names=tuple(names),
         history=history, starts=starts,
-        stats={"nfev": nfev, "seconds": time.perf_counter() - t0, "n_starts": len(runs),
+        stats={"nfev": sum(f.nfev for f in runs_fj), "seconds": time.perf_counter() - t0, "n_starts": len(runs),
                "chosen_start": best_k,
                "refinement": None if refined is None else
                {k: refined[k] for k in ("status", "message", "nit")}},
