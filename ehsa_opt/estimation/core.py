@@ -188,12 +188,14 @@ class SolverSettings:
 
 # ====================================================================== the NLP
 class _Recorder(ca.Callback):
-    """IPOPT iteration callback storing the decision vector of each iteration."""
+    """IPOPT iteration callback storing the decision vector and the constraint values
+    of each iteration (the minimax epigraph rows give J = g + t without re-evaluation)."""
 
     def __init__(self, nx: int, ng: int) -> None:
         ca.Callback.__init__(self)
         self.nx, self.ng = nx, ng
         self.rows: list[np.ndarray] = []
+        self.g_rows: list[np.ndarray] = []
         self.construct("recorder", {})
 
     def get_n_in(self) -> int:
@@ -219,7 +221,8 @@ class _Recorder(ca.Callback):
         return ca.Sparsity(0, 0)
 
     def eval(self, arg: Any) -> list:
-        self.rows.append(np.array(arg[0]).ravel().copy())
+        self.rows.append(np.array(arg[0]).ravel())
+        self.g_rows.append(np.array(arg[2]).ravel())
         return [0]
 
 
@@ -331,8 +334,14 @@ class NLP:
             w0[self.t_index] = float(np.max(np.array(self.Jfun(w0, p)).ravel()))
         return w0
 
-    def J_rows(self, rows: Sequence[np.ndarray], p: np.ndarray) -> np.ndarray:
-        """Per-channel J at each of ``rows`` (decision vectors), one batched call per 64."""
+    def J_rows(self, rows: Sequence[np.ndarray], p: np.ndarray,
+               g_rows: Sequence[np.ndarray] | None = None) -> np.ndarray:
+        """Per-channel J at each of ``rows`` (decision vectors), one batched call per 64;
+        with the constraint values ``g_rows`` of a minimax NLP (the recorder's), read
+        off the epigraph rows J − t instead (no evaluation)."""
+        if g_rows is not None and self.t_index is not None and len(g_rows) == len(rows):
+            G = np.array(g_rows, float)[:, self.n_eq:self.n_eq + self.n_channels]
+            return G + np.array(rows, float)[:, self.t_index:self.t_index + 1]
         if not hasattr(self, "_Jmap"):
             self._Jmap = self.Jfun.map(64)
         W = np.array(rows, float).T
@@ -350,7 +359,7 @@ class NLP:
     # -------------------------------------------------------------- solve
     def solve(self, w0: np.ndarray, p: np.ndarray) -> "SolveRecord":
         if self.recorder is not None:
-            self.recorder.rows = []
+            self.recorder.rows, self.recorder.g_rows = [], []
         t0 = time.perf_counter()
         try:
             sol = self.solver(x0=w0, p=p, lbx=self.lbw, ubx=self.ubw, lbg=self.lbg,
@@ -365,7 +374,9 @@ class NLP:
         if not (np.all(np.isfinite(w)) and math.isfinite(f)):
             ok = False
         rows = list(self.recorder.rows) if self.recorder is not None else []
-        return SolveRecord(ok, status, w, f, nit, time.perf_counter() - t0, rows or [w])
+        g_rows = list(self.recorder.g_rows) if rows else None
+        return SolveRecord(ok, status, w, f, nit, time.perf_counter() - t0, rows or [w],
+                           g_rows)
 
     # -------------------------------------------------------------- sensitivities
     def sensitivities(self, w: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -414,6 +425,7 @@ class SolveRecord:
     iterations: int
     seconds: float
     rows: list = field(default_factory=list)
+    g_rows: list | None = None
 
 
 _CACHE: dict[tuple, NLP] = {}
