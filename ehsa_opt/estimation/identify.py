@@ -209,7 +209,8 @@ class _Setup:
         opt = self.options
         return core.build(self.model, self.space,
                           core.Objective("minimax", opt.sum_weight, opt.objective_scale),
-                          core.SolverSettings(opt.tol, opt.max_iter, record_iterations=True),
+                          core.SolverSettings(opt.tol, opt.max_iter, record_iterations=True,
+                                              gauss_newton=self.path == "rigid"),
                           self.blocks)
 
 
