@@ -199,9 +199,8 @@ def given_block(model: BenchModel, X_obs: np.ndarray, u_obs: np.ndarray, y_obs: 
 def build_block_symbols(model: BenchModel, space: Any, key: tuple, z: Any, sym: Any,
                         sfx: str) -> dict:
     """Symbolic block of ``key``: decision states ``w``, data ``p`` (same layout as the
-    block's ``data``), equality defects ``g``, per-channel weighted residuals ``res``
-    (row vectors) and their SSE list, outputs ``y``, the positions of the initial
-    states in ``w``."""
+    block's ``data``), equality defects ``g``, per-channel SSE list, outputs ``y``,
+    the positions of the initial states in ``w``."""
     nx, npar = model.n_states, len(space.names)
     kind = key[0]
     parts: list[Any] = []
@@ -284,10 +283,9 @@ def build_block_symbols(model: BenchModel, space: Any, key: tuple, z: Any, sym: 
     else:
         raise ValueError(f"unknown transcription {kind!r}")
     y = y[:ny, :]
-    res = [wy[k] * (y[k, :] - ym[k, :]) for k in range(ny)]
-    sse = [ca.sumsqr(r) for r in res]
+    sse = [ca.sumsqr(wy[k] * (y[k, :] - ym[k, :])) for k in range(ny)]
     return {"w": w, "p": ca.vertcat(*parts), "g": ca.vertcat(*g) if g else sym(0, 1),
-            "sse": sse, "res": res, "n_obs": n_obs, "y": y, "x0_cols": x0_cols}
+            "sse": sse, "n_obs": n_obs, "y": y, "x0_cols": x0_cols}
 
 
 # ====================================================================== integration

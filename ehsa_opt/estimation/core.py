@@ -178,28 +178,12 @@ class Objective:
 
 @dataclass(frozen=True)
 class SolverSettings:
-    """IPOPT settings (iteration limits only: results never depend on CPU speed).
-
-    Attributes
-    ----------
-    tol, max_iter, acceptable_tol :
-        IPOPT ``tol`` (scaled NLP error), ``max_iter``, ``acceptable_tol``.
-    record_iterations : bool
-        Keep every iterate (and its constraint values) of each solve.
-    gauss_newton : bool
-        Gauss–Newton Hessian of the Lagrangian, Σ_k μ_k (2/n_k) J_kᵀ J_k with J_k the
-        Jacobian of channel k's weighted residuals and μ_k its weight in the
-        Lagrangian (objective share plus epigraph multiplier).  Only for a minimax
-        objective on ``given`` blocks, where no equality constraint is nonlinear;
-        ignored otherwise.  About a third of the exact Hessian's operations; the
-        neglected term Σ r ∇²r is small where the residuals are measurement noise.
-    """
+    """IPOPT settings (iteration limits only: results never depend on CPU speed)."""
 
     tol: float = 1e-8
     max_iter: int = 500
     acceptable_tol: float | None = None
     record_iterations: bool = False
-    gauss_newton: bool = False
 
 
 # ====================================================================== the NLP
@@ -259,7 +243,7 @@ class NLP:
         nv = space.nv
         z = sym.sym("z", nv)
         zref = sym.sym("zref", nv)
-        w_parts, p_parts, g_eq, sse, nobs, y_all, res = [z], [zref], [], [], [], [], []
+        w_parts, p_parts, g_eq, sse, nobs, y_all = [z], [zref], [], [], [], []
         self.var_slices: list[tuple[int, int]] = []
         self.x0_cols: list[list[int]] = []
         self.data_sizes: list[int] = []
@@ -275,7 +259,6 @@ class NLP:
             offset += nz
             g_eq.append(s["g"])
             sse += s["sse"]
-            res += s["res"]
             nobs += [s["n_obs"]] * len(s["sse"])
             y_all.append(ca.vec(s["y"].T))
         self.n_vars_no_t = offset
@@ -324,11 +307,6 @@ class NLP:
         self.recorder = _Recorder(self.nw, int(G.numel())) if settings.record_iterations else None
         if self.recorder is not None:
             opts["iteration_callback"] = self.recorder
-        self.gauss_newton = (settings.gauss_newton and kind == "given"
-                             and objective.kind == "minimax")
-        if self.gauss_newton:
-            opts["hess_lag"] = _gauss_newton_hessian(W, P, res, nobs, objective,
-                                                     self.n_eq, int(G.numel()), sym)
         self.solver = ca.nlpsol(f"core_{kind}", "ipopt", {"x": W, "f": f, "g": G, "p": P}, opts)
         lbw, ubw = np.full(self.nw, -np.inf), np.full(self.nw, np.inf)
         lbw[:nv], ubw[:nv] = space.lbz, space.ubz
@@ -427,27 +405,6 @@ class NLP:
             dy = Jy[:, theta].toarray()
         dy[:, :nv] /= np.array(self.space.scale)
         return dy
-
-
-def _gauss_newton_hessian(W: Any, P: Any, res: Sequence[Any], nobs: Sequence[int],
-                          objective: Objective, n_eq: int, ng: int, sym: Any) -> ca.Function:
-    """Gauss–Newton Hessian of the minimax Lagrangian (upper triangle, IPOPT's layout).
-
-    L = σ c (t + w·mean_k J_k) + Σ_k λ_k (J_k − t) + (linear order constraints), so
-    ∇²L = Σ_k μ_k ∇²J_k with μ_k = σ c w / n_ch + λ_k; ∇²J_k ≈ (2/n_k) J_kᵀ J_k.
-    Channels whose residuals do not depend on ``W`` contribute nothing.
-    """
-    lam_f, lam_g = sym.sym("lam_f"), sym.sym("lam_g", ng)
-    nch = len(res)
-    H = sym(W.numel(), W.numel())
-    for k, (r, n) in enumerate(zip(res, nobs)):
-        if not ca.depends_on(r, W):
-            continue
-        Jk = ca.jacobian(ca.vec(r), W)
-        mu = lam_f * objective.scale * objective.sum_weight / nch + lam_g[n_eq + k]
-        H = H + (2.0 * mu / n) * ca.mtimes(Jk.T, Jk)
-    return ca.Function("nlp_hess_l", [W, P, lam_f, lam_g], [ca.triu(H)],
-                       ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
 
 
 def _csc(m: Any) -> Any:

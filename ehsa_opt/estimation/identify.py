@@ -209,8 +209,7 @@ class _Setup:
         opt = self.options
         return core.build(self.model, self.space,
                           core.Objective("minimax", opt.sum_weight, opt.objective_scale),
-                          core.SolverSettings(opt.tol, opt.max_iter, record_iterations=True,
-                                              gauss_newton=self.path == "rigid"),
+                          core.SolverSettings(opt.tol, opt.max_iter, record_iterations=True),
                           self.blocks)
 
 
