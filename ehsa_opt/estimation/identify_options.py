@@ -90,7 +90,7 @@ class IdentifyOptions:
     degree: int = 3
     max_intervals: int = 100
     max_samples: int = 600
-    tol: float = 1e-8
+    tol: float = 1e-6
     max_iter: int = 500
     sum_weight: float = 0.1
     objective_scale: float = 100.0
