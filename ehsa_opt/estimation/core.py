@@ -6,8 +6,9 @@ and scaled states ``X = offset + s ⊙ Z``, solved by IPOPT.  Two objectives sha
 
 ``minimax``
     The paper's Eq 5 in epigraph form (identification):
-    ``min c·(t + w·mean_k J_k)`` s.t. ``J_k ≤ t``, J_k the mean squared
-    normalised residual of signal k of each test.
+    ``min c·(t + w·mean_k e_k)`` s.t. ``e_k = J_k``, ``e_k ≤ t``, J_k the mean
+    squared normalised residual of signal k of each test (the channel values e_k
+    are variables so that the objective is linear and J is evaluated once per point).
 ``likelihood``
     Gaussian likelihood (discrepancy fits): ``min Σ((y − y_m)/σ)² / n + ρ‖z − z_ref‖²``.
 
@@ -189,7 +190,7 @@ class SolverSettings:
 # ====================================================================== the NLP
 class _Recorder(ca.Callback):
     """IPOPT iteration callback storing the decision vector and the constraint values
-    of each iteration (the minimax epigraph rows give J = g + t without re-evaluation)."""
+    of each iteration (the minimax rows J − e give J = g + e without re-evaluation)."""
 
     def __init__(self, nx: int, ng: int) -> None:
         ca.Callback.__init__(self)
@@ -270,13 +271,17 @@ class NLP:
         self.channel_obs = np.array(nobs, dtype=float)
         J = ca.vertcat(*[s_ / n for s_, n in zip(sse, nobs)])
         if objective.kind == "minimax":
+            # channel values e_k are variables (e_k = J_k, e_k ≤ t): the objective is
+            # linear, so IPOPT evaluates the J_k and their gradients once per point
+            # (constraints), not again for f and ∇f
             tvar = sym.sym("t")
-            w_parts.append(tvar)
+            evar = sym.sym("e", len(sse))
+            w_parts += [tvar, evar]
             self.t_index: int | None = offset
-            g_parts.append(J - tvar)
-            lbg.append(np.full(len(sse), -np.inf))
-            ubg.append(np.zeros(len(sse)))
-            f = objective.scale * (tvar + objective.sum_weight * ca.sum1(J) / len(sse))
+            g_parts += [J - evar, evar - tvar]
+            lbg += [np.zeros(len(sse)), np.full(len(sse), -np.inf)]
+            ubg += [np.zeros(len(sse)), np.zeros(len(sse))]
+            f = objective.scale * (tvar + objective.sum_weight * ca.sum1(evar) / len(sse))
         else:
             self.t_index = None
             f = ca.sum1(ca.vertcat(*sse)) / float(sum(nobs)) \
@@ -331,7 +336,9 @@ class NLP:
         for k, ((a, b), blk) in enumerate(zip(self.var_slices, blocks)):
             w0[a:b] = blk.z_guess if states is None else states[k]
         if self.t_index is not None:
-            w0[self.t_index] = float(np.max(np.array(self.Jfun(w0, p)).ravel()))
+            J0 = np.array(self.Jfun(w0, p)).ravel()
+            w0[self.t_index] = float(np.max(J0))
+            w0[self.t_index + 1:self.t_index + 1 + J0.size] = J0
         return w0
 
     def J_rows(self, rows: Sequence[np.ndarray], p: np.ndarray,
@@ -341,7 +348,8 @@ class NLP:
         off the epigraph rows J − t instead (no evaluation)."""
         if g_rows is not None and self.t_index is not None and len(g_rows) == len(rows):
             G = np.array(g_rows, float)[:, self.n_eq:self.n_eq + self.n_channels]
-            return G + np.array(rows, float)[:, self.t_index:self.t_index + 1]
+            e = np.array(rows, float)[:, self.t_index + 1:self.t_index + 1 + self.n_channels]
+            return G + e
         if not hasattr(self, "_Jmap"):
             self._Jmap = self.Jfun.map(64)
         W = np.array(rows, float).T
