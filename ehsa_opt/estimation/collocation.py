@@ -122,12 +122,34 @@ def _quasi_static(model: BenchModel, u: np.ndarray, pbase: np.ndarray) -> np.nda
 
 
 def _radau_pattern(N: int, n_obs: int, d: int, intervals: bytes) -> ca.Sparsity:
-    """Interpolation pattern: observation m reads the polynomial of interval k_m."""
+    """Interpolation pattern: observation m may read the polynomials of its candidate
+    intervals (``intervals``: n_obs × w int64, row m the candidates of m)."""
+    cand = np.frombuffer(intervals, dtype=np.int64).reshape(n_obs, -1)
     rows, cols = [], []
-    for m, k in enumerate(np.frombuffer(intervals, dtype=np.int64)):
-        rows += [int(k)] + [(N + 1) + int(k) * d + j for j in range(d)]
-        cols += [m] * (d + 1)
+    for m, ks in enumerate(cand):
+        for k in ks:
+            rows += [int(k)] + [(N + 1) + int(k) * d + j for j in range(d)]
+            cols += [m] * (d + 1)
     return ca.Sparsity.triplet((N + 1) + d * N, n_obs, rows, cols)
+
+
+def _candidate_intervals(t_nodes: np.ndarray, t_obs: np.ndarray, k_obs: np.ndarray) -> np.ndarray:
+    """Candidate intervals of each observation (n_obs × w), shared by records of any
+    length when possible: observations spread uniformly between the fractions f0 and
+    f1 (rounded to 1e-3) of the node span lie in interval c_m = ⌊N (f0 + (f1 − f0)
+    m/(n_obs − 1))⌋ or the next one, so the pattern {c_m, c_m + 1} depends only on
+    (N, n_obs, f0, f1) and one NLP serves tests of different lengths (the unused
+    interpolation weights are zero).  Otherwise the exact intervals (w = 1)."""
+    N, n_obs = t_nodes.size - 1, t_obs.size
+    if N >= 2 and n_obs >= 2:
+        span = t_nodes[-1] - t_nodes[0]
+        f0 = round(float(t_obs[0] - t_nodes[0]) / span, 3)
+        f1 = round(float(t_obs[-1] - t_nodes[0]) / span, 3)
+        m = np.arange(n_obs)
+        c = np.clip(np.floor(N * (f0 + (f1 - f0) * m / (n_obs - 1))).astype(np.int64), 0, N - 2)
+        if np.all((k_obs == c) | (k_obs == c + 1)):
+            return np.stack([c, c + 1], axis=1)
+    return k_obs.astype(np.int64)[:, None]
 
 
 def radau_block(model: BenchModel, time_s: np.ndarray, motion: Any, node_idx: np.ndarray,
@@ -147,7 +169,7 @@ def radau_block(model: BenchModel, time_s: np.ndarray, motion: Any, node_idx: np
     t_obs = time_s[obs_idx]
     n_obs = t_obs.size
     k_obs = np.clip(np.searchsorted(t_nodes, t_obs, side="right") - 1, 0, N - 1)
-    intervals = k_obs.astype(np.int64).tobytes()
+    intervals = _candidate_intervals(t_nodes, t_obs, k_obs).tobytes()
     sp = _radau_pattern(N, n_obs, d, intervals)
     frac = (t_obs - t_nodes[k_obs]) / h[k_obs]
     dense = np.zeros(((N + 1) + d * N, n_obs))
