@@ -14,6 +14,7 @@ varied parameter).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
@@ -56,7 +57,14 @@ def node_indices(n: int, max_intervals: int) -> np.ndarray:
 
 
 def radau_tableau(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
-    """Radau points τ (with 0), derivative matrix C, end weights D, Lagrange basis."""
+    """Radau points τ (with 0), derivative matrix C, end weights D, Lagrange basis
+    (computed once per degree; copies of the arrays are returned)."""
+    tau, C, D, basis = _radau_tableau(int(d))
+    return tau.copy(), C.copy(), D.copy(), list(basis)
+
+
+@functools.lru_cache(maxsize=16)
+def _radau_tableau(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
     tau = np.append(0.0, ca.collocation_points(d, "radau"))
     C = np.zeros((d + 1, d + 1))
     D = np.zeros(d + 1)
@@ -318,6 +326,18 @@ def _stepper(model: BenchModel, n_steps: int, d: int = 3, newton: int = 4) -> ca
     key = (model_key(model), n_steps, d, newton)
     if key in _STEPPERS:
         return _STEPPERS[key]
+    F = _step(model, d, newton).mapaccum(n_steps)
+    if len(_STEPPERS) > 64:
+        _STEPPERS.pop(next(iter(_STEPPERS)))
+    _STEPPERS[key] = F
+    return F
+
+
+def _step(model: BenchModel, d: int, newton: int) -> ca.Function:
+    """One Radau IIA step (Newton on the stage equations), built once per model."""
+    key = (model_key(model), "step", d, newton)
+    if key in _STEPPERS:
+        return _STEPPERS[key]
     nx, npar = model.n_states, len(model.param_names)
     _, C, D, _ = radau_tableau(d)
     xk, uc, p, h = ca.SX.sym("xk", nx), ca.SX.sym("uc", 3, d), ca.SX.sym("p", npar), \
@@ -337,11 +357,10 @@ def _stepper(model: BenchModel, n_steps: int, d: int = 3, newton: int = 4) -> ca
         v = newton_step(v, xk, uc, p, h)
     xend = D[0] * xk + sum(D[j] * v[(j - 1) * nx: j * nx] for j in range(1, d + 1))
     step = ca.Function("radau_step", [xk, uc, p, h], [xend])
-    F = step.mapaccum(n_steps)
     if len(_STEPPERS) > 64:
         _STEPPERS.pop(next(iter(_STEPPERS)))
-    _STEPPERS[key] = F
-    return F
+    _STEPPERS[key] = step
+    return step
 
 
 def integrate_states(model: BenchModel, motion: Any, time_s: np.ndarray, pbase: np.ndarray,
