@@ -312,6 +312,9 @@ class NLP:
         self.recorder = _Recorder(self.nw, int(G.numel())) if settings.record_iterations else None
         if self.recorder is not None:
             opts["iteration_callback"] = self.recorder
+        if kind == "given" and objective.kind == "minimax" and sym is ca.SX:
+            opts["hess_lag"] = _given_hessian(model, space, keys, W, P, self.data_sizes,
+                                              self.n_eq, int(G.numel()))
         self.solver = ca.nlpsol(f"core_{kind}", "ipopt", {"x": W, "f": f, "g": G, "p": P}, opts)
         lbw, ubw = np.full(self.nw, -np.inf), np.full(self.nw, np.inf)
         lbw[:nv], ubw[:nv] = space.lbz, space.ubz
@@ -413,6 +416,53 @@ class NLP:
             dy = Jy[:, theta].toarray()
         dy[:, :nv] /= np.array(self.space.scale)
         return dy
+
+
+def _given_hessian(model: BenchModel, space: ParamSpace, keys: Sequence[tuple], W: Any, P: Any,
+                   data_sizes: Sequence[int], n_eq: int, ng: int) -> ca.Function:
+    """Exact Hessian of the minimax Lagrangian on ``given`` blocks, built per sample.
+
+    The objective is linear and the order constraints are linear, so
+    ∇²L = Σ_k λ_k ∇²J_k over the rows J_k − e_k; J_k is a sum over samples, so its
+    Hessian is the sum of one small per-sample Hessian (differentiated once,
+    mapped over the samples) instead of the differentiation of the whole NLP
+    graph: the same values, a fraction of the build time.
+    """
+    nv, nx, npar = space.nv, model.n_states, len(space.names)
+    lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", ng)
+    z, x, u = ca.SX.sym("z", nv), ca.SX.sym("x", nx), ca.SX.sym("u", 3)
+    pb = ca.SX.sym("pb", npar)
+    funs: dict[int, ca.Function] = {}
+    Hz = ca.SX(nv, nv)
+    pos, ch = nv, 0  # P = [zref, block data...]
+    for key, size in zip(keys, data_sizes):
+        _, n, ny = key
+        if ny not in funs:
+            ym, wy, mu = ca.SX.sym("ym", ny), ca.SX.sym("wy", ny), ca.SX.sym("mu", ny)
+            Pz, _ = space.expression(z, pb)
+            y = model.outputs(x, u, Pz)[:ny]
+            h, _ = ca.hessian(ca.sum1(mu * (wy * (y - ym)) ** 2), z)
+            funs[ny] = ca.Function("h", [z, x, u, pb, ym, wy, mu], [h]).map(
+                "hmap", "serial", n, [0, 3, 5, 6], [0])
+        d = P[pos:pos + size]
+        a = 0
+        Xg = ca.reshape(d[a:a + nx * n], nx, n)
+        a += nx * n
+        ug = ca.reshape(d[a:a + 3 * n], 3, n)
+        a += 3 * n
+        pbase = d[a:a + npar]
+        a += npar
+        ymg = ca.reshape(d[a:a + ny * n], ny, n)
+        a += ny * n
+        wyg = d[a:a + ny]
+        mu = lam_g[n_eq + ch:n_eq + ch + ny] / n
+        Hz = Hz + funs[ny](W[:nv], Xg, ug, pbase, ymg, wyg, mu)
+        pos += size
+        ch += ny
+    nw = int(W.numel())
+    H = ca.diagcat(Hz, ca.SX(nw - nv, nw - nv))
+    return ca.Function("nlp_hess_l", [W, P, lam_f, lam_g], [ca.triu(H)],
+                       ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
 
 
 def _csc(m: Any) -> Any:
