@@ -441,9 +441,15 @@ def _given_hessian(model: BenchModel, space: ParamSpace, keys: Sequence[tuple], 
             ym, wy, mu = ca.SX.sym("ym", ny), ca.SX.sym("wy", ny), ca.SX.sym("mu", ny)
             Pz, _ = space.expression(z, pb)
             y = model.outputs(x, u, Pz)[:ny]
-            h, _ = ca.hessian(ca.sum1(mu * (wy * (y - ym)) ** 2), z)
-            funs[ny] = ca.Function("h", [z, x, u, pb, ym, wy, mu], [h]).map(
-                "hmap", "serial", n, [0, 3, 5, 6], [0])
+            # ∇²(μ (w (y − y_m))²) = 2 μ w² (∇y ∇yᵀ + (y − y_m) ∇²y), upper triangle
+            h = ca.SX(nv, nv)
+            for k in range(ny):
+                if ca.depends_on(y[k], z):
+                    g = ca.jacobian(y[k], z)
+                    hy, _ = ca.hessian(y[k], z)
+                    h += 2 * mu[k] * wy[k] ** 2 * (ca.mtimes(g.T, g) + (y[k] - ym[k]) * hy)
+            funs[ny] = ca.Function("h", [z, x, u, pb, ym, wy, mu], [ca.triu(h)],
+                                   {"cse": True}).map("hmap", "serial", n, [0, 3, 5, 6], [0])
         d = P[pos:pos + size]
         a = 0
         Xg = ca.reshape(d[a:a + nx * n], nx, n)
@@ -461,7 +467,7 @@ def _given_hessian(model: BenchModel, space: ParamSpace, keys: Sequence[tuple], 
         ch += ny
     nw = int(W.numel())
     H = ca.diagcat(Hz, ca.SX(nw - nv, nw - nv))
-    return ca.Function("nlp_hess_l", [W, P, lam_f, lam_g], [ca.triu(H)],
+    return ca.Function("nlp_hess_l", [W, P, lam_f, lam_g], [H],
                        ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
 
 
