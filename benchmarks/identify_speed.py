@@ -6,7 +6,7 @@ hidden effect, noise on; not the default data's seed 2019).  21 tests × 4 start
 * **ours** — :func:`ehsa_opt.estimation.identify.identify` (``joint=False``, one
   process): the automatic rigid path (current integrated once per test by a
   compiled Radau stepper, Eq 5 epigraph NLP in the 8 friction parameters on the
-  estimation core, one NLP per test length), plus everything the report needs
+  estimation core, one NLP per objective-sample count), plus everything the report needs
   (per-test Eq 5 errors on the full grid, Fisher identifiability);
 * **baseline** — what a competent user writes: the same smoothing-spline motion,
   the winding current integrated once per test (``scipy.integrate.solve_ivp``,

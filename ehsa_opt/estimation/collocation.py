@@ -14,6 +14,7 @@ varied parameter).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
@@ -56,7 +57,14 @@ def node_indices(n: int, max_intervals: int) -> np.ndarray:
 
 
 def radau_tableau(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
-    """Radau points τ (with 0), derivative matrix C, end weights D, Lagrange basis."""
+    """Radau points τ (with 0), derivative matrix C, end weights D, Lagrange basis
+    (computed once per degree; copies of the arrays are returned)."""
+    tau, C, D, basis = _radau_tableau(int(d))
+    return tau.copy(), C.copy(), D.copy(), list(basis)
+
+
+@functools.lru_cache(maxsize=16)
+def _radau_tableau(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
     tau = np.append(0.0, ca.collocation_points(d, "radau"))
     C = np.zeros((d + 1, d + 1))
     D = np.zeros(d + 1)
@@ -122,12 +130,34 @@ def _quasi_static(model: BenchModel, u: np.ndarray, pbase: np.ndarray) -> np.nda
 
 
 def _radau_pattern(N: int, n_obs: int, d: int, intervals: bytes) -> ca.Sparsity:
-    """Interpolation pattern: observation m reads the polynomial of interval k_m."""
+    """Interpolation pattern: observation m may read the polynomials of its candidate
+    intervals (``intervals``: n_obs × w int64, row m the candidates of m)."""
+    cand = np.frombuffer(intervals, dtype=np.int64).reshape(n_obs, -1)
     rows, cols = [], []
-    for m, k in enumerate(np.frombuffer(intervals, dtype=np.int64)):
-        rows += [int(k)] + [(N + 1) + int(k) * d + j for j in range(d)]
-        cols += [m] * (d + 1)
+    for m, ks in enumerate(cand):
+        for k in ks:
+            rows += [int(k)] + [(N + 1) + int(k) * d + j for j in range(d)]
+            cols += [m] * (d + 1)
     return ca.Sparsity.triplet((N + 1) + d * N, n_obs, rows, cols)
+
+
+def _candidate_intervals(t_nodes: np.ndarray, t_obs: np.ndarray, k_obs: np.ndarray) -> np.ndarray:
+    """Candidate intervals of each observation (n_obs × w), shared by records of any
+    length when possible: observations spread uniformly between the fractions f0 and
+    f1 (rounded to 1e-3) of the node span lie in interval c_m = ⌊N (f0 + (f1 − f0)
+    m/(n_obs − 1))⌋ or the next one, so the pattern {c_m, c_m + 1} depends only on
+    (N, n_obs, f0, f1) and one NLP serves tests of different lengths (the unused
+    interpolation weights are zero).  Otherwise the exact intervals (w = 1)."""
+    N, n_obs = t_nodes.size - 1, t_obs.size
+    if N >= 2 and n_obs >= 2:
+        span = t_nodes[-1] - t_nodes[0]
+        f0 = round(float(t_obs[0] - t_nodes[0]) / span, 3)
+        f1 = round(float(t_obs[-1] - t_nodes[0]) / span, 3)
+        m = np.arange(n_obs)
+        c = np.clip(np.floor(N * (f0 + (f1 - f0) * m / (n_obs - 1))).astype(np.int64), 0, N - 2)
+        if np.all((k_obs == c) | (k_obs == c + 1)):
+            return np.stack([c, c + 1], axis=1)
+    return k_obs.astype(np.int64)[:, None]
 
 
 def radau_block(model: BenchModel, time_s: np.ndarray, motion: Any, node_idx: np.ndarray,
@@ -147,7 +177,7 @@ def radau_block(model: BenchModel, time_s: np.ndarray, motion: Any, node_idx: np
     t_obs = time_s[obs_idx]
     n_obs = t_obs.size
     k_obs = np.clip(np.searchsorted(t_nodes, t_obs, side="right") - 1, 0, N - 1)
-    intervals = k_obs.astype(np.int64).tobytes()
+    intervals = _candidate_intervals(t_nodes, t_obs, k_obs).tobytes()
     sp = _radau_pattern(N, n_obs, d, intervals)
     frac = (t_obs - t_nodes[k_obs]) / h[k_obs]
     dense = np.zeros(((N + 1) + d * N, n_obs))
@@ -296,6 +326,18 @@ def _stepper(model: BenchModel, n_steps: int, d: int = 3, newton: int = 4) -> ca
     key = (model_key(model), n_steps, d, newton)
     if key in _STEPPERS:
         return _STEPPERS[key]
+    F = _step(model, d, newton).mapaccum(n_steps)
+    if len(_STEPPERS) > 64:
+        _STEPPERS.pop(next(iter(_STEPPERS)))
+    _STEPPERS[key] = F
+    return F
+
+
+def _step(model: BenchModel, d: int, newton: int) -> ca.Function:
+    """One Radau IIA step (Newton on the stage equations), built once per model."""
+    key = (model_key(model), "step", d, newton)
+    if key in _STEPPERS:
+        return _STEPPERS[key]
     nx, npar = model.n_states, len(model.param_names)
     _, C, D, _ = radau_tableau(d)
     xk, uc, p, h = ca.SX.sym("xk", nx), ca.SX.sym("uc", 3, d), ca.SX.sym("p", npar), \
@@ -315,11 +357,10 @@ def _stepper(model: BenchModel, n_steps: int, d: int = 3, newton: int = 4) -> ca
         v = newton_step(v, xk, uc, p, h)
     xend = D[0] * xk + sum(D[j] * v[(j - 1) * nx: j * nx] for j in range(1, d + 1))
     step = ca.Function("radau_step", [xk, uc, p, h], [xend])
-    F = step.mapaccum(n_steps)
     if len(_STEPPERS) > 64:
         _STEPPERS.pop(next(iter(_STEPPERS)))
-    _STEPPERS[key] = F
-    return F
+    _STEPPERS[key] = step
+    return step
 
 
 def integrate_states(model: BenchModel, motion: Any, time_s: np.ndarray, pbase: np.ndarray,

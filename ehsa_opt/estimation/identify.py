@@ -269,7 +269,7 @@ def _run_starts(su: _Setup, draws: list[dict[str, float]], ident: bool = True) -
         out.append({"initial": dict(s), "final": su.space.values_of(r.w, su.pbases[0]),
                     "objective": r.objective, "success": r.success, "status": r.status,
                     "iterations": r.iterations, "seconds": r.seconds, "w": r.w,
-                    "history": _history(su, nlp, p, r.rows)})
+                    "history": _history(su, nlp, p, r.rows, r.g_rows)})
     ok = [r for r in out if r["success"]]
     if ident and ok:
         best = min(ok, key=lambda r: r["objective"])
@@ -280,8 +280,9 @@ def _run_starts(su: _Setup, draws: list[dict[str, float]], ident: bool = True) -
     return out
 
 
-def _history(su: _Setup, nlp: core.NLP, p: np.ndarray, rows: list[np.ndarray]) -> dict:
-    J = nlp.J_rows(rows, p)
+def _history(su: _Setup, nlp: core.NLP, p: np.ndarray, rows: list[np.ndarray],
+             g_rows: list[np.ndarray] | None = None) -> dict:
+    J = nlp.J_rows(rows, p, g_rows)
     isF = np.array([k == 0 for ym in su.y_meas for k in range(ym.shape[0])])
     opt = su.options
     obj = opt.objective_scale * (np.max(J, axis=1) + opt.sum_weight * J.mean(axis=1))
