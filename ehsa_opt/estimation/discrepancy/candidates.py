@@ -76,7 +76,9 @@ class Candidate:
 CANDIDATES: dict[str, Candidate] = {
     "backlash": Candidate(
         "backlash",
-        probes=({"backlash_gap_m": 5e-5}, {"backlash_gap_m": 2e-4}),
+        # one probe per ~half decade of the realistic gaps: the signature is far from
+        # linear in the gap, and a 0.8 mm gap projects on neither 0.05 nor 0.2 mm
+        probes=({"backlash_gap_m": 5e-5}, {"backlash_gap_m": 2e-4}, {"backlash_gap_m": 1e-3}),
         # gaps over the realistic 0.005-2 mm and below (1.6x apart) at a mid stiffness,
         # each at four rotor-side friction shares; then the stiffness decades 1e4-1e9
         starts=tuple({"backlash_gap_m": float(g), "backlash_contact_stiffness_N_per_m": 5e6}
