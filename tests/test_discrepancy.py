@@ -285,7 +285,8 @@ def test_backlash_screen_finds_gap_share_and_stiffness_decade():
     from ehsa_opt.estimation.discrepancy.refit import _screen
     from ehsa_opt.physics import make_component
     tests = generate_bench_tests(SyntheticSpec(
-        effects={"backlash": {"backlash_gap_m": 3e-4}}, frequencies_hz=(1.0, 2.5),
+        effects={"backlash": {"backlash_gap_m": 3e-4, "backlash_contact_stiffness_N_per_m": 5e7}},
+        frequencies_hz=(1.0, 2.5),
         loads_ohm=(47.0,), cycles=1.0, seed=4))
     pts = prepare_tests(tests)
     rig = Rig(H, True, ())
@@ -294,11 +295,11 @@ def test_backlash_screen_finds_gap_share_and_stiffness_decade():
     comp = make_component("backlash")
     crig = rig.with_components([comp])
     starts = [{**comp.defaults(), **base.parameters, "backlash_gap_m": g,
-               "backlash_contact_stiffness_N_per_m": 5e5} for g in (3e-5, 1e-4, 3e-4, 1e-3)]
+               "backlash_contact_stiffness_N_per_m": 5e6} for g in (3e-5, 1e-4, 3e-4, 1e-3)]
     best = _screen(pts, rig, crig, starts, (0.0, 0.3),
-                   [{"backlash_contact_stiffness_N_per_m": k} for k in (5e4, 5e6, 5e8)])
+                   [{"backlash_contact_stiffness_N_per_m": k} for k in (5e5, 5e7, 1e9)])
     assert best["backlash_gap_m"] == 3e-4
-    assert best["backlash_contact_stiffness_N_per_m"] == 5e6  # truth: the default 5e6 N/m
+    assert best["backlash_contact_stiffness_N_per_m"] == 5e7  # truth 5e7 N/m
 
 
 def test_fit_candidate_rejects_an_unknown_full_refit():
