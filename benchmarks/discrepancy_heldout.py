@@ -166,14 +166,16 @@ def make_case(d: Path, set_name: str, effects: dict, post: tuple | None, seed: i
 
 
 def run_case(args: tuple) -> dict:
-    set_name, k, (truth, effects, post, seed) = args
+    set_name, k, (truth, effects, post, seed), verbose = args
     from ehsa_opt.estimation.discrepancy import DiscrepancySettings, run_discrepancy
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "case"
         make_case(d, set_name, effects, post, seed)
         n_tests = len(load_bench(d).tests)
         t0 = time.perf_counter()
-        res = run_discrepancy(d, DiscrepancySettings(seed=seed, top=2, max_effects=2))
+        res = run_discrepancy(d, DiscrepancySettings(seed=seed, top=2, max_effects=2),
+                              log=(lambda m: print(f"  [{k}] {m}", flush=True)) if verbose
+                              else None)
         dt = time.perf_counter() - t0
     named = res.effects
     gains = [(c.effect, c.error_before, c.error_after) for c in res.candidates
@@ -203,10 +205,15 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--only", default=None,
                     help="run only these case numbers (comma-separated, e.g. 0,5,20)")
+    ap.add_argument("--case", default=None,
+                    help="run only the cases whose truth label contains this text "
+                         "(e.g. backlash)")
+    ap.add_argument("--verbose", action="store_true", help="print the workflow's progress")
     ap.add_argument("--out", default=None, help="also write the rows as JSON")
     args = ap.parse_args()
-    todo = [(args.set, k, c) for k, c in enumerate(CASES[args.set])
-            if not args.only or k in {int(i) for i in args.only.split(",")}]
+    todo = [(args.set, k, c, args.verbose) for k, c in enumerate(CASES[args.set])
+            if (not args.only or k in {int(i) for i in args.only.split(",")})
+            and (not args.case or args.case in c[0])]
     rows = []
     t_all = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.jobs, max_tasks_per_child=1) as ex:

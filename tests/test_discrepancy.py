@@ -281,3 +281,34 @@ def test_two_effects_are_named_in_turn(tmp_path):
     assert set(res.effects) == {"asymmetric_friction", "voltage_drop"}
     errs = [res.error_before] + [s["error_after"] for s in res.steps]
     assert errs[0] > errs[1] > errs[2]
+
+
+def test_backlash_screen_finds_gap_share_and_stiffness_decade():
+    """The start screen of a gap (forward simulations, linear friction correction) picks
+    the true gap among decades, a rotor-side friction share and the stiffness decade."""
+    from ehsa_opt.estimation.discrepancy.refit import _screen
+    from ehsa_opt.physics import make_component
+    tests = generate_bench_tests(SyntheticSpec(
+        effects={"backlash": {"backlash_gap_m": 3e-4, "backlash_contact_stiffness_N_per_m": 5e7}},
+        frequencies_hz=(1.0, 2.5),
+        loads_ohm=(47.0,), cycles=1.0, seed=4))
+    pts = prepare_tests(tests)
+    rig = Rig(H, True, ())
+    base = fit_group(pts, rig, [linear_baseline(pts, rig)])
+    assert base.success, base.message
+    comp = make_component("backlash")
+    crig = rig.with_components([comp])
+    starts = [{**comp.defaults(), **base.parameters, "backlash_gap_m": g,
+               "backlash_contact_stiffness_N_per_m": 5e6} for g in (3e-5, 1e-4, 3e-4, 1e-3)]
+    best = _screen(pts, rig, crig, starts, (0.0, 0.3),
+                   [{"backlash_contact_stiffness_N_per_m": k} for k in (5e5, 5e7, 1e9)])
+    assert best["backlash_gap_m"] == 3e-4
+    assert best["backlash_contact_stiffness_N_per_m"] == 5e7  # truth 5e7 N/m
+
+
+def test_fit_candidate_rejects_an_unknown_full_refit():
+    from ehsa_opt.estimation.discrepancy.refit import fit_candidate
+    from ehsa_opt.physics import make_component
+    with pytest.raises(ValueError, match="full_refit"):
+        fit_candidate("backlash", make_component("backlash"), [], [], [], Rig(H, True, ()), {},
+                      10, full_refit="newton")

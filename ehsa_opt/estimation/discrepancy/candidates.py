@@ -45,12 +45,25 @@ class Candidate:
         gap need a start near the right magnitude).
     needs_generator : bool
         Only testable on rigs that measure the generator (voltage, rotor).
+    shares : tuple of float
+        Bearing shares of the baseline's lumped friction each start is screened at
+        (a gap decides how far the rotor coasts by the friction on the rotor side).
+    refine : tuple of dict
+        Overrides tried on the best screened start (e.g. the contact stiffness over
+        its decades).
+    full_refit : str
+        How the full refit (friction and effect) is done: ``"collocation"`` (IPOPT)
+        or ``"simulation"`` (Gauss–Newton on the forward simulation from the
+        effect-only collocation fit; see :func:`~.refit.fit_candidate`).
     """
 
     name: str
     probes: tuple[dict, ...]
     starts: tuple[dict, ...]
     needs_generator: bool = False
+    shares: tuple[float, ...] = (0.0,)
+    refine: tuple[dict, ...] = ()
+    full_refit: str = "collocation"
 
     def applicable(self, rig: Rig) -> bool:
         return rig.has_generator or not self.needs_generator
@@ -63,10 +76,18 @@ class Candidate:
 CANDIDATES: dict[str, Candidate] = {
     "backlash": Candidate(
         "backlash",
-        probes=({"backlash_gap_m": 5e-5}, {"backlash_gap_m": 2e-4}),
-        starts=tuple({"backlash_gap_m": float(g), "backlash_contact_stiffness_N_per_m": k}
-                     for g in np.geomspace(1e-5, 2e-3, 9) for k in (2e6, 2e7)),
-        needs_generator=True),
+        # one probe per ~half decade of the realistic gaps: the signature is far from
+        # linear in the gap, and a 0.8 mm gap projects on neither 0.05 nor 0.2 mm
+        probes=({"backlash_gap_m": 5e-5}, {"backlash_gap_m": 2e-4}, {"backlash_gap_m": 1e-3}),
+        # gaps over the realistic 0.005-2 mm and below (1.6x apart) at a mid stiffness,
+        # each at four rotor-side friction shares; then the stiffness decades 1e4-1e9
+        starts=tuple({"backlash_gap_m": float(g), "backlash_contact_stiffness_N_per_m": 5e6}
+                     for g in np.geomspace(5e-6, 2e-3, 14)),
+        needs_generator=True,
+        shares=(0.0, 0.15, 0.3, 0.45),
+        refine=tuple({"backlash_contact_stiffness_N_per_m": float(k)}
+                     for k in (1e4, 1e5, 1e6, 1e7, 1e8, 1e9)),
+        full_refit="simulation"),
     "asymmetric_friction": Candidate(
         "asymmetric_friction",
         probes=({"asym_coulomb_N": 5.0}, {"asym_viscous_Ns_per_m": 30.0}),

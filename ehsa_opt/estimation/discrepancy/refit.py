@@ -161,24 +161,60 @@ def compatible(rig: Rig, component) -> bool:
     return not (component.transmission and any(c.transmission for c in rig.components))
 
 
+def _screen(fit_pts: Sequence[PreparedTest], rig: Rig, crig: Rig, starts: Sequence[dict],
+            shares: Sequence[float], refine: Sequence[dict]) -> dict:
+    """The start whose forward simulation fits best (after the linear friction
+    correction of :func:`_screen_sse`).
+
+    Each start is simulated at every bearing share of the friction in ``shares``
+    (a transmission effect such as a gap separates the rotor from the rod: how much
+    friction acts on the rotor side decides how far it coasts through the gap, and
+    the rigid baseline lumped it all into the nut).  The best one is then varied by
+    each override of ``refine`` (e.g. the contact stiffness over its decades), and
+    the best of those is returned.
+    """
+    r = rig.harvester.lead_m_per_rad
+
+    def cost(st: dict) -> float:
+        return _screen_sse(fit_pts, rig, predict(fit_pts, crig, st), st)
+
+    pool = [split_friction(st, sh, r) if sh > 0 else dict(st) for st in starts for sh in shares]
+    sses = [cost(st) for st in pool]
+    best, sbest = pool[int(np.nanargmin(sses))], float(np.nanmin(sses))
+    for over in refine:
+        st = {**best, **over}
+        c = cost(st)
+        if c < sbest:
+            best, sbest = st, c
+    return best
+
+
 def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequence[PreparedTest],
                   held_pts: Sequence[PreparedTest], rig: Rig, baseline: dict[str, float],
-                  max_iter: int) -> tuple[str, FitOutcome, list[np.ndarray], list[np.ndarray]]:
+                  max_iter: int, *, shares: Sequence[float] = (0.0,),
+                  refine: Sequence[dict] = (), full_refit: str = "collocation"
+                  ) -> tuple[str, FitOutcome, list[np.ndarray], list[np.ndarray]]:
     """Add ``component`` to ``rig`` (which may hold earlier effects) and re-identify.
 
-    Starts (effect parameters) are screened by forward simulation, IPOPT starts
-    from the best; stage 1 fits the effect parameters alone (everything else at
-    ``baseline``), stage 2 everything (see :mod:`.workflow`).  Returns the name,
-    the fit and the simulated outputs of the fit and held-out tests (empty lists
-    when the fit failed).
+    Starts (effect parameters) are screened by forward simulation (each at every
+    bearing share of the friction in ``shares``, the best then varied by the
+    overrides in ``refine``; :func:`_screen`), IPOPT starts from the best; stage 1
+    fits the effect parameters alone (everything else at the screened start),
+    stage 2 everything (see :mod:`.workflow`): by collocation + IPOPT
+    (``full_refit="collocation"``) or, for a contact effect whose full collocation
+    NLP factorises slowly, on the forward simulation itself from the stage-1 point
+    (``"simulation"``, :func:`_refit_on_simulation`).  Returns the name, the fit and
+    the simulated outputs of the fit and held-out tests (empty lists when the fit
+    failed).
     """
+    if full_refit not in ("collocation", "simulation"):
+        raise ValueError(f"fit_candidate: full_refit must be 'collocation' or 'simulation', "
+                         f"got {full_refit!r}")
     crig = rig.with_components([*rig.components, component])
     defaults = component.defaults()
     starts = [{**defaults, **baseline, **s} for s in starts] or [{**defaults, **baseline}]
-    if len(starts) > 1:  # screen the starts by forward simulation, start IPOPT from the best
-        sses = [_screen_sse(fit_pts, rig, predict(fit_pts, crig, st), baseline)
-                for st in starts]
-        starts = [starts[int(np.nanargmin(sses))]]
+    if len(starts) > 1 or len(shares) > 1 or refine:
+        starts = [_screen(fit_pts, rig, crig, starts, shares, refine)]
     eff = [q.name for q in component.parameters]
     first = fit_group(fit_pts, crig, starts, free=eff, fixed=starts[0], max_iter=max_iter)
     if first.parameters and rig.has_generator and component.transmission:
@@ -200,17 +236,10 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
         # rotor speed crosses it within a sample) and lets the collocation cheat
         # between samples: it stays at the baseline value
         free = [n for n in free if n != "bearing_breakaway_velocity_rad_per_s"]
-    # stage 2 starts from the effect-only fit and, for a transmission effect, also from
-    # the screened start with the baseline friction: the baseline friction absorbed part
-    # of the effect, so the effect-only fit can settle in a degenerate optimum (e.g. a
-    # zero backlash gap on the default data) from which the joint fit does not escape,
-    # while the joint fit from the raw start finds the effect (core.solve_starts keeps
-    # the best converged start)
-    stage2 = [first.parameters] if first.parameters else []
-    if component.transmission or not stage2:
-        stage2.append(starts[0])
-    res = fit_group(fit_pts, crig, stage2, free=free, fixed=first.parameters or starts[0],
-                    max_iter=max_iter)
+    if full_refit == "simulation" and first.parameters:
+        return _refit_on_simulation(name, fit_pts, held_pts, crig, first, free)
+    res = fit_group(fit_pts, crig, [first.parameters] if first.parameters else starts,
+                    free=free, fixed=first.parameters or starts[0], max_iter=max_iter)
     if not res.parameters and first.parameters:
         res = first  # the effect-only fit is still a valid (smaller) model
     if not res.parameters:
@@ -224,6 +253,40 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
             res, pf = first, pf1
     res, pf = _match_simulation(fit_pts, crig, res, pf, res.free, max_iter)
     return (name, res, pf, predict(held_pts, crig, res.parameters) if held_pts else [])
+
+
+#: Gauss-Newton iterations of the simulation refit (each costs ``len(free) + 1``
+#: simulations of the fit tests).
+SIMULATION_REFIT_ITER = 8
+
+
+def _refit_on_simulation(name: str, fit_pts: Sequence[PreparedTest],
+                         held_pts: Sequence[PreparedTest], crig: Rig, first: FitOutcome,
+                         free: Sequence[str]
+                         ) -> tuple[str, FitOutcome, list[np.ndarray], list[np.ndarray]]:
+    """Stage 2 on the forward simulation: all ``free`` parameters refined from the
+    effect-only collocation fit ``first`` by :func:`polish` (trust-region
+    Gauss-Newton on the CVODES residuals, :data:`SIMULATION_REFIT_ITER` iterations).
+
+    Used for backlash: with the friction free, the collocation NLP of a stiff
+    contact factorises slowly in MUMPS (minutes and GB per case on the held-out
+    grid), while the stage-1 point is already in the right basin (gap and
+    stiffness screened by simulation), so a few simulated Gauss-Newton steps reach
+    the optimum in seconds.  The reported intervals are those of the effect-only
+    collocation fit (conditional on the friction at its stage-1 value).
+    """
+    t0 = time.perf_counter()
+    po = polish(fit_pts, crig, first.parameters, list(free), max_iter=SIMULATION_REFIT_ITER)
+    pf = predict(fit_pts, crig, po.parameters)
+    sse = _sse(fit_pts, pf)
+    n_obs = first.n_obs
+    res = replace(first, parameters=po.parameters, sse=sse, objective=sse / n_obs,
+                  message=f"{first.message} (effect only), refined on simulation: {po.message}",
+                  starts=[*first.starts, {"simulation_refit": {
+                      "sse_before": po.sse_before, "sse_after": po.sse_after,
+                      "simulations": po.nfev, "free": list(free)}}],
+                  seconds=first.seconds + time.perf_counter() - t0)
+    return name, res, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
 
 
 #: A collocation fit whose simulated SSE exceeds its collocation SSE by more than

@@ -483,7 +483,10 @@ def _term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> T
 
 def _fit_one(a: tuple) -> tuple:
     name, comp, starts, sub_pts, fit_pts, held_pts, rig, params, max_iter = a
-    _, res, _, _ = fit_candidate(name, comp, starts, sub_pts, [], rig, params, max_iter)
+    cand = CANDIDATES[name]
+    _, res, _, _ = fit_candidate(name, comp, starts, sub_pts, [], rig, params, max_iter,
+                                 shares=cand.shares, refine=cand.refine,
+                                 full_refit=cand.full_refit)
     crig = rig.with_components([*rig.components, comp])
     if not res.parameters:
         return name, res, [], [], crig
