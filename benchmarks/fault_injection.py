@@ -130,6 +130,19 @@ def optimize_point(work: Path, k: int, delay_s: float, base: dict[str, object]) 
     return killed, optimize_outputs(out) == base
 
 
+
+def kill_points(what, run_point, work, base, t_base, n, rng) -> int:
+    """Kill ``what`` at ``n`` random instants in (0.3 s, its uninterrupted time), resume,
+    compare with ``base``; returns the number of runs that differ."""
+    bad = 0
+    for k in range(n):
+        delay = float(rng.uniform(0.3, t_base))
+        killed, same = run_point(work, k, delay, base)
+        bad += not same
+        print(f"  {what} kill at {delay:5.2f} s ({'killed' if killed else 'had finished'}): "
+              f"{'identical' if same else 'DIFFERENT'}", flush=True)
+    return bad
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=20, help="reproduce kill points (default 20)")
@@ -141,20 +154,10 @@ def main(argv: list[str] | None = None) -> int:
     bad = 0
     base, t_base = baseline_reproduce(work)
     print(f"reproduce baseline: {t_base:.1f} s, {len(base)} files compared")
-    for k in range(args.points):
-        delay = float(rng.uniform(0.3, t_base))
-        killed, same = reproduce_point(work, k, delay, base)
-        bad += not same
-        print(f"  reproduce kill at {delay:5.2f} s ({'killed' if killed else 'had finished'}): "
-              f"{'identical' if same else 'DIFFERENT'}", flush=True)
+    bad += kill_points("reproduce", reproduce_point, work, base, t_base, args.points, rng)
     obase, t_obase = baseline_optimize(work)
     print(f"optimize baseline: {t_obase:.1f} s")
-    for k in range(args.optimize_points):
-        delay = float(rng.uniform(0.3, t_obase))
-        killed, same = optimize_point(work, k, delay, obase)
-        bad += not same
-        print(f"  optimize kill at {delay:5.2f} s ({'killed' if killed else 'had finished'}): "
-              f"{'identical' if same else 'DIFFERENT'}", flush=True)
+    bad += kill_points("optimize", optimize_point, work, obase, t_obase, args.optimize_points, rng)
     print(f"{args.points + args.optimize_points} kill points, {bad} differences (expected 0); "
           f"work folder {work}")
     return 1 if bad else 0
