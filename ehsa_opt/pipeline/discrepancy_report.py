@@ -208,9 +208,11 @@ def step_discrepancy(ctx: Context) -> StepOutput:
                       "error 4.08 % → 3.11 %.\n")
             md.append("| quantity | paper | ours |\n|---|---|---|")
             md.append(f"| named effect | direction-dependent friction | `{res.effect}` |")
-            md.append(f"| error before (%) | {pub['force_relative_error_percent']} | "
+            md.append(f"| error before (%) — paper: identification record; ours: "
+                      f"{res.evaluation} | {pub['force_relative_error_percent']} | "
                       f"{res.error_before:.2f} |")
-            md.append(f"| error after (%) | {pub['direction_dependent']['force_relative_error_percent']}"
+            md.append(f"| error after (%) — same records | "
+                      f"{pub['direction_dependent']['force_relative_error_percent']}"
                       f" | {res.error_after:.2f} |")
             bp = res.baseline.parameters
             md.append(f"| M (kg) | {pub['inertia_kg']} | {bp['inertia_kg']:.2f} |")
@@ -230,8 +232,10 @@ def step_discrepancy(ctx: Context) -> StepOutput:
                       "velocity/acceleration, the Simscape friction law (with a Stribeck term) "
                       "and a smoothed sign; the published figures come from the authors' "
                       "filtered/decimated least-squares (IDIM-LS) data, hence the small "
-                      "difference. The ΔF_C/offset split is weakly determined (they differ only "
-                      "near v = 0).\n")
+                      "difference in the parameters. The errors are not the same quantity: the "
+                      "paper's are on the record it fitted, ours on the record not used to fit "
+                      f"({res.evaluation}), simulated from the fit. The ΔF_C/offset split is weakly "
+                      "determined (they differ only near v = 0).\n")
         md.append(report_markdown(res, fig_prefix=prefix,
                                   floor=results[name].get("error_true_parameters")))
     return StepOutput("\n".join(md), figs, results)
