@@ -156,9 +156,9 @@ def test_emps_validated_on_the_pulses_record():
 @pytest.mark.slow
 @pytest.mark.parametrize("max_tests,top", [(6, 2), (9, 1)], ids=["quick", "full"])
 def test_default_data_set_gives_backlash(max_tests, top):
-    """The reproduce step's two configurations (quick: 6 tests; full: 9 tests, where the
-    effect-only fit settles at a zero gap and only the joint fit from the raw start finds
-    the backlash)."""
+    """The reproduce step's two configurations (quick: 6 tests; full: 9 tests, where a
+    start screened with all the friction on the nut once led the effect-only fit to a zero
+    gap and the full report named no effect)."""
     from ehsa_opt.datasets.embedded import embedded_data_dir
     res = run_discrepancy(embedded_data_dir("bench_prototype"),
                           DiscrepancySettings(max_tests=max_tests, top=top))
