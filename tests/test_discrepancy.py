@@ -204,6 +204,25 @@ def test_decision_rule_needs_a_gain_beyond_the_noise_floor():
     assert not earns(5.0, 1.0, 1.0, -50.0, 3.0)  # no held-out evidence
 
 
+def test_a_round_at_the_noise_floor_is_skipped_exactly():
+    """can_earn is False only where earns() is False for every possible refit."""
+    from ehsa_opt.estimation.discrepancy.refit import can_earn, earns
+    rng = np.random.default_rng(0)
+    floor, n = 1.0, 1000.0
+    for err0, sse0 in [(1.02, 1.05 * n), (0.95, 1.2 * n), (1.04, 1.0 * n)]:
+        assert not can_earn(err0, floor, sse0, n)
+        for _ in range(200):
+            err1 = err0 * rng.uniform(0.0, 1.0)
+            sse1 = sse0 * rng.uniform(0.5, 1.0)
+            sse_red = (1 - (sse1 - n) / (sse0 - n)
+                       if sse0 > 1.25 * n else None)
+            assert not earns(err0, err1, floor, -1e3, -1e3, sse_red)
+    # an excess of the force error or of the SSE leaves room
+    assert can_earn(1.2, floor, 1.0 * n, n)
+    assert can_earn(1.0, floor, 1.5 * n, n)
+    assert earns(1.0, 1.0, floor, -10.0, -10.0, 1 - (1.1 * n - n) / (1.5 * n - n))
+
+
 def _residual_case(extra, seed=3):
     """Clean tests with a known term added to the measured force; the 'model' is the
     noise-free simulation (so the residual is the term plus noise)."""

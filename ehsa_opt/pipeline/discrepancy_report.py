@@ -96,6 +96,8 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
                  f"{'yes' if c.fitted else 'no'} | {_fmt(c.delta_bic_fit, '.1f')} | "
                  f"{_fmt(c.delta_bic_heldout, '.1f')} | {_fmt(c.error_before, '.3f')} | "
                  f"{_fmt(c.error_after, '.3f')} | {'**yes**' if c.earns else 'no'} |")
+    for note in getattr(res, "notes", []):
+        L.append(f"\n{note[0].upper()}{note[1:]}.")
     L.append(f"\n![ranking]({fig_prefix}discrepancy_ranking.png)\n")
     w = res.winner
     if w is not None:

@@ -29,7 +29,7 @@ from .fit import (
 )
 
 __all__ = ["split_tests", "effective_samples", "split_friction", "fit_candidate", "compatible",
-           "earns", "excess_reduction", "force_noise_floor_percent", "MIN_EXCESS_REDUCTION",
+           "earns", "can_earn", "excess_reduction", "force_noise_floor_percent", "MIN_EXCESS_REDUCTION",
            "FRICTION_SHARES", "MISMATCH_RATIO", "REFINE_SUBSTEPS"]
 
 
@@ -380,6 +380,17 @@ def earns(err_before: float, err_after: float, floor: float, dbic_fit: float,
     if sse_excess_reduction is not None and err_after <= err_before:
         gain = max(gain, sse_excess_reduction)
     return gain >= MIN_EXCESS_REDUCTION and dbic_fit < 0 and dbic_heldout < 0
+
+
+def can_earn(err_before: float, floor: float, sse_before: float, n_obs: float) -> bool:
+    """Whether *any* refit could earn by :func:`earns` from this state — False when
+    the force error's excess over the noise floor is within
+    :data:`MIN_EXCESS_OVER_FLOOR` of the floor (no force gain is possible) and the
+    all-channel SSE is within :data:`MIN_SSE_EXCESS` of its noise expectation N (the
+    SSE alternative is not offered).  Exact: a round started from such a state
+    cannot name anything, so it is not run."""
+    ex0 = math.sqrt(max(err_before ** 2 - floor ** 2, 0.0))
+    return ex0 > MIN_EXCESS_OVER_FLOOR * floor or sse_before > (1 + MIN_SSE_EXCESS) * n_obs
 
 
 def _spread(items: Sequence[Any], n: int | None) -> list[Any]:

@@ -55,12 +55,14 @@ from .fit import (
 )
 from .localise import Localisation, localise
 from .refit import (
+    MIN_EXCESS_OVER_FLOOR,
     MIN_EXCESS_REDUCTION,
     MIN_SSE_EXCESS,
     _crop,
     _dbic,
     _force_error,
     _sse,
+    can_earn,
     compatible,
     earns,
     effective_samples,
@@ -201,6 +203,10 @@ class DiscrepancyResult:
         The data-driven term proposed for the final residual.
     noise_floor : float
         Relative force error (%) of the measurement noise alone (evaluation set).
+    validation : dict or None
+        EMPS-style validation record: open-loop position errors (see :mod:`.openloop`).
+    notes : list of str
+        Why a round was not run (e.g. the residual is already at the noise floor).
     """
 
     success: bool
@@ -225,6 +231,7 @@ class DiscrepancyResult:
     term: TermProposal | None = None
     noise_floor: float = math.nan
     validation: dict | None = None
+    notes: list[str] = field(default_factory=list)
 
     @property
     def winner(self) -> CandidateResult | None:
@@ -273,6 +280,7 @@ class DiscrepancyResult:
                     "noise_floor_percent": self.noise_floor},
                 "term": self.term.as_dict() if self.term else None,
                 "validation": self.validation,
+                "notes": self.notes,
                 "localisation_before": self.loc_before.as_dict(),
                 "localisation_after": self.loc_after.as_dict() if self.loc_after else None,
                 "per_test": self.per_test_errors(),
@@ -331,6 +339,7 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
     cur_rig, cur_params = rig, dict(base.parameters)
     cur_fit, cur_held = base_fit_pred, base_held_pred
     cur_err, effects, steps, all_cands = err0, [], [], []
+    notes: list[str] = []
     if settings.discover and "force_lag" in settings.candidates:
         lagged = try_lag(fit_pts, held_pts, rig, base, cur_fit, cur_held, floor, n_eff_fit,
                           n_eff_held, err0, settings, say)
@@ -362,12 +371,26 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
                                     error_before=cur_err) for n in order}
         chosen = [n for n in order if scores[n]["applicable"]
                   and compatible(cur_rig, comps[n])][:settings.top]
-        say(f"round {rnd} ranking: " + ", ".join(f"{n} {scores[n]['score']:.3g}" for n in order))
+        sse_fit, sse_held = _sse(fit_pts, cur_fit), (_sse(held_pts, cur_held) if held_pts
+                                                      else math.nan)
+        n_obs = sum(pt.y.size for pt in eval_pts)
+        sse0 = sse_held if held_pts else sse_fit
+        say(f"round {rnd} (error {cur_err:.3f} %, floor {floor:.3f} %, SSE/N {sse0 / n_obs:.3f}) "
+            "ranking: " + ", ".join(f"{n} {scores[n]['score']:.3g}" for n in order))
+        if not can_earn(cur_err, floor, sse0, n_obs):
+            excess = math.sqrt(max(cur_err ** 2 - floor ** 2, 0.0))
+            note = (f"round {rnd}: candidates not re-identified — the {evaluation} force "
+                    f"error {cur_err:.3f} % exceeds the noise floor {floor:.3f} % by "
+                    f"{excess:.3f} % (≤ {MIN_EXCESS_OVER_FLOOR:g} × floor) and the all-channel "
+                    f"SSE is {sse0 / n_obs:.3f} N (≤ {1 + MIN_SSE_EXCESS:g} N): no refit can "
+                    f"earn by the decision rule")
+            say(note)
+            notes.append(note)
+            all_cands += [cands[n] for n in order]
+            break
         args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts, cur_rig,
                  cur_params, settings.max_iter) for n in chosen]
         outs = _run_fits(args, settings.jobs)
-        sse_fit, sse_held = _sse(fit_pts, cur_fit), (_sse(held_pts, cur_held) if held_pts
-                                                      else math.nan)
         for name, res, pf, ph, crig in outs:
             c = cands[name]
             c.fitted, c.fit, c.rig = True, res, crig
@@ -388,7 +411,6 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
                 c.delta_bic_heldout = c.delta_bic_fit
                 c.error_after = _force_error(fit_pts, pf)
             c.excess_reduction = excess_reduction(cur_err, c.error_after, floor)
-            n_obs, sse0 = sum(pt.y.size for pt in eval_pts), (sse_held if held_pts else sse_fit)
             c.earns = earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
                             1 - (c.sse_heldout - n_obs) / (sse0 - n_obs)
                             if sse0 > (1 + MIN_SSE_EXCESS) * n_obs else None)
@@ -460,7 +482,7 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
         ok, msg, effect, err0, cur_err, evaluation, all_cands, base, rig, fit_pts, held_pts,
         base_fit_pred + base_held_pred, loc0, loc1, {"fit": n_eff_fit, "heldout": n_eff_held},
         time.perf_counter() - t_start, str(getattr(data, "path", "")), effects, steps, term,
-        floor, validation)
+        floor, validation, notes)
 
 
 #: A catalogue effect that earns is still not named when the data-driven term leaves
