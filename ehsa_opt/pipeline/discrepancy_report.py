@@ -52,6 +52,10 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
              "error. No catalogue effect earning but the term earning → `none of the catalogue`."
              + (" Too few tests to hold any out: the rule uses all data." if not res.heldout_tests
                 else "") + "\n")
+    for note in getattr(res, "notes", []):
+        L.append(f"- {note[0].upper()}{note[1:]}.")
+    if getattr(res, "notes", []):
+        L.append("")
     if res.steps:
         L.append("| step | effect added | error after (%) | excess error removed |\n|---|---|---|---|")
         L.append(f"| 0 | baseline | {res.error_before:.3f} | |")
@@ -96,8 +100,6 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
                  f"{'yes' if c.fitted else 'no'} | {_fmt(c.delta_bic_fit, '.1f')} | "
                  f"{_fmt(c.delta_bic_heldout, '.1f')} | {_fmt(c.error_before, '.3f')} | "
                  f"{_fmt(c.error_after, '.3f')} | {'**yes**' if c.earns else 'no'} |")
-    for note in getattr(res, "notes", []):
-        L.append(f"\n{note[0].upper()}{note[1:]}.")
     L.append(f"\n![ranking]({fig_prefix}discrepancy_ranking.png)\n")
     w = res.winner
     if w is not None:

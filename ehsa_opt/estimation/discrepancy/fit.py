@@ -429,6 +429,11 @@ class PolishOutcome:
     nfev : int
         Simulations of the test group (including finite differences).
     seconds : float
+    free : list[str]
+        The refined names.
+    covariance : ndarray or None
+        Gauss–Newton covariance of the refined parameters at the returned point,
+        s² (JᵀJ)⁺ with s² = SSE/(N − k), in physical units (None when not refined).
     """
 
     success: bool
@@ -438,10 +443,13 @@ class PolishOutcome:
     sse_after: float
     nfev: int
     seconds: float
+    free: list[str] = field(default_factory=list)
+    covariance: np.ndarray | None = None
 
 
 def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
-           free: Sequence[str], *, max_iter: int = 8, diff_step: float = 1e-3) -> PolishOutcome:
+           free: Sequence[str], *, max_iter: int = 8, diff_step: float = 1e-3,
+           log_names: Sequence[str] = ()) -> PolishOutcome:
     """Refine a collocation fit on the forward simulation itself.
 
     The collocation defects are a one-step rule on the sample grid; a stiff
@@ -464,27 +472,41 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         Gauss–Newton iterations (each costs ``len(free) + 1`` simulations of the group).
     diff_step : float
         Forward-difference step in the scaled parameters.
+    log_names : list of str
+        Free parameters refined in log10 (those spanning decades, e.g. a stiffness;
+        their lower bound must be > 0).
     """
     from scipy.optimize import least_squares
     t0 = time.perf_counter()
     model = rig.model()
     specs = {**BASE_SPECS, **model.param_specs}
     free = list(free)
+    is_log = np.array([n in log_names for n in free])
+    for n in log_names:
+        if n in free and not specs[n].lower > 0:
+            raise ValueError(f"polish: {n} cannot be refined in log10 (lower bound "
+                             f"{specs[n].lower} is not > 0)")
     scales = np.array([_scale(specs[n]) for n in free])
-    lb = np.array([specs[n].lower for n in free]) / scales
-    ub = np.array([specs[n].upper for n in free]) / scales
+    lo = np.array([specs[n].lower for n in free], dtype=float)
+    hi = np.array([specs[n].upper for n in free], dtype=float)
+    lb = np.where(is_log, np.log10(np.maximum(lo, 1e-300)), lo / scales)
+    ub = np.where(is_log, np.log10(np.maximum(hi, 1e-300)), hi / scales)
     base = dict(parameters)
     counter = [0]
 
+    def values(z: np.ndarray) -> np.ndarray:
+        return np.where(is_log, 10.0 ** z, z * scales)
+
     def resid(z: np.ndarray) -> np.ndarray:
         counter[0] += 1
-        vals = {**base, **{n: float(z[k] * scales[k]) for k, n in enumerate(free)}}
+        vals = {**base, **{n: float(v) for n, v in zip(free, values(z))}}
         preds = predict(prepared, rig, vals)
         r = np.concatenate([((pt.y - yp) / pt.sigma[:, None]).ravel()
                             for pt, yp in zip(prepared, preds)])
         return np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=-1e6)
 
-    z0 = np.clip(np.array([base[n] for n in free]) / scales, lb, ub)
+    x0 = np.array([base[n] for n in free], dtype=float)
+    z0 = np.clip(np.where(is_log, np.log10(np.maximum(x0, 1e-300)), x0 / scales), lb, ub)
     r0 = resid(z0)
     sse0 = float(r0 @ r0)
     try:
@@ -492,14 +514,20 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
                             diff_step=diff_step, max_nfev=max_iter, jac="2-point")
     except Exception as exc:  # noqa: BLE001 - a failed polish keeps the collocation fit
         return PolishOutcome(False, f"polish failed: {exc}", base, sse0, sse0, counter[0],
-                             time.perf_counter() - t0)
+                             time.perf_counter() - t0, free)
     sse1 = float(2.0 * sol.cost)
     if not sse1 < sse0:
         return PolishOutcome(True, "no improvement", base, sse0, sse0, counter[0],
-                             time.perf_counter() - t0)
-    out = {**base, **{n: float(sol.x[k] * scales[k]) for k, n in enumerate(free)}}
+                             time.perf_counter() - t0, free)
+    x1 = values(sol.x)
+    out = {**base, **{n: float(v) for n, v in zip(free, x1)}}
+    # Gauss-Newton covariance from the final Jacobian (chain rule to physical units)
+    dxdz = np.where(is_log, np.log(10.0) * x1, scales)
+    J = np.asarray(sol.jac, dtype=float) / dxdz[None, :]
+    dof = max(r0.size - len(free), 1)
+    cov = (sse1 / dof) * np.linalg.pinv(J.T @ J)
     return PolishOutcome(True, sol.message, out, sse0, sse1, counter[0],
-                         time.perf_counter() - t0)
+                         time.perf_counter() - t0, free, cov)
 
 
 @dataclass

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from ...datasets.bench_format import BenchData, load_bench
+from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from .candidates import CANDIDATES, components_for, signature_scores
 from .fit import (
     FitOutcome,
@@ -206,7 +207,8 @@ class DiscrepancyResult:
     validation : dict or None
         EMPS-style validation record: open-loop position errors (see :mod:`.openloop`).
     notes : list of str
-        Why a round was not run (e.g. the residual is already at the noise floor).
+        Bench checks the data failed (used anyway) and why a round was not run
+        (e.g. the residual is already at the noise floor).
     """
 
     success: bool
@@ -308,8 +310,20 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
     t_start = time.perf_counter()
     settings = settings or DiscrepancySettings()
     say = log or (lambda msg: None)
+    notes: list[str] = []
     if not isinstance(data, BenchData):
-        data = load_bench(data)
+        # the bench checks compare the signals with the rigid model (e.g. the voltage the
+        # motion implies); data that disagree with it are what this workflow diagnoses, so
+        # those checks are reported, not fatal (syntax and layout errors still are)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", BenchDataWarning)
+            data = load_bench(data, lenient=True)
+        for w in caught:
+            if issubclass(w.category, BenchDataWarning):
+                note = (f"bench check (the data are used anyway — a disagreement with the "
+                        f"rigid model is what this workflow diagnoses): {w.message}")
+                say(note)
+                notes.append(note)
     rig = Rig(data.harvester, data.has_generator, ())
     lead = data.harvester.lead_m_per_rad
     fit_t, held_t, evaluation = _load_split(data, settings)
@@ -339,7 +353,6 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
     cur_rig, cur_params = rig, dict(base.parameters)
     cur_fit, cur_held = base_fit_pred, base_held_pred
     cur_err, effects, steps, all_cands = err0, [], [], []
-    notes: list[str] = []
     if settings.discover and "force_lag" in settings.candidates:
         lagged = try_lag(fit_pts, held_pts, rig, base, cur_fit, cur_held, floor, n_eff_fit,
                           n_eff_held, err0, settings, say)
@@ -508,7 +521,8 @@ def _fit_one(a: tuple) -> tuple:
     cand = CANDIDATES[name]
     _, res, _, _ = fit_candidate(name, comp, starts, sub_pts, [], rig, params, max_iter,
                                  shares=cand.shares, refine=cand.refine,
-                                 full_refit=cand.full_refit)
+                                 full_refit=cand.full_refit, effect_fit=cand.effect_fit,
+                                 log_names=cand.log_names)
     crig = rig.with_components([*rig.components, comp])
     if not res.parameters:
         return name, res, [], [], crig
