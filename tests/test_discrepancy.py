@@ -331,3 +331,15 @@ def test_fit_candidate_rejects_an_unknown_full_refit():
     with pytest.raises(ValueError, match="full_refit"):
         fit_candidate("backlash", make_component("backlash"), [], [], [], Rig(H, True, ()), {},
                       10, full_refit="newton")
+
+
+def test_gauss_newton_covariance_is_infinite_where_the_data_say_nothing():
+    from ehsa_opt.estimation.discrepancy.fit import gauss_newton_covariance
+    rng = np.random.default_rng(1)
+    J = rng.normal(size=(300, 3)) * np.array([1e-3, 1.0, 1e4])  # badly scaled columns
+    assert np.allclose(gauss_newton_covariance(J, 2.0), 2.0 * np.linalg.inv(J.T @ J))
+    # a column collinear with another, and one with no effect: infinite, not zero, variance
+    J2 = np.column_stack([J[:, 0], J[:, 1], 5.0 * J[:, 0], np.zeros(300)])
+    var = np.diag(gauss_newton_covariance(J2, 1.0))
+    assert np.isinf(var[[0, 2, 3]]).all()
+    assert var[1] == pytest.approx(1.0 / (J[:, 1] @ J[:, 1]), rel=0.05)

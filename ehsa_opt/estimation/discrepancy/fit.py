@@ -253,7 +253,10 @@ class FitOutcome:
         if self.covariance is None or name not in self.free:
             return None
         k = self.free.index(name)
-        sd = math.sqrt(max(float(self.covariance[k, k]), 0.0))
+        var = float(self.covariance[k, k])
+        if not math.isfinite(var):
+            return None  # not determined by the data
+        sd = math.sqrt(max(var, 0.0))
         v = self.parameters[name]
         return (v - z * sd, v + z * sd)
 
@@ -523,11 +526,29 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     out = {**base, **{n: float(v) for n, v in zip(free, x1)}}
     # Gauss-Newton covariance from the final Jacobian (chain rule to physical units)
     dxdz = np.where(is_log, np.log(10.0) * x1, scales)
-    J = np.asarray(sol.jac, dtype=float) / dxdz[None, :]
-    dof = max(r0.size - len(free), 1)
-    cov = (sse1 / dof) * np.linalg.pinv(J.T @ J)
+    cov = gauss_newton_covariance(np.asarray(sol.jac, dtype=float) / dxdz[None, :],
+                                  sse1 / max(r0.size - len(free), 1))
     return PolishOutcome(True, sol.message, out, sse0, sse1, counter[0],
                          time.perf_counter() - t0, free, cov)
+
+
+def gauss_newton_covariance(J: np.ndarray, s2: float, rcond: float = 1e-9) -> np.ndarray:
+    """s² (JᵀJ)⁻¹ from a residual Jacobian ``J`` (N × k), by SVD of the
+    column-normalised Jacobian.  Directions the data do not determine (singular
+    values below ``rcond`` × the largest) get an *infinite* variance — a
+    pseudo-inverse would report them as perfectly known (zero width)."""
+    norms = np.linalg.norm(J, axis=0)
+    norms = np.where(norms > 0, norms, 1.0)
+    _, S, Vt = np.linalg.svd(J / norms, full_matrices=False)
+    good = S > rcond * max(S.max(initial=0.0), 1e-300)
+    Vg = Vt[good]
+    cov = (Vg.T / S[good] ** 2) @ Vg
+    loose = np.sum(Vt[~good] ** 2, axis=0) > 1e-6 if (~good).any() else np.zeros(J.shape[1], bool)
+    cov = s2 * cov / np.outer(norms, norms)
+    cov[loose, :] = np.nan
+    cov[:, loose] = np.nan
+    cov[loose, loose] = np.inf
+    return cov
 
 
 @dataclass
