@@ -77,20 +77,32 @@ def _tabulate() -> tuple[np.ndarray, np.ndarray]:
 _T_TAB, _L_TAB = _tabulate()
 
 
+_DLR = _LOG_RHO[1] - _LOG_RHO[0]
+
+
 def _t_l(rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """T(ρ) and L(ρ) for ρ ≥ 0 (small ρ: ρ/2, ρ²/4; large: 2/π − π/(12ρ²), 2ρ/π −
-    ln 2 + π/(12ρ))."""
+    ln 2 + π/(12ρ)); linear interpolation in ln ρ on the uniform table (the index is
+    computed, not searched: the same values as ``np.interp``)."""
     rho = np.maximum(rho, 0.0)
-    lr = np.log(np.maximum(rho, 1e-300))
-    t = np.interp(lr, _LOG_RHO, _T_TAB)
-    l_ = np.interp(lr, _LOG_RHO, _L_TAB)
+    with np.errstate(divide="ignore"):
+        u = (np.log(rho) - _LOG_RHO[0]) / _DLR
+    u = np.clip(u, 0.0, _LOG_RHO.size - 1.0)
+    i = np.minimum(u.astype(np.intp), _LOG_RHO.size - 2)
+    w = u - i
+    t = _T_TAB[i]
+    t += w * (_T_TAB[i + 1] - t)
+    l_ = _L_TAB[i]
+    l_ += w * (_L_TAB[i + 1] - l_)
     small = rho < 1e-4
     big = rho > _RHO_SWITCH
-    with np.errstate(divide="ignore"):
+    if np.any(small):
+        t = np.where(small, 0.5 * rho, t)
+        l_ = np.where(small, 0.25 * rho ** 2, l_)
+    if np.any(big):
         rb = np.where(big, rho, 1.0)
-    t = np.where(small, 0.5 * rho, np.where(big, 2.0 / math.pi - math.pi / (12.0 * rb ** 2), t))
-    l_ = np.where(small, 0.25 * rho ** 2,
-                  np.where(big, 2.0 * rho / math.pi - math.log(2.0) + math.pi / (12.0 * rb), l_))
+        t = np.where(big, 2.0 / math.pi - math.pi / (12.0 * rb ** 2), t)
+        l_ = np.where(big, 2.0 * rho / math.pi - math.log(2.0) + math.pi / (12.0 * rb), l_)
     return t, l_
 
 
@@ -103,7 +115,8 @@ def harmonic_terms(amplitude: Any, breakaway: Any, coulomb: Any, breakaway_veloc
     amplitude : array_like
         V, velocity amplitude (m/s or rad/s), ≥ 0.
     breakaway, coulomb, breakaway_velocity, viscous : array_like
-        The law's parameters (:func:`ehsa_opt.physics.friction.simscape_friction`).
+        The law's parameters (:func:`ehsa_opt.physics.friction.simscape_friction`),
+        broadcast against ``amplitude``.
 
     Returns
     -------
@@ -112,25 +125,50 @@ def harmonic_terms(amplitude: Any, breakaway: Any, coulomb: Any, breakaway_veloc
         and Φ(V) = 2⟨P(V cos φ)⟩ = ∫₀^V 2⟨F v⟩(u)/u du, the friction's energy
         exponent (J per unit modal mass × damping units: N m s/… ; W s).
     """
-    v, brk, cou, ubrk, fv = np.broadcast_arrays(
-        *(np.asarray(a, dtype=float) for a in (amplitude, breakaway, coulomb,
-                                               breakaway_velocity, viscous)))
+    v = np.asarray(amplitude, dtype=float)
+    brk, cou, ubrk, fv = (np.asarray(a, dtype=float) for a in (breakaway, coulomb,
+                                                                 breakaway_velocity, viscous))
+    shape = np.broadcast_shapes(v.shape, brk.shape, cou.shape, ubrk.shape, fv.shape)
+    v = np.broadcast_to(v, shape)
     u_st = math.sqrt(2.0) * ubrk
     u_c = ubrk / 10.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        half_a = np.where(u_st > 0.0, 0.5 * (v / u_st) ** 2, 0.0)
-        rho = np.where(u_c > 0.0, v / u_c, np.inf)
-    t, l_ = _t_l(np.where(np.isfinite(rho), rho, 0.0))
-    inf = ~np.isfinite(rho)
+    v2 = v * v
+    d = 0.5 * fv * v2
+    phi = d.copy()
     dq = _SQRT_2E * (brk - cou)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        strib_d = np.where(dq != 0.0, dq * v ** 2 / u_st * 0.5 * (i0e(half_a) - i1e(half_a)),
-                           0.0)
-        strib_p = np.where(dq != 0.0, dq * u_st * (1.0 - i0e(half_a)), 0.0)
-    coul_d = np.where(cou != 0.0, cou * v * np.where(inf, 2.0 / math.pi, t), 0.0)
-    coul_p = np.where(cou != 0.0, np.where(inf, 4.0 * cou * v / math.pi,
-                                           2.0 * cou * u_c * l_), 0.0)
-    return (fv * v ** 2 / 2.0 + coul_d + strib_d, fv * v ** 2 / 2.0 + coul_p + strib_p)
+    if np.any(dq != 0.0):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv_st = np.where(u_st > 0.0, 1.0 / u_st, 0.0)
+            half_a = 0.5 * v2 * inv_st ** 2
+            i0 = i0e(half_a)
+            strib_d = dq * v2 * inv_st * 0.5 * (i0 - i1e(half_a))
+            strib_p = dq * u_st * (1.0 - i0)
+        if np.all(dq != 0.0):
+            d += strib_d
+            phi += strib_p
+        else:
+            d += np.where(dq != 0.0, strib_d, 0.0)
+            phi += np.where(dq != 0.0, strib_p, 0.0)
+    if np.any(cou != 0.0):
+        pos = u_c > 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rho = np.where(pos, v, 0.0) / np.where(pos, u_c, 1.0)
+        t, l_ = _t_l(rho)
+        if not np.all(pos):
+            t = np.where(pos, t, 2.0 / math.pi)
+            l_ = np.where(pos, l_, 2.0 * v / math.pi)
+            u_c_safe = np.where(pos, u_c, 1.0)
+        else:
+            u_c_safe = u_c
+        coul_d = cou * v * t
+        coul_p = 2.0 * cou * u_c_safe * l_
+        if np.all(cou != 0.0):
+            d += coul_d
+            phi += coul_p
+        else:
+            d += np.where(cou != 0.0, coul_d, 0.0)
+            phi += np.where(cou != 0.0, coul_p, 0.0)
+    return d, phi
 
 
 def _rod_terms(amplitude: np.ndarray, p: np.ndarray, r: np.ndarray

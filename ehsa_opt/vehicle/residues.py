@@ -1,0 +1,259 @@
+"""Exact band-limited variances of the linear quarter car by residues (issue 14).
+
+Why: the friction-aware fast path (:mod:`ehsa_opt.vehicle.equivalent`) needs the
+stroke-velocity variance σ_v²(c) many times while it iterates on the friction's
+equivalent damping c, then the metrics at the fixed point.  A quadrature over a
+few hundred frequencies per design costs far more than the 2-DOF system's five
+poles carry; this module integrates the rational spectra in closed form.
+
+Method.  With the harvester's impedance (SPEC §4, paper Eqs 1–3, as in
+:func:`ehsa_opt.vehicle.metrics.linear_metrics`) and an extra viscous damping c
+between the masses, every output y (stroke velocity, sprung acceleration, tyre
+deflection, current) is y/V0 = H(s) = N(s)/Q(s) with the road velocity V0 as
+input and the degree-5 polynomial (D̃ = (k2 + c s + m_eq s²)(R + L s) + s K_t K_e/r²)::
+
+    Q(s) = D̃(s) ((m1 + m2) s² + k1) + (R + L s) m2 s² (m1 s² + k1)
+
+(poles: body, wheel, electrical).  Numerators: v: k1 m2 s² (R + L s); ẍ2:
+k1 s D̃; i: (K_e/r) k1 m2 s²; x1 − x0: [k1 (D̃ + m2 s² (R + L s)) − Q]/s; the
+comfort output is ẍ2 times the exact rational W_k(s) (order 8, ISO 2631-1,
+:func:`ehsa_opt.vehicle.iso2631.wk_exact_tf`).  For a strictly proper H with simple
+poles λ_k and residues r_k, H(s) H(−s) = Σ_k r_k H(−λ_k) [1/(s − λ_k) + 1/(−s − λ_k)],
+so on s = jω, with μ_k = −λ_k (Re μ_k > 0)::
+
+    ∫_{ωa}^{ωb} |H(jω)|² dω = Σ_k r_k H(−λ_k) · 2 [atan(ωb/μ_k) − atan(ωa/μ_k)]
+
+(the complex arctangent is analytic along ω > 0 because Re μ_k > 0).  The
+one-sided variance over the road band [f_lo, f_hi] of a white road velocity of
+one-sided PSD Φ is then Φ/(2π) times that: exact (no frequency grid), for any
+damping, O(poles) per design.  The poles come from one batched companion
+eigenvalue computation polished by Newton steps; when c changes during the
+fixed-point iteration they are tracked by simultaneous (Aberth–Ehrlich) Newton
+steps from the previous ones, so no eigenvalue problem is solved again.
+
+Validity: the residue formula needs simple poles.  Rows whose poles (with the
+W_k poles) nearly coincide (relative gap < 1e-7) or whose polished roots do not
+satisfy Q(λ) ≈ 0 are flagged (``ok`` False) so the caller can evaluate them by
+quadrature instead.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+
+from ..physics.params import VehicleParams
+from .iso2631 import wk_exact_tf
+
+__all__ = ["QuarterCarPolynomials"]
+
+_WK_NUM, _WK_DEN = (np.asarray(a, float)[::-1].copy() for a in wk_exact_tf())  # ascending
+_WK_POLES = np.roots(_WK_DEN[::-1])
+_WK_DDEN = _WK_DEN[1:] * np.arange(1, _WK_DEN.size)
+
+
+def _pmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Product of batched polynomials (ascending coefficients on the last axis)."""
+    out = np.zeros(np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
+                   + (a.shape[-1] + b.shape[-1] - 1,))
+    for i in range(a.shape[-1]):
+        out[..., i:i + b.shape[-1]] += a[..., i:i + 1] * b
+    return out
+
+
+def _padd(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    k = max(a.shape[-1], b.shape[-1])
+    shape = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
+    out = np.zeros(shape + (k,))
+    out[..., :a.shape[-1]] += a
+    out[..., :b.shape[-1]] += b
+    return out
+
+
+def _peval(c: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """Polynomial with ascending coefficients c (n, k) (or (k,)) at z (n, m) (Horner)."""
+    if c.ndim == 1:
+        out = np.full(z.shape, c[-1], dtype=complex)
+        for j in range(c.size - 2, -1, -1):
+            out = out * z + c[j]
+        return out
+    out = np.broadcast_to(c[:, -1:], z.shape).astype(complex)
+    for j in range(c.shape[1] - 2, -1, -1):
+        out = out * z + c[:, j:j + 1]
+    return out
+
+
+def _pder(c: np.ndarray) -> np.ndarray:
+    return c[..., 1:] * np.arange(1, c.shape[-1])
+
+
+def _band_integral(res_h: np.ndarray, lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
+    """Σ_k r_k H(−λ_k) · 2 [atan(ωb/μ_k) − atan(ωa/μ_k)], μ = −λ: ∫ |H(jω)|² dω."""
+    mu = -lam
+    return np.real(np.sum(res_h * 2.0 * (np.arctan(wb / mu) - np.arctan(wa / mu)), axis=-1))
+
+
+class QuarterCarPolynomials:
+    """The quarter car's transfer functions as polynomials, vectorised over designs.
+
+    Parameters
+    ----------
+    vehicle : VehicleParams
+    design : mapping of 1-D arrays
+        Flat SI arrays of :func:`ehsa_opt.vehicle.metrics.design_arrays`
+        (``J_kgm2, r_m_per_rad, Ke, Kt, L_H, Ri_ohm, Re_ohm``), one entry per design.
+    f_lo, f_hi : float
+        Integration band, Hz.
+    psd : float
+        One-sided road-velocity PSD Φ, (m/s)²/Hz.
+    """
+
+    def __init__(self, vehicle: VehicleParams, design: Mapping[str, np.ndarray], f_lo: float,
+                 f_hi: float, psd: float) -> None:
+        m2, m1 = vehicle.sprung_mass_kg, vehicle.unsprung_mass_kg
+        k2, k1 = vehicle.suspension_stiffness_N_per_m, vehicle.tyre_stiffness_N_per_m
+        self.k1, self.m1, self.m2 = k1, m1, m2
+        r, ke, kt = design["r_m_per_rad"], design["Ke"], design["Kt"]
+        R = design["Ri_ohm"] + design["Re_ohm"]
+        self.open = np.isinf(R)
+        self.R = np.where(self.open, 1.0, R)
+        self.Re = np.where(self.open, 0.0, design["Re_ohm"])
+        # L = 0 is allowed: a pole far out of any band stands for it (as in metrics._mode_grid)
+        L = np.maximum(design["L_H"], 1e-7)
+        self.kt_over_ke = kt / ke
+        kk = np.where(self.open, 0.0, kt * ke / r ** 2)
+        meq = design["J_kgm2"] / r ** 2
+        n = r.size
+        self.n = n
+        self.wa, self.wb = 2.0 * math.pi * f_lo, 2.0 * math.pi * f_hi
+        self.scale = psd / (2.0 * math.pi)
+        z = np.zeros(n)
+        rl = np.stack([self.R, L], axis=1)                                  # R + L s
+        d0 = _padd(_pmul(np.stack([np.full(n, k2), z, meq], axis=1), rl),
+                   np.stack([z, kk], axis=1))                                 # D̃ at c = 0
+        d1 = _pmul(np.stack([z, np.ones(n)], axis=1), rl)                     # ∂D̃/∂c = s (R + L s)
+        p2 = np.array([k1, 0.0, m1 + m2])
+        tail = _pmul(rl, np.array([0.0, 0.0, m2 * k1, 0.0, m2 * m1]))
+        self.q0 = _padd(_pmul(d0, p2), tail)                                  # Q at c = 0, (n, 6)
+        self.q1 = _padd(_pmul(d1, p2), np.zeros((n, 6)))                     # ∂Q/∂c, (n, 6)
+        self.d0, self.d1 = d0, _padd(d1, np.zeros((n, 4)))
+        self.rl = rl
+        self.cur_gain = np.where(self.open, 0.0, ke / r * k1 * m2)
+        # s-scale for the companion matrix
+        self.w0 = math.sqrt(k1 / m1)
+
+    # ------------------------------------------------------------------ poles
+    def q(self, c: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """Coefficients of Q for damping ``c`` (N s/m) on ``rows``, (m, 6)."""
+        return self.q0[rows] + c[:, None] * self.q1[rows]
+
+    def roots(self, qc: np.ndarray) -> np.ndarray:
+        """The five roots of Q (m, 6) by a batched companion eigenvalue problem, polished."""
+        m = qc.shape[0]
+        sc = self.w0 ** np.arange(6)
+        a = qc * sc
+        a = a[:, :5] / a[:, 5:6]
+        comp = np.zeros((m, 5, 5))
+        comp[:, 1:, :4] = np.eye(4)
+        comp[:, :, 4] = -a
+        lam = np.linalg.eigvals(comp).astype(complex) * self.w0
+        return self.track(qc, lam, steps=3)[0]
+
+    @staticmethod
+    def track(qc: np.ndarray, lam: np.ndarray, steps: int = 6
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """Simultaneous Newton (Aberth–Ehrlich) steps on all roots of Q from ``lam``.
+
+        Returns the roots and whether each row converged (last step < 1e-13 relative).
+        """
+        dq = _pder(qc)
+        k = lam.shape[1]
+        eye = np.eye(k, dtype=bool)
+        todo = np.arange(lam.shape[0])
+        lam = lam.copy()
+        done = np.zeros(lam.shape[0], dtype=bool)
+        for _ in range(steps):
+            z = lam[todo]
+            ratio = _peval(qc[todo], z) / _peval(dq[todo], z)
+            diff = z[:, :, None] - z[:, None, :]
+            diff[:, eye] = np.inf
+            corr = ratio / (1.0 - ratio * np.sum(1.0 / diff, axis=2))
+            lam[todo] = z - corr
+            fin = np.all(np.abs(corr) <= 1e-13 * np.abs(z), axis=1)
+            done[todo[fin]] = True
+            todo = todo[~fin]
+            if todo.size == 0:
+                break
+        return lam, done
+
+    def follow(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        """Poles for damping ``c`` on ``rows`` tracked from the poles ``lam`` of a nearby
+        damping (a fresh eigenvalue computation where tracking does not converge)."""
+        qc = self.q(c, rows)
+        new, done = self.track(qc, lam, steps=8)
+        if not np.all(done):
+            bad = np.flatnonzero(~done)
+            new[bad] = self.roots(qc[bad])
+        return new
+
+    def check(self, qc: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        """Rows whose poles are simple, stable and accurate (the residue formula holds)."""
+        allp = np.concatenate([lam, np.broadcast_to(_WK_POLES, (lam.shape[0], _WK_POLES.size))],
+                              axis=1)
+        mag = np.abs(allp)
+        diff = np.abs(allp[:, :, None] - allp[:, None, :])
+        k = allp.shape[1]
+        diff[:, np.eye(k, dtype=bool)] = np.inf
+        gap = np.min(diff / np.maximum(mag[:, :, None], mag[:, None, :]), axis=(1, 2))
+        absq = _peval(np.abs(qc), np.abs(lam)).real
+        resid = np.max(np.abs(_peval(qc, lam)) / absq, axis=1)
+        return (gap > 1e-7) & (resid < 1e-9) & np.all(lam.real < 0.0, axis=1)
+
+    # ------------------------------------------------------------------ variances
+    def var_v(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        """Stroke-velocity variance σ_v² ((m/s)²) for damping c on ``rows`` with poles lam."""
+        qc = self.q(c, rows)
+        nv = self.k1 * self.m2 * _pmul(self.rl[rows], np.array([0.0, 0.0, 1.0]))
+        return self.scale * self._var(nv, qc, lam)
+
+    def _var(self, num: np.ndarray, qc: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        res = _peval(num, lam) / _peval(_pder(qc), lam)
+        h_neg = _peval(num, -lam) / _peval(qc, -lam)
+        return _band_integral(res * h_neg, lam, self.wa, self.wb)
+
+    def variances(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray
+                  ) -> dict[str, np.ndarray]:
+        """All variances on ``rows`` for damping ``c`` and poles ``lam`` (m, 5).
+
+        Returns
+        -------
+        dict
+            ``var_v`` ((m/s)²), ``var_acc_w`` (W_k-weighted ẍ2, (m/s²)²), ``var_tyre``
+            (m²), ``p_load`` (W), ``p_diss`` (W: electrical + c σ_v²).
+        """
+        qc = self.q(c, rows)
+        k1, m2 = self.k1, self.m2
+        rl = self.rl[rows]
+        s2 = np.array([0.0, 0.0, 1.0])
+        out = {"var_v": self.scale * self._var(k1 * m2 * _pmul(rl, s2), qc, lam)}
+        var_i = self.scale * self._var(self.cur_gain[rows, None] * s2, qc, lam)
+        out["p_load"] = self.Re[rows] * var_i
+        out["p_diss"] = (self.kt_over_ke[rows] * np.where(self.open[rows], 0.0, self.R[rows])
+                         * var_i + c * out["var_v"])
+        dc = self.d0[rows] + c[:, None] * self.d1[rows]                     # D̃ (m, 4)
+        num_t = _padd(k1 * _padd(dc, m2 * _pmul(rl, s2)), -qc)                   # (m, 6), zero at s=0
+        out["var_tyre"] = self.scale * self._var(num_t[:, 1:], qc, lam)
+        # comfort: ẍ2 = k1 s D̃ / Q times W_k = Wn/Wd; poles of Q and of Wd
+        na = k1 * np.concatenate([np.zeros((dc.shape[0], 1)), dc], axis=1)  # k1 s D̃
+        num = _pmul(na, _WK_NUM)
+        dq = _pder(qc)
+        res_p = _peval(num, lam) / (_peval(dq, lam) * _peval(_WK_DEN, lam))
+        wp = np.broadcast_to(_WK_POLES, (lam.shape[0], _WK_POLES.size))
+        res_w = _peval(num, wp) / (_peval(qc, wp) * _peval(_WK_DDEN, wp))
+        allp = np.concatenate([lam, wp], axis=1)
+        h_neg = _peval(num, -allp) / (_peval(qc, -allp) * _peval(_WK_DEN, -allp))
+        res = np.concatenate([res_p, res_w], axis=1)
+        out["var_acc_w"] = self.scale * _band_integral(res * h_neg, allp, self.wa, self.wb)
+        return out

@@ -1,0 +1,80 @@
+"""Exact band-limited variances by residues (ehsa_opt.vehicle.residues)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+from ehsa_opt.physics.params import ParameterError, RoadParams, VehicleParams
+from ehsa_opt.vehicle.equivalent import friction_metrics
+from ehsa_opt.vehicle.iso2631 import wk_exact
+from ehsa_opt.vehicle.metrics import design_arrays
+from ehsa_opt.vehicle.residues import QuarterCarPolynomials
+from ehsa_opt.vehicle.road import ROAD_BAND_CYCLES_PER_M, road_velocity_psd
+
+VEHICLE = VehicleParams()
+# well damped, lightly damped (R_e = 10 kΩ, k_n high), heavy inertia, open circuit
+DESIGN = {"load_ohm": np.array([47.0, 1e4, 3.0, math.inf]),
+          "speed_constant_rpm_per_V": np.array([69.7, 11900.0, 300.0, 69.7]),
+          "total_inertia_gcm2": np.array([301.0, 9000.0, 5000.0, 301.0]),
+          "lead_mm_per_rev": np.array([5.0, 5.3, 20.0, 10.0])}
+C_F = np.array([0.0, 30.0, 500.0, 200.0])
+
+
+def _adaptive(road: RoadParams, j: int, d: dict, c: float) -> dict:
+    """The same variances by scipy's adaptive quadrature of the complex transfer functions."""
+    m2, m1 = VEHICLE.sprung_mass_kg, VEHICLE.unsprung_mass_kg
+    k2, k1 = VEHICLE.suspension_stiffness_N_per_m, VEHICLE.tyre_stiffness_N_per_m
+    r, ke, kt, L = d["r_m_per_rad"][j], d["Ke"][j], d["Kt"][j], d["L_H"][j]
+    R = d["Ri_ohm"][j] + d["Re_ohm"][j]
+    meq = d["J_kgm2"][j] / r ** 2
+
+    def tf(f: float) -> tuple:
+        s = 2j * math.pi * f
+        y_el = 0.0 if math.isinf(R) else kt * ke / (r ** 2 * (R + s * L))
+        dd = k2 + s * (s * meq + y_el + c)
+        a11 = dd + m2 * s * s
+        det = a11 * (dd + m1 * s * s + k1) - dd * dd
+        v = k1 * m2 * s * s / det
+        cur = 0.0 if math.isinf(R) else ke / r * v / (R + s * L)
+        return v, k1 * s * dd / det * wk_exact(f), (k1 * a11 - det) / (s * det), cur
+
+    v = road.speed_m_per_s
+    f_lo, f_hi = ROAD_BAND_CYCLES_PER_M[0] * v, ROAD_BAND_CYCLES_PER_M[1] * v
+    out = {}
+    for i, key in enumerate(("var_v", "var_acc_w", "var_tyre", "var_i")):
+        val = integrate.quad(lambda f: abs(tf(f)[i]) ** 2, f_lo, f_hi, points=[1.0, 10.0],
+                             limit=4000, epsabs=0.0, epsrel=1e-11)[0]
+        out[key] = val * road_velocity_psd(road)
+    return out
+
+
+@pytest.mark.parametrize("road", [RoadParams("C", 70.0), RoadParams("B", 30.0)])
+def test_residue_variances_match_adaptive_quadrature(road):
+    d = {k: a.reshape(-1) for k, a in design_arrays(DESIGN).items()}
+    v = road.speed_m_per_s
+    qp = QuarterCarPolynomials(VEHICLE, d, ROAD_BAND_CYCLES_PER_M[0] * v,
+                               ROAD_BAND_CYCLES_PER_M[1] * v, road_velocity_psd(road))
+    rows = np.arange(C_F.size)
+    lam = qp.roots(qp.q(C_F, rows))
+    assert np.all(qp.check(qp.q(C_F, rows), lam))
+    got = qp.variances(C_F, rows, lam)
+    for j in rows:
+        ref = _adaptive(road, j, d, C_F[j])
+        assert got["var_v"][j] == pytest.approx(ref["var_v"], rel=1e-8)
+        assert got["var_acc_w"][j] == pytest.approx(ref["var_acc_w"], rel=1e-8)
+        assert got["var_tyre"][j] == pytest.approx(ref["var_tyre"], rel=1e-8)
+        p_load = d["Re_ohm"][j] * ref["var_i"] if np.isfinite(d["Re_ohm"][j]) else 0.0
+        assert got["p_load"][j] == pytest.approx(p_load, rel=1e-8, abs=1e-300)
+    # poles tracked from c = 0 are the poles computed afresh
+    lam0 = qp.roots(qp.q0)
+    tracked = qp.follow(C_F, rows, lam0)
+    np.testing.assert_allclose(np.sort_complex(tracked), np.sort_complex(lam), rtol=1e-10)
+
+
+def test_method_is_checked():
+    with pytest.raises(ParameterError, match="method"):
+        friction_metrics(VEHICLE, RoadParams("C", 70.0), None, None, method="fast")
