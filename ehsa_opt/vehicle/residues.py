@@ -159,34 +159,33 @@ class QuarterCarPolynomials:
         comp[:, 1:, :4] = np.eye(4)
         comp[:, :, 4] = -a
         lam = np.linalg.eigvals(comp).astype(complex) * self.w0
-        return self.track(qc, lam, steps=3)[0]
+        new, done = self.track(qc, lam, steps=2)
+        return np.where(done[:, None], new, lam)
 
     @staticmethod
-    def track(qc: np.ndarray, lam: np.ndarray, steps: int = 6
+    def track(qc: np.ndarray, lam: np.ndarray, steps: int = 8
               ) -> tuple[np.ndarray, np.ndarray]:
-        """Simultaneous Newton (Aberth–Ehrlich) steps on all roots of Q from ``lam``.
+        """Newton steps on each root of Q (m, 6) from ``lam`` (m, 5).
 
-        Returns the roots and whether each row converged (last step < 1e-13 relative).
+        Returns the roots and whether each row converged to five distinct roots
+        (last step < 1e-12 relative, and the roots' sum and product equal −q4/q5 and
+        −q0/q5 (Vieta) to 1e-9, so no root was lost to a neighbour's basin).
         """
         dq = _pder(qc)
-        k = lam.shape[1]
-        eye = np.eye(k, dtype=bool)
-        todo = np.arange(lam.shape[0])
         lam = lam.copy()
-        done = np.zeros(lam.shape[0], dtype=bool)
+        step = np.zeros(lam.shape)
         for _ in range(steps):
-            z = lam[todo]
-            ratio = _peval(qc[todo], z) / _peval(dq[todo], z)
-            diff = z[:, :, None] - z[:, None, :]
-            diff[:, eye] = np.inf
-            corr = ratio / (1.0 - ratio * np.sum(1.0 / diff, axis=2))
-            lam[todo] = z - corr
-            fin = np.all(np.abs(corr) <= 1e-13 * np.abs(z), axis=1)
-            done[todo[fin]] = True
-            todo = todo[~fin]
-            if todo.size == 0:
+            corr = _peval(qc, lam) / _peval(dq, lam)
+            lam -= corr
+            step = np.abs(corr) / np.maximum(np.abs(lam), 1e-300)
+            if not np.max(step) > 1e-13:
                 break
-        return lam, done
+        lead = qc[:, 5]
+        s_ok = (np.abs(np.sum(lam, axis=1) + qc[:, 4] / lead)
+                <= 1e-9 * np.sum(np.abs(lam), axis=1))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            p_ok = np.abs(np.prod(lam, axis=1) * lead / -qc[:, 0] - 1.0) <= 1e-9
+        return lam, np.all(step <= 1e-12, axis=1) & s_ok & p_ok
 
     def follow(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray) -> np.ndarray:
         """Poles for damping ``c`` on ``rows`` tracked from the poles ``lam`` of a nearby
