@@ -514,7 +514,7 @@ def _model_fixed_point(x0: np.ndarray, rows: np.ndarray, sigma_v_of: Any, cf_of:
             beta = np.where(dc != 0.0, (yb[todo] - ya[todo]) / dc, 0.0)
         beta = np.maximum(beta, 0.0)
         alpha = yb[todo] - beta * cb[todo]
-        xm = _solve_model(alpha, beta, rows[todo], lo[todo], x0[todo], cf_of)
+        xm = _solve_model(alpha, beta, rows[todo], lo[todo], x0[todo], x[todo], cf_of)
         cn = cf_of(np.exp(xm), rows[todo])
         sn = sigma_v_of(cn, rows[todo])
         gn = np.log(sn) - xm
@@ -530,16 +530,24 @@ def _model_fixed_point(x0: np.ndarray, rows: np.ndarray, sigma_v_of: Any, cf_of:
 
 
 def _solve_model(alpha: np.ndarray, beta: np.ndarray, rows: np.ndarray, lo: np.ndarray,
-                 hi: np.ndarray, cf_of: Any) -> np.ndarray:
+                 hi: np.ndarray, guess: np.ndarray, cf_of: Any) -> np.ndarray:
     """Root of h(x) = −2x − ln(α + β c_f(eˣ)) on [lo, hi] (Illinois; lo if h(lo) ≤ 0,
-    hi if h(hi) ≥ 0): the one-mode model's fixed point, ln σ."""
+    hi if h(hi) ≥ 0): the one-mode model's fixed point, ln σ.  Bracketed first by
+    ``guess`` ± 0.25 (the previous iterate), else by [lo, hi]; to 1e-10 in x (the
+    outer secant only needs its iterate well inside its own tolerance)."""
     def h(x: np.ndarray, sub: np.ndarray) -> np.ndarray:
         y = alpha[sub] + beta[sub] * cf_of(np.exp(x), rows[sub])
         return -2.0 * x - np.log(np.maximum(y, 1e-300))
 
     every = np.arange(alpha.size)
-    a, b = lo.copy(), hi.copy()
+    a = np.clip(guess - 0.25, lo, hi)
+    b = np.clip(guess + 0.25, lo, hi)
     ha, hb = h(a, every), h(b, every)
+    for end, val, cond in ((a, ha, ha <= 0.0), (b, hb, hb >= 0.0)):
+        wide = np.flatnonzero(cond & (end != (lo if end is a else hi)))
+        if wide.size:
+            end[wide] = (lo if end is a else hi)[wide]
+            val[wide] = h(end[wide], wide)
     x = np.where(ha <= 0.0, a, b)
     todo = np.flatnonzero((ha > 0.0) & (hb < 0.0))
     side = np.zeros(alpha.size)
@@ -557,5 +565,5 @@ def _solve_model(alpha: np.ndarray, beta: np.ndarray, rows: np.ndarray, lo: np.n
         b[todo] = np.where(pos, b[todo], xn)
         hb[todo] = np.where(pos, np.where(sd == 1, 0.5 * fb, fb), hn)
         side[todo] = np.where(pos, 1, -1)
-        todo = todo[(np.abs(hn) > 1e-13) & (b[todo] - a[todo] > 1e-13)]
+        todo = todo[(np.abs(hn) > 1e-10) & (b[todo] - a[todo] > 1e-10)]
     return x

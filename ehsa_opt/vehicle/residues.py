@@ -77,11 +77,13 @@ def _peval(c: np.ndarray, z: np.ndarray) -> np.ndarray:
     if c.ndim == 1:
         out = np.full(z.shape, c[-1], dtype=complex)
         for j in range(c.size - 2, -1, -1):
-            out = out * z + c[j]
+            out *= z
+            out += c[j]
         return out
     out = np.broadcast_to(c[:, -1:], z.shape).astype(complex)
     for j in range(c.shape[1] - 2, -1, -1):
-        out = out * z + c[:, j:j + 1]
+        out *= z
+        out += c[:, j:j + 1]
     return out
 
 
@@ -90,9 +92,17 @@ def _pder(c: np.ndarray) -> np.ndarray:
 
 
 def _band_integral(res_h: np.ndarray, lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
-    """Σ_k r_k H(−λ_k) · 2 [atan(ωb/μ_k) − atan(ωa/μ_k)], μ = −λ: ∫ |H(jω)|² dω."""
+    """Σ_k r_k H(−λ_k) · 2 [atan(ωb/μ_k) − atan(ωa/μ_k)], μ = −λ: ∫ |H(jω)|² dω.
+
+    2 atan(ω/μ) = −j [Log(μ + jω) − Log(μ − jω)] for Re μ > 0 (both in the right
+    half-plane, no branch cut), and a product of two right-half-plane numbers stays
+    off the negative real axis, so the bracket is −j [Log A − Log B] with
+    A = (μ + jωb)(μ − jωa), B = (μ − jωb)(μ + jωa): two logarithms, no arctangent.
+    """
     mu = -lam
-    return np.real(np.sum(res_h * 2.0 * (np.arctan(wb / mu) - np.arctan(wa / mu)), axis=-1))
+    a = (mu + 1j * wb) * (mu - 1j * wa)
+    b = (mu - 1j * wb) * (mu + 1j * wa)
+    return np.real(np.sum(res_h * (-1j) * (np.log(a) - np.log(b)), axis=-1))
 
 
 class QuarterCarPolynomials:
