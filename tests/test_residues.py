@@ -71,7 +71,7 @@ def test_residue_variances_match_adaptive_quadrature(road):
         assert got["p_load"][j] == pytest.approx(p_load, rel=1e-8, abs=1e-300)
     # poles tracked from c = 0 are the poles computed afresh
     lam0 = qp.roots(qp.q0)
-    tracked = qp.follow(C_F, rows, lam0)
+    tracked = qp.follow(C_F, rows, lam0, np.zeros(C_F.size))
     np.testing.assert_allclose(np.sort_complex(tracked), np.sort_complex(lam), rtol=1e-10)
 
 

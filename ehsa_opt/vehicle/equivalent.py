@@ -417,11 +417,13 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
     n = qp.n
     every = np.arange(n)
     lam = qp.roots(qp.q0)           # frictionless poles; tracked as c_f changes
-    sigma0 = np.sqrt(np.maximum(qp.var_v(np.zeros(n), every, lam), 0.0))
+    c_lam = np.zeros(n)             # the damping of the poles in lam
+    sigma0 = np.sqrt(np.maximum(qp.var_v(c_lam, every, lam), 0.0))
 
     def sigma_v_of(c: np.ndarray, rows: np.ndarray) -> np.ndarray:
         c = np.asarray(c, dtype=float)
-        lam[rows] = qp.follow(c, rows, lam[rows])
+        lam[rows] = qp.follow(c, rows, lam[rows], c_lam[rows])
+        c_lam[rows] = c
         return np.sqrt(np.maximum(qp.var_v(c, rows, lam[rows]), 0.0))
 
     def cf_of(sigma: np.ndarray, rows: np.ndarray) -> np.ndarray:
@@ -448,7 +450,7 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
                     break
                 sc[todo] = sigma_v_of(c[todo], act[todo])
             cf[act] = c
-    lam[:] = qp.follow(cf, every, lam)
+    lam[:] = qp.follow(cf, every, lam, c_lam)
     ok = qp.check(qp.q(cf, every), lam)
     var = qp.variances(cf, every, lam)
     g = G

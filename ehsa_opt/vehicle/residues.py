@@ -52,6 +52,8 @@ __all__ = ["QuarterCarPolynomials"]
 _WK_NUM, _WK_DEN = (np.asarray(a, float)[::-1].copy() for a in wk_exact_tf())  # ascending
 _WK_POLES = np.roots(_WK_DEN[::-1])
 _WK_DDEN = _WK_DEN[1:] * np.arange(1, _WK_DEN.size)
+_WK_INV_DDEN = 1.0 / np.polyval(_WK_DDEN[::-1], _WK_POLES)      # 1/Wd'(q) at W_k's poles
+_WK_INV_DEN_NEG = 1.0 / np.polyval(_WK_DEN[::-1], -_WK_POLES)  # 1/Wd(−q)
 
 
 def _pmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -91,8 +93,8 @@ def _pder(c: np.ndarray) -> np.ndarray:
     return c[..., 1:] * np.arange(1, c.shape[-1])
 
 
-def _band_integral(res_h: np.ndarray, lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
-    """Σ_k r_k H(−λ_k) · 2 [atan(ωb/μ_k) − atan(ωa/μ_k)], μ = −λ: ∫ |H(jω)|² dω.
+def _band_weights(lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
+    """2 [atan(ωb/μ) − atan(ωa/μ)], μ = −λ: ∫_{ωa}^{ωb} |H(jω)|² dω = Σ_k r_k H(−λ_k) × this.
 
     2 atan(ω/μ) = −j [Log(μ + jω) − Log(μ − jω)] for Re μ > 0 (both in the right
     half-plane, no branch cut), and a product of two right-half-plane numbers stays
@@ -102,7 +104,12 @@ def _band_integral(res_h: np.ndarray, lam: np.ndarray, wa: float, wb: float) -> 
     mu = -lam
     a = (mu + 1j * wb) * (mu - 1j * wa)
     b = (mu - 1j * wb) * (mu + 1j * wa)
-    return np.real(np.sum(res_h * (-1j) * (np.log(a) - np.log(b)), axis=-1))
+    return -1j * (np.log(a) - np.log(b))
+
+
+def _band_integral(res_h: np.ndarray, lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
+    """Σ_k r_k H(−λ_k) · 2 [atan(ωb/μ_k) − atan(ωa/μ_k)]: ∫ |H(jω)|² dω."""
+    return np.real(np.sum(res_h * _band_weights(lam, wa, wb), axis=-1))
 
 
 class QuarterCarPolynomials:
@@ -169,7 +176,7 @@ class QuarterCarPolynomials:
         comp[:, 1:, :4] = np.eye(4)
         comp[:, :, 4] = -a
         lam = np.linalg.eigvals(comp).astype(complex) * self.w0
-        new, done = self.track(qc, lam, steps=2)
+        new, done = self.track(qc, lam, steps=1)
         return np.where(done[:, None], new, lam)
 
     @staticmethod
@@ -184,12 +191,23 @@ class QuarterCarPolynomials:
         dq = _pder(qc)
         lam = lam.copy()
         step = np.zeros(lam.shape)
+        todo = None                     # all rows, then only those still moving
         for _ in range(steps):
-            corr = _peval(qc, lam) / _peval(dq, lam)
-            lam -= corr
-            step = np.abs(corr) / np.maximum(np.abs(lam), 1e-300)
-            if not np.max(step) > 1e-13:
+            if todo is None:
+                corr = _peval(qc, lam) / _peval(dq, lam)
+                lam -= corr
+                step = np.abs(corr) / np.maximum(np.abs(lam), 1e-300)
+                moving = np.max(step, axis=1) > 1e-13
+            else:
+                z = lam[todo]
+                corr = _peval(qc[todo], z) / _peval(dq[todo], z)
+                lam[todo] = z - corr
+                step[todo] = np.abs(corr) / np.maximum(np.abs(lam[todo]), 1e-300)
+                moving = np.zeros(lam.shape[0], dtype=bool)
+                moving[todo] = np.max(step[todo], axis=1) > 1e-13
+            if not np.any(moving):
                 break
+            todo = np.flatnonzero(moving)
         lead = qc[:, 5]
         s_ok = (np.abs(np.sum(lam, axis=1) + qc[:, 4] / lead)
                 <= 1e-9 * np.sum(np.abs(lam), axis=1))
@@ -197,10 +215,15 @@ class QuarterCarPolynomials:
             p_ok = np.abs(np.prod(lam, axis=1) * lead / -qc[:, 0] - 1.0) <= 1e-9
         return lam, np.all(step <= 1e-12, axis=1) & s_ok & p_ok
 
-    def follow(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray) -> np.ndarray:
-        """Poles for damping ``c`` on ``rows`` tracked from the poles ``lam`` of a nearby
-        damping (a fresh eigenvalue computation where tracking does not converge)."""
+    def follow(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray,
+               c_old: np.ndarray) -> np.ndarray:
+        """Poles for damping ``c`` on ``rows`` tracked from the poles ``lam`` of damping
+        ``c_old``: first-order prediction dλ/dc = −∂Q/∂c / Q'(λ), then Newton steps
+        (a fresh eigenvalue computation where tracking does not converge)."""
         qc = self.q(c, rows)
+        q_old = self.q(c_old, rows)
+        lam = lam - (c - c_old)[:, None] * (_peval(self.q1[rows], lam)
+                                            / _peval(_pder(q_old), lam))
         new, done = self.track(qc, lam, steps=8)
         if not np.all(done):
             bad = np.flatnonzero(~done)
@@ -209,16 +232,17 @@ class QuarterCarPolynomials:
 
     def check(self, qc: np.ndarray, lam: np.ndarray) -> np.ndarray:
         """Rows whose poles are simple, stable and accurate (the residue formula holds)."""
-        allp = np.concatenate([lam, np.broadcast_to(_WK_POLES, (lam.shape[0], _WK_POLES.size))],
-                              axis=1)
-        mag = np.abs(allp)
-        diff = np.abs(allp[:, :, None] - allp[:, None, :])
-        k = allp.shape[1]
-        diff[:, np.eye(k, dtype=bool)] = np.inf
-        gap = np.min(diff / np.maximum(mag[:, :, None], mag[:, None, :]), axis=(1, 2))
-        absq = _peval(np.abs(qc), np.abs(lam)).real
+        mag = np.abs(lam)
+        gaps = []
+        for other in (lam, np.broadcast_to(_WK_POLES, (lam.shape[0], _WK_POLES.size))):
+            diff = np.abs(lam[:, :, None] - other[:, None, :])
+            if other is lam:
+                diff[:, np.eye(lam.shape[1], dtype=bool)] = np.inf
+            gaps.append(np.min(diff / np.maximum(mag[:, :, None], np.abs(other)[:, None, :]),
+                               axis=(1, 2)))
+        absq = _peval(np.abs(qc), mag).real
         resid = np.max(np.abs(_peval(qc, lam)) / absq, axis=1)
-        return (gap > 1e-7) & (resid < 1e-9) & np.all(lam.real < 0.0, axis=1)
+        return (np.minimum(*gaps) > 1e-7) & (resid < 1e-9) & np.all(lam.real < 0.0, axis=1)
 
     # ------------------------------------------------------------------ variances
     def var_v(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray) -> np.ndarray:
@@ -246,23 +270,32 @@ class QuarterCarPolynomials:
         k1, m2 = self.k1, self.m2
         rl = self.rl[rows]
         s2 = np.array([0.0, 0.0, 1.0])
-        out = {"var_v": self.scale * self._var(k1 * m2 * _pmul(rl, s2), qc, lam)}
-        var_i = self.scale * self._var(self.cur_gain[rows, None] * s2, qc, lam)
+        # shared by every output: 1/Q'(λ), 1/Q(−λ) and the band weights of the poles
+        inv_dq = 1.0 / _peval(_pder(qc), lam)
+        inv_qn = 1.0 / _peval(qc, -lam)
+        band = _band_weights(lam, self.wa, self.wb)
+
+        def var(num: np.ndarray) -> np.ndarray:
+            h = _peval(num, lam) * inv_dq * _peval(num, -lam) * inv_qn
+            return self.scale * np.real(np.sum(h * band, axis=1))
+
+        out = {"var_v": var(k1 * m2 * _pmul(rl, s2))}
+        var_i = var(self.cur_gain[rows, None] * s2)
         out["p_load"] = self.Re[rows] * var_i
         out["p_diss"] = (self.kt_over_ke[rows] * np.where(self.open[rows], 0.0, self.R[rows])
                          * var_i + c * out["var_v"])
         dc = self.d0[rows] + c[:, None] * self.d1[rows]                     # D̃ (m, 4)
-        num_t = _padd(k1 * _padd(dc, m2 * _pmul(rl, s2)), -qc)                   # (m, 6), zero at s=0
-        out["var_tyre"] = self.scale * self._var(num_t[:, 1:], qc, lam)
+        num_t = _padd(k1 * _padd(dc, m2 * _pmul(rl, s2)), -qc)              # zero at s = 0
+        out["var_tyre"] = var(num_t[:, 1:])
         # comfort: ẍ2 = k1 s D̃ / Q times W_k = Wn/Wd; poles of Q and of Wd
         na = k1 * np.concatenate([np.zeros((dc.shape[0], 1)), dc], axis=1)  # k1 s D̃
         num = _pmul(na, _WK_NUM)
-        dq = _pder(qc)
-        res_p = _peval(num, lam) / (_peval(dq, lam) * _peval(_WK_DEN, lam))
+        hp = (_peval(num, lam) * inv_dq / _peval(_WK_DEN, lam)
+              * _peval(num, -lam) * inv_qn / _peval(_WK_DEN, -lam))
         wp = np.broadcast_to(_WK_POLES, (lam.shape[0], _WK_POLES.size))
-        res_w = _peval(num, wp) / (_peval(qc, wp) * _peval(_WK_DDEN, wp))
-        allp = np.concatenate([lam, wp], axis=1)
-        h_neg = _peval(num, -allp) / (_peval(qc, -allp) * _peval(_WK_DEN, -allp))
-        res = np.concatenate([res_p, res_w], axis=1)
-        out["var_acc_w"] = self.scale * _band_integral(res * h_neg, allp, self.wa, self.wb)
+        hw = (_peval(num, wp) / _peval(qc, wp) * _WK_INV_DDEN
+              * _peval(num, -wp) / _peval(qc, -wp) * _WK_INV_DEN_NEG)
+        out["var_acc_w"] = self.scale * (np.real(np.sum(hp * band, axis=1))
+                                         + np.real(hw @ _band_weights(_WK_POLES, self.wa,
+                                                                      self.wb)))
         return out
