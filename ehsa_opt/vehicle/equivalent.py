@@ -19,17 +19,30 @@ vectorised over designs:
   quadrature of E[u tanh(u/u_c)] otherwise.
 
 The bearing law is linearised in ω = v/r (σ_ω = σ_v/r) and seen at the rod as
-c_b/r².  c_f joins the harvester's damping in the exact linear frequency path
-(:func:`ehsa_opt.vehicle.metrics.linear_metrics`, ``friction_damping_Ns_per_m``),
-whose σ_v depends on c_f: the fixed point σ_v = σ_lin(c_f(σ_v)) is found per
-design by a vectorised Illinois (regula falsi) iteration on log σ_v, bracketed by
-the frictionless σ_v (c_f ≥ 0 only lowers σ_v) and 10⁻⁴ of it.  The iteration
-runs inside ``linear_metrics`` on each block's prepared (coarser) frequency grid
-(only |det|² depends on c_f, so one iteration costs a small fraction of a full
-evaluation); the metrics at the fixed point are then one exact linear evaluation
-with c_f: the friction-aware evaluation costs 2–3 linear ones (measured: 4000
-designs 0.54 s Gaussian, 0.67 s with the averaging correction, linear path 0.24 s;
-76 designs 7.0 / 8.2 / 2.5 ms).  Friction then
+c_b/r².  c_f joins the harvester's damping in the linear quarter car, whose σ_v
+depends on c_f: the fixed point σ_v = σ_lin(c_f(σ_v)) is solved per design.
+
+Default (``method="exact"``): the linear quarter car's variances over the road band
+are integrated in closed form by residues (:mod:`ehsa_opt.vehicle.residues`: five
+poles per design, no frequency grid, exact to rounding), the poles being tracked by
+Newton steps as c_f changes.  The fixed point is found by secants of the one-mode
+model 1/σ_v² = α + β c (exact for one lightly damped mode under white excitation,
+nearly so for the quarter car): each step fits α, β through the two latest exact
+points (c, 1/σ_lin²(c)), solves the model's fixed point (only the friction law is
+evaluated) and evaluates σ_lin exactly at its c_f, until |ln σ_lin(c_f(σ)) − ln σ| <
+rtol — typically 2 exact evaluations.  The Coulomb expectation is a univariate
+function of u_c/σ, tabulated once (cubic spline, relative error < 1e-10).  4000
+designs: about 0.1 s with the averaging correction (the time-domain path needs
+20–40 ms per design; ``benchmarks/friction_fast_path.py``).
+
+``method="quadrature"`` keeps the frequency grid of
+:func:`ehsa_opt.vehicle.metrics.linear_metrics`: a vectorised Illinois (regula
+falsi) iteration on log σ_v, bracketed by the frictionless σ_v (c_f ≥ 0 only lowers
+σ_v) and 10⁻⁴ of it, runs inside ``linear_metrics`` on each block's prepared
+(coarser) grid (only |det|² depends on c_f), then again on the final grid refined
+around the poles with that c_f (``resolve_on_final_grid``); the metrics are one
+linear evaluation with c_f.  Its grid error is up to ~1e-3 on lightly damped
+designs (the exact path is the limit of its refinement).  Friction then
 dissipates E[F_f v] = c_f σ_v², included in ``dissipated_power_W`` so the
 efficiency is the generator's share, as in the time-domain path.
 
@@ -211,7 +224,8 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
     rtol : float
         Tolerance on log σ_v of the fixed point.
     max_iter : int
-        Iteration limit (Illinois steps).
+        Iteration limit (model-secant steps of the "exact" method, Illinois steps of
+        the "quadrature" one).
     iteration_n_freq : int
         Shared grid points while iterating (the fixed point c_f is then evaluated
         exactly by ``linear_metrics`` at ``n_freq`` on a grid refined around the
@@ -545,10 +559,11 @@ def _solve_model(alpha: np.ndarray, beta: np.ndarray, rows: np.ndarray, lo: np.n
     a = np.clip(guess - 0.25, lo, hi)
     b = np.clip(guess + 0.25, lo, hi)
     ha, hb = h(a, every), h(b, every)
-    for end, val, cond in ((a, ha, ha <= 0.0), (b, hb, hb >= 0.0)):
-        wide = np.flatnonzero(cond & (end != (lo if end is a else hi)))
+    # the root is not inside guess ± 0.25: widen that end to [lo, hi]'s
+    for end, val, limit, outside in ((a, ha, lo, ha <= 0.0), (b, hb, hi, hb >= 0.0)):
+        wide = np.flatnonzero(outside & (end != limit))
         if wide.size:
-            end[wide] = (lo if end is a else hi)[wide]
+            end[wide] = limit[wide]
             val[wide] = h(end[wide], wide)
     x = np.where(ha <= 0.0, a, b)
     todo = np.flatnonzero((ha > 0.0) & (hb < 0.0))

@@ -112,6 +112,53 @@ def _band_integral(res_h: np.ndarray, lam: np.ndarray, wa: float, wb: float) -> 
     return np.real(np.sum(res_h * _band_weights(lam, wa, wb), axis=-1))
 
 
+def _ferrari_roots(qc: np.ndarray, guess: np.ndarray) -> np.ndarray:
+    """Approximate roots (m, 5) of the quintics qc (m, 6): a real root by Newton from
+    ``guess`` (m,), deflated, then the quartic's four roots by Ferrari's method."""
+    x = guess.astype(float).copy()
+    dq = _pder(qc)
+    for _ in range(30):
+        step = _peval(qc, x[:, None]).real[:, 0] / _peval(dq, x[:, None]).real[:, 0]
+        x -= step
+        if not np.max(np.abs(step) / np.abs(x)) > 1e-15:
+            break
+    # deflate Q = (s − x) B from the constant term up (b0 = −q0/x, b_k = (b_{k−1} − q_k)/x):
+    # stable for the largest root, which the electrical one is
+    b = np.empty((qc.shape[0], 5))
+    b[:, 0] = -qc[:, 0] / x
+    for j in range(1, 5):
+        b[:, j] = (b[:, j - 1] - qc[:, j]) / x
+    a3, a2, a1, a0 = (b[:, j] / b[:, 4] for j in (3, 2, 1, 0))
+    p = a2 - 3.0 * a3 ** 2 / 8.0
+    q = a1 - a3 * a2 / 2.0 + a3 ** 3 / 8.0
+    r = a0 - a3 * a1 / 4.0 + a3 ** 2 * a2 / 16.0 - 3.0 * a3 ** 4 / 256.0
+    # resolvent cubic m³ + p m² + (p²/4 − r) m − q²/8 = 0, its largest root (Cardano)
+    c1, c0 = p ** 2 / 4.0 - r, -q ** 2 / 8.0
+    pp = (c1 - p ** 2 / 3.0).astype(complex)
+    qq = (2.0 * p ** 3 / 27.0 - p * c1 / 3.0 + c0).astype(complex)
+    disc = np.sqrt(qq ** 2 / 4.0 + pp ** 3 / 27.0)
+    u = np.where(np.abs(-qq / 2.0 + disc) >= np.abs(-qq / 2.0 - disc), -qq / 2.0 + disc,
+                 -qq / 2.0 - disc)
+    cc = u ** (1.0 / 3.0)
+    best = np.zeros(qc.shape[0], dtype=complex)
+    for k in range(3):
+        ck = cc * np.exp(2j * math.pi * k / 3.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(ck != 0.0, ck - pp / (3.0 * ck), 0.0)
+        mk = t - p / 3.0
+        best = np.where(np.abs(mk) > np.abs(best), mk, best)
+    sq = np.sqrt(2.0 * best)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        qm = np.where(best != 0.0, q / best, 0.0)
+    out = np.empty((qc.shape[0], 5), dtype=complex)
+    out[:, 0] = x
+    for i, sg in enumerate((1.0, -1.0)):
+        root = np.sqrt(-2.0 * best - 2.0 * p - sg * sq * qm)
+        out[:, 1 + 2 * i] = (sg * sq + root) / 2.0 - a3 / 4.0
+        out[:, 2 + 2 * i] = (sg * sq - root) / 2.0 - a3 / 4.0
+    return out
+
+
 class QuarterCarPolynomials:
     """The quarter car's transfer functions as polynomials, vectorised over designs.
 
@@ -167,7 +214,27 @@ class QuarterCarPolynomials:
         return self.q0[rows] + c[:, None] * self.q1[rows]
 
     def roots(self, qc: np.ndarray) -> np.ndarray:
-        """The five roots of Q (m, 6) by a batched companion eigenvalue problem, polished."""
+        """The five roots of Q (m, 6), polished by Newton steps.
+
+        The electrical root is far out (near −R/L): found by real Newton steps from
+        −R/L and deflated; the remaining quartic (body and wheel modes) is solved in
+        closed form (Ferrari); all five are then polished on Q itself.  Rows where that
+        does not converge to five distinct roots (checked by Vieta's relations) fall
+        back to a batched companion eigenvalue computation.
+        """
+        m = qc.shape[0]
+        lam = np.empty((m, 5), dtype=complex)
+        ok = np.zeros(m, dtype=bool)
+        if m:
+            # the roots' sum −q4/q5 is about the electrical root (the modes' real
+            # parts are small beside it)
+            lam, ok = self.track(qc, _ferrari_roots(qc, -qc[:, 4] / qc[:, 5]), steps=4)
+        bad = np.flatnonzero(~ok)
+        if bad.size:
+            lam[bad] = self._eig_roots(qc[bad])
+        return lam
+
+    def _eig_roots(self, qc: np.ndarray) -> np.ndarray:
         m = qc.shape[0]
         sc = self.w0 ** np.arange(6)
         a = qc * sc
