@@ -165,6 +165,38 @@ def law_equivalent_damping(sigma: ArrayLike, breakaway: ArrayLike, coulomb: Arra
     return fv + stribeck + coul
 
 
+class _LawTerms:
+    """:func:`friction_equivalent_damping_Ns_per_m` with the per-design constants of
+    both laws precomputed (the same formulas; for the many calls of the fixed point).
+
+    Parameters
+    ----------
+    fr : ndarray (n, 8)
+        Friction sets in :data:`FRICTION_NAMES` order.
+    r : ndarray (n,)
+        r = lead/2π, m/rad.
+    """
+
+    def __init__(self, fr: np.ndarray, r: np.ndarray) -> None:
+        self.r = r
+        self.laws = []
+        for k, scale in ((0, 1.0), (4, r ** -2)):   # nut at v; bearing at v/r, seen as /r²
+            brk, cou, ubrk, fv = (fr[:, k + j] for j in range(4))
+            u_st = math.sqrt(2.0) * ubrk
+            with np.errstate(divide="ignore", invalid="ignore"):
+                self.laws.append((fv * scale, _SQRT_2E * (brk - cou) / u_st * scale,
+                                  2.0 / u_st ** 2, cou * scale, ubrk / 10.0))
+
+    def __call__(self, sigma: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        out = np.zeros(rows.size)
+        for i, (fv, strib, inv_st2, cou, u_c) in enumerate(self.laws):
+            s = sigma if i == 0 else sigma / self.r[rows]
+            c = cou[rows]
+            out += fv[rows] + strib[rows] * (1.0 + inv_st2[rows] * s * s) ** -1.5
+            out += np.where(c > 0.0, c * _coulomb_term(s, u_c[rows]), 0.0)
+        return out
+
+
 def friction_array(friction: FrictionParams | Sequence[FrictionParams] | ArrayLike | None
                    ) -> np.ndarray:
     """Friction sets as an array (..., 8) in :data:`FRICTION_NAMES` order."""
@@ -440,8 +472,10 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
         c_lam[rows] = c
         return np.sqrt(np.maximum(qp.var_v(c, rows, lam[rows]), 0.0))
 
+    laws = _LawTerms(fr, r)
+
     def cf_of(sigma: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        return friction_equivalent_damping_Ns_per_m(sigma, fr[rows], r[rows])
+        return laws(sigma, rows)
 
     c_gauss, iters, conv = record
     cf = np.zeros(n)
