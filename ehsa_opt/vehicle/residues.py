@@ -77,13 +77,13 @@ def _padd(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def _peval(c: np.ndarray, z: np.ndarray) -> np.ndarray:
     """Polynomial with ascending coefficients c (n, k) (or (k,)) at z (n, m) (Horner)."""
     if c.ndim == 1:
-        out = np.full(z.shape, c[-1], dtype=complex)
-        for j in range(c.size - 2, -1, -1):
-            out *= z
-            out += c[j]
-        return out
-    out = np.broadcast_to(c[:, -1:], z.shape).astype(complex)
-    for j in range(c.shape[1] - 2, -1, -1):
+        c = c[None, :]
+    k = c.shape[-1]
+    if k == 1:
+        return np.broadcast_to(c[:, :1], z.shape).astype(complex)
+    out = z * c[:, -1:]
+    out += c[:, -2:-1]
+    for j in range(k - 3, -1, -1):
         out *= z
         out += c[:, j:j + 1]
     return out
