@@ -62,6 +62,8 @@ def test_residue_variances_match_adaptive_quadrature(road):
     lam = qp.roots(qp.q(C_F, rows))
     assert np.all(qp.check(qp.q(C_F, rows), lam))
     got = qp.variances(C_F, rows, lam)
+    # the fixed point's cheaper σ_v² (Q(−λ) = −2 Q_odd(λ)) is the same number
+    np.testing.assert_allclose(qp.var_v(C_F, rows, lam), got["var_v"], rtol=1e-8)
     for j in rows:
         ref = _adaptive(road, j, d, C_F[j])
         assert got["var_v"][j] == pytest.approx(ref["var_v"], rel=1e-8)

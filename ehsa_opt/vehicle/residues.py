@@ -315,8 +315,14 @@ class QuarterCarPolynomials:
     def var_v(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray) -> np.ndarray:
         """Stroke-velocity variance σ_v² ((m/s)²) for damping c on ``rows`` with poles lam."""
         qc = self.q(c, rows)
-        nv = self.k1 * self.m2 * _pmul(self.rl[rows], np.array([0.0, 0.0, 1.0]))
-        return self.scale * self._var(nv, qc, lam)
+        # N_v(λ) N_v(−λ) = (k1 m2)² λ⁴ (R² − L² λ²); Q'(λ) by Horner; Q(−λ) = −2 Q_odd(λ)
+        # (Q(λ) = 0: Q_even(λ) = −Q_odd(λ)), three coefficients in λ²
+        l2 = lam * lam
+        rr, ll = self.rl[rows, :1], self.rl[rows, 1:]
+        nn = (self.k1 * self.m2) ** 2 * (l2 * l2) * (rr * rr - (ll * ll) * l2)
+        q_odd = lam * (qc[:, 1:2] + l2 * (qc[:, 3:4] + l2 * qc[:, 5:6]))
+        h = nn / (_peval(_pder(qc), lam) * (-2.0 * q_odd))
+        return self.scale * _band_integral(h, lam, self.wa, self.wb)
 
     def _var(self, num: np.ndarray, qc: np.ndarray, lam: np.ndarray) -> np.ndarray:
         res = _peval(num, lam) / _peval(_pder(qc), lam)
