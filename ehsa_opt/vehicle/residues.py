@@ -89,6 +89,19 @@ def _peval(c: np.ndarray, z: np.ndarray) -> np.ndarray:
     return out
 
 
+def _peval_d(c: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Polynomial (ascending c (n, k), k ≥ 2) and its derivative at z (n, m), one pass."""
+    p = z * c[:, -1:]
+    p += c[:, -2:-1]
+    dp = np.broadcast_to(c[:, -1:], z.shape).astype(z.dtype)
+    for j in range(c.shape[1] - 3, -1, -1):
+        dp *= z
+        dp += p
+        p *= z
+        p += c[:, j:j + 1]
+    return p, dp
+
+
 def _pder(c: np.ndarray) -> np.ndarray:
     return c[..., 1:] * np.arange(1, c.shape[-1])
 
@@ -255,19 +268,20 @@ class QuarterCarPolynomials:
         (last step < 1e-12 relative, and the roots' sum and product equal −q4/q5 and
         −q0/q5 (Vieta) to 1e-9, so no root was lost to a neighbour's basin).
         """
-        dq = _pder(qc)
         lam = lam.copy()
         step = np.zeros(lam.shape)
         todo = None                     # all rows, then only those still moving
         for _ in range(steps):
             if todo is None:
-                corr = _peval(qc, lam) / _peval(dq, lam)
+                p, dp = _peval_d(qc, lam)
+                corr = p / dp
                 lam -= corr
                 step = np.abs(corr) / np.maximum(np.abs(lam), 1e-300)
                 moving = np.max(step, axis=1) > 1e-13
             else:
                 z = lam[todo]
-                corr = _peval(qc[todo], z) / _peval(dq[todo], z)
+                p, dp = _peval_d(qc[todo], z)
+                corr = p / dp
                 lam[todo] = z - corr
                 step[todo] = np.abs(corr) / np.maximum(np.abs(lam[todo]), 1e-300)
                 moving = np.zeros(lam.shape[0], dtype=bool)
@@ -288,9 +302,8 @@ class QuarterCarPolynomials:
         ``c_old``: first-order prediction dλ/dc = −∂Q/∂c / Q'(λ), then Newton steps
         (a fresh eigenvalue computation where tracking does not converge)."""
         qc = self.q(c, rows)
-        q_old = self.q(c_old, rows)
-        lam = lam - (c - c_old)[:, None] * (_peval(self.q1[rows], lam)
-                                            / _peval(_pder(q_old), lam))
+        dq_old = _peval_d(self.q(c_old, rows), lam)[1]
+        lam = lam - (c - c_old)[:, None] * (_peval(self.q1[rows, :5], lam) / dq_old)
         new, done = self.track(qc, lam, steps=8)
         if not np.all(done):
             bad = np.flatnonzero(~done)
