@@ -83,26 +83,29 @@ _DLR = _LOG_RHO[1] - _LOG_RHO[0]
 def _t_l(rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """T(ρ) and L(ρ) for ρ ≥ 0 (small ρ: ρ/2, ρ²/4; large: 2/π − π/(12ρ²), 2ρ/π −
     ln 2 + π/(12ρ)); linear interpolation in ln ρ on the uniform table (the index is
-    computed, not searched: the same values as ``np.interp``)."""
-    rho = np.maximum(rho, 0.0)
-    with np.errstate(divide="ignore"):
-        u = (np.log(rho) - _LOG_RHO[0]) / _DLR
-    u = np.clip(u, 0.0, _LOG_RHO.size - 1.0)
-    i = np.minimum(u.astype(np.intp), _LOG_RHO.size - 2)
-    w = u - i
-    t = _T_TAB[i]
-    t += w * (_T_TAB[i + 1] - t)
-    l_ = _L_TAB[i]
-    l_ += w * (_L_TAB[i + 1] - l_)
-    small = rho < 1e-4
+    computed, not searched: the same values as ``np.interp``), only where needed."""
+    rho = np.maximum(np.asarray(rho, dtype=float), 0.0)
+    t, l_ = np.empty(rho.shape), np.empty(rho.shape)
     big = rho > _RHO_SWITCH
+    small = rho < 1e-4
+    mid = ~(big | small)
+    if np.any(mid):
+        r = rho[mid]
+        u = np.clip((np.log(r) - _LOG_RHO[0]) / _DLR, 0.0, _LOG_RHO.size - 1.0)
+        i = np.minimum(u.astype(np.intp), _LOG_RHO.size - 2)
+        w = u - i
+        a = _T_TAB[i]
+        t[mid] = a + w * (_T_TAB[i + 1] - a)
+        a = _L_TAB[i]
+        l_[mid] = a + w * (_L_TAB[i + 1] - a)
     if np.any(small):
-        t = np.where(small, 0.5 * rho, t)
-        l_ = np.where(small, 0.25 * rho ** 2, l_)
+        r = rho[small]
+        t[small], l_[small] = 0.5 * r, 0.25 * r * r
     if np.any(big):
-        rb = np.where(big, rho, 1.0)
-        t = np.where(big, 2.0 / math.pi - math.pi / (12.0 * rb ** 2), t)
-        l_ = np.where(big, 2.0 * rho / math.pi - math.log(2.0) + math.pi / (12.0 * rb), l_)
+        r = rho[big]
+        inv = 1.0 / r
+        t[big] = 2.0 / math.pi - (math.pi / 12.0) * inv * inv
+        l_[big] = (2.0 / math.pi) * r - math.log(2.0) + (math.pi / 12.0) * inv
     return t, l_
 
 
