@@ -16,12 +16,13 @@ from ehsa_opt.vehicle.residues import QuarterCarPolynomials
 from ehsa_opt.vehicle.road import ROAD_BAND_CYCLES_PER_M, road_velocity_psd
 
 VEHICLE = VehicleParams()
-# well damped, lightly damped (R_e = 10 kΩ, k_n high), heavy inertia, open circuit
-DESIGN = {"load_ohm": np.array([47.0, 1e4, 3.0, math.inf]),
-          "speed_constant_rpm_per_V": np.array([69.7, 11900.0, 300.0, 69.7]),
-          "total_inertia_gcm2": np.array([301.0, 9000.0, 5000.0, 301.0]),
-          "lead_mm_per_rev": np.array([5.0, 5.3, 20.0, 10.0])}
-C_F = np.array([0.0, 30.0, 500.0, 200.0])
+# well damped, lightly damped (R_e = 10 kΩ, k_n high), heavy inertia, open circuit,
+# a locked strut (c = 1e7 N s/m: one pole far below, one far above the band)
+DESIGN = {"load_ohm": np.array([47.0, 1e4, 3.0, math.inf, 47.0]),
+          "speed_constant_rpm_per_V": np.array([69.7, 11900.0, 300.0, 69.7, 69.7]),
+          "total_inertia_gcm2": np.array([301.0, 9000.0, 5000.0, 301.0, 301.0]),
+          "lead_mm_per_rev": np.array([5.0, 5.3, 20.0, 10.0, 5.0])}
+C_F = np.array([0.0, 30.0, 500.0, 200.0, 1e7])
 
 
 def _adaptive(road: RoadParams, j: int, d: dict, c: float) -> dict:
@@ -85,3 +86,19 @@ def test_residue_variances_match_adaptive_quadrature(road):
 def test_method_is_checked():
     with pytest.raises(ParameterError, match="method"):
         friction_metrics(VEHICLE, RoadParams("C", 70.0), None, None, method="fast")
+
+
+def test_undamped_frictionless_design_falls_back_to_quadrature():
+    # open circuit: no damping without friction, σ_v(0) is unbounded; such designs are
+    # evaluated by the quadrature path, the others exactly in the same call
+    from ehsa_opt.physics.params import FrictionParams
+    road = RoadParams("B", 30.0)
+    fr = FrictionParams(nut_breakaway_N=120.0, nut_coulomb_N=80.0,
+                        nut_breakaway_velocity_m_per_s=0.01, nut_viscous_Ns_per_m=300.0)
+    design = {"load_ohm": np.array([math.inf, 47.0])}
+    got = friction_metrics(VEHICLE, road, design, fr)
+    quad = friction_metrics(VEHICLE, road, design, fr, method="quadrature")
+    assert got["power_W"][0] == 0.0 and np.all(got["converged"] == 1.0)
+    for key in ("comfort", "road_holding", "friction_damping_Ns_per_m"):
+        assert got[key][0] == pytest.approx(quad[key][0], rel=1e-12)
+        assert got[key][1] == pytest.approx(quad[key][1], rel=1e-3)

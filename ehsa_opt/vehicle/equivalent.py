@@ -477,9 +477,12 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
     def cf_of(sigma: np.ndarray, rows: np.ndarray) -> np.ndarray:
         return laws(sigma, rows)
 
+    # an undamped frictionless design (open circuit: poles on the imaginary axis) has no
+    # finite σ_v(0) to start from: left to the quadrature path
+    ok0 = np.isfinite(sigma0) & (sigma0 > 0.0) & np.all(lam.real < 0.0, axis=1)
     c_gauss, iters, conv = record
     cf = np.zeros(n)
-    act = np.flatnonzero(has_f)
+    act = np.flatnonzero(has_f & ok0)
     if act.size:
         x, c, it, ok = _model_fixed_point(np.log(sigma0[act]), act, sigma_v_of, cf_of, rtol,
                                           max_iter)
@@ -514,7 +517,7 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
          "dissipation_bound_W": np.full(n, dissipation_bound_W(vehicle, road)),
          "stroke_velocity_rms_m_s": np.sqrt(np.maximum(var["var_v"], 0.0)),
          "friction_damping_Ns_per_m": cf}
-    bad = np.flatnonzero(~(ok & np.all([np.isfinite(a) for a in m.values()], axis=0)))
+    bad = np.flatnonzero(~(ok & ok0 & np.all([np.isfinite(a) for a in m.values()], axis=0)))
     return m, cf, bad
 
 
