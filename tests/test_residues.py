@@ -47,7 +47,7 @@ def _adaptive(road: RoadParams, j: int, d: dict, c: float) -> dict:
     f_lo, f_hi = ROAD_BAND_CYCLES_PER_M[0] * v, ROAD_BAND_CYCLES_PER_M[1] * v
     out = {}
     for i, key in enumerate(("var_v", "var_acc_w", "var_tyre", "var_i")):
-        val = integrate.quad(lambda f: abs(tf(f)[i]) ** 2, f_lo, f_hi, points=[1.0, 10.0],
+        val = integrate.quad(lambda f, i=i: abs(tf(f)[i]) ** 2, f_lo, f_hi, points=[1.0, 10.0],
                              limit=4000, epsabs=0.0, epsrel=1e-11)[0]
         out[key] = val * road_velocity_psd(road)
     return out

@@ -26,10 +26,12 @@ so on s = jω, with μ_k = −λ_k (Re μ_k > 0)::
 (the complex arctangent is analytic along ω > 0 because Re μ_k > 0).  The
 one-sided variance over the road band [f_lo, f_hi] of a white road velocity of
 one-sided PSD Φ is then Φ/(2π) times that: exact (no frequency grid), for any
-damping, O(poles) per design.  The poles come from one batched companion
-eigenvalue computation polished by Newton steps; when c changes during the
-fixed-point iteration they are tracked by simultaneous (Aberth–Ehrlich) Newton
-steps from the previous ones, so no eigenvalue problem is solved again.
+damping, O(poles) per design.  The poles come in closed form: the electrical
+root (far out, near −R/L) by Newton steps from the roots' sum −q4/q5, deflated,
+the two modes' quartic by Ferrari's formula, all polished by a Newton step on Q
+(a batched companion eigenvalue computation only where that fails Vieta's
+checks).  When c changes during the fixed-point iteration they are tracked: a
+first-order prediction dλ/dc = −(∂Q/∂c)/Q'(λ), then Newton steps.
 
 Validity: the residue formula needs simple poles.  Rows whose poles (with the
 W_k poles) nearly coincide (relative gap < 1e-7) or whose polished roots do not
@@ -300,7 +302,7 @@ class QuarterCarPolynomials:
                c_old: np.ndarray) -> np.ndarray:
         """Poles for damping ``c`` on ``rows`` tracked from the poles ``lam`` of damping
         ``c_old``: first-order prediction dλ/dc = −∂Q/∂c / Q'(λ), then Newton steps
-        (a fresh eigenvalue computation where tracking does not converge)."""
+        (:meth:`roots` afresh where tracking does not converge)."""
         qc = self.q(c, rows)
         dq_old = _peval_d(self.q(c_old, rows), lam)[1]
         lam = lam - (c - c_old)[:, None] * (_peval(self.q1[rows, :5], lam) / dq_old)
