@@ -124,6 +124,17 @@ _LN_RHO = np.arange(-10.0, 10.0 + 1e-9, 0.01)
 _G_SPLINE = CubicSpline(_LN_RHO, _coulomb_term_quadrature(np.ones(_LN_RHO.size),
                                                           np.exp(_LN_RHO)))
 _KAPPA = (_SQRT_2_PI - float(_G_SPLINE(-10.0))) * math.exp(20.0)
+_G_PIECES = np.ascontiguousarray(_G_SPLINE.c.T)   # (pieces, 4) cubic coefficients
+_G_STEP = 0.01
+
+
+def _g_of_ln_rho(lr: np.ndarray) -> np.ndarray:
+    """The spline at ``lr`` in [−10, 10] (uniform knots: the piece index is computed)."""
+    u = (lr - _LN_RHO[0]) / _G_STEP
+    i = np.clip(u.astype(np.intp), 0, _G_PIECES.shape[0] - 1)
+    t = lr - _LN_RHO[i]
+    c = _G_PIECES[i]
+    return ((c[..., 0] * t + c[..., 1]) * t + c[..., 2]) * t + c[..., 3]
 
 
 def _coulomb_term(sigma: np.ndarray, u_c: np.ndarray) -> np.ndarray:
@@ -131,7 +142,7 @@ def _coulomb_term(sigma: np.ndarray, u_c: np.ndarray) -> np.ndarray:
     sigma, u_c = np.broadcast_arrays(np.maximum(sigma, 1e-300), u_c)
     with np.errstate(divide="ignore"):
         lr = np.log(u_c / sigma)
-    g = _G_SPLINE(np.clip(lr, _LN_RHO[0], _LN_RHO[-1]))
+    g = _g_of_ln_rho(np.clip(lr, _LN_RHO[0], _LN_RHO[-1]))
     lo, hi = lr < _LN_RHO[0], lr > _LN_RHO[-1]
     if np.any(lo):
         g = np.where(lo, _SQRT_2_PI - _KAPPA * np.exp(2.0 * np.minimum(lr, 0.0)), g)
