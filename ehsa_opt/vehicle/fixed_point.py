@@ -19,6 +19,11 @@ import numpy as np
 
 __all__ = ["model_fixed_point"]
 
+#: σ below σ₀/_LOCKED is reported as a locked strut (not converged).  Far below the
+#: quadrature path's 1e4: an almost undamped design (σ₀ of metres per second) that
+#: friction alone damps has its fixed point 1e5–1e6 below σ₀.
+_LOCKED = 1e10
+
 
 def model_fixed_point(x0: np.ndarray, rows: np.ndarray, sigma_v_of: Any, cf_of: Any,
                        tol: float, max_iter: int
@@ -45,10 +50,10 @@ def model_fixed_point(x0: np.ndarray, rows: np.ndarray, sigma_v_of: Any, cf_of: 
     -------
     x, c, iterations, converged : ndarray (m,)
         ln σ of the fixed point, c_f there (N s/m), exact evaluations, and
-        whether it converged (False also for a locked strut: σ < 10⁻⁴ σ₀).
+        whether it converged (False also for a locked strut: σ < 10⁻¹⁰ σ₀).
     """
     m = x0.size
-    lo = x0 - math.log(1e4)
+    lo = x0 - math.log(_LOCKED)
     ca, ya = np.zeros(m), np.exp(-2.0 * x0)
     cb = cf_of(np.exp(x0), rows)
     sb = sigma_v_of(cb, rows)
