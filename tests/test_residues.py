@@ -102,3 +102,21 @@ def test_undamped_frictionless_design_falls_back_to_quadrature():
     for key in ("comfort", "road_holding", "friction_damping_Ns_per_m"):
         assert got[key][0] == pytest.approx(quad[key][0], rel=1e-12)
         assert got[key][1] == pytest.approx(quad[key][1], rel=1e-3)
+
+
+def test_almost_undamped_design_that_friction_alone_damps():
+    # R_e = 23 kΩ, L = 0, k_n = 5500 rpm/V: σ_v(0) of kilometres per second; the fixed
+    # point (friction ×34) lies ~1e-6 below it, not a locked strut
+    from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
+    from ehsa_opt.vehicle.fast_path_check import scaled_friction
+    truth = load_truth(embedded_data_dir("bench_prototype"))["friction"]
+    design = {"total_inertia_gcm2": 17.507, "lead_mm_per_rev": 94.51,
+              "speed_constant_rpm_per_V": 5501.5, "load_ohm": 23061.7, "inductance_H": 0.0,
+              "internal_resistance_ohm": 7.197}
+    fr = scaled_friction(truth, 34.1)
+    road = RoadParams("B", 30.0)
+    got = friction_metrics(VEHICLE, road, design, fr, non_gaussian=False)
+    quad = friction_metrics(VEHICLE, road, design, fr, non_gaussian=False, method="quadrature")
+    assert float(got["converged"]) == 1.0
+    assert float(got["stroke_velocity_rms_m_s"]) == pytest.approx(
+        float(quad["stroke_velocity_rms_m_s"]), rel=1e-2)
