@@ -77,21 +77,76 @@ def _tabulate() -> tuple[np.ndarray, np.ndarray]:
 _T_TAB, _L_TAB = _tabulate()
 
 
+_DLR = _LOG_RHO[1] - _LOG_RHO[0]
+
+
 def _t_l(rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """T(ρ) and L(ρ) for ρ ≥ 0 (small ρ: ρ/2, ρ²/4; large: 2/π − π/(12ρ²), 2ρ/π −
-    ln 2 + π/(12ρ))."""
-    rho = np.maximum(rho, 0.0)
-    lr = np.log(np.maximum(rho, 1e-300))
-    t = np.interp(lr, _LOG_RHO, _T_TAB)
-    l_ = np.interp(lr, _LOG_RHO, _L_TAB)
-    small = rho < 1e-4
+    ln 2 + π/(12ρ)); linear interpolation in ln ρ on the uniform table (the index is
+    computed, not searched: the same values as ``np.interp``), only where needed."""
+    rho = np.maximum(np.asarray(rho, dtype=float), 0.0)
+    t, l_ = np.empty(rho.shape), np.empty(rho.shape)
     big = rho > _RHO_SWITCH
-    with np.errstate(divide="ignore"):
-        rb = np.where(big, rho, 1.0)
-    t = np.where(small, 0.5 * rho, np.where(big, 2.0 / math.pi - math.pi / (12.0 * rb ** 2), t))
-    l_ = np.where(small, 0.25 * rho ** 2,
-                  np.where(big, 2.0 * rho / math.pi - math.log(2.0) + math.pi / (12.0 * rb), l_))
+    small = rho < 1e-4
+    mid = ~(big | small)
+    if np.any(mid):
+        r = rho[mid]
+        u = np.clip((np.log(r) - _LOG_RHO[0]) / _DLR, 0.0, _LOG_RHO.size - 1.0)
+        i = np.minimum(u.astype(np.intp), _LOG_RHO.size - 2)
+        w = u - i
+        a = _T_TAB[i]
+        t[mid] = a + w * (_T_TAB[i + 1] - a)
+        a = _L_TAB[i]
+        l_[mid] = a + w * (_L_TAB[i + 1] - a)
+    if np.any(small):
+        r = rho[small]
+        t[small], l_[small] = 0.5 * r, 0.25 * r * r
+    if np.any(big):
+        r = rho[big]
+        inv = 1.0 / r
+        t[big] = 2.0 / math.pi - (math.pi / 12.0) * inv * inv
+        l_[big] = (2.0 / math.pi) * r - math.log(2.0) + (math.pi / 12.0) * inv
     return t, l_
+
+
+# Large-argument (Hankel) series of e^−h I0(h) and e^−h (I0(h) − I1(h)), h ≥ 200:
+# (2πh)^−1/2 Σ_k c_k h^−k with c_k = Π_{j≤k} (4ν² − (2j−1)²) (−1)^k / (k! 8^k); seven
+# terms are exact to rounding (< 1e-15 relative against scipy's i0e), and the
+# difference is more accurate than i0e − i1e, which loses ~eps·h to cancellation.
+def _hankel(nu2: float) -> np.ndarray:
+    c, out = 1.0, [1.0]
+    for k in range(1, 8):
+        c *= -(nu2 - (2 * k - 1) ** 2) / (k * 8.0)
+        out.append(c)
+    return np.array(out)
+
+
+_H0 = _hankel(0.0)
+_H01 = _H0 - _hankel(4.0)
+_H_SWITCH = 200.0
+
+
+def _bessel_terms(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """i0e(h) and i0e(h) − i1e(h) for h ≥ 0 (series for h ≥ 200, scipy below)."""
+    h = np.asarray(h, dtype=float)
+    i0, d = np.empty(h.shape), np.empty(h.shape)
+    big = h >= _H_SWITCH
+    small = ~big
+    if np.any(small):
+        hs = h[small]
+        a = i0e(hs)
+        i0[small], d[small] = a, a - i1e(hs)
+    if np.any(big):
+        x = 1.0 / h[big]
+        pref = np.sqrt(x / (2.0 * math.pi))
+        p0, p1 = np.full(x.shape, _H0[-1]), np.full(x.shape, _H01[-1])
+        for k in range(_H0.size - 2, -1, -1):
+            p0 *= x
+            p0 += _H0[k]
+            p1 *= x
+            p1 += _H01[k]
+        i0[big], d[big] = pref * p0, pref * p1
+    return i0, d
 
 
 def harmonic_terms(amplitude: Any, breakaway: Any, coulomb: Any, breakaway_velocity: Any,
@@ -103,7 +158,8 @@ def harmonic_terms(amplitude: Any, breakaway: Any, coulomb: Any, breakaway_veloc
     amplitude : array_like
         V, velocity amplitude (m/s or rad/s), ≥ 0.
     breakaway, coulomb, breakaway_velocity, viscous : array_like
-        The law's parameters (:func:`ehsa_opt.physics.friction.simscape_friction`).
+        The law's parameters (:func:`ehsa_opt.physics.friction.simscape_friction`),
+        broadcast against ``amplitude``.
 
     Returns
     -------
@@ -112,25 +168,50 @@ def harmonic_terms(amplitude: Any, breakaway: Any, coulomb: Any, breakaway_veloc
         and Φ(V) = 2⟨P(V cos φ)⟩ = ∫₀^V 2⟨F v⟩(u)/u du, the friction's energy
         exponent (J per unit modal mass × damping units: N m s/… ; W s).
     """
-    v, brk, cou, ubrk, fv = np.broadcast_arrays(
-        *(np.asarray(a, dtype=float) for a in (amplitude, breakaway, coulomb,
-                                               breakaway_velocity, viscous)))
+    v = np.asarray(amplitude, dtype=float)
+    brk, cou, ubrk, fv = (np.asarray(a, dtype=float) for a in (breakaway, coulomb,
+                                                                 breakaway_velocity, viscous))
+    shape = np.broadcast_shapes(v.shape, brk.shape, cou.shape, ubrk.shape, fv.shape)
+    v = np.broadcast_to(v, shape)
     u_st = math.sqrt(2.0) * ubrk
     u_c = ubrk / 10.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        half_a = np.where(u_st > 0.0, 0.5 * (v / u_st) ** 2, 0.0)
-        rho = np.where(u_c > 0.0, v / u_c, np.inf)
-    t, l_ = _t_l(np.where(np.isfinite(rho), rho, 0.0))
-    inf = ~np.isfinite(rho)
+    v2 = v * v
+    d = 0.5 * fv * v2
+    phi = d.copy()
     dq = _SQRT_2E * (brk - cou)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        strib_d = np.where(dq != 0.0, dq * v ** 2 / u_st * 0.5 * (i0e(half_a) - i1e(half_a)),
-                           0.0)
-        strib_p = np.where(dq != 0.0, dq * u_st * (1.0 - i0e(half_a)), 0.0)
-    coul_d = np.where(cou != 0.0, cou * v * np.where(inf, 2.0 / math.pi, t), 0.0)
-    coul_p = np.where(cou != 0.0, np.where(inf, 4.0 * cou * v / math.pi,
-                                           2.0 * cou * u_c * l_), 0.0)
-    return (fv * v ** 2 / 2.0 + coul_d + strib_d, fv * v ** 2 / 2.0 + coul_p + strib_p)
+    if np.any(dq != 0.0):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv_st = np.where(u_st > 0.0, 1.0 / u_st, 0.0)
+            half_a = 0.5 * v2 * inv_st ** 2
+            i0, i0_i1 = _bessel_terms(half_a)
+            strib_d = dq * v2 * inv_st * 0.5 * i0_i1
+            strib_p = dq * u_st * (1.0 - i0)
+        if np.all(dq != 0.0):
+            d += strib_d
+            phi += strib_p
+        else:
+            d += np.where(dq != 0.0, strib_d, 0.0)
+            phi += np.where(dq != 0.0, strib_p, 0.0)
+    if np.any(cou != 0.0):
+        pos = u_c > 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rho = np.where(pos, v, 0.0) / np.where(pos, u_c, 1.0)
+        t, l_ = _t_l(rho)
+        if not np.all(pos):
+            t = np.where(pos, t, 2.0 / math.pi)
+            l_ = np.where(pos, l_, 2.0 * v / math.pi)
+            u_c_safe = np.where(pos, u_c, 1.0)
+        else:
+            u_c_safe = u_c
+        coul_d = cou * v * t
+        coul_p = 2.0 * cou * u_c_safe * l_
+        if np.all(cou != 0.0):
+            d += coul_d
+            phi += coul_p
+        else:
+            d += np.where(cou != 0.0, coul_d, 0.0)
+            phi += np.where(cou != 0.0, coul_p, 0.0)
+    return d, phi
 
 
 def _rod_terms(amplitude: np.ndarray, p: np.ndarray, r: np.ndarray
@@ -141,9 +222,13 @@ def _rod_terms(amplitude: np.ndarray, p: np.ndarray, r: np.ndarray
     return d_n + d_b, phi_n + phi_b
 
 
-_N_AMP = 48
+# 32 Gauss–Legendre nodes on [0, 9·scale]: the density's exponent is about −y²/2 at
+# V = y·σ_c (e^−40 at the end); against 48 nodes on [0, 12·scale] c_f moves by < 5e-6
+# (measured on the validation designs and a 2000-design population), below the
+# correction's own stopping tolerance (10·rtol = 1e-5)
+_N_AMP = 32
 _Y, _WY = np.polynomial.legendre.leggauss(_N_AMP)
-_Y_MAX = 12.0
+_Y_MAX = 9.0
 _Y = 0.5 * _Y_MAX * (_Y + 1.0)
 _WY = 0.5 * _Y_MAX * _WY
 
@@ -156,7 +241,7 @@ def amplitude_terms(scale: Any, friction: np.ndarray, lead_m_per_rad: Any
     ----------
     scale : array_like (n,)
         Spread of the amplitude density, m/s (about the rms stroke velocity): the
-        nodes are Gauss–Legendre points on [0, 12·scale].
+        nodes are Gauss–Legendre points on [0, 9·scale].
     friction : ndarray (n, 8)
         Friction sets in :data:`~ehsa_opt.physics.params.FRICTION_NAMES` order.
     lead_m_per_rad : array_like (n,)
@@ -164,7 +249,7 @@ def amplitude_terms(scale: Any, friction: np.ndarray, lead_m_per_rad: Any
 
     Returns
     -------
-    (ndarray, ndarray, ndarray), each (n, 48)
+    (ndarray, ndarray, ndarray), each (n, 32)
         Nodes V (m/s), ⟨F v⟩(V) (W) and Φ(V) (W s) of nut + bearing at the rod.
     """
     v = np.asarray(scale, dtype=float)[:, None] * _Y
