@@ -452,7 +452,7 @@ class PolishOutcome:
 
 def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
            free: Sequence[str], *, max_iter: int = 8, diff_step: float = 1e-3,
-           log_names: Sequence[str] = ()) -> PolishOutcome:
+           log_names: Sequence[str] = (), ftol: float = 1e-8) -> PolishOutcome:
     """Refine a collocation fit on the forward simulation itself.
 
     The collocation defects are a one-step rule on the sample grid; a stiff
@@ -478,6 +478,9 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     log_names : list of str
         Free parameters refined in log10 (those spanning decades, e.g. a stiffness;
         their lower bound must be > 0).
+    ftol : float
+        Stop when an iteration lowers the SSE by less than this share
+        (``scipy.optimize.least_squares``' ``ftol``).
     """
     from scipy.optimize import least_squares
     t0 = time.perf_counter()
@@ -514,7 +517,8 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     sse0 = float(r0 @ r0)
     try:
         sol = least_squares(resid, z0, bounds=(lb, ub), method="trf", x_scale="jac",
-                            diff_step=diff_step, max_nfev=max_iter, jac="2-point")
+                            diff_step=diff_step, max_nfev=max_iter, jac="2-point",
+                            ftol=ftol)
     except Exception as exc:  # noqa: BLE001 - a failed polish keeps the collocation fit
         return PolishOutcome(False, f"polish failed: {exc}", base, sse0, sse0, counter[0],
                              time.perf_counter() - t0, free)

@@ -244,10 +244,13 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
                 first = again
     earlier = [q.name for c in rig.components for q in c.parameters]
     free = rig.base_names + earlier + eff
-    if rig.has_generator and component.transmission:
+    if rig.has_generator and any(c.transmission for c in crig.components):
         # the bearing's Stribeck velocity is poorly determined at the sample rate (the
         # rotor speed crosses it within a sample) and lets the collocation cheat
-        # between samples: it stays at the baseline value
+        # between samples: it stays at the baseline value - also for every candidate
+        # added on top of a transmission effect, so that its refit frees only its own
+        # parameters beyond the current model's (nested models: otherwise cogging was
+        # named on a 0.1 mm gap for what freeing that velocity gave)
         free = [n for n in free if n != "bearing_breakaway_velocity_rad_per_s"]
     if full_refit == "simulation" and first.parameters:
         return _refit_on_simulation(name, fit_pts, held_pts, crig, first, free, log_names)

@@ -516,14 +516,18 @@ def _term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> T
     return term
 
 
+def _rig_on_simulation(rig: Rig) -> bool:
+    """Whether ``rig`` holds an effect fitted on the simulation (a stiff contact or an
+    elastic mount): every later candidate is then fitted on the simulation too — the
+    collocation NLP with those states factorises for minutes (a 0.8 mm gap: > 15 min)."""
+    return any(CANDIDATES[c.name].full_refit == "simulation"
+               for c in rig.components if c.name in CANDIDATES)
+
+
 def _fit_one(a: tuple) -> tuple:
     name, comp, starts, sub_pts, fit_pts, held_pts, rig, params, max_iter = a
     cand = CANDIDATES[name]
-    # on a rig that already holds an effect fitted on the simulation (a stiff contact or
-    # an elastic mount), every later candidate is fitted on the simulation too: the
-    # collocation NLP with those states factorises for minutes (a 0.8 mm gap: > 15 min)
-    on_sim = any(CANDIDATES[c.name].full_refit == "simulation"
-                 for c in rig.components if c.name in CANDIDATES)
+    on_sim = _rig_on_simulation(rig)
     _, res, _, _ = fit_candidate(name, comp, starts, sub_pts, [], rig, params, max_iter,
                                  shares=cand.shares, refine=cand.refine,
                                  full_refit="simulation" if on_sim else cand.full_refit,
