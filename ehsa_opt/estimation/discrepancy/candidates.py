@@ -108,8 +108,10 @@ CANDIDATES: dict[str, Candidate] = {
                 {"cogging_sin_Nm": 2e-2, "cogging_cos_Nm": -2e-2})),
     "compliance": Candidate(
         "compliance",
-        probes=({"compliance_stiffness_N_per_m": 1e6, "compliance_damping_Ns_per_m": 1e3},
-                {"compliance_stiffness_N_per_m": 1e7, "compliance_damping_Ns_per_m": 1e3}),
+        # one probe per decade of the realistic mount stiffness 1e4-1e8 N/m (1e9 is
+        # rigid at these rates): like a gap, the signature is far from linear in it
+        probes=tuple({"compliance_stiffness_N_per_m": k, "compliance_damping_Ns_per_m": 1e3}
+                     for k in (1e4, 1e5, 1e6, 1e7, 1e8)),
         starts=tuple({"compliance_stiffness_N_per_m": k, "compliance_damping_Ns_per_m": c}
                      for k in np.geomspace(1e4, 1e9, 11) for c in (3e2, 3e3)),
         needs_generator=True,
