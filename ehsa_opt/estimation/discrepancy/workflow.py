@@ -395,8 +395,8 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
             note = (f"round {rnd}: candidates not re-identified — the {evaluation} force "
                     f"error {cur_err:.3f} % exceeds the noise floor {floor:.3f} % by "
                     f"{excess:.3f} % (≤ {MIN_EXCESS_OVER_FLOOR:g} × floor) and the all-channel "
-                    f"SSE is {sse0 / n_obs:.3f} N (≤ {1 + MIN_SSE_EXCESS:g} N): no refit can "
-                    f"earn by the decision rule")
+                    f"SSE is {sse0 / n_obs:.3f} × its noise expectation "
+                    f"(≤ {1 + MIN_SSE_EXCESS:g}): no refit can earn by the decision rule")
             say(note)
             notes.append(note)
             all_cands += [cands[n] for n in order]
