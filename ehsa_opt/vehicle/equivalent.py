@@ -248,6 +248,27 @@ def friction_equivalent_damping_Ns_per_m(sigma_v_m_s: ArrayLike, friction: Any,
     return nut + bearing
 
 
+def _energy_envelope(s0: np.ndarray, sc: np.ndarray, c: np.ndarray, fr: np.ndarray,
+                     r: np.ndarray, terms: tuple, sigma_v_of: Any, rows: np.ndarray,
+                     n_iter: int, tol: float) -> np.ndarray:
+    """The energy-envelope correction of the friction damping ``c`` (per design row,
+    updated in place and returned): secant (c, σ_c) of the linear path, iterated until
+    c moves by less than 10·``tol`` (relative) or ``n_iter`` times.  ``sc`` (σ_v at c)
+    is updated in place; ``sigma_v_of(c, rows)`` is the linear path."""
+    vt, dt, pt = terms
+    todo = np.arange(c.size)
+    for _ in range(n_iter):
+        cn = averaged_damping(s0[todo], sc[todo], c[todo], fr[todo], r[todo],
+                              terms=(vt[todo], dt[todo], pt[todo]))
+        moved = np.abs(cn - c[todo]) > 10.0 * tol * np.abs(c[todo])
+        c[todo] = cn
+        todo = todo[moved]
+        if todo.size == 0:
+            break
+        sc[todo] = sigma_v_of(c[todo], rows[todo])
+    return c
+
+
 def friction_metrics(vehicle: VehicleParams, road: RoadParams,
                      design: Mapping[str, ArrayLike] | None = None,
                      friction: Any = None, *, n_freq: int = 256,
@@ -387,22 +408,14 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
             # energy-envelope correction: secant (c, σ_c) of the linear path, iterated
             gi = index[act]
             s0, c, sc = np.exp(s_hi[act]), cf[act], np.exp(s_sol[act])
-            todo = np.arange(act.size)
             # amplitude nodes and cycle averages once, on the Gaussian σ_v's scale
             vt, dt, pt = amplitude_terms(np.minimum(sc, s0), fr[gi], r[gi])
             prev = np.flatnonzero(np.isfinite(hint_c[gi]))
             if prev.size:  # second pass: start from the first pass's corrected c_f
                 c[prev] = hint_c[gi[prev]]
                 sc[prev] = sigma_v_of(c[prev], act[prev])
-            for _ in range(averaging_iter):
-                cn = averaged_damping(s0[todo], sc[todo], c[todo], fr[gi[todo]], r[gi[todo]],
-                                      terms=(vt[todo], dt[todo], pt[todo]))
-                moved = np.abs(cn - c[todo]) > 10.0 * tol[0] * np.abs(c[todo])
-                c[todo] = cn
-                todo = todo[moved]
-                if todo.size == 0:
-                    break
-                sc[todo] = sigma_v_of(c[todo], act[todo])
+            c = _energy_envelope(s0, sc, c, fr[gi], r[gi], (vt, dt, pt), sigma_v_of, act,
+                                 averaging_iter, tol[0])
             cf[act] = c
             hint_c[gi] = c
         return cf
@@ -501,18 +514,9 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
         cf[act], c_gauss[act], iters[act], conv[act] = c, c, it, ok
         if non_gaussian:  # energy-envelope correction: secant (c, σ_c) of the linear path
             s0, sc = sigma0[act], np.exp(x)
-            vt, dt, pt = amplitude_terms(np.minimum(sc, s0), fr[act], r[act])
-            todo = np.arange(act.size)
-            for _ in range(averaging_iter):
-                cn = averaged_damping(s0[todo], sc[todo], c[todo], fr[act[todo]],
-                                      r[act[todo]], terms=(vt[todo], dt[todo], pt[todo]))
-                moved = np.abs(cn - c[todo]) > 10.0 * rtol * np.abs(c[todo])
-                c[todo] = cn
-                todo = todo[moved]
-                if todo.size == 0:
-                    break
-                sc[todo] = sigma_v_of(c[todo], act[todo])
-            cf[act] = c
+            terms = amplitude_terms(np.minimum(sc, s0), fr[act], r[act])
+            cf[act] = _energy_envelope(s0, sc, c, fr[act], r[act], terms, sigma_v_of, act,
+                                       averaging_iter, rtol)
     lam[:] = qp.follow(cf, every, lam, c_lam)
     ok = qp.check(qp.q(cf, every), lam)
     var = qp.variances(cf, every, lam)
