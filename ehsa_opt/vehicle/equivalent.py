@@ -72,7 +72,7 @@ from scipy.interpolate import CubicSpline
 from ..physics.params import FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError, \
     RoadParams, VehicleParams
 from .averaging import amplitude_terms, averaged_damping
-from .fixed_point import model_fixed_point
+from .fixed_point import illinois_update, model_fixed_point
 from .metrics import G, design_arrays, dimensionless_power, linear_metrics
 from .residues import QuarterCarPolynomials
 from .road import ROAD_BAND_CYCLES_PER_M, dissipation_bound_W, road_velocity_psd
@@ -383,19 +383,11 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
                 todo = np.flatnonzero(~done)
                 if todo.size == 0:
                     break
-                fa, fb = ga[todo], gb[todo]
-                xn = (a[todo] * fb - b[todo] * fa) / (fb - fa)
+                xn = (a[todo] * gb[todo] - b[todo] * ga[todo]) / (gb[todo] - ga[todo])
                 gn = g(todo, xn)
                 it[todo] += 1
                 x[todo] = xn
-                pos = gn > 0.0
-                # Illinois: halve the retained end's value when the same end is kept twice
-                sd = side[todo]
-                a[todo] = np.where(pos, xn, a[todo])
-                ga[todo] = np.where(pos, gn, np.where(sd == -1, 0.5 * fa, fa))
-                b[todo] = np.where(pos, b[todo], xn)
-                gb[todo] = np.where(pos, np.where(sd == 1, 0.5 * fb, fb), gn)
-                side[todo] = np.where(pos, 1, -1)
+                illinois_update(a, b, ga, gb, side, todo, xn, gn)
                 done[todo] = (np.abs(gn) < tol[0]) | (np.abs(b[todo] - a[todo]) < tol[0])
             s_sol[act] = x
             hint_s[gi] = x

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["model_fixed_point"]
+__all__ = ["model_fixed_point", "illinois_update"]
 
 #: σ below σ₀/_LOCKED is reported as a locked strut (not converged).  Far below the
 #: quadrature path's 1e4: an almost undamped design (σ₀ of metres per second) that
@@ -112,16 +112,26 @@ def _solve_model(alpha: np.ndarray, beta: np.ndarray, rows: np.ndarray, lo: np.n
     for _ in range(100):
         if todo.size == 0:
             break
-        fa, fb = ha[todo], hb[todo]
-        xn = (a[todo] * fb - b[todo] * fa) / (fb - fa)
+        xn = (a[todo] * hb[todo] - b[todo] * ha[todo]) / (hb[todo] - ha[todo])
         hn = h(xn, todo)
         x[todo] = xn
-        pos = hn > 0.0
-        sd = side[todo]
-        a[todo] = np.where(pos, xn, a[todo])
-        ha[todo] = np.where(pos, hn, np.where(sd == -1, 0.5 * fa, fa))
-        b[todo] = np.where(pos, b[todo], xn)
-        hb[todo] = np.where(pos, np.where(sd == 1, 0.5 * fb, fb), hn)
-        side[todo] = np.where(pos, 1, -1)
+        illinois_update(a, b, ha, hb, side, todo, xn, hn)
         todo = todo[(np.abs(hn) > 1e-10) & (b[todo] - a[todo] > 1e-10)]
     return x
+
+
+def illinois_update(a: np.ndarray, b: np.ndarray, fa: np.ndarray, fb: np.ndarray,
+                    side: np.ndarray, rows: np.ndarray, xn: np.ndarray, fn: np.ndarray
+                    ) -> None:
+    """One Illinois (modified regula falsi) update, in place, of the brackets [a, b]
+    with values fa > 0 > fb on ``rows``, given the secant point ``xn`` and its value
+    ``fn``: the end with the same sign is replaced, and the retained end's value is
+    halved when the same end was kept twice in a row (``side`` remembers which)."""
+    ka, kb = fa[rows], fb[rows]
+    pos = fn > 0.0
+    sd = side[rows]
+    a[rows] = np.where(pos, xn, a[rows])
+    fa[rows] = np.where(pos, fn, np.where(sd == -1, 0.5 * ka, ka))
+    b[rows] = np.where(pos, b[rows], xn)
+    fb[rows] = np.where(pos, np.where(sd == 1, 0.5 * kb, kb), fn)
+    side[rows] = np.where(pos, 1, -1)
