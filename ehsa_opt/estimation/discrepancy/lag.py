@@ -49,13 +49,15 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
     if lag is None:
         return None
     tau = lag[0]
-    for _ in range(2):  # re-estimate once on the re-aligned baseline
+    for it in range(2):  # re-estimate once on the re-aligned baseline
         f2 = _lag_tests(fit_pts, tau, rig.has_generator)
         h2 = _lag_tests(held_pts, tau, rig.has_generator) if held_pts else []
         b2 = fit_group(f2, rig, [base.parameters], max_iter=settings.max_iter)
         if not b2.parameters:
             return None
         pf = predict(f2, rig, b2.parameters)
+        if it == 1:
+            break  # f2, h2, b2 belong to the tau applied (reported below)
         again = _shift_lag(f2, pf)
         if again is None:
             break
