@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
+from ...utils.process import single_threaded_blas
 from .candidates import CANDIDATES, components_for, signature_scores
 from .fit import (
     FitOutcome,
@@ -307,6 +308,12 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
     log : callable, optional
         Progress messages (e.g. ``print``).
     """
+    with single_threaded_blas():  # process-level parallelism only (see the utility)
+        return _run_discrepancy(data, settings, log)
+
+
+def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings | None,
+                     log: Any) -> DiscrepancyResult:
     t_start = time.perf_counter()
     settings = settings or DiscrepancySettings()
     say = log or (lambda msg: None)
