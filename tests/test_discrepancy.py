@@ -223,6 +223,69 @@ def test_a_round_at_the_noise_floor_is_skipped_exactly():
     assert earns(1.0, 1.0, floor, -10.0, -10.0, 1 - (1.1 * n - n) / (1.5 * n - n))
 
 
+
+def test_sse_alternative_is_judged_per_channel():
+    """A channel's small leftover excess (voltage) does not let a gain in another
+    channel at its noise level (force) count as the SSE alternative."""
+    from types import SimpleNamespace as NS
+
+    from ehsa_opt.estimation.discrepancy.decide import (channel_sse,
+                                                         channel_sse_excess_reduction,
+                                                         sse_can_earn)
+    from ehsa_opt.estimation.discrepancy.refit import earns
+    n = np.array([1000.0, 1000.0])
+    # force at its noise level, voltage 1.4 x N: pooled, a force-only drop of 5 % of
+    # the force SSE removed 12 % of the pooled excess and earned
+    s0 = np.array([1.0, 1.4]) * n
+    s1 = np.array([0.95, 1.4]) * n
+    assert 1 - (s1.sum() - n.sum()) / (s0.sum() - n.sum()) >= 0.1
+    red = channel_sse_excess_reduction(s0, s1, n)
+    assert red == pytest.approx(0.0)
+    assert not earns(0.57, 0.56, 0.57, -20.0, -20.0, red)
+    # a gain in the channel that holds the excess still counts (a voltage-seen effect)
+    red = channel_sse_excess_reduction(s0, np.array([1.0, 1.1]) * n, n)
+    assert red == pytest.approx(0.75)
+    assert earns(0.57, 0.57, 0.57, -20.0, -20.0, red)
+    # no channel beyond MIN_SSE_EXCESS: the alternative is not offered
+    assert channel_sse_excess_reduction(np.array([1.1, 1.2]) * n, n, n) is None
+    assert not sse_can_earn(np.array([1.1, 1.2]) * n, n)
+    assert sse_can_earn(np.array([1.1, 1.3]) * n, n)
+    # channel_sse: per channel, normalised by each test's sigma
+    y = np.vstack([np.ones(50), 2 * np.ones(50)])
+    pt = NS(y=y, sigma=np.array([0.5, 2.0]))
+    off = np.array([[0.5], [2.0]])
+    sse, cnt = channel_sse([pt, pt], [y - off, y + off])
+    assert sse == pytest.approx([100.0, 100.0]) and list(cnt) == [100, 100]
+
+
+def test_winner_is_the_lowest_heldout_dbic_and_small_gains_widen_the_round():
+    from types import SimpleNamespace as NS
+
+    from ehsa_opt.estimation.discrepancy.decide import WIDEN_BELOW, choose_winner, should_widen
+    from ehsa_opt.estimation.discrepancy.refit import _dbic
+    n_eff, sse0 = 500.0, 5000.0
+    # a gap of ~zero fits as well as the compliance it reduces to (nested, one
+    # parameter more): the simpler one wins although its SSE is marginally higher
+    comp = NS(effect="compliance", sse_heldout=1000.0, excess_reduction=1.0, sse_reduction=None,
+              delta_bic_heldout=_dbic(1000.0, sse0, 2, n_eff))
+    back = NS(effect="backlash", sse_heldout=999.0, excess_reduction=1.0, sse_reduction=None,
+              delta_bic_heldout=_dbic(999.0, sse0, 3, n_eff))
+    assert choose_winner([back, comp]) is comp
+    # a clearly better fit still wins with more parameters
+    back.sse_heldout = 900.0
+    back.delta_bic_heldout = _dbic(900.0, sse0, 3, n_eff)
+    assert choose_winner([comp, back]) is back
+    with pytest.raises(ValueError):
+        choose_winner([])
+    # widening: only when the best earning candidate explains little of the excess
+    assert not should_widen([])
+    assert not should_widen([comp])
+    small = NS(excess_reduction=0.11, sse_reduction=None)
+    assert should_widen([small])
+    assert not should_widen([small, NS(excess_reduction=WIDEN_BELOW, sse_reduction=None)])
+    # ... a voltage-seen effect with a large SSE gain is no reason to widen
+    assert not should_widen([NS(excess_reduction=0.05, sse_reduction=0.9)])
+
 def _residual_case(extra, seed=3):
     """Clean tests with a known term added to the measured force; the 'model' is the
     noise-free simulation (so the residual is the term plus noise)."""

@@ -21,7 +21,11 @@ round after round, then propose a data-driven term for what no catalogue effect 
    error above the noise floor (the error the measurement noise alone gives) and
    ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff < 0 on the fit tests and on the
    held-out tests (N_eff = Σ N/τ, τ the residual autocorrelation time).  Among
-   the earning candidates the one with the largest held-out SSE drop is added.
+   the earning candidates the one with the lowest held-out ΔBIC is added
+   (:func:`~.decide.choose_winner`: between nested effects that fit equally well,
+   the simpler).  When the best earning candidate removes less than
+   :data:`~.decide.WIDEN_BELOW` of the excess, the remaining lower-ranked
+   candidates are re-identified too before deciding (:func:`~.decide.should_widen`).
 7. **Repeat** from 3 with the effect in the model (the remaining candidates are
    added on top of it) until nothing earns or ``max_effects`` are named.
 8. **Outside the catalogue**: the remaining force residual is regressed on a
@@ -73,6 +77,14 @@ from .refit import (
     split_tests,
 )
 from .refit import _load_split, _spread
+from .decide import (
+    WIDEN_BELOW,
+    channel_sse,
+    channel_sse_excess_reduction,
+    choose_winner,
+    should_widen,
+    sse_can_earn,
+)
 from .lag import try_lag
 from .terms import TermProposal, discover_term
 
@@ -161,6 +173,7 @@ class CandidateResult:
     delta_bic_fit: float = math.nan
     delta_bic_heldout: float = math.nan
     sse_heldout: float = math.nan
+    sse_reduction: float | None = None
     earns: bool = False
     parameters: dict[str, float] = field(default_factory=dict)
     intervals: dict[str, tuple[float, float] | None] = field(default_factory=dict)
@@ -174,6 +187,7 @@ class CandidateResult:
                 "error_before": self.error_before, "error_after": self.error_after,
                 "excess_error_reduction": self.excess_reduction,
                 "delta_bic_fit": self.delta_bic_fit, "delta_bic_heldout": self.delta_bic_heldout,
+                "sse_excess_reduction": self.sse_reduction,
                 "earns_its_parameters": self.earns, "parameters": self.parameters,
                 "intervals_95": {k: list(v) if v else None for k, v in self.intervals.items()},
                 "ipopt_status": self.fit.message if self.fit else None,
@@ -276,8 +290,9 @@ class DiscrepancyResult:
                             "at least min_excess_reduction of the held-out relative force error "
                             "above the noise floor, 1 - sqrt(e1^2 - en^2)/sqrt(e0^2 - en^2), and "
                             "dBIC = N_eff ln(SSE_new/SSE_old) + k ln(N_eff) < 0 on the fit and "
-                            "on the held-out tests; effects are added one at a time (largest "
-                            "held-out SSE drop first) until none earns",
+                            "on the held-out tests; effects are added one at a time (lowest "
+                            "held-out dBIC first) until none earns; the SSE alternative is "
+                            "judged per channel",
                     "min_excess_reduction": MIN_EXCESS_REDUCTION,
                     "noise_floor_percent": self.noise_floor},
                 "term": self.term.as_dict() if self.term else None,
@@ -388,56 +403,46 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
                                                       else math.nan)
         n_obs = sum(pt.y.size for pt in eval_pts)
         sse0 = sse_held if held_pts else sse_fit
-        say(f"round {rnd} (error {cur_err:.3f} %, floor {floor:.3f} %, SSE/N {sse0 / n_obs:.3f}) "
-            "ranking: " + ", ".join(f"{n} {scores[n]['score']:.3g}" for n in order))
-        if not can_earn(cur_err, floor, sse0, n_obs):
+        ch_sse0, ch_n = channel_sse(eval_pts, cur_held or cur_fit)
+        say(f"round {rnd} (error {cur_err:.3f} %, floor {floor:.3f} %, SSE/N {sse0 / n_obs:.3f}"
+            f" [per channel " + ", ".join(f"{a / b:.3f}" for a, b in zip(ch_sse0, ch_n))
+            + "]) ranking: " + ", ".join(f"{n} {scores[n]['score']:.3g}" for n in order))
+        if not (can_earn(cur_err, floor, 0.0, 1.0) or sse_can_earn(ch_sse0, ch_n)):
             excess = math.sqrt(max(cur_err ** 2 - floor ** 2, 0.0))
             note = (f"round {rnd}: candidates not re-identified — the {evaluation} force "
                     f"error {cur_err:.3f} % exceeds the noise floor {floor:.3f} % by "
-                    f"{excess:.3f} % (≤ {MIN_EXCESS_OVER_FLOOR:g} × floor) and the all-channel "
-                    f"SSE is {sse0 / n_obs:.3f} × its noise expectation "
-                    f"(≤ {1 + MIN_SSE_EXCESS:g}): no refit can earn by the decision rule")
+                    f"{excess:.3f} % (≤ {MIN_EXCESS_OVER_FLOOR:g} × floor) and the SSE of "
+                    f"every channel is within {1 + MIN_SSE_EXCESS:g} × its noise expectation "
+                    f"(all channels {sse0 / n_obs:.3f}): no refit can earn by the decision rule")
             say(note)
             notes.append(note)
             all_cands += [cands[n] for n in order]
             break
+        judge = dict(comps=comps, fit_pts=fit_pts, held_pts=held_pts, sse_fit=sse_fit,
+                     sse_held=sse_held, n_eff_fit=n_eff_fit, n_eff_held=n_eff_held,
+                     cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say)
         args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts, cur_rig,
                  cur_params, settings.max_iter) for n in chosen]
-        outs = _run_fits(args, settings.jobs)
-        for name, res, pf, ph, crig in outs:
-            c = cands[name]
-            c.fitted, c.fit, c.rig = True, res, crig
-            if not pf:
-                say(f"{name}: re-identification failed ({res.message})")
-                continue
-            comp_params = [q.name for q in comps[name].parameters]
-            k = len(comp_params)
-            c.parameters = {n: res.parameters[n] for n in comp_params}
-            c.intervals = {n: res.interval(n) for n in c.parameters}
-            c.delta_bic_fit = _dbic(_sse(fit_pts, pf), sse_fit, k, n_eff_fit)
-            if held_pts:
-                c.sse_heldout = _sse(held_pts, ph)
-                c.delta_bic_heldout = _dbic(c.sse_heldout, sse_held, k, n_eff_held)
-                c.error_after = _force_error(held_pts, ph)
-            else:
-                c.sse_heldout = _sse(fit_pts, pf)
-                c.delta_bic_heldout = c.delta_bic_fit
-                c.error_after = _force_error(fit_pts, pf)
-            c.excess_reduction = excess_reduction(cur_err, c.error_after, floor)
-            c.earns = earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
-                            1 - (c.sse_heldout - n_obs) / (sse0 - n_obs)
-                            if sse0 > (1 + MIN_SSE_EXCESS) * n_obs else None)
-            c.predictions = pf + ph
-            c.per_test_after = [force_relative_error_percent(y[0], pt.y[0])
-                                for y, pt in zip(c.predictions, fit_pts + held_pts)]
-            say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
-                f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
-                f"(excess reduced {100 * c.excess_reduction:.0f} %; {res.seconds:.1f} s)")
-        all_cands += [cands[n] for n in order]
+        for out in _run_fits(args, settings.jobs):
+            _judge(cands[out[0]], out, **judge)
         earning = [c for c in cands.values() if c.earns]
+        if should_widen(earning):
+            more = [n for n in order if n not in chosen and scores[n]["applicable"]
+                    and compatible(cur_rig, comps[n])]
+            if more:
+                best = max(earning, key=lambda c: c.excess_reduction)
+                say(f"round {rnd}: the best earning candidate ({best.effect}) removes only "
+                    f"{100 * best.excess_reduction:.0f} % of the excess (< "
+                    f"{100 * WIDEN_BELOW:.0f} %): also re-identifying {', '.join(more)}")
+                args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts,
+                         cur_rig, cur_params, settings.max_iter) for n in more]
+                for out in _run_fits(args, settings.jobs):
+                    _judge(cands[out[0]], out, **judge)
+                earning = [c for c in cands.values() if c.earns]
+        all_cands += [cands[n] for n in order]
         if not earning:
             break
-        win = min(earning, key=lambda c: c.sse_heldout)
+        win = choose_winner(earning)
         if settings.discover:
             rival = _term(fit_pts, cur_fit, eval_pts, cur_held or cur_fit, lead, settings.seed,
                           floor, n_eff_held if held_pts else n_eff_fit)
@@ -496,6 +501,44 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
         base_fit_pred + base_held_pred, loc0, loc1, {"fit": n_eff_fit, "heldout": n_eff_held},
         time.perf_counter() - t_start, str(getattr(data, "path", "")), effects, steps, term,
         floor, validation, notes)
+
+
+def _judge(c: CandidateResult, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
+           n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say) -> None:
+    """Fill ``c`` from one re-identification ``out`` (:func:`_fit_one`) and judge it by
+    :func:`~.refit.earns` (force error, ΔBIC on the fit and held-out tests, SSE
+    alternative per channel, :func:`~.decide.channel_sse_excess_reduction`)."""
+    name, res, pf, ph, crig = out
+    c.fitted, c.fit, c.rig = True, res, crig
+    if not pf:
+        say(f"{name}: re-identification failed ({res.message})")
+        return
+    comp_params = [q.name for q in comps[name].parameters]
+    k = len(comp_params)
+    c.parameters = {n: res.parameters[n] for n in comp_params}
+    c.intervals = {n: res.interval(n) for n in c.parameters}
+    c.delta_bic_fit = _dbic(_sse(fit_pts, pf), sse_fit, k, n_eff_fit)
+    ev_pts, ev_pred = (held_pts, ph) if held_pts else (fit_pts, pf)
+    c.sse_heldout = _sse(ev_pts, ev_pred)
+    c.delta_bic_heldout = (_dbic(c.sse_heldout, sse_held, k, n_eff_held) if held_pts
+                           else c.delta_bic_fit)
+    c.error_after = _force_error(ev_pts, ev_pred)
+    c.excess_reduction = excess_reduction(cur_err, c.error_after, floor)
+    c.sse_reduction = channel_sse_excess_reduction(ch_sse0, channel_sse(ev_pts, ev_pred)[0],
+                                                   ch_n)
+    c.earns = earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
+                    c.sse_reduction)
+    c.predictions = pf + ph
+    c.per_test_after = [force_relative_error_percent(y[0], pt.y[0])
+                        for y, pt in zip(c.predictions, fit_pts + held_pts)]
+    pars = ", ".join(f"{n} {v:.3g}" + (f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv else "")
+                     for (n, v), iv in zip(c.parameters.items(), c.intervals.values()))
+    sse_txt = f", SSE excess reduced {100 * c.sse_reduction:.0f} %" \
+        if c.sse_reduction is not None else ""
+    say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
+        f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
+        f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}; {res.seconds:.1f} s)"
+        f"{' EARNS' if c.earns else ''}; {pars}")
 
 
 #: A catalogue effect that earns is still not named when the data-driven term leaves
