@@ -286,6 +286,64 @@ def test_winner_is_the_lowest_heldout_dbic_and_small_gains_widen_the_round():
     # ... a voltage-seen effect with a large SSE gain is no reason to widen
     assert not should_widen([NS(excess_reduction=0.05, sse_reduction=0.9)])
 
+
+def test_an_effect_earns_only_with_a_resolved_size():
+    from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
+    from ehsa_opt.estimation.discrepancy.decide import significant
+    amp = CANDIDATES["voltage_drop"].amplitudes
+    assert amp == ("voltage_drop_V",)
+    # a voltage drop of ~0 V whose interval straddles zero is not named
+    assert not significant({"voltage_drop_V": (-0.0049, 0.0049)}, amp)
+    assert significant({"voltage_drop_V": (0.02, 0.04)}, amp)
+    # one resolved amplitude of several is enough (cogging: sin resolved, cos not)
+    cog = CANDIDATES["cogging"].amplitudes
+    assert significant({"cogging_sin_Nm": (1e-4, 9e-4), "cogging_cos_Nm": (-1e-4, 1e-4)}, cog)
+    assert not significant({"cogging_sin_Nm": (-1e-4, 2e-5), "cogging_cos_Nm": (-8e-6, 2e-4)},
+                           cog)
+    # transmission effects (absent = infinite stiffness) and missing intervals pass
+    assert CANDIDATES["backlash"].amplitudes == () and CANDIDATES["compliance"].amplitudes == ()
+    assert significant({"backlash_gap_m": (-1e-6, 1e-6)}, ())
+    assert significant({"voltage_drop_V": None}, amp)
+
+
+def test_lookahead_adds_first_what_lets_a_confounded_candidate_earn():
+    """A gap that fits the fit tests but fails on the held-out ones (it absorbed a
+    cogging ripple) is tried on top of each earning candidate; the one that lets it
+    earn is added first, if the two-step path ends below the default winner."""
+    from types import SimpleNamespace as NS
+
+    from ehsa_opt.estimation.discrepancy.decide import confounded, lookahead_winner
+
+    def cand(effect, earns, dbic_fit, dbic_held, sse, err):
+        return NS(effect=effect, fitted=True, earns=earns, predictions=[], sse_heldout=sse,
+                  delta_bic_fit=dbic_fit, delta_bic_heldout=dbic_held, error_after=err)
+    gap = cand("backlash", False, -1005.0, 40.0, 5200.0, 15.4)
+    comp = cand("compliance", True, -80.0, -60.0, 4000.0, 12.7)
+    cog = cand("cogging", True, -50.0, -30.0, 4300.0, 13.9)
+    noise = cand("asymmetric_friction", False, 5.0, 3.0, 4900.0, 14.3)
+    assert confounded([comp, cog, gap, noise]) is gap
+    assert confounded([comp, cog, noise]) is None
+    calls = []
+
+    def on_top(c):  # the gap cannot join the compliance (one transmission slot)
+        calls.append(c.effect)
+        if c.effect == "compliance":
+            return None
+        return NS(earns=True, sse_heldout=600.0, error_after=1.6)
+    assert lookahead_winner([comp, cog], gap, on_top) is cog
+    assert calls == ["compliance", "cogging"]
+
+    # the path must end below the default winner, and the second step must earn
+    def worse(c):
+        return None if c.effect == "compliance" else NS(earns=True, sse_heldout=4100.0,
+                                                        error_after=12.9)
+    assert lookahead_winner([comp, cog], gap, worse) is None
+
+    def fails(c):
+        return None if c.effect == "compliance" else NS(earns=False, sse_heldout=600.0,
+                                                        error_after=1.6)
+    assert lookahead_winner([comp, cog], gap, fails) is None
+
 def _residual_case(extra, seed=3):
     """Clean tests with a known term added to the measured force; the 'model' is the
     noise-free simulation (so the residual is the term plus noise)."""

@@ -61,6 +61,11 @@ class Candidate:
         start).
     log_names : tuple of str
         Effect parameters refined in log10 on the simulation (they span decades).
+    amplitudes : tuple of str
+        Effect parameters that are all zero when the effect is absent (its size):
+        the effect earns only when the ~95 % interval of one of them excludes zero
+        (:func:`~.decide.significant`).  Empty for a transmission effect, whose
+        absence is a limit (infinite stiffness), not a zero.
     """
 
     name: str
@@ -72,6 +77,7 @@ class Candidate:
     full_refit: str = "collocation"
     effect_fit: str = "collocation"
     log_names: tuple[str, ...] = ()
+    amplitudes: tuple[str, ...] = ()
 
     def applicable(self, rig: Rig) -> bool:
         return rig.has_generator or not self.needs_generator
@@ -100,12 +106,14 @@ CANDIDATES: dict[str, Candidate] = {
         "asymmetric_friction",
         probes=({"asym_coulomb_N": 5.0}, {"asym_viscous_Ns_per_m": 30.0}),
         starts=({"asym_coulomb_N": 0.5, "asym_viscous_Ns_per_m": 1.0},
-                {"asym_coulomb_N": -0.5, "asym_viscous_Ns_per_m": -1.0})),
+                {"asym_coulomb_N": -0.5, "asym_viscous_Ns_per_m": -1.0}),
+        amplitudes=("asym_coulomb_N", "asym_viscous_Ns_per_m")),
     "cogging": Candidate(
         "cogging",
         probes=({"cogging_sin_Nm": 0.005}, {"cogging_cos_Nm": 0.005}),
         starts=({"cogging_sin_Nm": 1e-3, "cogging_cos_Nm": 1e-3},
-                {"cogging_sin_Nm": 2e-2, "cogging_cos_Nm": -2e-2})),
+                {"cogging_sin_Nm": 2e-2, "cogging_cos_Nm": -2e-2}),
+        amplitudes=("cogging_sin_Nm", "cogging_cos_Nm")),
     "compliance": Candidate(
         "compliance",
         # one probe per decade of the realistic mount stiffness 1e4-1e8 N/m (1e9 is
@@ -123,14 +131,14 @@ CANDIDATES: dict[str, Candidate] = {
         "voltage_drop",
         probes=({"voltage_drop_V": 0.5},),
         starts=tuple({"voltage_drop_V": v} for v in (0.05, 0.2, 0.5, 1.0, 2.0, 3.0)),
-        needs_generator=True),
+        needs_generator=True, amplitudes=("voltage_drop_V",)),
     "winding_heating": Candidate(
         "winding_heating",
         probes=({"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 100.0},
                 {"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 0.3}),
         starts=tuple({"winding_heating_K_per_J": h, "winding_cooling_time_s": tau}
                      for h in (0.3, 1.0, 3.0, 10.0) for tau in (0.5, 5.0, 50.0)),
-        needs_generator=True),
+        needs_generator=True, amplitudes=("winding_heating_K_per_J",)),
 }
 assert set(CANDIDATES) <= set(COMPONENTS)
 

@@ -39,7 +39,6 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -71,8 +70,6 @@ from .refit import (
     compatible,
     earns,
     effective_samples,
-    excess_reduction,
-    fit_candidate,
     force_noise_floor_percent,
     split_tests,
 )
@@ -80,12 +77,14 @@ from .refit import _load_split, _spread
 from .decide import (
     WIDEN_BELOW,
     channel_sse,
-    channel_sse_excess_reduction,
     choose_winner,
+    confounded,
+    lookahead_winner,
     should_widen,
     sse_can_earn,
 )
 from .lag import try_lag
+from .rounds import _judge, _on_top, _run_fits
 from .terms import TermProposal, discover_term
 
 __all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "run_discrepancy",
@@ -426,6 +425,7 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
         for out in _run_fits(args, settings.jobs):
             _judge(cands[out[0]], out, **judge)
         earning = [c for c in cands.values() if c.earns]
+        first = None
         if should_widen(earning):
             more = [n for n in order if n not in chosen and scores[n]["applicable"]
                     and compatible(cur_rig, comps[n])]
@@ -439,10 +439,15 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
                 for out in _run_fits(args, settings.jobs):
                     _judge(cands[out[0]], out, **judge)
                 earning = [c for c in cands.values() if c.earns]
+                blocked = confounded(list(cands.values()))
+                if earning and blocked is not None:
+                    first = lookahead_winner(
+                        earning, blocked, lambda c: _on_top(c, blocked, judge, sub_pts,
+                                                            settings.max_iter, rnd), say)
         all_cands += [cands[n] for n in order]
         if not earning:
             break
-        win = choose_winner(earning)
+        win = first or choose_winner(earning)
         if settings.discover:
             rival = _term(fit_pts, cur_fit, eval_pts, cur_held or cur_fit, lead, settings.seed,
                           floor, n_eff_held if held_pts else n_eff_fit)
@@ -503,44 +508,6 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
         floor, validation, notes)
 
 
-def _judge(c: CandidateResult, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
-           n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say) -> None:
-    """Fill ``c`` from one re-identification ``out`` (:func:`_fit_one`) and judge it by
-    :func:`~.refit.earns` (force error, ΔBIC on the fit and held-out tests, SSE
-    alternative per channel, :func:`~.decide.channel_sse_excess_reduction`)."""
-    name, res, pf, ph, crig = out
-    c.fitted, c.fit, c.rig = True, res, crig
-    if not pf:
-        say(f"{name}: re-identification failed ({res.message})")
-        return
-    comp_params = [q.name for q in comps[name].parameters]
-    k = len(comp_params)
-    c.parameters = {n: res.parameters[n] for n in comp_params}
-    c.intervals = {n: res.interval(n) for n in c.parameters}
-    c.delta_bic_fit = _dbic(_sse(fit_pts, pf), sse_fit, k, n_eff_fit)
-    ev_pts, ev_pred = (held_pts, ph) if held_pts else (fit_pts, pf)
-    c.sse_heldout = _sse(ev_pts, ev_pred)
-    c.delta_bic_heldout = (_dbic(c.sse_heldout, sse_held, k, n_eff_held) if held_pts
-                           else c.delta_bic_fit)
-    c.error_after = _force_error(ev_pts, ev_pred)
-    c.excess_reduction = excess_reduction(cur_err, c.error_after, floor)
-    c.sse_reduction = channel_sse_excess_reduction(ch_sse0, channel_sse(ev_pts, ev_pred)[0],
-                                                   ch_n)
-    c.earns = earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
-                    c.sse_reduction)
-    c.predictions = pf + ph
-    c.per_test_after = [force_relative_error_percent(y[0], pt.y[0])
-                        for y, pt in zip(c.predictions, fit_pts + held_pts)]
-    pars = ", ".join(f"{n} {v:.3g}" + (f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv else "")
-                     for (n, v), iv in zip(c.parameters.items(), c.intervals.values()))
-    sse_txt = f", SSE excess reduced {100 * c.sse_reduction:.0f} %" \
-        if c.sse_reduction is not None else ""
-    say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
-        f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
-        f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}; {res.seconds:.1f} s)"
-        f"{' EARNS' if c.earns else ''}; {pars}")
-
-
 #: A catalogue effect that earns is still not named when the data-driven term leaves
 #: less than this share of the effect's remaining error above the noise floor (the
 #: catalogue name would point at the wrong part: e.g. backlash for a lagging force
@@ -558,36 +525,3 @@ def _term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> T
         term.earns = earns(term.error_before, term.error_after, floor, d_b, d_b)
     return term
 
-
-def _rig_on_simulation(rig: Rig) -> bool:
-    """Whether ``rig`` holds an effect fitted on the simulation (a stiff contact or an
-    elastic mount): every later candidate is then fitted on the simulation too — the
-    collocation NLP with those states factorises for minutes (a 0.8 mm gap: > 15 min)."""
-    return any(CANDIDATES[c.name].full_refit == "simulation"
-               for c in rig.components if c.name in CANDIDATES)
-
-
-def _fit_one(a: tuple) -> tuple:
-    name, comp, starts, sub_pts, fit_pts, held_pts, rig, params, max_iter = a
-    cand = CANDIDATES[name]
-    on_sim = _rig_on_simulation(rig)
-    _, res, _, _ = fit_candidate(name, comp, starts, sub_pts, [], rig, params, max_iter,
-                                 shares=cand.shares, refine=cand.refine,
-                                 full_refit="simulation" if on_sim else cand.full_refit,
-                                 effect_fit="simulation" if on_sim else cand.effect_fit,
-                                 log_names=cand.log_names)
-    crig = rig.with_components([*rig.components, comp])
-    if not res.parameters:
-        return name, res, [], [], crig
-    pf = predict(fit_pts, crig, res.parameters)
-    ph = predict(held_pts, crig, res.parameters) if held_pts else []
-    return name, res, pf, ph, crig
-
-
-def _run_fits(args: list[tuple], jobs: int) -> list[tuple]:
-    if jobs > 1 and len(args) > 1:
-        import multiprocessing as mp
-        with ProcessPoolExecutor(max_workers=min(jobs, len(args)),
-                                 mp_context=mp.get_context("fork")) as ex:
-            return list(ex.map(_fit_one, args))
-    return [_fit_one(a) for a in args]
