@@ -316,7 +316,8 @@ def test_lookahead_adds_first_what_lets_a_confounded_candidate_earn():
 
     def cand(effect, earns, dbic_fit, dbic_held, sse, err):
         return NS(effect=effect, fitted=True, earns=earns, predictions=[], sse_heldout=sse,
-                  delta_bic_fit=dbic_fit, delta_bic_heldout=dbic_held, error_after=err)
+                  delta_bic_fit=dbic_fit, delta_bic_heldout=dbic_held, error_after=err,
+                  error_before=14.28)
     gap = cand("backlash", False, -1005.0, 40.0, 5200.0, 15.4)
     comp = cand("compliance", True, -80.0, -60.0, 4000.0, 12.7)
     cog = cand("cogging", True, -50.0, -30.0, 4300.0, 13.9)
@@ -343,6 +344,24 @@ def test_lookahead_adds_first_what_lets_a_confounded_candidate_earn():
         return None if c.effect == "compliance" else NS(earns=False, sse_heldout=600.0,
                                                         error_after=1.6)
     assert lookahead_winner([comp, cog], gap, fails) is None
+    # a first step that does not earn alone (a few % of the excess) but is supported
+    from ehsa_opt.estimation.discrepancy.decide import supported
+    weak = cand("cogging", False, -50.0, -12.0, 4850.0, 14.1)
+    weak.error_before, weak.resolved = 14.28, True
+    assert supported(weak)
+    assert lookahead_winner([comp], gap, on_top) is None  # only the compliance offered
+    assert lookahead_winner([comp], gap, on_top, first_steps=[weak]) is weak
+    weak.resolved = False  # its size not resolved: no first step
+    assert not supported(weak)
+    nothing_fit = cand("voltage_drop", False, 3.0, -5.0, 5000.0, 14.2)
+    nothing_fit.resolved = True
+    assert not supported(nothing_fit)  # explains nothing even on the fit tests
+    weak.resolved = True
+
+    def passenger(c):  # the first step's size is not resolved in the joint fit
+        return None if c.effect == "compliance" else NS(earns=True, sse_heldout=600.0,
+                                                        error_after=1.6, first_resolved=False)
+    assert lookahead_winner([comp], gap, passenger, first_steps=[weak]) is None
 
 def _residual_case(extra, seed=3):
     """Clean tests with a known term added to the measured force; the 'model' is the

@@ -55,9 +55,9 @@ def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
     c.excess_reduction = excess_reduction(cur_err, c.error_after, floor)
     c.sse_reduction = channel_sse_excess_reduction(ch_sse0, channel_sse(ev_pts, ev_pred)[0],
                                                    ch_n)
+    c.resolved = significant(c.intervals, CANDIDATES[name].amplitudes)
     c.earns = (earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
-                     c.sse_reduction)
-               and significant(c.intervals, CANDIDATES[name].amplitudes))
+                     c.sse_reduction) and c.resolved)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0], pt.y[0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
@@ -92,7 +92,11 @@ def _on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd
                          "sse_held": _sse(held_pts, ph) if held_pts else math.nan,
                          "n_eff_held": effective_samples(held_pts, ph) if held_pts else math.nan,
                          "cur_err": c.error_after, "ch_sse0": ch_sse0, "ch_n": ch_n})
-    return step if step.predictions is not None else None
+    if step.predictions is None:
+        return None
+    amp = CANDIDATES[c.effect].amplitudes if c.effect in CANDIDATES else ()
+    step.first_resolved = significant({n: step.fit.interval(n) for n in amp}, amp)
+    return step
 
 
 def _rig_on_simulation(rig: Rig) -> bool:

@@ -82,6 +82,7 @@ from .decide import (
     lookahead_winner,
     should_widen,
     sse_can_earn,
+    supported,
 )
 from .lag import try_lag
 from .rounds import _judge, _on_top, _run_fits
@@ -173,6 +174,7 @@ class CandidateResult:
     delta_bic_heldout: float = math.nan
     sse_heldout: float = math.nan
     sse_reduction: float | None = None
+    resolved: bool = True
     earns: bool = False
     parameters: dict[str, float] = field(default_factory=dict)
     intervals: dict[str, tuple[float, float] | None] = field(default_factory=dict)
@@ -440,12 +442,20 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
                     _judge(cands[out[0]], out, **judge)
                 earning = [c for c in cands.values() if c.earns]
                 blocked = confounded(list(cands.values()))
-                if earning and blocked is not None:
+                if blocked is not None:
                     first = lookahead_winner(
                         earning, blocked, lambda c: _on_top(c, blocked, judge, sub_pts,
-                                                            settings.max_iter, rnd), say)
+                                                            settings.max_iter, rnd), say,
+                        first_steps=[c for c in cands.values() if supported(c)])
         all_cands += [cands[n] for n in order]
-        if not earning:
+        if first is not None and not first.earns:
+            note = (f"round {rnd}: {first.effect} is added first (it removes "
+                    f"{100 * first.excess_reduction:.0f} % of the excess alone, and lets "
+                    f"{blocked.effect} earn on top of it)")
+            say(note)
+            notes.append(note)
+            first.earns = True
+        if not earning and first is None:
             break
         win = first or choose_winner(earning)
         if settings.discover:
