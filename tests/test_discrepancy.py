@@ -283,8 +283,10 @@ def test_winner_is_the_lowest_heldout_dbic_and_small_gains_widen_the_round():
     small = NS(excess_reduction=0.11, sse_reduction=None)
     assert should_widen([small])
     assert not should_widen([small, NS(excess_reduction=WIDEN_BELOW, sse_reduction=None)])
-    # ... a voltage-seen effect with a large SSE gain is no reason to widen
-    assert not should_widen([NS(excess_reduction=0.05, sse_reduction=0.9)])
+    # ... with the force at its noise level, a voltage-seen effect with a large SSE
+    # gain is no reason to widen; with a force excess, the force gain decides
+    assert not should_widen([NS(excess_reduction=0.0, sse_reduction=0.9)], force_excess=False)
+    assert should_widen([NS(excess_reduction=0.11, sse_reduction=0.9)], force_excess=True)
 
 
 def test_an_effect_earns_only_with_a_resolved_size():
@@ -304,6 +306,10 @@ def test_an_effect_earns_only_with_a_resolved_size():
     assert CANDIDATES["backlash"].amplitudes == () and CANDIDATES["compliance"].amplitudes == ()
     assert significant({"backlash_gap_m": (-1e-6, 1e-6)}, ())
     assert significant({"voltage_drop_V": None}, amp)
+    # mechanical effects judge the SSE alternative on the force only (rigid rig)
+    assert CANDIDATES["cogging"].rigid_channels == (0,)
+    assert CANDIDATES["asymmetric_friction"].rigid_channels == (0,)
+    assert CANDIDATES["voltage_drop"].rigid_channels is None
 
 
 def test_lookahead_adds_first_what_lets_a_confounded_candidate_earn():

@@ -113,12 +113,13 @@ def choose_winner(earning: Sequence[Any]) -> Any:
     return min(earning, key=lambda c: (c.delta_bic_heldout, c.sse_heldout))
 
 
-def should_widen(earning: Sequence[Any]) -> bool:
+def should_widen(earning: Sequence[Any], force_excess: bool = True) -> bool:
     """Whether to re-identify the remaining lower-ranked candidates before deciding.
 
     True when some candidate earns but the best earning one removes less than
     :data:`WIDEN_BELOW` of the held-out force error's excess over the noise floor
-    (and the SSE alternative, when offered, says the same): most of what the model
+    (when the force has no excess beyond noise, ``force_excess`` False: of the SSE
+    alternative's excess — a voltage-seen effect): most of what the model
     misses is then unexplained by the top-ranked candidates, and the ranking (a
     linearised score on the fit tests) may have put the effect that explains it
     below ``top`` — a 12-per-rev cogging beside a 0.1 mm gap ranked 5th, the gap's
@@ -130,6 +131,12 @@ def should_widen(earning: Sequence[Any]) -> bool:
     earning : sequence of CandidateResult
         The earning candidates of the round (``excess_reduction`` set; an optional
         ``sse_reduction`` attribute holds the SSE alternative's share).
+    force_excess : bool
+        Whether the force error's excess over the noise floor is beyond noise
+        (:func:`~.refit.can_earn` on the force alone).  Then the force gain decides
+        alone: a compliance beside a gap plus a cogging removed 11 % of the force
+        excess but more than half of the voltage channel's, and the round was not
+        widened.
     """
     if not earning:
         return False
@@ -137,7 +144,8 @@ def should_widen(earning: Sequence[Any]) -> bool:
     for c in earning:
         g = c.excess_reduction if math.isfinite(c.excess_reduction) else -math.inf
         s = getattr(c, "sse_reduction", None)
-        gains.append(max(g, s) if s is not None and math.isfinite(s) else g)
+        use_sse = not force_excess and s is not None and math.isfinite(s)
+        gains.append(max(g, s) if use_sse else g)
     return max(gains) < max(WIDEN_BELOW, MIN_EXCESS_REDUCTION)
 
 

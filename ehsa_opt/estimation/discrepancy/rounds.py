@@ -53,8 +53,12 @@ def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
                            else c.delta_bic_fit)
     c.error_after = _force_error(ev_pts, ev_pred)
     c.excess_reduction = excess_reduction(cur_err, c.error_after, floor)
-    c.sse_reduction = channel_sse_excess_reduction(ch_sse0, channel_sse(ev_pts, ev_pred)[0],
-                                                   ch_n)
+    ch = CANDIDATES[name].rigid_channels if name in CANDIDATES else None
+    if ch is None or any(q.transmission for q in crig.components):
+        ch = tuple(range(len(ch_n)))
+    ch = [k for k in ch if k < len(ch_n)]
+    c.sse_reduction = channel_sse_excess_reduction(
+        ch_sse0[ch], channel_sse(ev_pts, ev_pred)[0][ch], ch_n[ch])
     c.resolved = significant(c.intervals, CANDIDATES[name].amplitudes)
     c.earns = (earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
                      c.sse_reduction) and c.resolved)

@@ -428,7 +428,7 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
             _judge(cands[out[0]], out, **judge)
         earning = [c for c in cands.values() if c.earns]
         first = None
-        if should_widen(earning):
+        if should_widen(earning, can_earn(cur_err, floor, 0.0, 1.0)):
             more = [n for n in order if n not in chosen and scores[n]["applicable"]
                     and compatible(cur_rig, comps[n])]
             if more:
