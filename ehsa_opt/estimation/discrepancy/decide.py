@@ -27,7 +27,7 @@ from .fit import PreparedTest
 from .refit import MIN_EXCESS_REDUCTION, MIN_SSE_EXCESS
 
 __all__ = ["channel_sse", "channel_sse_excess_reduction", "sse_can_earn", "choose_winner",
-           "should_widen", "confounded", "supported", "lookahead_winner", "significant", "WIDEN_BELOW"]
+           "should_widen", "confounded", "supported", "lookahead_winner", "confounded_first", "significant", "WIDEN_BELOW"]
 
 #: When the best earning candidate of a round removes less than this share of the
 #: held-out force error's excess over the noise floor, the round re-identifies every
@@ -253,3 +253,64 @@ def significant(intervals: dict, amplitudes: Sequence[str]) -> bool:
     if not amplitudes or not known:
         return True
     return any(lo > 0 or hi < 0 for lo, hi in known)
+
+
+def confounded_first(blocked: Any, others: Sequence[Any], try_on_blocked: Any,
+                     err_before: float, floor: float, best_sse: float, say: Any = None,
+                     max_paths: int = 4) -> bool:
+    """Whether the confounded candidate ``blocked`` should be added first: some other
+    candidate C, re-identified on top of it (C's own and ``blocked``'s parameters
+    free), completes a path ``blocked`` → C that earns as a whole.
+
+    The reverse of :func:`lookahead_winner`: when the effect that ``blocked``
+    absorbed on the fit tests cannot be fitted alone (a 12-per-rev cogging beside a
+    0.1 mm gap: fitted alone on the baseline it finds nothing, fit ΔBIC > 0), the
+    joint refit on top of ``blocked`` can still separate them.  A path earns when C
+    earns on top of ``blocked`` (``step.earns``, its size resolved), the path as a
+    whole earns against the current model by :func:`~.refit.earns` (held-out force
+    error ``err_before`` → the path's, ΔBIC summed over the two steps) and its
+    held-out SSE ends below ``best_sse`` (the default winner's, or ∞).
+
+    Parameters
+    ----------
+    blocked : CandidateResult
+        The confounded candidate (:func:`confounded`).
+    others : sequence of CandidateResult
+        Fitted candidates to try as the second step (rank order; at most
+        ``max_paths`` are tried).
+    try_on_blocked : callable
+        ``try_on_blocked(c) -> CandidateResult | None``: C re-identified on the model
+        with ``blocked``, judged against it.
+    err_before : float
+        Held-out relative force error of the current model, %.
+    floor : float
+        Noise floor of that error, %.
+    best_sse : float
+        Held-out SSE (noise-normalised) the path must end below.
+    say : callable, optional
+        Progress messages.
+    max_paths : int
+        At most this many second steps are tried.
+    """
+    from .refit import earns
+    tried = 0
+    for c in others:
+        if tried >= max_paths:
+            break
+        if c is blocked:
+            continue
+        step = try_on_blocked(c)
+        if step is None:
+            continue
+        tried += 1
+        whole = earns(err_before, step.error_after, floor,
+                      blocked.delta_bic_fit + step.delta_bic_fit,
+                      blocked.delta_bic_heldout + step.delta_bic_heldout)
+        ok = step.earns and whole and step.sse_heldout < best_sse
+        if say:
+            say(f"look-ahead: {c.effect} on top of {blocked.effect}: held-out error "
+                f"{err_before:.3f} -> {blocked.error_after:.3f} -> {step.error_after:.3f} %"
+                f"{' (the path earns)' if ok else ' (the path does not earn)'}")
+        if ok:
+            return True
+    return False

@@ -15,7 +15,7 @@ import math
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
-from .candidates import CANDIDATES
+from .candidates import CANDIDATES, components_for
 from .decide import channel_sse, channel_sse_excess_reduction, significant
 from .fit import Rig, force_relative_error_percent, predict
 from .refit import (
@@ -84,6 +84,10 @@ def _on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd
         return None
     fit_pts, held_pts = judge["fit_pts"], judge["held_pts"]
     pf, ph = c.predictions[:len(fit_pts)], c.predictions[len(fit_pts):]
+    # configured from the residual of the model with c (the cogging period: the
+    # baseline's residual was dominated by what c explains)
+    comp = components_for([blocked.effect], fit_pts, pf, c.rig.harvester.lead_m_per_rad
+                          )[blocked.effect]
     ev_pts, ev_pred = (held_pts, ph) if held_pts else (fit_pts, pf)
     sse_fit = _sse(fit_pts, pf)
     n_eff_fit = effective_samples(fit_pts, pf)

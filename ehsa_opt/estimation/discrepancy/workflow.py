@@ -79,6 +79,7 @@ from .decide import (
     channel_sse,
     choose_winner,
     confounded,
+    confounded_first,
     lookahead_winner,
     should_widen,
     sse_can_earn,
@@ -447,11 +448,21 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
                         earning, blocked, lambda c: _on_top(c, blocked, judge, sub_pts,
                                                             settings.max_iter, rnd), say,
                         first_steps=[c for c in cands.values() if supported(c)])
+                    others = [cands[n] for n in order if cands[n].fitted
+                              and cands[n].predictions is not None and cands[n] is not blocked]
+                    if first is None and confounded_first(
+                            blocked, others,
+                            lambda c: _on_top(blocked, c, judge, sub_pts, settings.max_iter,
+                                              rnd),
+                            cur_err, floor,
+                            choose_winner(earning).sse_heldout if earning else math.inf, say):
+                        first = blocked
         all_cands += [cands[n] for n in order]
         if first is not None and not first.earns:
             note = (f"round {rnd}: {first.effect} is added first (it removes "
-                    f"{100 * first.excess_reduction:.0f} % of the excess alone, and lets "
-                    f"{blocked.effect} earn on top of it)")
+                    f"{100 * first.excess_reduction:.0f} % of the excess alone, and "
+                    + (f"lets {blocked.effect} earn on top of it)" if first is not blocked
+                       else "a candidate fitted on top of it completes a path that earns)"))
             say(note)
             notes.append(note)
             first.earns = True
