@@ -369,6 +369,46 @@ def test_lookahead_adds_first_what_lets_a_confounded_candidate_earn():
                                                         error_after=1.6, first_resolved=False)
     assert lookahead_winner([comp], gap, passenger, first_steps=[weak]) is None
 
+
+def test_a_confounded_candidate_is_added_first_when_a_path_over_it_earns():
+    """The reverse look-ahead: the gap fails alone on the held-out tests (it absorbed
+    a cogging ripple that cogging alone could not fit), but cogging re-identified on
+    top of the gap completes a path that earns as a whole."""
+    from types import SimpleNamespace as NS
+
+    from ehsa_opt.estimation.discrepancy.decide import confounded_first
+    gap = NS(effect="backlash", delta_bic_fit=-1005.0, delta_bic_heldout=155.0,
+             error_after=15.41)
+    cog = NS(effect="cogging")
+    comp = NS(effect="compliance")
+    volt = NS(effect="voltage_drop")
+    tried = []
+
+    def on_gap(c):
+        tried.append(c.effect)
+        if c.effect == "compliance":
+            return None  # one transmission slot
+        if c.effect == "cogging":
+            return NS(earns=True, error_after=1.68, sse_heldout=600.0,
+                      delta_bic_fit=-1855.0, delta_bic_heldout=-2786.0)
+        return NS(earns=True, error_after=14.49, sse_heldout=5000.0, delta_bic_fit=-65.0,
+                  delta_bic_heldout=-61.0)
+    # 14.28 -> 15.41 -> 1.68 %, noise floor 1.99 %, default winner's SSE 4000
+    assert confounded_first(gap, [comp, volt, cog], on_gap, 14.28, 1.99, 4000.0)
+    assert tried == ["compliance", "voltage_drop", "cogging"]
+    # a path that ends above the current error or the default winner does not count
+    assert not confounded_first(gap, [volt], on_gap, 14.28, 1.99, 4000.0)
+    assert not confounded_first(gap, [cog], on_gap, 14.28, 1.99, 500.0)
+    # the second step must earn on top of the gap (its size resolved)
+    assert not confounded_first(gap, [cog], lambda c: NS(
+        earns=False, error_after=1.68, sse_heldout=600.0, delta_bic_fit=-1855.0,
+        delta_bic_heldout=-2786.0), 14.28, 1.99, 4000.0)
+    # at most max_paths second steps are re-identified
+    tried.clear()
+    assert not confounded_first(gap, [volt, comp, cog], on_gap, 14.28, 1.99, 4000.0,
+                                max_paths=1)
+    assert tried == ["voltage_drop"]
+
 def _residual_case(extra, seed=3):
     """Clean tests with a known term added to the measured force; the 'model' is the
     noise-free simulation (so the residual is the term plus noise)."""

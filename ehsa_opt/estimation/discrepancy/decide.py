@@ -13,7 +13,9 @@
   too before deciding (the best earning candidate explains little of the excess);
 * :func:`confounded` / :func:`lookahead_winner`: a candidate that fits the fit tests
   but fails on the held-out ones is tried on top of each earning candidate, and the
-  one that lets it earn is added first (it absorbed that candidate's residual).
+  one that lets it earn is added first (it absorbed that candidate's residual);
+  :func:`confounded_first`: or, when nothing fitted alone does, the others are
+  fitted on top of it, and a path over it that earns as a whole adds it first.
 """
 
 from __future__ import annotations

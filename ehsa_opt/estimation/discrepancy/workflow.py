@@ -25,7 +25,12 @@ round after round, then propose a data-driven term for what no catalogue effect 
    (:func:`~.decide.choose_winner`: between nested effects that fit equally well,
    the simpler).  When the best earning candidate removes less than
    :data:`~.decide.WIDEN_BELOW` of the excess, the remaining lower-ranked
-   candidates are re-identified too before deciding (:func:`~.decide.should_widen`).
+   candidates are re-identified too before deciding (:func:`~.decide.should_widen`),
+   and a candidate that fits the fit tests but fails on the held-out ones (it
+   absorbed another effect's residual) is re-identified on top of the others, or
+   they on top of it: a two-step path that earns as a whole and ends below the
+   default winner decides which is added first (:func:`~.decide.lookahead_winner`,
+   :func:`~.decide.confounded_first`).
 7. **Repeat** from 3 with the effect in the model (the remaining candidates are
    added on top of it) until nothing earns or ``max_effects`` are named.
 8. **Outside the catalogue**: the remaining force residual is regressed on a
