@@ -61,6 +61,17 @@ class Candidate:
         start).
     log_names : tuple of str
         Effect parameters refined in log10 on the simulation (they span decades).
+    rigid_channels : tuple of int or None
+        Output channels (0 force, 1 voltage) the effect can change on a rig without
+        a transmission effect (the rotor then turns with the imposed motion):
+        a mechanical effect on the rod or rotor side changes only the force.  The SSE
+        alternative of the decision rule is judged on these channels only — a gain
+        elsewhere is the current model's re-fit, not the effect.  None: all.
+    amplitudes : tuple of str
+        Effect parameters that are all zero when the effect is absent (its size):
+        the effect earns only when the ~95 % interval of one of them excludes zero
+        (:func:`~.decide.significant`).  Empty for a transmission effect, whose
+        absence is a limit (infinite stiffness), not a zero.
     """
 
     name: str
@@ -72,6 +83,8 @@ class Candidate:
     full_refit: str = "collocation"
     effect_fit: str = "collocation"
     log_names: tuple[str, ...] = ()
+    amplitudes: tuple[str, ...] = ()
+    rigid_channels: tuple[int, ...] | None = None
 
     def applicable(self, rig: Rig) -> bool:
         return rig.has_generator or not self.needs_generator
@@ -104,12 +117,16 @@ CANDIDATES: dict[str, Candidate] = {
         "asymmetric_friction",
         probes=({"asym_coulomb_N": 5.0}, {"asym_viscous_Ns_per_m": 30.0}),
         starts=({"asym_coulomb_N": 0.5, "asym_viscous_Ns_per_m": 1.0},
-                {"asym_coulomb_N": -0.5, "asym_viscous_Ns_per_m": -1.0})),
+                {"asym_coulomb_N": -0.5, "asym_viscous_Ns_per_m": -1.0}),
+        amplitudes=("asym_coulomb_N", "asym_viscous_Ns_per_m"),
+        rigid_channels=(0,)),
     "cogging": Candidate(
         "cogging",
         probes=({"cogging_sin_Nm": 0.005}, {"cogging_cos_Nm": 0.005}),
         starts=({"cogging_sin_Nm": 1e-3, "cogging_cos_Nm": 1e-3},
-                {"cogging_sin_Nm": 2e-2, "cogging_cos_Nm": -2e-2})),
+                {"cogging_sin_Nm": 2e-2, "cogging_cos_Nm": -2e-2}),
+        amplitudes=("cogging_sin_Nm", "cogging_cos_Nm"),
+        rigid_channels=(0,)),
     "compliance": Candidate(
         "compliance",
         # one probe per decade of the realistic mount stiffness 1e4-1e8 N/m (1e9 is
@@ -127,14 +144,14 @@ CANDIDATES: dict[str, Candidate] = {
         "voltage_drop",
         probes=({"voltage_drop_V": 0.5},),
         starts=tuple({"voltage_drop_V": v} for v in (0.05, 0.2, 0.5, 1.0, 2.0, 3.0)),
-        needs_generator=True),
+        needs_generator=True, amplitudes=("voltage_drop_V",)),
     "winding_heating": Candidate(
         "winding_heating",
         probes=({"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 100.0},
                 {"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 0.3}),
         starts=tuple({"winding_heating_K_per_J": h, "winding_cooling_time_s": tau}
                      for h in (0.3, 1.0, 3.0, 10.0) for tau in (0.5, 5.0, 50.0)),
-        needs_generator=True),
+        needs_generator=True, amplitudes=("winding_heating_K_per_J",)),
 }
 assert set(CANDIDATES) <= set(COMPONENTS)
 

@@ -21,7 +21,16 @@ round after round, then propose a data-driven term for what no catalogue effect 
    error above the noise floor (the error the measurement noise alone gives) and
    ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff < 0 on the fit tests and on the
    held-out tests (N_eff = Σ N/τ, τ the residual autocorrelation time).  Among
-   the earning candidates the one with the largest held-out SSE drop is added.
+   the earning candidates the one with the lowest held-out ΔBIC is added
+   (:func:`~.decide.choose_winner`: between nested effects that fit equally well,
+   the simpler).  When the best earning candidate removes less than
+   :data:`~.decide.WIDEN_BELOW` of the excess, the remaining lower-ranked
+   candidates are re-identified too before deciding (:func:`~.decide.should_widen`),
+   and a candidate that fits the fit tests but fails on the held-out ones (it
+   absorbed another effect's residual) is re-identified on top of the others, or
+   they on top of it: a two-step path that earns as a whole and ends below the
+   default winner decides which is added first (:func:`~.decide.lookahead_winner`,
+   :func:`~.decide.confounded_first`).
 7. **Repeat** from 3 with the effect in the model (the remaining candidates are
    added on top of it) until nothing earns or ``max_effects`` are named.
 8. **Outside the catalogue**: the remaining force residual is regressed on a
@@ -35,7 +44,6 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -68,13 +76,23 @@ from .refit import (
     compatible,
     earns,
     effective_samples,
-    excess_reduction,
-    fit_candidate,
     force_noise_floor_percent,
     split_tests,
 )
 from .refit import _load_split, _spread
+from .decide import (
+    WIDEN_BELOW,
+    channel_sse,
+    choose_winner,
+    confounded,
+    confounded_first,
+    lookahead_winner,
+    should_widen,
+    sse_can_earn,
+    supported,
+)
 from .lag import try_lag
+from .rounds import _judge, _on_top, _run_fits
 from .terms import TermProposal, discover_term
 
 __all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "run_discrepancy",
@@ -162,6 +180,8 @@ class CandidateResult:
     delta_bic_fit: float = math.nan
     delta_bic_heldout: float = math.nan
     sse_heldout: float = math.nan
+    sse_reduction: float | None = None
+    resolved: bool = True
     earns: bool = False
     parameters: dict[str, float] = field(default_factory=dict)
     intervals: dict[str, tuple[float, float] | None] = field(default_factory=dict)
@@ -175,6 +195,7 @@ class CandidateResult:
                 "error_before": self.error_before, "error_after": self.error_after,
                 "excess_error_reduction": self.excess_reduction,
                 "delta_bic_fit": self.delta_bic_fit, "delta_bic_heldout": self.delta_bic_heldout,
+                "sse_excess_reduction": self.sse_reduction,
                 "earns_its_parameters": self.earns, "parameters": self.parameters,
                 "intervals_95": {k: list(v) if v else None for k, v in self.intervals.items()},
                 "ipopt_status": self.fit.message if self.fit else None,
@@ -277,8 +298,9 @@ class DiscrepancyResult:
                             "at least min_excess_reduction of the held-out relative force error "
                             "above the noise floor, 1 - sqrt(e1^2 - en^2)/sqrt(e0^2 - en^2), and "
                             "dBIC = N_eff ln(SSE_new/SSE_old) + k ln(N_eff) < 0 on the fit and "
-                            "on the held-out tests; effects are added one at a time (largest "
-                            "held-out SSE drop first) until none earns",
+                            "on the held-out tests; effects are added one at a time (lowest "
+                            "held-out dBIC first) until none earns; the SSE alternative is "
+                            "judged per channel",
                     "min_excess_reduction": MIN_EXCESS_REDUCTION,
                     "noise_floor_percent": self.noise_floor},
                 "term": self.term.as_dict() if self.term else None,
@@ -395,56 +417,70 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                                                       else math.nan)
         n_obs = sum(pt.y.size for pt in eval_pts)
         sse0 = sse_held if held_pts else sse_fit
-        say(f"round {rnd} (error {cur_err:.3f} %, floor {floor:.3f} %, SSE/N {sse0 / n_obs:.3f}) "
-            "ranking: " + ", ".join(f"{n} {scores[n]['score']:.3g}" for n in order))
-        if not can_earn(cur_err, floor, sse0, n_obs):
+        ch_sse0, ch_n = channel_sse(eval_pts, cur_held or cur_fit)
+        say(f"round {rnd} (error {cur_err:.3f} %, floor {floor:.3f} %, SSE/N {sse0 / n_obs:.3f}"
+            f" [per channel " + ", ".join(f"{a / b:.3f}" for a, b in zip(ch_sse0, ch_n))
+            + "]) ranking: " + ", ".join(f"{n} {scores[n]['score']:.3g}" for n in order))
+        if not (can_earn(cur_err, floor, 0.0, 1.0) or sse_can_earn(ch_sse0, ch_n)):
             excess = math.sqrt(max(cur_err ** 2 - floor ** 2, 0.0))
             note = (f"round {rnd}: candidates not re-identified — the {evaluation} force "
                     f"error {cur_err:.3f} % exceeds the noise floor {floor:.3f} % by "
-                    f"{excess:.3f} % (≤ {MIN_EXCESS_OVER_FLOOR:g} × floor) and the all-channel "
-                    f"SSE is {sse0 / n_obs:.3f} × its noise expectation "
-                    f"(≤ {1 + MIN_SSE_EXCESS:g}): no refit can earn by the decision rule")
+                    f"{excess:.3f} % (≤ {MIN_EXCESS_OVER_FLOOR:g} × floor) and the SSE of "
+                    f"every channel is within {1 + MIN_SSE_EXCESS:g} × its noise expectation "
+                    f"(all channels {sse0 / n_obs:.3f}): no refit can earn by the decision rule")
             say(note)
             notes.append(note)
             all_cands += [cands[n] for n in order]
             break
+        judge = dict(comps=comps, fit_pts=fit_pts, held_pts=held_pts, sse_fit=sse_fit,
+                     sse_held=sse_held, n_eff_fit=n_eff_fit, n_eff_held=n_eff_held,
+                     cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say)
         args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts, cur_rig,
                  cur_params, settings.max_iter) for n in chosen]
-        outs = _run_fits(args, settings.jobs)
-        for name, res, pf, ph, crig in outs:
-            c = cands[name]
-            c.fitted, c.fit, c.rig = True, res, crig
-            if not pf:
-                say(f"{name}: re-identification failed ({res.message})")
-                continue
-            comp_params = [q.name for q in comps[name].parameters]
-            k = len(comp_params)
-            c.parameters = {n: res.parameters[n] for n in comp_params}
-            c.intervals = {n: res.interval(n) for n in c.parameters}
-            c.delta_bic_fit = _dbic(_sse(fit_pts, pf), sse_fit, k, n_eff_fit)
-            if held_pts:
-                c.sse_heldout = _sse(held_pts, ph)
-                c.delta_bic_heldout = _dbic(c.sse_heldout, sse_held, k, n_eff_held)
-                c.error_after = _force_error(held_pts, ph)
-            else:
-                c.sse_heldout = _sse(fit_pts, pf)
-                c.delta_bic_heldout = c.delta_bic_fit
-                c.error_after = _force_error(fit_pts, pf)
-            c.excess_reduction = excess_reduction(cur_err, c.error_after, floor)
-            c.earns = earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
-                            1 - (c.sse_heldout - n_obs) / (sse0 - n_obs)
-                            if sse0 > (1 + MIN_SSE_EXCESS) * n_obs else None)
-            c.predictions = pf + ph
-            c.per_test_after = [force_relative_error_percent(y[0], pt.y[0])
-                                for y, pt in zip(c.predictions, fit_pts + held_pts)]
-            say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
-                f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
-                f"(excess reduced {100 * c.excess_reduction:.0f} %; {res.seconds:.1f} s)")
-        all_cands += [cands[n] for n in order]
+        for out in _run_fits(args, settings.jobs):
+            _judge(cands[out[0]], out, **judge)
         earning = [c for c in cands.values() if c.earns]
-        if not earning:
+        first = None
+        if should_widen(earning, can_earn(cur_err, floor, 0.0, 1.0)):
+            more = [n for n in order if n not in chosen and scores[n]["applicable"]
+                    and compatible(cur_rig, comps[n])]
+            if more:
+                best = max(earning, key=lambda c: c.excess_reduction)
+                say(f"round {rnd}: the best earning candidate ({best.effect}) removes only "
+                    f"{100 * best.excess_reduction:.0f} % of the excess (< "
+                    f"{100 * WIDEN_BELOW:.0f} %): also re-identifying {', '.join(more)}")
+                args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts,
+                         cur_rig, cur_params, settings.max_iter) for n in more]
+                for out in _run_fits(args, settings.jobs):
+                    _judge(cands[out[0]], out, **judge)
+                earning = [c for c in cands.values() if c.earns]
+                blocked = confounded(list(cands.values()))
+                if blocked is not None:
+                    first = lookahead_winner(
+                        earning, blocked, lambda c: _on_top(c, blocked, judge, sub_pts,
+                                                            settings.max_iter, rnd), say,
+                        first_steps=[c for c in cands.values() if supported(c)])
+                    others = [cands[n] for n in order if cands[n].fitted
+                              and cands[n].predictions is not None and cands[n] is not blocked]
+                    if first is None and confounded_first(
+                            blocked, others,
+                            lambda c: _on_top(blocked, c, judge, sub_pts, settings.max_iter,
+                                              rnd),
+                            cur_err, floor,
+                            choose_winner(earning).sse_heldout if earning else math.inf, say):
+                        first = blocked
+        all_cands += [cands[n] for n in order]
+        if first is not None and not first.earns:
+            note = (f"round {rnd}: {first.effect} is added first (it removes "
+                    f"{100 * first.excess_reduction:.0f} % of the excess alone, and "
+                    + (f"lets {blocked.effect} earn on top of it)" if first is not blocked
+                       else "a candidate fitted on top of it completes a path that earns)"))
+            say(note)
+            notes.append(note)
+            first.earns = True
+        if not earning and first is None:
             break
-        win = min(earning, key=lambda c: c.sse_heldout)
+        win = first or choose_winner(earning)
         if settings.discover:
             rival = _term(fit_pts, cur_fit, eval_pts, cur_held or cur_fit, lead, settings.seed,
                           floor, n_eff_held if held_pts else n_eff_fit)
@@ -522,36 +558,3 @@ def _term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> T
         term.earns = earns(term.error_before, term.error_after, floor, d_b, d_b)
     return term
 
-
-def _rig_on_simulation(rig: Rig) -> bool:
-    """Whether ``rig`` holds an effect fitted on the simulation (a stiff contact or an
-    elastic mount): every later candidate is then fitted on the simulation too — the
-    collocation NLP with those states factorises for minutes (a 0.8 mm gap: > 15 min)."""
-    return any(CANDIDATES[c.name].full_refit == "simulation"
-               for c in rig.components if c.name in CANDIDATES)
-
-
-def _fit_one(a: tuple) -> tuple:
-    name, comp, starts, sub_pts, fit_pts, held_pts, rig, params, max_iter = a
-    cand = CANDIDATES[name]
-    on_sim = _rig_on_simulation(rig)
-    _, res, _, _ = fit_candidate(name, comp, starts, sub_pts, [], rig, params, max_iter,
-                                 shares=cand.shares, refine=cand.refine,
-                                 full_refit="simulation" if on_sim else cand.full_refit,
-                                 effect_fit="simulation" if on_sim else cand.effect_fit,
-                                 log_names=cand.log_names)
-    crig = rig.with_components([*rig.components, comp])
-    if not res.parameters:
-        return name, res, [], [], crig
-    pf = predict(fit_pts, crig, res.parameters)
-    ph = predict(held_pts, crig, res.parameters) if held_pts else []
-    return name, res, pf, ph, crig
-
-
-def _run_fits(args: list[tuple], jobs: int) -> list[tuple]:
-    if jobs > 1 and len(args) > 1:
-        import multiprocessing as mp
-        with ProcessPoolExecutor(max_workers=min(jobs, len(args)),
-                                 mp_context=mp.get_context("fork")) as ex:
-            return list(ex.map(_fit_one, args))
-    return [_fit_one(a) for a in args]

@@ -1,0 +1,141 @@
+"""Re-identifying and judging the candidates of one round (kept apart from
+:mod:`.workflow` to keep each module small).
+
+* :func:`_fit_one` / :func:`_run_fits`: one candidate's staged re-identification
+  (:func:`~.refit.fit_candidate`) on the fit-test subset, simulated on all tests;
+* :func:`_judge`: its errors, ΔBIC and the decision (:func:`~.refit.earns` with the
+  per-channel SSE alternative and the resolved-size check of :mod:`.decide`);
+* :func:`_on_top`: the look-ahead re-identification of a confounded candidate on the
+  model with an earning one (:func:`~.decide.lookahead_winner`).
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any
+
+from .candidates import CANDIDATES, components_for
+from .decide import channel_sse, channel_sse_excess_reduction, significant
+from .fit import Rig, force_relative_error_percent, predict
+from .refit import (
+    _dbic,
+    _force_error,
+    _sse,
+    compatible,
+    earns,
+    effective_samples,
+    excess_reduction,
+    fit_candidate,
+)
+
+__all__: list[str] = []
+
+
+def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
+           n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say) -> None:
+    """Fill ``c`` from one re-identification ``out`` (:func:`_fit_one`) and judge it by
+    :func:`~.refit.earns` (force error, ΔBIC on the fit and held-out tests, SSE
+    alternative per channel, :func:`~.decide.channel_sse_excess_reduction`)."""
+    name, res, pf, ph, crig = out
+    c.fitted, c.fit, c.rig = True, res, crig
+    if not pf:
+        say(f"{name}: re-identification failed ({res.message})")
+        return
+    comp_params = [q.name for q in comps[name].parameters]
+    k = len(comp_params)
+    c.parameters = {n: res.parameters[n] for n in comp_params}
+    c.intervals = {n: res.interval(n) for n in c.parameters}
+    c.delta_bic_fit = _dbic(_sse(fit_pts, pf), sse_fit, k, n_eff_fit)
+    ev_pts, ev_pred = (held_pts, ph) if held_pts else (fit_pts, pf)
+    c.sse_heldout = _sse(ev_pts, ev_pred)
+    c.delta_bic_heldout = (_dbic(c.sse_heldout, sse_held, k, n_eff_held) if held_pts
+                           else c.delta_bic_fit)
+    c.error_after = _force_error(ev_pts, ev_pred)
+    c.excess_reduction = excess_reduction(cur_err, c.error_after, floor)
+    ch = CANDIDATES[name].rigid_channels if name in CANDIDATES else None
+    if ch is None or any(q.transmission for q in crig.components):
+        ch = tuple(range(len(ch_n)))
+    ch = [k for k in ch if k < len(ch_n)]
+    c.sse_reduction = channel_sse_excess_reduction(
+        ch_sse0[ch], channel_sse(ev_pts, ev_pred)[0][ch], ch_n[ch])
+    c.resolved = significant(c.intervals, CANDIDATES[name].amplitudes)
+    c.earns = (earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
+                     c.sse_reduction) and c.resolved)
+    c.predictions = pf + ph
+    c.per_test_after = [force_relative_error_percent(y[0], pt.y[0])
+                        for y, pt in zip(c.predictions, fit_pts + held_pts)]
+    pars = ", ".join(f"{n} {v:.3g}" + (f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv else "")
+                     for (n, v), iv in zip(c.parameters.items(), c.intervals.values()))
+    sse_txt = f", SSE excess reduced {100 * c.sse_reduction:.0f} %" \
+        if c.sse_reduction is not None else ""
+    say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
+        f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
+        f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}; {res.seconds:.1f} s)"
+        f"{' EARNS' if c.earns else ''}; {pars}")
+
+
+def _on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd: int
+            ) -> Any:
+    """``blocked`` re-identified on the model with ``c`` and judged against it (the
+    look-ahead of :func:`~.decide.lookahead_winner`); None when incompatible."""
+    comp = judge["comps"][blocked.effect]
+    if c.rig is None or c.fit is None or not compatible(c.rig, comp):
+        return None
+    fit_pts, held_pts = judge["fit_pts"], judge["held_pts"]
+    pf, ph = c.predictions[:len(fit_pts)], c.predictions[len(fit_pts):]
+    # configured from the residual of the model with c (the cogging period: the
+    # baseline's residual was dominated by what c explains)
+    comp = components_for([blocked.effect], fit_pts, pf, c.rig.harvester.lead_m_per_rad
+                          )[blocked.effect]
+    ev_pts, ev_pred = (held_pts, ph) if held_pts else (fit_pts, pf)
+    sse_fit = _sse(fit_pts, pf)
+    n_eff_fit = effective_samples(fit_pts, pf)
+    ch_sse0, ch_n = channel_sse(ev_pts, ev_pred)
+    step = type(blocked)(blocked.effect, True, blocked.score, blocked.chi2, rnd + 1,
+                           error_before=c.error_after)
+    out = _fit_one((blocked.effect, comp, CANDIDATES[blocked.effect].starts, sub_pts, fit_pts,
+                    held_pts, c.rig, dict(c.fit.parameters), max_iter))
+    _judge(step, out, **{**judge, "sse_fit": sse_fit, "n_eff_fit": n_eff_fit,
+                         "sse_held": _sse(held_pts, ph) if held_pts else math.nan,
+                         "n_eff_held": effective_samples(held_pts, ph) if held_pts else math.nan,
+                         "cur_err": c.error_after, "ch_sse0": ch_sse0, "ch_n": ch_n})
+    if step.predictions is None:
+        return None
+    amp = CANDIDATES[c.effect].amplitudes if c.effect in CANDIDATES else ()
+    step.first_resolved = significant({n: step.fit.interval(n) for n in amp}, amp)
+    return step
+
+
+def _rig_on_simulation(rig: Rig) -> bool:
+    """Whether ``rig`` holds an effect fitted on the simulation (a stiff contact or an
+    elastic mount): every later candidate is then fitted on the simulation too — the
+    collocation NLP with those states factorises for minutes (a 0.8 mm gap: > 15 min)."""
+    return any(CANDIDATES[c.name].full_refit == "simulation"
+               for c in rig.components if c.name in CANDIDATES)
+
+
+def _fit_one(a: tuple) -> tuple:
+    name, comp, starts, sub_pts, fit_pts, held_pts, rig, params, max_iter = a
+    cand = CANDIDATES[name]
+    on_sim = _rig_on_simulation(rig)
+    _, res, _, _ = fit_candidate(name, comp, starts, sub_pts, [], rig, params, max_iter,
+                                 shares=cand.shares, refine=cand.refine,
+                                 full_refit="simulation" if on_sim else cand.full_refit,
+                                 effect_fit="simulation" if on_sim else cand.effect_fit,
+                                 log_names=cand.log_names)
+    crig = rig.with_components([*rig.components, comp])
+    if not res.parameters:
+        return name, res, [], [], crig
+    pf = predict(fit_pts, crig, res.parameters)
+    ph = predict(held_pts, crig, res.parameters) if held_pts else []
+    return name, res, pf, ph, crig
+
+
+def _run_fits(args: list[tuple], jobs: int) -> list[tuple]:
+    if jobs > 1 and len(args) > 1:
+        import multiprocessing as mp
+        with ProcessPoolExecutor(max_workers=min(jobs, len(args)),
+                                 mp_context=mp.get_context("fork")) as ex:
+            return list(ex.map(_fit_one, args))
+    return [_fit_one(a) for a in args]
