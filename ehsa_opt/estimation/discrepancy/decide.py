@@ -210,16 +210,7 @@ def lookahead_winner(earning: Sequence[Any], blocked: Any, try_on_top: Any,
     best, best_sse = None, choose_winner(earning).sse_heldout if earning else math.inf
     pool = sorted(earning, key=lambda c: (c.delta_bic_heldout, c.sse_heldout)) + sorted(
         (c for c in first_steps if c not in earning), key=lambda c: c.delta_bic_fit)
-    tried = 0
-    for c in pool:
-        if tried >= max_paths:
-            break
-        if c is blocked:
-            continue
-        step = try_on_top(c)
-        if step is None:
-            continue
-        tried += 1
+    for c, step in _paths(pool, blocked, try_on_top, max_paths):
         ok = (step.earns and step.error_after < c.error_before
               and getattr(step, "first_resolved", True))
         if say:
@@ -229,6 +220,24 @@ def lookahead_winner(earning: Sequence[Any], blocked: Any, try_on_top: Any,
         if ok and step.sse_heldout < best_sse:
             best, best_sse = c, step.sse_heldout
     return best
+
+
+def _paths(pool: Sequence[Any], blocked: Any, attempt: Any, max_paths: int):
+    """(C, step) for the candidates C of ``pool`` other than ``blocked`` in order, with
+    ``step = attempt(C)`` not None, at most ``max_paths`` of them (the look-ahead's
+    two-step paths, either order)."""
+    tried = 0
+    for c in pool:
+        if tried >= max_paths:
+            return
+        if c is blocked:
+            continue
+        step = attempt(c)
+        if step is None:
+            continue
+        tried += 1
+        yield c, step
+
 
 def significant(intervals: dict, amplitudes: Sequence[str]) -> bool:
     """Whether the effect's size is resolved: the ~95 % interval of at least one of its
@@ -295,16 +304,7 @@ def confounded_first(blocked: Any, others: Sequence[Any], try_on_blocked: Any,
         At most this many second steps are tried.
     """
     from .refit import earns
-    tried = 0
-    for c in others:
-        if tried >= max_paths:
-            break
-        if c is blocked:
-            continue
-        step = try_on_blocked(c)
-        if step is None:
-            continue
-        tried += 1
+    for c, step in _paths(others, blocked, try_on_blocked, max_paths):
         whole = earns(err_before, step.error_after, floor,
                       blocked.delta_bic_fit + step.delta_bic_fit,
                       blocked.delta_bic_heldout + step.delta_bic_heldout)
