@@ -501,7 +501,9 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     counter = [0]
 
     def values(z: np.ndarray) -> np.ndarray:
-        return np.where(is_log, 10.0 ** z, z * scales)
+        out = np.asarray(z, dtype=float) * scales   # 10**z only where refined in log10
+        out[is_log] = 10.0 ** np.asarray(z, dtype=float)[is_log]
+        return out
 
     def resid(z: np.ndarray) -> np.ndarray:
         counter[0] += 1
