@@ -1,4 +1,5 @@
-"""Worker processes die with their parent.
+"""Worker processes: they die with their parent, and BLAS stays on one thread where the
+parallelism is by processes (:func:`single_threaded_blas`).
 
 :func:`die_with_parent` installs a fork hook: every child forked afterwards (the
 ``fork``-context process pools of identify, discrepancy and sweep) asks the Linux kernel
@@ -71,4 +72,3 @@ def single_threaded_blas():
     from threadpoolctl import threadpool_limits
     with threadpool_limits(limits=1, user_api="blas"):
         yield
-
