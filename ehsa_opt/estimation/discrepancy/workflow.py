@@ -421,7 +421,8 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         say(f"round {rnd} (error {cur_err:.3f} %, floor {floor:.3f} %, SSE/N {sse0 / n_obs:.3f}"
             f" [per channel " + ", ".join(f"{a / b:.3f}" for a, b in zip(ch_sse0, ch_n))
             + "]) ranking: " + ", ".join(f"{n} {scores[n]['score']:.3g}" for n in order))
-        if not (can_earn(cur_err, floor, 0.0, 1.0) or sse_can_earn(ch_sse0, ch_n)):
+        force_can_earn = can_earn(cur_err, floor, 0.0, 1.0)  # the force path alone
+        if not (force_can_earn or sse_can_earn(ch_sse0, ch_n)):
             excess = math.sqrt(max(cur_err ** 2 - floor ** 2, 0.0))
             note = (f"round {rnd}: candidates not re-identified — the {evaluation} force "
                     f"error {cur_err:.3f} % exceeds the noise floor {floor:.3f} % by "
@@ -435,13 +436,17 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         judge = dict(comps=comps, fit_pts=fit_pts, held_pts=held_pts, sse_fit=sse_fit,
                      sse_held=sse_held, n_eff_fit=n_eff_fit, n_eff_held=n_eff_held,
                      cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say)
-        args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts, cur_rig,
-                 cur_params, settings.max_iter) for n in chosen]
-        for out in _run_fits(args, settings.jobs):
-            _judge(cands[out[0]], out, **judge)
+
+        def fit_and_judge(names: list[str]) -> None:
+            args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts, cur_rig,
+                     cur_params, settings.max_iter) for n in names]
+            for out in _run_fits(args, settings.jobs):
+                _judge(cands[out[0]], out, **judge)
+
+        fit_and_judge(chosen)
         earning = [c for c in cands.values() if c.earns]
         first = None
-        if should_widen(earning, can_earn(cur_err, floor, 0.0, 1.0)):
+        if should_widen(earning, force_can_earn):
             more = [n for n in order if n not in chosen and scores[n]["applicable"]
                     and compatible(cur_rig, comps[n])]
             if more:
@@ -449,10 +454,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 say(f"round {rnd}: the best earning candidate ({best.effect}) removes only "
                     f"{100 * best.excess_reduction:.0f} % of the excess (< "
                     f"{100 * WIDEN_BELOW:.0f} %): also re-identifying {', '.join(more)}")
-                args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts,
-                         cur_rig, cur_params, settings.max_iter) for n in more]
-                for out in _run_fits(args, settings.jobs):
-                    _judge(cands[out[0]], out, **judge)
+                fit_and_judge(more)
                 earning = [c for c in cands.values() if c.earns]
                 blocked = confounded(list(cands.values()))
                 if blocked is not None:
