@@ -520,7 +520,7 @@ def test_fit_candidate_rejects_an_unknown_full_refit():
 
 
 def test_gauss_newton_covariance_is_infinite_where_the_data_say_nothing():
-    from ehsa_opt.estimation.discrepancy.fit import gauss_newton_covariance
+    from ehsa_opt.estimation.discrepancy.polish import gauss_newton_covariance
     rng = np.random.default_rng(1)
     J = rng.normal(size=(300, 3)) * np.array([1e-3, 1.0, 1e4])  # badly scaled columns
     assert np.allclose(gauss_newton_covariance(J, 2.0), 2.0 * np.linalg.inv(J.T @ J))

@@ -40,11 +40,12 @@ from ...physics.motion import FilteredMotion, SineMotion
 from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .. import core
 from ..collocation import given_block, theta_block
+from ..given_fit import GivenFit, fit_given
 from ..identify_result import force_relative_error_percent
 
 __all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
-           "fit_group", "predict", "polish", "PolishOutcome", "FilteredMotion", "force_relative_error_percent", "linear_baseline",
-           "BASE_SPECS"]
+           "fit_group", "predict", "FilteredMotion", "force_relative_error_percent",
+           "linear_baseline", "BASE_SPECS"]
 
 NUT_NAMES = FRICTION_NAMES[:4]
 
@@ -356,13 +357,17 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
             guesses.append([((_simulate(model, pt, pstart, tf).states - b.info["off"])
                              / b.info["sx"][:, None]).ravel(order="F")
                             for pt, b, tf in zip(prepared, blocks, grids)])
+    n_obs = sum(b.n_obs * b.ny for b in blocks)
+    if not model.n_states:  # no state: ordinary least squares, no NLP to build
+        given = _fit_given(model, space, blocks, z0s, regularisation, max_iter)
+        if given is not None:
+            return _outcome_given(given, space, blocks, free, names, default_of, n_obs, t0)
     nlp = core.build(model, space, core.Objective("likelihood", regularisation=regularisation),
                      core.SolverSettings(1e-8, int(max_iter), acceptable_tol=1e-5), blocks)
     recs = core.solve_starts(nlp, blocks, z0s, zref=z0s[0], state_guesses=guesses)
     records = [{"status": r.status, "success": r.success, "objective": r.objective,
                 "iterations": r.iterations} for r in recs]
     usable = [r for r in recs if (r.success or r.status in _USABLE) and np.isfinite(r.objective)]
-    n_obs = sum(b.n_obs * b.ny for b in blocks)
     if not usable:
         return FitOutcome(False, "; ".join(r["status"] for r in records), {}, free, math.inf,
                           math.inf, n_obs, records, time.perf_counter() - t0)
@@ -375,6 +380,35 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     cov = _covariance(nlp, best.w, p, blocks, len(free), sse / max(n_obs - len(free), 1))
     return FitOutcome(best.success, best.status, params, free, sse / n_obs, sse, n_obs, records,
                       time.perf_counter() - t0, cov)
+
+
+def _fit_given(model: BenchModel, space: core.ParamSpace, blocks: Sequence[Any],
+               z0s: Sequence[np.ndarray], regularisation: float, max_iter: int
+               ) -> list[GivenFit] | None:
+    """Every start by least squares (:func:`~ehsa_opt.estimation.given_fit.fit_given`);
+    None when that cannot pose the problem or reaches no finite point: the caller
+    then solves the NLP."""
+    fits = fit_given(model, space, blocks, z0s, zref=z0s[0], regularisation=regularisation,
+                     max_nfev=10 * int(max_iter))
+    if fits is None or not any(np.isfinite(f.objective) for f in fits):
+        return None
+    return fits
+
+
+def _outcome_given(fits: list[GivenFit], space: core.ParamSpace, blocks: Sequence[Any],
+                   free: list[str], names: list[str], default_of: Any, n_obs: int,
+                   t0: float) -> FitOutcome:
+    records = [{"status": f.status, "success": f.success, "objective": f.objective,
+                "iterations": f.iterations} for f in fits]
+    best = min((f for f in fits if np.isfinite(f.objective)), key=lambda f: f.objective)
+    params = {n: default_of(n) for n in names}
+    vals = space.values_of(best.w, np.zeros(len(space.names)))
+    params.update({n: vals[n] for n in free})
+    S = best.jacobian / np.array(space.scale)  # d(weighted residuals)/d(physical values)
+    s2 = best.sse / max(n_obs - len(free), 1)
+    cov = np.linalg.pinv(S.T @ S) * s2
+    return FitOutcome(best.success, best.status, params, free, best.sse / n_obs, best.sse,
+                      n_obs, records, time.perf_counter() - t0, cov)
 
 
 def _covariance(nlp: core.NLP, w: np.ndarray, p: np.ndarray, blocks: Sequence[Any], nz: int,
@@ -415,146 +449,6 @@ def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str,
         sim = _simulate(model, pt, vals)
         out.append(np.vstack([sim.force_N, sim.voltage_V])[:ny])
     return out
-
-
-@dataclass
-class PolishOutcome:
-    """Result of :func:`polish` (mirrors ``scipy.optimize.OptimizeResult``).
-
-    Attributes
-    ----------
-    success : bool
-        The simulated SSE did not increase (always true of the returned point).
-    message : str
-    parameters : dict[str, float]
-    sse_before, sse_after : float
-        Sum of squared noise-normalised simulation residuals on the fitted tests.
-    nfev : int
-        Simulations of the test group (including finite differences).
-    seconds : float
-    free : list[str]
-        The refined names.
-    covariance : ndarray or None
-        Gauss–Newton covariance of the refined parameters at the returned point,
-        s² (JᵀJ)⁺ with s² = SSE/(N − k), in physical units (None when not refined).
-    """
-
-    success: bool
-    message: str
-    parameters: dict[str, float]
-    sse_before: float
-    sse_after: float
-    nfev: int
-    seconds: float
-    free: list[str] = field(default_factory=list)
-    covariance: np.ndarray | None = None
-
-
-def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
-           free: Sequence[str], *, max_iter: int = 8, diff_step: float = 1e-3,
-           log_names: Sequence[str] = (), ftol: float = 1e-8) -> PolishOutcome:
-    """Refine a collocation fit on the forward simulation itself.
-
-    The collocation defects are a one-step rule on the sample grid; a stiff
-    transmission (e.g. a 5e7 N/m compliance on the 47.5 kg rotor-equivalent mass:
-    165 Hz against 1 kHz sampling) makes its optimum differ from what CVODES
-    simulates with the same parameters.  A few trust-region Gauss–Newton steps
-    (``scipy.optimize.least_squares``, method ``trf``) on the noise-normalised
-    residuals of :func:`predict`, with forward-difference sensitivities in the
-    scaled parameters and the fit bounds, close that gap.
-
-    Parameters
-    ----------
-    prepared : list of PreparedTest
-    rig : Rig
-    parameters : dict
-        Start (all model parameters, e.g. ``FitOutcome.parameters``).
-    free : list of str
-        Names refined (the rest stay fixed).
-    max_iter : int
-        Gauss–Newton iterations (each costs ``len(free) + 1`` simulations of the group).
-    diff_step : float
-        Forward-difference step in the scaled parameters.
-    log_names : list of str
-        Free parameters refined in log10 (those spanning decades, e.g. a stiffness;
-        their lower bound must be > 0).
-    ftol : float
-        Stop when an iteration lowers the SSE by less than this share
-        (``scipy.optimize.least_squares``' ``ftol``).
-    """
-    from scipy.optimize import least_squares
-    t0 = time.perf_counter()
-    model = rig.model()
-    specs = {**BASE_SPECS, **model.param_specs}
-    free = list(free)
-    is_log = np.array([n in log_names for n in free])
-    for n in log_names:
-        if n in free and not specs[n].lower > 0:
-            raise ValueError(f"polish: {n} cannot be refined in log10 (lower bound "
-                             f"{specs[n].lower} is not > 0)")
-    scales = np.array([_scale(specs[n]) for n in free])
-    lo = np.array([specs[n].lower for n in free], dtype=float)
-    hi = np.array([specs[n].upper for n in free], dtype=float)
-    lb = np.where(is_log, np.log10(np.maximum(lo, 1e-300)), lo / scales)
-    ub = np.where(is_log, np.log10(np.maximum(hi, 1e-300)), hi / scales)
-    base = dict(parameters)
-    counter = [0]
-
-    def values(z: np.ndarray) -> np.ndarray:
-        out = np.asarray(z, dtype=float) * scales   # 10**z only where refined in log10
-        out[is_log] = 10.0 ** np.asarray(z, dtype=float)[is_log]
-        return out
-
-    def resid(z: np.ndarray) -> np.ndarray:
-        counter[0] += 1
-        vals = {**base, **{n: float(v) for n, v in zip(free, values(z))}}
-        preds = predict(prepared, rig, vals)
-        r = np.concatenate([((pt.y - yp) / pt.sigma[:, None]).ravel()
-                            for pt, yp in zip(prepared, preds)])
-        return np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=-1e6)
-
-    x0 = np.array([base[n] for n in free], dtype=float)
-    z0 = np.clip(np.where(is_log, np.log10(np.maximum(x0, 1e-300)), x0 / scales), lb, ub)
-    r0 = resid(z0)
-    sse0 = float(r0 @ r0)
-    try:
-        sol = least_squares(resid, z0, bounds=(lb, ub), method="trf", x_scale="jac",
-                            diff_step=diff_step, max_nfev=max_iter, jac="2-point",
-                            ftol=ftol)
-    except Exception as exc:  # noqa: BLE001 - a failed polish keeps the collocation fit
-        return PolishOutcome(False, f"polish failed: {exc}", base, sse0, sse0, counter[0],
-                             time.perf_counter() - t0, free)
-    sse1 = float(2.0 * sol.cost)
-    if not sse1 < sse0:
-        return PolishOutcome(True, "no improvement", base, sse0, sse0, counter[0],
-                             time.perf_counter() - t0, free)
-    x1 = values(sol.x)
-    out = {**base, **{n: float(v) for n, v in zip(free, x1)}}
-    # Gauss-Newton covariance from the final Jacobian (chain rule to physical units)
-    dxdz = np.where(is_log, np.log(10.0) * x1, scales)
-    cov = gauss_newton_covariance(np.asarray(sol.jac, dtype=float) / dxdz[None, :],
-                                  sse1 / max(r0.size - len(free), 1))
-    return PolishOutcome(True, sol.message, out, sse0, sse1, counter[0],
-                         time.perf_counter() - t0, free, cov)
-
-
-def gauss_newton_covariance(J: np.ndarray, s2: float, rcond: float = 1e-9) -> np.ndarray:
-    """s² (JᵀJ)⁻¹ from a residual Jacobian ``J`` (N × k), by SVD of the
-    column-normalised Jacobian.  Directions the data do not determine (singular
-    values below ``rcond`` × the largest) get an *infinite* variance — a
-    pseudo-inverse would report them as perfectly known (zero width)."""
-    norms = np.linalg.norm(J, axis=0)
-    norms = np.where(norms > 0, norms, 1.0)
-    _, S, Vt = np.linalg.svd(J / norms, full_matrices=False)
-    good = S > rcond * max(S.max(initial=0.0), 1e-300)
-    Vg = Vt[good]
-    cov = (Vg.T / S[good] ** 2) @ Vg
-    loose = np.sum(Vt[~good] ** 2, axis=0) > 1e-6 if (~good).any() else np.zeros(J.shape[1], bool)
-    cov = s2 * cov / np.outer(norms, norms)
-    cov[loose, :] = np.nan
-    cov[:, loose] = np.nan
-    cov[loose, loose] = np.inf
-    return cov
 
 
 @dataclass

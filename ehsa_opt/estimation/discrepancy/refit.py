@@ -24,9 +24,9 @@ from .fit import (
     Rig,
     fit_group,
     force_relative_error_percent,
-    polish,
     predict,
 )
+from .polish import polish
 
 __all__ = ["split_tests", "effective_samples", "split_friction", "fit_candidate", "compatible",
            "earns", "can_earn", "excess_reduction", "force_noise_floor_percent", "MIN_EXCESS_REDUCTION",
