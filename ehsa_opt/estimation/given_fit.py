@@ -34,7 +34,7 @@ from .core import ParamSpace
 
 __all__ = ["GivenFit", "fit_given"]
 
-_FUNS: dict[tuple, ca.Function] = {}
+_FUNS: dict[tuple, tuple[ca.Function, ca.Function]] = {}
 _FUNS_MAX = 32
 
 
@@ -71,9 +71,11 @@ class GivenFit:
     jacobian: np.ndarray
 
 
-def _functions(model: BenchModel, space: ParamSpace, ny: int) -> ca.Function:
-    """Weighted residuals of one sample and their z-gradients, in SX (compiled once per
-    model, space and channel count): (z, x, u, pbase, ŷ, w) → (r (ny), dr/dz (ny × nv))."""
+def _functions(model: BenchModel, space: ParamSpace, ny: int
+               ) -> tuple[ca.Function, ca.Function]:
+    """Weighted residuals of one sample, alone and with their z-gradients, in SX (built
+    once per model, space and channel count): (z, x, u, pbase, ŷ, w) → r (ny) and
+    (z, x, u, pbase, ŷ, w) → (r, dr/dz (ny × nv))."""
     ck = (model_key(model), space, ny)
     fun = _FUNS.get(ck)
     if fun is None:
@@ -86,7 +88,9 @@ def _functions(model: BenchModel, space: ParamSpace, ny: int) -> ca.Function:
         P, _ = space.expression(z, pbase)
         y = model.outputs(x, u, P)[:ny]
         r = wy * (y - ym)
-        fun = ca.Function("given_residual", [z, x, u, pbase, ym, wy], [r, ca.jacobian(r, z)])
+        args = [z, x, u, pbase, ym, wy]
+        fun = (ca.Function("given_residual", args, [r]),
+               ca.Function("given_residual_jac", args, [r, ca.jacobian(r, z)]))
         if len(_FUNS) >= _FUNS_MAX:
             _FUNS.pop(next(iter(_FUNS)))
         _FUNS[ck] = fun
@@ -167,27 +171,31 @@ def fit_given(model: BenchModel, space: ParamSpace, blocks: Sequence[Block],
         raise ValueError("fit_given: every block must be a 'given' block (states are data)")
     from scipy.optimize import least_squares
     nv = space.nv
-    mapped = [(_functions(model, space, b.ny).map(b.n_obs), _unpack(model, space, b))
-              for b in blocks]
+    mapped = [([f.map(b.n_obs) for f in _functions(model, space, b.ny)],
+               [ca.DM(a) for a in _unpack(model, space, b)]) for b in blocks]  # DM once
     n_tot = float(sum(b.n_obs * b.ny for b in blocks))
     root_n, root_rho = np.sqrt(n_tot), np.sqrt(regularisation)
     zref = np.asarray(zref, float)
     lb, ub = space.lbz, space.ubz
-    cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray | None]] = {}
 
-    def evaluate(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Weighted residuals (channel-major per block) and their Jacobian in z."""
+    def evaluate(z: np.ndarray, with_jac: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Weighted residuals (channel-major per block) and, when asked, their
+        Jacobian in z (a trial point the trust region rejects needs no Jacobian)."""
         k = z.tobytes()
-        if k not in cache:
+        if k not in cache or (with_jac and cache[k][1] is None):
             cache.clear()
             rs, js = [], []
-            for f, (X, u, pb, ym, wy) in mapped:
-                r, j = f(z, X, u, pb, ym, wy)
-                n = ym.shape[1]
+            for (f_r, f_rj), (X, u, pb, ym, wy) in mapped:
+                ny, n = ym.shape
+                if with_jac:
+                    r, j = f_rj(z, X, u, pb, ym, wy)
+                    # j: (ny, n·nv), sample i's (ny × nv) block in columns i·nv … i·nv + nv − 1
+                    js.append(np.asarray(j).reshape(ny, n, nv).reshape(-1, nv))
+                else:
+                    r = f_r(z, X, u, pb, ym, wy)
                 rs.append(np.asarray(r).ravel())  # (ny, n) row-major: channel by channel
-                # j: (ny, n·nv), sample i's (ny × nv) block in columns i·nv … i·nv + nv − 1
-                js.append(np.asarray(j).reshape(ym.shape[0], n, nv).reshape(-1, nv))
-            cache[k] = (np.concatenate(rs), np.vstack(js))
+            cache[k] = (np.concatenate(rs), np.vstack(js) if with_jac else None)
         return cache[k]
 
     order = _order_map(space, _unpack(model, space, blocks[0])[2])
@@ -197,7 +205,7 @@ def fit_given(model: BenchModel, space: ParamSpace, blocks: Sequence[Block],
 
     def resid(q: np.ndarray) -> np.ndarray:
         z = T @ q
-        return np.concatenate([evaluate(z)[0] / root_n, root_rho * (z - zref)])
+        return np.concatenate([evaluate(z, with_jac=False)[0] / root_n, root_rho * (z - zref)])
 
     def jac(q: np.ndarray) -> np.ndarray:
         return np.vstack([evaluate(T @ q)[1] @ T / root_n, root_rho * T])

