@@ -1,5 +1,7 @@
 """The reproduce pipeline caches steps by input hash and resumes after an interruption."""
 
+import json
+
 import pytest
 
 from ehsa_opt.pipeline.reproduce import Step, StepOutput, reproduce
@@ -67,3 +69,52 @@ def test_friction_bounds_choice_reruns_only_what_uses_the_friction_sets(tmp_path
     assert "bounds = paper" in text and "paper's per-parameter method" in text
     with pytest.raises(ValueError, match="friction_bounds must be one of data, paper"):
         reproduce(tmp_path / "x", steps=steps, friction_bounds="widest")
+
+
+def _slow_side(ctx):
+    """A background step: its own pid (it must not be the parent's) and some work."""
+    import os
+    return StepOutput(f"side markdown pid {os.getpid()}", [], {"pid": os.getpid(),
+                                                              "sum": sum(range(10 ** 6))})
+
+
+def _side_fails(ctx):
+    raise ValueError("broken side data")
+
+
+def test_background_step_runs_beside_keeps_its_place_and_is_cached(tmp_path):
+    import os
+    seen = {}
+
+    def main_step(ctx):
+        seen["main_pid"] = os.getpid()
+        return StepOutput("main markdown", [], {"x": 1})
+
+    steps = [Step("side", "Side step", _slow_side, background=True),
+             Step("main", "Main step", main_step)]
+    logs: list[str] = []
+    report = reproduce(tmp_path, steps=steps, jobs=2, log=logs.append).read_text()
+    assert any("started beside" in m for m in logs)
+    assert report.index("## 1. Side step") < report.index("## 2. Main step")  # its place
+    cached = json.loads((tmp_path / "cache" / "side.json").read_text())["payload"]
+    side_pid = int(cached["markdown"].split()[-1])
+    assert side_pid != seen["main_pid"] and side_pid != os.getpid()  # really forked
+    assert cached["results"]["sum"] == sum(range(10 ** 6))
+    logs.clear()
+    reproduce(tmp_path, steps=steps, jobs=2, log=logs.append)  # second run: from the cache
+    assert any("Side step: cached" in m for m in logs)
+    assert not any("started beside" in m for m in logs)
+
+
+def test_background_step_inline_with_one_job_and_errors_reach_the_parent(tmp_path):
+    import os
+    steps = [Step("side", "Side step", _slow_side, background=True)]
+    reproduce(tmp_path / "a", steps=steps, jobs=1, log=lambda m: None)
+    cached = json.loads((tmp_path / "a" / "cache" / "side.json").read_text())["payload"]
+    assert cached["results"]["pid"] == os.getpid()  # one job: run in this process
+    bad = [Step("side", "Side step", _side_fails, background=True),
+           Step("main", "Main step", lambda ctx: StepOutput("m"))]
+    with pytest.raises(RuntimeError, match="step 'side' failed: ValueError: broken side data"):
+        reproduce(tmp_path / "b", steps=bad, jobs=2, log=lambda m: None)
+    # the step that ran is kept for the resumed run
+    assert (tmp_path / "b" / "cache" / "main.json").exists()

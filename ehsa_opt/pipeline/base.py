@@ -146,6 +146,9 @@ class Step:
     depends : tuple[str, ...]
         Keys of earlier steps whose results this step uses (their hashes enter
         this step's hash).
+    background : bool
+        May run beside the other steps (:mod:`~.background`) when it depends on no
+        step and no step depends on it; its section keeps its place in the report.
     """
 
     key: str
@@ -153,6 +156,7 @@ class Step:
     run: Callable[[Context], StepOutput]
     inputs: Callable[[Context], Any] = lambda ctx: None
     depends: tuple[str, ...] = ()
+    background: bool = False
 
 
 def hash_json(obj: Any) -> str:

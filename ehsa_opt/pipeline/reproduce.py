@@ -16,6 +16,7 @@ from typing import Any, Callable
 from ..utils.io import atomic_write_bytes, atomic_write_text
 from ..utils.progress import progress_bar
 from ..utils.version import __version__
+from .background import BackgroundStep, runs_in_background
 from .base import Context, Step, StepOutput, code_digest, data_digest, hash_json
 from .bench_report import step_bench_truth, step_data, step_harvester
 
@@ -88,7 +89,8 @@ STEPS: list[Step] = [
          lambda ctx: _identify_steps().step_identify_prototype(ctx),
          lambda ctx: data_digest(_data_paths(ctx)[0])),
     Step("discrepancy", "Model discrepancy: find, name and add the missing effect (SPEC §7–9)",
-         _step_discrepancy, lambda ctx: [data_digest(p) for p in _data_paths(ctx)]),
+         _step_discrepancy, lambda ctx: [data_digest(p) for p in _data_paths(ctx)],
+         background=True),
     Step("qc_paths", "Quarter car: W_k, frequency vs time domain, dissipation bound",
          lambda ctx: _quarter_car_step("step_quarter_car_paths", ctx),
          lambda ctx: [ctx.quick, ctx.inputs()]),
@@ -180,46 +182,75 @@ def _reproduce(out_dir: str | Path, quick: bool, jobs: int, steps: list[Step] | 
         ctx.vehicle()
     if steps is None:
         steps = [s for s in STEPS if not (ctx.custom_data and s.key in EMBEDDED_ONLY)]
-    sections = []
+    sections: list[str | None] = []
     hashes: dict[str, str] = {}
     downstream: set[str] = set()
-    timings: list[tuple[str, str, float]] = []
+    timings: list[tuple[str, str, float] | None] = []
     code = code_digest()
     t_all = time.perf_counter()
-    bar = progress_bar(total=len(steps), desc="reproduce", unit="step")
-    for n, step in enumerate(steps, start=1):
-        bar.set_postfix_str(step.key)
+
+    def step_key(step: Step) -> str:
         # the friction-bounds choice reaches every step downstream of the identification
         if any(d == "identification" or d in downstream for d in step.depends):
             downstream.add(step.key)
-        key = hash_json({"step": step.key, "version": __version__, "code": code, "quick": quick,
-                         "inputs": step.inputs(ctx), "depends": [hashes[d] for d in step.depends],
-                         **({"friction_bounds": friction_bounds}
-                            if step.key in downstream and friction_bounds != "data" else {})})
-        hashes[step.key] = key
-        cached = cache.load(step.key, key)
-        if cached is not None:
-            log(f"[{n}/{len(steps)}] {step.title}: cached (hash {key}), not recomputed")
-            output = StepOutput(cached["markdown"], cached["figures"], cached["results"])
-            timings.append((step.title, "cached", float(cached.get("seconds", 0.0))))
-        else:
-            log(f"[{n}/{len(steps)}] {step.title} ...")
-            t0 = time.perf_counter()
-            output = step.run(ctx)
-            dt = time.perf_counter() - t0
-            # the results later steps see are those a resumed run would read back
-            stored = cache.store(step.key, key, {"markdown": output.markdown,
-                                                 "figures": output.figures,
-                                                 "results": output.results, "seconds": dt})
-            output = StepOutput(stored["markdown"], stored["figures"], stored["results"])
-            log(f"[{n}/{len(steps)}] {step.title}: done in {dt:.1f} s")
-            timings.append((step.title, "computed", dt))
-        bar.update(1)
-        ctx.results[step.key] = output.results
-        _write_tables(out, step.key, output.markdown)
-        sections.append(f"## {n}. {step.title}\n\n{output.markdown}")
+        return hash_json({"step": step.key, "version": __version__, "code": code, "quick": quick,
+                          "inputs": step.inputs(ctx), "depends": [hashes[d] for d in step.depends],
+                          **({"friction_bounds": friction_bounds}
+                             if step.key in downstream and friction_bounds != "data" else {})})
+
+    def finish(n: int, step: Step, key: str, output: StepOutput, dt: float) -> None:
+        # the results later steps see are those a resumed run would read back
+        stored = cache.store(step.key, key, {"markdown": output.markdown,
+                                             "figures": output.figures,
+                                             "results": output.results, "seconds": dt})
+        log(f"[{n}/{len(steps)}] {step.title}: done in {dt:.1f} s")
+        timings[n - 1] = (step.title, "computed", dt)
+        ctx.results[step.key] = stored["results"]
+        _write_tables(out, step.key, stored["markdown"])
+        sections[n - 1] = f"## {n}. {step.title}\n\n{stored['markdown']}"
+
+    # steps nobody reads (the discrepancy workflow) start at once, beside the others
+    background: dict[str, tuple[BackgroundStep, str]] = {}
+    for step in steps:
+        if runs_in_background(step, steps, ctx):
+            key = step_key(step)
+            if cache.load(step.key, key) is None:
+                background[step.key] = (BackgroundStep(step, ctx), key)
+                log(f"{step.title}: started beside the other steps")
+    bar = progress_bar(total=len(steps), desc="reproduce", unit="step")
+    try:
+        for n, step in enumerate(steps, start=1):
+            bar.set_postfix_str(step.key)
+            sections.append(None)
+            timings.append(None)
+            key = hashes[step.key] = (background[step.key][1] if step.key in background
+                                      else step_key(step))
+            if step.key in background:
+                continue  # collected below
+            cached = cache.load(step.key, key)
+            if cached is not None:
+                log(f"[{n}/{len(steps)}] {step.title}: cached (hash {key}), not recomputed")
+                timings[n - 1] = (step.title, "cached", float(cached.get("seconds", 0.0)))
+                ctx.results[step.key] = cached["results"]
+                _write_tables(out, step.key, cached["markdown"])
+                sections[n - 1] = f"## {n}. {step.title}\n\n{cached['markdown']}"
+            else:
+                log(f"[{n}/{len(steps)}] {step.title} ...")
+                t0 = time.perf_counter()
+                output = step.run(ctx)
+                finish(n, step, key, output, time.perf_counter() - t0)
+            bar.update(1)
+        for n, step in enumerate(steps, start=1):
+            if step.key in background:
+                bar.set_postfix_str(f"{step.key} (waiting)")
+                output, dt = background.pop(step.key)[0].result()
+                finish(n, step, hashes[step.key], output, dt)
+                bar.update(1)
+    finally:
+        for bg, _ in background.values():  # an interrupted run: stop the children
+            bg.cancel()
     bar.close()
-    rows = "\n".join(f"| {t} | {how} | {sec:.1f} |" for t, how, sec in timings)
+    rows = "\n".join(f"| {t} | {how} | {sec:.1f} |" for t, how, sec in filter(None, timings))
     sections.append("## Run log\n\n| step | this run | compute time (s) |\n|---|---|---|\n"
                     + rows + "\n")
     mode = "quick" if quick else "full"
@@ -233,6 +264,6 @@ def _reproduce(out_dir: str | Path, quick: bool, jobs: int, steps: list[Step] | 
             + f" ({mode} mode, ehsa_opt {__version__}). Every table is also a CSV file in "
             f"`tables/` (`<step>_<k>.csv`).\n\n")
     report = out / "REPORT.md"
-    atomic_write_text(report, head + "\n".join(sections))
+    atomic_write_text(report, head + "\n".join(filter(None, sections)))
     log(f"report written in {time.perf_counter() - t_all:.1f} s: {report}")
     return report
