@@ -191,8 +191,9 @@ def run_case(args: tuple) -> dict:
         dt = time.perf_counter() - t0
     named = res.effects
     orc = oracle(res, effects, post, FRICTIONS[set_name])
-    gains = [(c.effect, c.error_before, c.error_after) for c in res.candidates
-             if c.earns and c.effect in named]
+    # the held-out error before → after each named step (a look-ahead pair is one step)
+    errs = [res.error_before] + [st["error_after"] for st in res.steps]
+    gains = [(st["effect"], e0, e1) for st, e0, e1 in zip(res.steps, errs, errs[1:])]
     return {"case": k, "truth": truth, "effects": effects, "post": post, "seed": seed,
             "tests": n_tests, "answer": res.effect, "named": named,
             "error_before": res.error_before, "error_after": res.error_after,

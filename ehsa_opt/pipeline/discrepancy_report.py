@@ -45,11 +45,18 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
              f"*above the noise floor* ({_fmt(res.noise_floor, '.3f')} %: what the measurement "
              "noise alone gives), 1 − √(e₁² − e_n²)/√(e₀² − e_n²), **and** "
              "ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff < 0 on the fit tests and on the "
-             "held-out tests (N_eff = Σ N/τ discounts autocorrelated residuals). Effects are "
-             "added one at a time (the earning candidate with the largest held-out SSE drop), "
-             "the rest re-ranked and refitted on top, until none earns. A catalogue effect is "
-             "not named when a data-driven term leaves less than half its remaining excess "
-             "error. No catalogue effect earning but the term earning → `none of the catalogue`."
+             "held-out tests (N_eff = Σ N/τ discounts autocorrelated residuals); where the force "
+             "is already at its noise floor, the same test on the SSE of a channel that exceeds "
+             "its noise expectation (a voltage-seen effect). An effect's size must be resolved "
+             "(the ≈95 % interval of one of its amplitudes excludes zero). Effects are added one "
+             "at a time — the earning candidate with the lowest held-out ΔBIC — the rest "
+             "re-ranked and refitted on top, until none earns; a round whose best candidate "
+             "removes less than half of the excess re-identifies every candidate, and an effect "
+             "the fit tests support but the held-out tests refuse is tried in two-step paths "
+             "with the others: a path that earns as a whole is named as **one step** (the pair, "
+             "with the error after both). A catalogue effect is not named when a data-driven "
+             "term leaves less than half its remaining excess error. No catalogue effect "
+             "earning but the term earning → `none of the catalogue`."
              + (" Too few tests to hold any out: the rule uses all data." if not res.heldout_tests
                 else "") + "\n")
     for note in getattr(res, "notes", []):

@@ -76,6 +76,7 @@ from .refit import (
     compatible,
     earns,
     effective_samples,
+    excess_reduction,
     force_noise_floor_percent,
     split_tests,
 )
@@ -402,6 +403,9 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
             base_fit_pred = predict(fit_pts, rig, base.parameters)
             base_held_pred = predict(held_pts, rig, base.parameters) if held_pts else []
     remaining = [n for n in settings.candidates if n in CANDIDATES]
+    # a look-ahead first step (no gain alone) is named only together with the effect
+    # that completes its path: (state before it, its error before) until then
+    joint: tuple | None = None
     for rnd in range(1, settings.max_effects + 1):
         comps = components_for(remaining, fit_pts, cur_fit, lead)
         sub_pred = [cur_fit[next(k for k, q in enumerate(fit_pts) if q is p)] for p in sub_pts]
@@ -472,7 +476,14 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                             choose_winner(earning).sse_heldout if earning else math.inf, say):
                         first = blocked
         all_cands += [cands[n] for n in order]
+        if first is not None and not first.earns and (rnd == settings.max_effects
+                                                      or len(remaining) < 2
+                                                      or joint is not None):
+            say(f"round {rnd}: no round left to complete a path through {first.effect}")
+            first = None
         if first is not None and not first.earns:
+            joint = ((cur_rig, cur_params, cur_fit, cur_held, n_eff_fit, n_eff_held, cur_err,
+                      list(effects), list(steps), list(remaining)), cur_err)
             note = (f"round {rnd}: {first.effect} is added first (it removes "
                     f"{100 * first.excess_reduction:.0f} % of the excess alone, and "
                     + (f"lets {blocked.effect} earn on top of it)" if first is not blocked
@@ -505,9 +516,23 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         cur_err = win.error_after
         steps.append({"effect": win.effect, "error_after": cur_err,
                       "excess_reduction": win.excess_reduction, "parameters": win.parameters})
+        if joint is not None and win is not first:  # the path is complete: one step
+            prev = steps.pop(-2)
+            steps[-1] = {"effect": f"{prev['effect']} + {win.effect}", "error_after": cur_err,
+                         "excess_reduction": excess_reduction(joint[1], cur_err, floor),
+                         "parameters": {**prev["parameters"], **win.parameters},
+                         "joint": True}
+            joint = None
         say(f"round {rnd}: added {win.effect}, {evaluation} error {cur_err:.3f} %")
         if not remaining:
             break
+    if joint is not None:  # the path was not completed: its first step is not named
+        (cur_rig, cur_params, cur_fit, cur_held, n_eff_fit, n_eff_held, cur_err, effects,
+         steps, remaining) = joint[0]
+        note = (f"the look-ahead path was not completed: its first step is not named "
+                f"(error back to {cur_err:.3f} %)")
+        say(note)
+        notes.append(note)
     term = None
     if settings.discover:
         term = _term(fit_pts, cur_fit, eval_pts, cur_held or cur_fit, lead, settings.seed,
