@@ -44,7 +44,6 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -54,19 +53,15 @@ from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
 from .candidates import CANDIDATES, components_for, signature_scores
 from .fit import (
-    FitOutcome,
-    PreparedTest,
     Rig,
     fit_group,
-    force_relative_error_percent,
     linear_baseline,
     predict,
     prepare_tests,
 )
-from .localise import Localisation, localise
+from .localise import localise
 from .refit import (
     MIN_EXCESS_OVER_FLOOR,
-    MIN_EXCESS_REDUCTION,
     MIN_SSE_EXCESS,
     _crop,
     _dbic,
@@ -93,233 +88,13 @@ from .decide import (
     supported,
 )
 from .lag import try_lag
+from .results import NONE_OF_CATALOGUE, CandidateResult, DiscrepancyResult, DiscrepancySettings
 from .rounds import _judge, _on_top, _run_fits
 from .terms import TermProposal, discover_term
 
 __all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "run_discrepancy",
            "split_tests", "effective_samples", "NONE_OF_CATALOGUE"]
 
-#: The answer when the residual is structured but no catalogue effect earns.
-NONE_OF_CATALOGUE = "none of the catalogue"
-
-
-@dataclass(frozen=True)
-class DiscrepancySettings:
-    """Settings of :func:`run_discrepancy`.
-
-    Attributes
-    ----------
-    candidates : tuple of str
-        Candidate effects to consider (default: the whole library).
-    top : int
-        How many of the best-ranked candidates are re-identified per round.
-    max_effects : int
-        At most this many effects are named (rounds of the search).
-    max_tests : int or None
-        Use at most this many tests (spread over the grid), e.g. for quick runs.
-    max_fit_tests : int or None
-        Candidate re-identifications use at most this many of the fit tests
-        (spread over the grid; the decision always uses all held-out tests) — the
-        wall-time and memory budget of a large grid.
-    max_iter : int
-        IPOPT iterations per fit.
-    max_samples : int or None
-        Sine tests longer than this are cropped to their last ``max_samples``
-        samples (whole recorded tests such as EMPS are never cropped).
-    seed : int
-        Seeds the held-out split and the sparse regression's folds.
-    jobs : int
-        Parallel processes for the candidate re-identifications.
-    discover : bool
-        Run the data-driven term discovery on the final residual.
-    """
-
-    candidates: tuple[str, ...] = (*CANDIDATES, "force_lag")
-    top: int = 3
-    max_effects: int = 3
-    max_tests: int | None = None
-    max_fit_tests: int | None = 8
-    max_iter: int = 150
-    max_samples: int | None = 1500
-    seed: int = 0
-    jobs: int = 1
-    discover: bool = True
-
-    def __post_init__(self) -> None:
-        unknown = [c for c in self.candidates if c not in CANDIDATES and c != "force_lag"]
-        if unknown:
-            raise ValueError(f"DiscrepancySettings: unknown candidates {unknown} "
-                             f"(known: {', '.join(CANDIDATES)})")
-        for name in ("top", "max_effects", "jobs"):
-            v = getattr(self, name)
-            if not (isinstance(v, int) and v >= 1):
-                raise ValueError(f"DiscrepancySettings: {name} must be an integer >= 1, "
-                                 f"got {v!r}")
-        for name in ("max_tests", "max_fit_tests"):
-            v = getattr(self, name)
-            if v is not None and not (isinstance(v, int) and v >= 1):
-                raise ValueError(f"DiscrepancySettings: {name} must be None or an integer >= 1")
-        if self.max_samples is not None and not (isinstance(self.max_samples, int)
-                                                 and self.max_samples >= 50):
-            raise ValueError("DiscrepancySettings: max_samples must be None or an integer >= 50")
-
-
-@dataclass
-class CandidateResult:
-    """One candidate in one round: its rank score, re-identification and errors."""
-
-    effect: str
-    applicable: bool
-    score: float
-    chi2: float
-    round: int = 1
-    fitted: bool = False
-    fit: FitOutcome | None = None
-    error_before: float = math.nan  # relative force error, % (evaluation set)
-    error_after: float = math.nan
-    excess_reduction: float = math.nan
-    delta_bic_fit: float = math.nan
-    delta_bic_heldout: float = math.nan
-    sse_heldout: float = math.nan
-    sse_reduction: float | None = None
-    resolved: bool = True
-    earns: bool = False
-    parameters: dict[str, float] = field(default_factory=dict)
-    intervals: dict[str, tuple[float, float] | None] = field(default_factory=dict)
-    per_test_after: list[float] = field(default_factory=list)
-    predictions: list[np.ndarray] | None = None
-    rig: Rig | None = None
-
-    def as_dict(self) -> dict:
-        return {"effect": self.effect, "round": self.round, "applicable": self.applicable,
-                "score": self.score, "chi2": self.chi2, "re_identified": self.fitted,
-                "error_before": self.error_before, "error_after": self.error_after,
-                "excess_error_reduction": self.excess_reduction,
-                "delta_bic_fit": self.delta_bic_fit, "delta_bic_heldout": self.delta_bic_heldout,
-                "sse_excess_reduction": self.sse_reduction,
-                "earns_its_parameters": self.earns, "parameters": self.parameters,
-                "intervals_95": {k: list(v) if v else None for k, v in self.intervals.items()},
-                "ipopt_status": self.fit.message if self.fit else None,
-                "fit_seconds": self.fit.seconds if self.fit else None}
-
-
-@dataclass
-class DiscrepancyResult:
-    """Outcome of the workflow (mirrors ``OptimizeResult``: ``success``, ``message``).
-
-    Attributes
-    ----------
-    effect : str
-        The named effects joined by " + ", ``"none"`` (the residual is noise) or
-        ``"none of the catalogue"`` (structured, explained by the proposed term).
-    effects : list of str
-        The named effects in the order they were added.
-    error_before, error_after : float
-        Relative force error (%) on the evaluation set before and after the named
-        effects (after = before when none).
-    evaluation : str
-        ``"held-out"``, ``"validation set"`` or ``"all data"``.
-    candidates : list of CandidateResult
-        All rounds, each in rank order.
-    steps : list of dict
-        Per named effect: effect, error after adding it, parameters.
-    term : TermProposal or None
-        The data-driven term proposed for the final residual.
-    noise_floor : float
-        Relative force error (%) of the measurement noise alone (evaluation set).
-    validation : dict or None
-        EMPS-style validation record: open-loop position errors (see :mod:`.openloop`).
-    notes : list of str
-        Bench checks the data failed (used anyway) and why a round was not run
-        (e.g. the residual is already at the noise floor).
-    """
-
-    success: bool
-    message: str
-    effect: str
-    error_before: float
-    error_after: float
-    evaluation: str
-    candidates: list[CandidateResult]
-    baseline: FitOutcome
-    rig: Rig
-    fit_tests: list[PreparedTest]
-    heldout_tests: list[PreparedTest]
-    baseline_pred: list[np.ndarray]
-    loc_before: Localisation
-    loc_after: Localisation | None
-    n_eff: dict[str, float]
-    seconds: float
-    data_path: str = ""
-    effects: list[str] = field(default_factory=list)
-    steps: list[dict] = field(default_factory=list)
-    term: TermProposal | None = None
-    noise_floor: float = math.nan
-    validation: dict | None = None
-    notes: list[str] = field(default_factory=list)
-
-    @property
-    def winner(self) -> CandidateResult | None:
-        """The last named effect's result (its predictions are the final model's)."""
-        named = [c for c in self.candidates if self.effects and c.earns
-                 and c.effect == self.effects[-1]]
-        return named[-1] if named else None
-
-    @property
-    def eval_tests(self) -> list[PreparedTest]:
-        return self.heldout_tests or self.fit_tests
-
-    def per_test_errors(self) -> list[dict]:
-        """Relative force error per test, before and after, fit and held-out."""
-        rows = []
-        w = self.winner
-        allp = self.fit_tests + self.heldout_tests
-        for k, pt in enumerate(allp):
-            before = force_relative_error_percent(self.baseline_pred[k][0], pt.y[0])
-            after = (force_relative_error_percent(w.predictions[k][0], pt.y[0])
-                     if w is not None and w.predictions is not None else before)
-            rows.append({"test": pt.test.label, "file": pt.test.file,
-                         "set": "fit" if k < len(self.fit_tests) else "held-out",
-                         "error_before": before, "error_after": after})
-        return rows
-
-    def as_dict(self) -> dict:
-        return {"effect": self.effect, "effects": self.effects, "steps": self.steps,
-                "error_before": self.error_before, "error_after": self.error_after,
-                "evaluation": self.evaluation, "noise_floor_percent": self.noise_floor,
-                "success": self.success, "message": self.message, "data": self.data_path,
-                "fit_tests": [p.test.file for p in self.fit_tests],
-                "heldout_tests": [p.test.file for p in self.heldout_tests],
-                "baseline": {"parameters": self.baseline.parameters,
-                             "ipopt_status": self.baseline.message,
-                             "fit_seconds": self.baseline.seconds},
-                "effective_samples": self.n_eff,
-                "criterion": {
-                    "rule": "an effect (or a discovered term) is named only if its refit removes "
-                            "at least min_excess_reduction of the held-out relative force error "
-                            "above the noise floor, 1 - sqrt(e1^2 - en^2)/sqrt(e0^2 - en^2), and "
-                            "dBIC = N_eff ln(SSE_new/SSE_old) + k ln(N_eff) < 0 on the fit and "
-                            "on the held-out tests; effects are added one at a time (lowest "
-                            "held-out dBIC first) until none earns; the SSE alternative is "
-                            "judged per channel",
-                    "min_excess_reduction": MIN_EXCESS_REDUCTION,
-                    "noise_floor_percent": self.noise_floor},
-                "term": self.term.as_dict() if self.term else None,
-                "validation": self.validation,
-                "notes": self.notes,
-                "localisation_before": self.loc_before.as_dict(),
-                "localisation_after": self.loc_after.as_dict() if self.loc_after else None,
-                "per_test": self.per_test_errors(),
-                "candidates": [c.as_dict() for c in self.candidates],
-                "seconds": self.seconds}
-
-    def plot(self, out_dir: str | Path) -> list[Path]:
-        """Write the report's figures into ``out_dir`` (delegates to plots.discrepancy)."""
-        from ...plots import discrepancy as pd
-        return pd.all_figures(self, Path(out_dir))
-
-
-# ------------------------------------------------------------------ the workflow
 def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings | None = None,
                     log: Any = None) -> DiscrepancyResult:
     """Run the workflow on a bench data directory (see module docstring).
