@@ -136,6 +136,8 @@ def test_integrator_cache_is_per_model():
     ("cogging", {"cogging_sin_Nm": 0.02, "cogging_cos_Nm": -0.01}),
     ("voltage_drop", {"voltage_drop_V": 1.0}),
     ("winding_heating", {"winding_heating_K_per_J": 10.0}),
+    ("position_friction", {"position_friction_N": 20.0}),
+    ("magnetic_saturation", {"saturation_per_A2": 0.5}),
 ])
 def test_energy_balance_closes_with_new_components(name, values):
     from ehsa_opt.physics import make_component

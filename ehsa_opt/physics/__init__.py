@@ -9,7 +9,9 @@ from .components import (
                          Cogging,
                          Compliance,
                          Component,
+                         MagneticSaturation,
                          ParamSpec,
+                         PositionFriction,
                          VoltageDrop,
                          WindingHeating,
                          make_component,
@@ -22,6 +24,7 @@ from .harvester import (
 )
 
 __all__ = ["BenchModel", "Component", "ParamSpec", "Backlash", "Compliance", "AsymmetricFriction",
-           "Cogging", "VoltageDrop", "WindingHeating", "COMPONENTS",
+           "Cogging", "VoltageDrop", "WindingHeating", "PositionFriction", "MagneticSaturation",
+           "COMPONENTS",
            "make_component", "equivalent_mass_kg", "equivalent_damping_Ns_per_m",
            "equivalent_stiffness_N_per_m", "equivalent_impedance"]

@@ -5,15 +5,18 @@ voltage (outputs).  With r = lead/2π, J = J_m + J_s, R = R_e + R_i:
 
 Rigid transmission (default; rotor θ = x/r, ω = v/r, α = a/r)::
 
-    L di/dt = e − R i,          e = K_e ω  (possibly transformed by components)
-    f_t     = (J α + K_t i + T_b(ω) + Σ τ_extra) / r
+    L di/dt = e − R i,          e = K_e g ω  (possibly transformed by components)
+    f_t     = (J α + K_t g i + T_b(ω) + Σ τ_extra) / r
+
+g = Π generator_factor (1 without such a component, e.g. magnetic saturation)
+scales both generator constants, so the conversion K_t g i ω = e i stays lossless.
     F       = f_t + F_ns(v) + Σ f_extra,       V = R_e i
 
 Elastic transmission (a component with ``transmission = True``, e.g. backlash;
 states θ, ω)::
 
     δ = x − rθ,  δ̇ = v − rω,   f_t = coupling_force(δ, δ̇)
-    J ω̇ = r f_t − K_t i − T_b(ω) − Σ τ_extra
+    J ω̇ = r f_t − K_t g i − T_b(ω) − Σ τ_extra
     F   = f_t + F_ns(v) + Σ f_extra
 
 Rig without a generator (``generator=False``, e.g. EMPS): no winding, i ≡ 0 and
@@ -144,7 +147,15 @@ class BenchModel:
         if self.transmission is not None:
             s["delta"] = xr - r * theta
             s["delta_dot"] = vr - r * omega
-        e = Ke * omega
+        # generator factor g (e.g. saturation): on the emf and the torque alike
+        s["load_ohm"], s["unsaturated_emf_V"] = Re, Ke * omega
+        if i_sym is not None:
+            s["current_A"] = i_sym
+        g = ca.SX(1)
+        if self.generator:
+            for c in self.components:
+                g = g * c.generator_factor(s, pc)
+        e = Ke * g * omega
         for c in self.components:
             e = c.emf(e, s, pc)
         R = Re + Ri + sum((c.extra_resistance_ohm(s, pc) for c in self.components), ca.SX(0))
@@ -169,9 +180,9 @@ class BenchModel:
         if self.transmission is not None:
             f_t = self.transmission.coupling_force(s, pc)
             rates["rotor_angle_rad"] = omega
-            rates["rotor_speed_rad_per_s"] = (r * f_t - Kt * i - T_b - tau_extra) / J
+            rates["rotor_speed_rad_per_s"] = (r * f_t - Kt * g * i - T_b - tau_extra) / J
         elif self.generator:
-            f_t = (J * ar / r + Kt * i + T_b + tau_extra) / r
+            f_t = (J * ar / r + Kt * g * i + T_b + tau_extra) / r
         else:  # rotor inertia lumped into inertia_kg
             f_t = (T_b + tau_extra) / r
         f_rig = prig["inertia_kg"] * ar + prig["offset_N"] if not self.generator else 0.0

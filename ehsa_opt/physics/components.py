@@ -16,6 +16,11 @@ contributes to one or more of the model's hooks:
     A transformation of the generator emf, e.g. a rectifier/brush drop.
 ``extra_resistance_ohm``
     A resistance in series with the winding, e.g. its temperature rise.
+``generator_factor``
+    A factor g on the generator constant, applied to the emf K_e ω g *and* the
+    torque K_t g i alike (so the energy balance closes without further booking),
+    e.g. magnetic saturation; it may depend on the current (``s["current_A"]``
+    when the winding has inductance, else see :class:`MagneticSaturation`).
 ``states`` / ``state_rates``
     Own differential states of a component (named, start at 0), e.g. a
     winding temperature; the rates may use every signal including ``i``.
@@ -34,7 +39,8 @@ from typing import Any, ClassVar
 import casadi as ca
 
 __all__ = ["ParamSpec", "Component", "Backlash", "Compliance", "AsymmetricFriction", "Cogging",
-           "VoltageDrop", "WindingHeating", "smooth_ramp", "smooth_step", "smooth_abs", "COMPONENTS",
+           "VoltageDrop", "WindingHeating", "PositionFriction", "MagneticSaturation",
+           "smooth_ramp", "smooth_step", "smooth_abs", "COMPONENTS",
            "make_component"]
 
 
@@ -85,6 +91,8 @@ class Component:
     parameters: ClassVar[tuple[ParamSpec, ...]] = ()
     transmission: ClassVar[bool] = False
     states: ClassVar[tuple[str, ...]] = ()
+    #: Attributes that only set :meth:`defaults` (fit starts), not the equations.
+    start_attributes: ClassVar[tuple[str, ...]] = ()
 
     def coupling_force(self, s: dict, p: dict) -> Any:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -100,6 +108,10 @@ class Component:
 
     def extra_resistance_ohm(self, s: dict, p: dict) -> Any:
         return 0.0
+
+    def generator_factor(self, s: dict, p: dict) -> Any:
+        """Factor on both generator constants (emf and torque), dimensionless."""
+        return 1.0
 
     def state_rates(self, s: dict, p: dict) -> list[Any]:
         """Time derivatives of :attr:`states` (same order)."""
@@ -331,10 +343,124 @@ class WindingHeating(Component):
         return self.extra_resistance_ohm(s, p) * s["i"] ** 2
 
 
+class PositionFriction(Component):
+    """Extra Coulomb friction over a window of the stroke (a rough spot, a damaged track).
+
+    With z = (x − x_c)/(L/2) and a smooth window of unit height::
+
+        w(x) = ½ [tanh(k (z + 1)) − tanh(k (z − 1))]     (≈ 1 for |x − x_c| < L/2)
+        F    = A w(x) tanh(v/u_s)
+
+    A is the extra friction level inside the window (N; A = 0 is exactly inert,
+    A < 0 a smoother stretch), x_c its centre on the stroke (m), L its width (m).
+    The force always opposes the motion when A > 0; its power F v is booked by the
+    model as component dissipation.  k = 8 makes the edges ~L/16 wide (the
+    window stays smooth for IPOPT).
+
+    Parameters
+    ----------
+    centre_m, width_m : float or None
+        Starting values of x_c and L (m) returned by :meth:`defaults` (the
+        discrepancy workflow sets them from where the residual lives on the
+        stroke); None: the ParamSpec defaults.
+    smoothing_m_per_s : float
+        u_s of the smoothed sign, m/s.
+    edge_sharpness : float
+        k of the window edges (dimensionless), fixed.
+    """
+
+    name = "position_friction"
+    start_attributes = ("centre_m", "width_m")
+    parameters = (
+        ParamSpec("position_friction_N", "N", 0.0, -100.0, 500.0,
+                  "A, extra Coulomb friction inside the stroke window"),
+        ParamSpec("position_friction_centre_m", "m", 0.0, -0.05, 0.05,
+                  "x_c, centre of the window on the rod stroke"),
+        ParamSpec("position_friction_width_m", "m", 0.01, 5e-4, 0.1,
+                  "L, width of the window"),
+    )
+
+    def __init__(self, centre_m: float | None = None, width_m: float | None = None,
+                 smoothing_m_per_s: float = 1e-3, edge_sharpness: float = 8.0) -> None:
+        if not smoothing_m_per_s > 0:
+            raise ValueError("PositionFriction: smoothing_m_per_s must be > 0 (m/s)")
+        if not edge_sharpness > 0:
+            raise ValueError("PositionFriction: edge_sharpness must be > 0")
+        spec = {q.name: q for q in self.parameters}
+        for what, v in (("centre", centre_m), ("width", width_m)):
+            q = spec[f"position_friction_{what}_m"]
+            if v is not None and not q.lower <= v <= q.upper:
+                raise ValueError(f"PositionFriction: {what}_m = {v} outside "
+                                 f"[{q.lower}, {q.upper}] m")
+        self.centre_m = None if centre_m is None else float(centre_m)
+        self.width_m = None if width_m is None else float(width_m)
+        self.smoothing_m_per_s = smoothing_m_per_s
+        self.edge_sharpness = edge_sharpness
+
+    def defaults(self) -> dict[str, float]:
+        out = super().defaults()
+        if self.centre_m is not None:
+            out["position_friction_centre_m"] = self.centre_m
+        if self.width_m is not None:
+            out["position_friction_width_m"] = self.width_m
+        return out
+
+    def window(self, x: Any, p: dict) -> Any:
+        """w(x) of the stroke window (works on floats, numpy arrays and CasADi)."""
+        z = (x - p["position_friction_centre_m"]) / (0.5 * p["position_friction_width_m"])
+        k = self.edge_sharpness
+        return 0.5 * (ca.tanh(k * (z + 1)) - ca.tanh(k * (z - 1)))
+
+    def rod_force(self, s: dict, p: dict) -> Any:
+        return (p["position_friction_N"] * self.window(s["x"], p)
+                * ca.tanh(s["v"] / self.smoothing_m_per_s))
+
+
+class MagneticSaturation(Component):
+    """Generator constant falling with the current (magnetic saturation of the iron).
+
+    Both constants fall by the same factor (one flux linkage)::
+
+        g(i) = 1 / (1 + β i²),    e = K_e ω g(i),    τ_gen = K_t g(i) i
+
+    β ≥ 0 (1/A²; β = 0 is exactly inert; 1/√β is the current at which the
+    constant has halved).  Because g multiplies emf and torque alike the generator
+    still converts K_t g i ω = e i (K_e = K_t in SI): the energy balance closes
+    with no extra booking, the loss appears as less current, not as heat.
+
+    With winding inductance the current is a state and g uses it.  Without
+    inductance (quasi-static i = e/R) i solves the cubic i R (1 + β i²) = K_e ω,
+    R = R_e + R_i, in closed form (Cardano; the one real root) — exact when the
+    winding carries no other emf or resistance effect; otherwise g is evaluated
+    at that current while the rest of the model still uses its own (energy still
+    closes, as g is applied to emf and torque alike).  The closed form is
+    i = 2/√(3β) · sinh(⅓ asinh(3 e0 √(3β) / (2R))), which tends to e0/R as β → 0.
+    """
+
+    name = "magnetic_saturation"
+    parameters = (
+        ParamSpec("saturation_per_A2", "1/A^2", 0.0, 0.0, 100.0,
+                  "β of g(i) = 1/(1 + β i²)"),
+    )
+
+    def generator_factor(self, s: dict, p: dict) -> Any:
+        beta = p["saturation_per_A2"]
+        i = s.get("current_A")
+        if i is None:  # quasi-static: the real root of R β i³ + R i − e0 = 0 (sinh form
+            # of Cardano's root, accurate down to β → 0 where it tends to e0/R)
+            R = s["load_ohm"] + s["internal_resistance_ohm"]
+            e0 = s["unsaturated_emf_V"]
+            sb = ca.sqrt(3.0 * ca.fmax(beta, 1e-30))
+            root = 2.0 / sb * ca.sinh(ca.asinh(1.5 * e0 / R * sb) / 3.0)
+            i = ca.if_else(beta > 0, root, e0 / R)
+        return 1.0 / (1.0 + beta * i * i)
+
+
 #: Registry of components by name (later effects register here too).
 COMPONENTS: dict[str, type[Component]] = {
     "backlash": Backlash, "compliance": Compliance, "asymmetric_friction": AsymmetricFriction,
-    "cogging": Cogging, "voltage_drop": VoltageDrop, "winding_heating": WindingHeating}
+    "cogging": Cogging, "voltage_drop": VoltageDrop, "winding_heating": WindingHeating,
+    "position_friction": PositionFriction, "magnetic_saturation": MagneticSaturation}
 
 
 def make_component(name: str, **kwargs: Any) -> Component:

@@ -23,7 +23,7 @@ import numpy as np
 
 from ...physics import COMPONENTS, make_component
 from .fit import PreparedTest, Rig, predict
-from .localise import best_rotor_period
+from .localise import best_rotor_period, stroke_window
 
 __all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for"]
 
@@ -152,6 +152,20 @@ CANDIDATES: dict[str, Candidate] = {
         starts=tuple({"winding_heating_K_per_J": h, "winding_cooling_time_s": tau}
                      for h in (0.3, 1.0, 3.0, 10.0) for tau in (0.5, 5.0, 50.0)),
         needs_generator=True, amplitudes=("winding_heating_K_per_J",)),
+    "position_friction": Candidate(
+        "position_friction",
+        # centre and width are not in the probes or starts: they come from the
+        # component's defaults, which components_for sets from where the force
+        # residual behaves like friction on the stroke (localise.stroke_window)
+        probes=({"position_friction_N": 10.0},),
+        starts=tuple({"position_friction_N": a} for a in (-5.0, 2.0, 8.0, 30.0)),
+        amplitudes=("position_friction_N",),
+        rigid_channels=(0,)),
+    "magnetic_saturation": Candidate(
+        "magnetic_saturation",
+        probes=({"saturation_per_A2": 0.05},),
+        starts=tuple({"saturation_per_A2": b} for b in (0.003, 0.01, 0.03, 0.1, 0.3)),
+        needs_generator=True, amplitudes=("saturation_per_A2",)),
 }
 assert set(CANDIDATES) <= set(COMPONENTS)
 
@@ -208,6 +222,7 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
             continue
         crig = rig.with_components([*rig.components, comp])
         spec_defaults = {q.name: q.default for q in crig.model().param_specs.values()}
+        spec_defaults.update(comp.defaults())  # e.g. a stroke window set from the data
         cols = []
         for probe in cand.probes:
             vals = {**spec_defaults, **baseline, **probe}
@@ -227,12 +242,17 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
 
 def components_for(names: Sequence[str], prepared: Sequence[PreparedTest],
                     preds: Sequence[np.ndarray], lead: float) -> dict:
-    """Candidate components configured from the residual (cogging period)."""
+    """Candidate components configured from the residual (cogging period; the stroke
+    window a position-dependent friction starts from)."""
     out = {}
     for n in names:
         if n == "cogging":
             out[n] = CANDIDATES[n].component(
                 periods_per_rev=best_rotor_period(prepared, preds, lead_m_per_rad=lead))
+        elif n == "position_friction":
+            win = stroke_window(prepared, preds)
+            out[n] = (CANDIDATES[n].component(centre_m=win[0], width_m=win[1]) if win
+                      else CANDIDATES[n].component())
         else:
             out[n] = CANDIDATES[n].component()
     return out

@@ -94,7 +94,9 @@ class Rig:
         """The rig's model (cached: one model object per distinct rig, kept alive —
         :func:`~ehsa_opt.physics.bench_sim.simulate_bench` caches integrators by model identity)."""
         key = (self.has_generator, self.harvester,
-               tuple((type(c).__name__, tuple(sorted(vars(c).items()))) for c in self.components))
+               tuple((type(c).__name__, tuple(sorted((k, v) for k, v in vars(c).items()
+                                                     if k not in c.start_attributes)))
+                     for c in self.components))
         if key not in _MODELS:
             _MODELS[key] = BenchModel(self.harvester, self.components,
                                       generator=self.has_generator)

@@ -28,7 +28,7 @@ from ...physics.motion import SineMotion
 from .fit import PreparedTest
 
 __all__ = ["CoordinateStat", "ChannelMap", "Localisation", "localise", "reversal_times",
-           "COORDINATES"]
+           "COORDINATES", "stroke_window"]
 
 #: Coordinates a residual is mapped against (name → unit).
 COORDINATES: dict[str, str] = {
@@ -273,3 +273,44 @@ def best_rotor_period(prepared: Sequence[PreparedTest], predictions: Sequence[np
     return int(np.argmax(rotor_angle_spectrum(prepared, predictions,
                                               lead_m_per_rad=lead_m_per_rad,
                                               max_periods=max_periods))) + 1
+
+
+def stroke_window(prepared: Sequence[PreparedTest], predictions: Sequence[np.ndarray], *,
+                  smoothing_m_per_s: float = 1e-3, edge_sharpness: float = 8.0,
+                  n_centres: int = 41, widths_rel: Sequence[float] = (0.05, 0.08, 0.12, 0.18,
+                                                                     0.27, 0.4, 0.6, 0.9)
+                  ) -> tuple[float, float] | None:
+    """Centre and width (m) of the stroke window where the force residual looks like
+    friction: the start of :class:`~ehsa_opt.physics.components.PositionFriction`.
+
+    The normalised force residual is regressed on [tanh(v/u_s), w(x; x_c, L) tanh(v/u_s)]
+    (the first column is the Coulomb level a baseline refit would move anyway) for
+    x_c on ``n_centres`` points of the stroke and L = ``widths_rel`` × stroke; the
+    (x_c, L) whose window column removes the most residual energy wins.  None when
+    the stroke is shorter than 0.1 mm.
+    """
+    xs, rs, ss = [], [], []
+    for pt, yp in zip(prepared, predictions):
+        xs.append(pt.u[0])
+        ss.append(np.tanh(pt.u[1] / smoothing_m_per_s))
+        rs.append((pt.y[0] - yp[0]) / pt.sigma[0])
+    x, r, sg = np.concatenate(xs), np.concatenate(rs), np.concatenate(ss)
+    lo, hi = float(x.min()), float(x.max())
+    stroke = hi - lo
+    if not stroke > 1e-4:
+        return None
+    q0 = sg / (np.linalg.norm(sg) or 1.0)
+    r_perp = r - q0 * (q0 @ r)
+    best, out = -1.0, None
+    for L in np.asarray(widths_rel) * stroke:
+        for xc in np.linspace(lo, hi, n_centres):
+            z = (x - xc) / (0.5 * L)
+            c = 0.5 * (np.tanh(edge_sharpness * (z + 1)) - np.tanh(edge_sharpness * (z - 1))) * sg
+            c = c - q0 * (q0 @ c)
+            nn = float(c @ c)
+            if nn <= 1e-12 * x.size:
+                continue
+            gain = float(c @ r_perp) ** 2 / nn
+            if gain > best:
+                best, out = gain, (float(xc), float(L))
+    return out
