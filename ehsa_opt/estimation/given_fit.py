@@ -30,7 +30,7 @@ import numpy as np
 
 from ..physics.bench_model import BenchModel
 from .collocation import Block, model_key
-from .core import ParamSpace
+from .core import ParamSpace, SolveRecord
 
 __all__ = ["GivenFit", "fit_given"]
 
@@ -39,36 +39,22 @@ _FUNS_MAX = 32
 
 
 @dataclass
-class GivenFit:
-    """One start of :func:`fit_given` (mirrors the core's ``SolveRecord``).
+class GivenFit(SolveRecord):
+    """One start of :func:`fit_given`: the core's :class:`~.core.SolveRecord` (success:
+    ``least_squares`` met a tolerance at a finite point; status: its message prefixed
+    ``least_squares:``; w: the scaled parameters z; objective: f(z) above; iterations:
+    residual evaluations; seconds) plus the residuals' statistics.
 
     Attributes
     ----------
-    success : bool
-        ``least_squares`` converged (a tolerance met) and the point is finite.
-    status : str
-        ``least_squares``' message, prefixed ``least_squares:``.
-    w : ndarray (nv,)
-        Scaled parameters z.
-    objective : float
-        f(z) above.
-    iterations : int
-        Residual evaluations.
-    seconds : float
     sse : float
         Σ (w_k (y − ŷ))² without the 1/N and the regularisation.
     jacobian : ndarray (N_res, nv)
         d(weighted residuals)/dz at ``w``.
     """
 
-    success: bool
-    status: str
-    w: np.ndarray
-    objective: float
-    iterations: int
-    seconds: float
-    sse: float
-    jacobian: np.ndarray
+    sse: float = float("nan")
+    jacobian: np.ndarray | None = None
 
 
 def _functions(model: BenchModel, space: ParamSpace, ny: int
@@ -222,5 +208,6 @@ def fit_given(model: BenchModel, space: ParamSpace, blocks: Sequence[Block],
         finite = bool(np.all(np.isfinite(z)) and np.isfinite(sol.cost))
         out.append(GivenFit(bool(sol.status > 0 and finite), f"least_squares: {sol.message}",
                             z, float(r @ r / n_tot + regularisation * np.sum((z - zref) ** 2)),
-                            int(sol.nfev), time.perf_counter() - t0, float(r @ r), J.copy()))
+                            int(sol.nfev), time.perf_counter() - t0, sse=float(r @ r),
+                            jacobian=J.copy()))
     return out
