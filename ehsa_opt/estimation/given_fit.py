@@ -156,6 +156,10 @@ def fit_given(model: BenchModel, space: ParamSpace, blocks: Sequence[Block],
     if any(b.key[0] != "given" for b in blocks):
         raise ValueError("fit_given: every block must be a 'given' block (states are data)")
     from scipy.optimize import least_squares
+    order = _order_map(space, _unpack(model, space, blocks[0])[2])
+    if order is None:
+        return None
+    T, qlo, qhi = order
     nv = space.nv
     mapped = [([f.map(b.n_obs) for f in _functions(model, space, b.ny)],
                [ca.DM(a) for a in _unpack(model, space, b)]) for b in blocks]  # DM once
@@ -183,11 +187,6 @@ def fit_given(model: BenchModel, space: ParamSpace, blocks: Sequence[Block],
                 rs.append(np.asarray(r).ravel())  # (ny, n) row-major: channel by channel
             cache[k] = (np.concatenate(rs), np.vstack(js) if with_jac else None)
         return cache[k]
-
-    order = _order_map(space, _unpack(model, space, blocks[0])[2])
-    if order is None:
-        return None
-    T, qlo, qhi = order
 
     def resid(q: np.ndarray) -> np.ndarray:
         z = T @ q

@@ -179,9 +179,7 @@ def simulate_tests(tests: Sequence[BenchTest], harvester: HarvesterParams,
             # fixed-step Radau IIA of the fit's rigid path (within 2e-5 of the peak of
             # CVODES at rtol 1e-7 on the embedded tests, 30x faster: a spline motion
             # makes every CVODES right-hand side evaluation costly)
-            uu = motion.evaluate(test.time_s)
-            X = integrate_states(model, motion, test.time_s, p)
-            F, V = np.array(model.outputs.map(test.n_samples)(X, uu, p))[:2]
+            F, V = _outputs_on_grid(model, motion, test.time_s, p)[:2]
         else:
             sim = simulate_bench(model, motion, p, test.time_s, rtol=1e-7, atol=1e-9)
             F, V = sim.force_N, sim.voltage_V
@@ -408,6 +406,15 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
     return _finish(su, records, time.perf_counter() - t0, identifiability)
 
 
+def _outputs_on_grid(model: BenchModel, motion: Any, time_s: np.ndarray, p: np.ndarray,
+                     X: np.ndarray | None = None) -> np.ndarray:
+    """Model outputs (force, voltage, …) on ``time_s`` from the states ``X`` (default:
+    integrated once by the compiled Radau stepper — states no parameter drives)."""
+    if X is None:
+        X = integrate_states(model, motion, time_s, p)
+    return np.array(model.outputs.map(time_s.size)(X, motion.evaluate(time_s), p))
+
+
 def _predictions(su: _Setup, params: Mapping[str, float]) -> list[Prediction]:
     """Simulated signals on each test's full grid with the fitted parameters: the rigid
     path's states (or one compiled Radau integration when no state depends on the
@@ -420,10 +427,9 @@ def _predictions(su: _Setup, params: Mapping[str, float]) -> list[Prediction]:
                               motions=su.motions)
     out = []
     for test, motion, pb, X in zip(su.tests, su.motions, su.pbases, su.full_states):
-        if X is None:
-            X = integrate_states(model, motion, test.time_s, pb)
         p = np.array([pb[0]] + [params[n] for n in model.param_names[1:]])
-        y = np.array(model.outputs.map(test.n_samples)(X, motion.evaluate(test.time_s), p))
+        y = _outputs_on_grid(model, motion, test.time_s, p, X if X is not None else
+                             integrate_states(model, motion, test.time_s, pb))
         V = y[1] if (model.generator and test.voltage_V is not None) else None
         out.append(Prediction(test.file, test.time_s, y[0], V))
     return out
