@@ -120,6 +120,8 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="2 development + 2 held-out roads")
     ap.add_argument("--gaussian", action="store_true",
                     help="the plain Gaussian equivalent linearisation (no averaging correction)")
+    ap.add_argument("--no-residual", action="store_true",
+                    help="without the friction's non-linear residual force (Gaussian closure)")
     args = ap.parse_args()
     dev, held = (DEVELOPMENT[:2], HELD_OUT[:2]) if args.quick else (DEVELOPMENT, HELD_OUT)
     from ehsa_opt.physics.params import VehicleParams
@@ -137,7 +139,8 @@ def main() -> None:
         res[label] = []
         for case in cases:
             r = check_case(vehicle, case, list(hs.values()), frictions, fast_repeats=7,
-                           non_gaussian=not args.gaussian)
+                           non_gaussian=not args.gaussian,
+                           residual=not args.no_residual)
             res[label].append((case, r))
             worst = {k: np.max(np.abs(r[f"error_{k}"])) for k in CHECK_METRICS}
             print(f"  {label:<12} {case.iso_class} {case.speed_km_per_h:5.0f} km/h seed "
@@ -206,7 +209,8 @@ def main() -> None:
     # speed: designs per second; the time domain on 400 m versions of the held-out roads
     short = [check_case(vehicle, RoadCase(c.iso_class, c.speed_km_per_h, c.seed, 400.0),
                         list(hs.values()), frictions, fast_repeats=7,
-                        non_gaussian=not args.gaussian) for c in held]
+                        non_gaussian=not args.gaussian,
+                           residual=not args.no_residual) for c in held]
     n_pairs = sum(r["n_pairs"] for r in short)
     t_time = sum(r["time_wall_s"] for r in short)
     t_fast = sum(r["fast_wall_s"] for r in short)
@@ -217,12 +221,17 @@ def main() -> None:
     pop.update(internal_resistance_ohm=base.internal_resistance_ohm,
                inductance_H=base.inductance_H)
     from ehsa_opt.physics.params import RoadParams
-    t_pops = []
+    t_pops, t_pops_lin = [], []
     for _ in range(3):
         t0 = time.perf_counter()
-        friction_metrics(vehicle, RoadParams("C", 70.0), pop, frictions[3], n_freq=256)
+        friction_metrics(vehicle, RoadParams("C", 70.0), pop, frictions[3], n_freq=256,
+                         residual=not args.no_residual)
         t_pops.append(time.perf_counter() - t0)
-    t_pop = float(np.median(t_pops))
+        t0 = time.perf_counter()   # the same without the residual force
+        friction_metrics(vehicle, RoadParams("C", 70.0), pop, frictions[3], n_freq=256,
+                         residual=False)
+        t_pops_lin.append(time.perf_counter() - t0)
+    t_pop, t_pop_lin = float(np.median(t_pops)), float(np.median(t_pops_lin))
     rate_time = n_pairs / t_time
     # the validation roads (>= 60 s each): what a reference within ~1 % costs
     rate_long = sum(r["n_pairs"] for r in raw[len(dev):]) / sum(
@@ -240,6 +249,8 @@ def main() -> None:
           f"-> {n_pairs / t_fast_med / rate_time:7.0f} x")
     print(f"  fast path, 4000-design population (max fr.,   {4000 / t_pop:10.0f} /s  "
           f"-> {4000 / t_pop / rate_time:7.0f} x\n   median of 3)")
+    print(f"  ... the same without the residual force:      {4000 / t_pop_lin:10.0f} /s  "
+          f"-> {4000 / t_pop_lin / rate_time:7.0f} x")
 
 
 if __name__ == "__main__":

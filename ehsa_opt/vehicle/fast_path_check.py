@@ -71,7 +71,7 @@ def scaled_friction(friction: FrictionParams | Mapping[str, float], scale: float
 
 def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[HarvesterParams],
                frictions: Sequence[FrictionParams], *, n_freq: int = 256,
-               fast_repeats: int = 1, non_gaussian: bool = True
+               fast_repeats: int = 1, non_gaussian: bool = True, residual: bool = True
                ) -> dict[str, np.ndarray | float]:
     """Fast path vs time domain for every (harvester, friction) pair on one road.
 
@@ -85,6 +85,9 @@ def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[Harv
     non_gaussian : bool
         Passed to :func:`~ehsa_opt.vehicle.equivalent.friction_metrics` (False: the
         plain Gaussian equivalent linearisation, for comparison).
+    residual : bool
+        Passed to :func:`~ehsa_opt.vehicle.equivalent.friction_metrics` (False:
+        without the friction's non-linear residual force).
 
     Returns
     -------
@@ -112,7 +115,7 @@ def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[Harv
     for _ in range(max(1, int(fast_repeats))):
         t0 = time.perf_counter()
         fast = friction_metrics(vehicle, road, design, fs, n_freq=n_freq,
-                                non_gaussian=non_gaussian)
+                                non_gaussian=non_gaussian, residual=residual)
         walls.append(time.perf_counter() - t0)
     t_fast = walls[0]
     out: dict[str, np.ndarray | float] = {

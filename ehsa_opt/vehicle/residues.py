@@ -195,6 +195,7 @@ class QuarterCarPolynomials:
         k2, k1 = vehicle.suspension_stiffness_N_per_m, vehicle.tyre_stiffness_N_per_m
         self.k1, self.m1, self.m2 = k1, m1, m2
         r, ke, kt = design["r_m_per_rad"], design["Ke"], design["Kt"]
+        self.r_m_per_rad = r
         R = design["Ri_ohm"] + design["Re_ohm"]
         self.open = np.isinf(R)
         self.R = np.where(self.open, 1.0, R)
