@@ -196,7 +196,8 @@ def step_robust_design(ctx: Context) -> StepOutput:
                 f"{d['load_ohm']:.1f} Ω")
     md = (
         f"Friction sets: {source}. Friction-aware objectives: worst of min/max by the fast "
-        f"path (stochastic equivalent linearisation, `ehsa_opt.vehicle.equivalent`), goals = "
+        f"path (stochastic equivalent linearisation, `ehsa_opt.vehicle.equivalent`, with the "
+        f"friction's residual force under Gaussian closure), goals = "
         f"the prototype's objectives under the same friction.\n\n"
         f"- frictionless goal-attainment optimum: {fmt(ga_p.design)} (γ = {ga_p.gamma:+.3f})\n"
         f"- friction-aware optimum: {fmt(ga_r.design)} (γ = {ga_r.gamma:+.3f})\n\n"
@@ -206,7 +207,8 @@ def step_robust_design(ctx: Context) -> StepOutput:
         + "\n".join(price_lines) + "\n\n"
         f"**Fast path against the time domain** ({len(designs)} designs — prototype, paper "
         f"optimum, both optima — × none/min/max friction × "
-        + ", ".join(f"{c.iso_class} {c.speed_km_per_h:g} km/h" for c in cases)
+        + ", ".join(f"{c.iso_class} {c.speed_km_per_h:g} km/h ({c.length:.0f} m)"
+                    for c in cases)
         + f"; {rate:.0f} pairs; time domain {t_td:.1f} s, fast path {t_fp:.3f} s; the full "
         f"validation set is `benchmarks/friction_fast_path.py`):\n\n"
         + "\n".join(err_lines) + "\n\n"
