@@ -32,7 +32,7 @@ body and wheel (added to the damper's force; same Q(s) and poles λ_k as
 :mod:`ehsa_opt.vehicle.residues`, plus W_k's poles for comfort), and
 ρ(τ) = R_v(τ)/R_v(0), R_v(τ) = Σ_k res_k[...] e^{λ_k|τ|} of the road-to-v response
 (white road velocity).  So only the Laplace transforms L_k = ∫₀^∞ R_r(τ) e^{λ_k τ} dτ
-are needed: R_r piecewise linear on a geometric lag grid (:data:`TAU_S`), the
+are needed: R_r piecewise linear on a nearly geometric lag grid (:data:`TAU_S`), the
 exponential integrated exactly (any damping, no frequency grid).  The residual's
 own dissipation is E[r v] = Σ_k Res[H_v]_k L_k (negative: a force uncorrelated with
 v feeds the motion it drives), so the friction's mean power is c_f σ_v² + E[r v].
@@ -60,10 +60,17 @@ from .residues import (_WK_DEN, _WK_INV_DDEN, _WK_INV_DEN_NEG, _WK_NUM, _WK_POLE
 __all__ = ["residual_autocovariance", "residual_variances", "TAU_S"]
 
 _SQRT_2_PI = math.sqrt(2.0 / math.pi)
-#: Lags of the closure's integrals: 0 and a geometric grid from 10 µs to 30 s.
-TAU_S = np.concatenate([[0.0], np.geomspace(1e-5, 30.0, 96)])
+# Lags of the closure's integrals: 0, then octaves [T_k, 2 T_k), T_k = 10 µs · 2^k, each
+# cut into _SUB equal steps (nearly geometric: ≤ 25 % per step), up to 10 µs · 2^22 = 42 s.
+# Equal steps within an octave and doubling octaves make e^{λτ} a chain of products:
+# e^{λ(T_k + i h_k)} = e^{λ T_k} w_k^i with w_k = e^{λ h_k}, w_{k+1} = w_k² (no exp per lag).
+_T0, _OCTAVES, _SUB = 1e-5, 22, 4
+#: The lags, s.
+TAU_S = np.concatenate([[0.0], (_T0 * 2.0 ** np.arange(_OCTAVES)[:, None]
+                                * (1.0 + np.arange(_SUB)[None, :] / _SUB)).ravel(),
+                        [_T0 * 2.0 ** _OCTAVES]])
 _H_TAU = np.diff(TAU_S)
-_E_WK = np.exp(_WK_POLES[:, None] * TAU_S[None, :])       # W_k's poles, shared
+_E_WK = np.exp(_WK_POLES[:, None] * TAU_S[None, :]).T    # W_k's poles, shared, (M+1, 6)
 
 
 def _law_terms(sigma: np.ndarray, fr: np.ndarray, r: np.ndarray
@@ -113,72 +120,65 @@ def residual_autocovariance(rho: np.ndarray, sigma: np.ndarray, fr: np.ndarray,
     sigma = np.asarray(sigma, dtype=float)
     A, V, S, a = _law_terms(sigma, fr, r)
     rho = np.clip(rho, -1.0, 1.0)
-    one = 1.0 - rho * rho
-    col = lambda x: x[:, None]  # noqa: E731
-    out = col(A * A * (2.0 / math.pi)) * np.arcsin(rho)
-    beta1 = A * _SQRT_2_PI + V
-    lin = 2.0 * A * V * _SQRT_2_PI + V * V
-    for i in range(2):
-        bi = col(1.0 + 2.0 * a[:, i])
-        out += col(2.0 * S[:, i] * A * _SQRT_2_PI) * rho / (bi * np.sqrt(bi * one + rho * rho))
-        lin = lin + 2.0 * S[:, i] * V / (1.0 + 2.0 * a[:, i]) ** 1.5
-        beta1 = beta1 + S[:, i] / (1.0 + 2.0 * a[:, i]) ** 1.5
+    rho2 = rho * rho
+    one = 1.0 - rho2
+    b = 1.0 + 2.0 * a
+    beta1 = A * _SQRT_2_PI + V + np.sum(S / (b * np.sqrt(b)), axis=1)
+    lin = 2.0 * A * V * _SQRT_2_PI + V * V + 2.0 * V * np.sum(S / (b * np.sqrt(b)), axis=1)
+    # the Stribeck terms with their largest value (at ρ = 1); a term below 1e-3 of the
+    # Coulomb part's for every design is dropped (e.g. the bearing's narrow hump squared)
+    terms = []
+    for i in range(2):     # Coulomb × Stribeck_i, both orders
+        c = 2.0 * S[:, i] * A * _SQRT_2_PI / b[:, i]
+        terms.append((np.abs(c), c, b[:, i], None))
+    for i in range(2):     # Stribeck_i × Stribeck_j
         for j in range(i, 2):
             w = (1.0 if i == j else 2.0) * S[:, i] * S[:, j]
-            q = col(1.0 + 2.0 * (a[:, i] + a[:, j])) + col(4.0 * a[:, i] * a[:, j]) * one
-            out += col(w) * rho / (q * np.sqrt(q))
-    return out + col(lin - beta1 * beta1) * rho
+            q0 = 1.0 + 2.0 * (a[:, i] + a[:, j])
+            terms.append((np.abs(w) / q0 ** 1.5, w, q0, 4.0 * a[:, i] * a[:, j]))
+    scale = A * A + V * V + sum(t[0] for t in terms)
+    inner = np.broadcast_to((lin - beta1 * beta1)[:, None], rho.shape).copy()
+    for size, coef, b0, b1 in terms:
+        if np.all(size <= 1e-3 * scale):
+            continue
+        if b1 is None:      # c / √(b (1 − ρ²) + ρ²)
+            inner += coef[:, None] / np.sqrt(b0[:, None] * one + rho2)
+        else:               # w / q^{3/2}, q = q0 + 4 a_i a_j (1 − ρ²)
+            q = b0[:, None] + b1[:, None] * one
+            inner += coef[:, None] / (q * np.sqrt(q))
+    return (A * A * (2.0 / math.pi))[:, None] * np.arcsin(rho) + inner * rho
 
 
-def _laplace(R: np.ndarray, E: np.ndarray, lam: np.ndarray) -> np.ndarray:
-    """∫_0^τmax R(τ) e^{λτ} dτ for R piecewise linear on TAU_S, exact in the exponential.
-
-    R (n, M+1); E = e^{λ τ_j}: (n, k, M+1) per design or (k, M+1) shared; lam (n, k) or
-    (k,).  Per cell the integral of (R_j + s_j (τ − τ_j)) e^{λτ} telescopes to
-    (R_M E_M − R_0)/λ − Σ_j d_j E_j / λ², d the jumps of the slopes s_j.
-    """
+def _slope_jumps(R: np.ndarray) -> np.ndarray:
+    """d_j of R piecewise linear on TAU_S: −s_0, s_{j−1} − s_j, s_{M−1} (s the slopes)."""
     s = np.diff(R, axis=1) / _H_TAU
-    d = np.zeros_like(R)
+    d = np.empty_like(R)
     d[:, 0] = -s[:, 0]
     d[:, 1:-1] = s[:, :-1] - s[:, 1:]
     d[:, -1] = s[:, -1]
-    if E.ndim == 2:
-        dE = d @ E.T
-        end = R[:, -1:] * E[None, :, -1] - R[:, :1]
-    else:
-        dE = np.einsum("nj,nkj->nk", d, E)
-        end = R[:, -1:] * E[:, :, -1] - R[:, :1]
-    return end / lam - dE / (lam * lam)
+    return d
 
 
-def _exp_tau(lam: np.ndarray) -> np.ndarray:
-    """e^{λ τ_j} on :data:`TAU_S` for lam (n, k), as e^{aτ}(cos bτ + j sin bτ)."""
-    x = np.maximum(lam.real[..., None] * TAU_S, -600.0)   # no subnormals (slow)
-    y = lam.imag[..., None] * TAU_S
-    mag = np.exp(x)
-    out = np.empty(x.shape, dtype=complex)
-    out.real = mag * np.cos(y)
-    out.imag = mag * np.sin(y)
-    return out
+def _laplace(R: np.ndarray, d: np.ndarray, dE: np.ndarray, e_end: np.ndarray,
+             lam: np.ndarray) -> np.ndarray:
+    """∫_0^τmax R(τ) e^{λτ} dτ for R piecewise linear on TAU_S, exact in the exponential:
+    per cell the integral of (R_j + s_j (τ − τ_j)) e^{λτ} telescopes to
+    (R_M E_M − R_0)/λ − Σ_j d_j E_j / λ² (``dE`` = Σ_j d_j E_j, ``e_end`` = E_M)."""
+    return (R[:, -1:] * e_end - R[:, :1]) / lam - dE / (lam * lam)
 
 
-def _sorted_exponentials(lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The poles sorted by imaginary part and e^{λ τ_j} (n, k, M+1) for them, the
-    conjugate of a pair mirrored from its partner (two of five poles for the usual
-    body, wheel and electrical poles)."""
-    order = np.argsort(lam.imag, axis=1, kind="stable")
-    srt = np.take_along_axis(lam, order, axis=1)
-    k = srt.shape[1]
-    h = k // 2
-    E = np.empty(srt.shape + TAU_S.shape, dtype=complex)
-    E[:, h:] = _exp_tau(srt[:, h:])
-    np.conjugate(E[:, k - 1:k - 1 - h:-1], out=E[:, :h])
-    tol = 1e-10 * np.max(np.abs(srt), axis=1)
-    rest = np.flatnonzero(np.any(np.abs(srt[:, :h] - np.conj(srt[:, k - 1:k - 1 - h:-1]))
-                                 > tol[:, None], axis=1))
-    if rest.size:   # not conjugate pairs (e.g. real poles of an overdamped design)
-        E[rest, :h] = _exp_tau(srt[rest, :h])
-    return srt, E
+def _chain(lam: np.ndarray):
+    """e^{λ τ_j} for the lags j = 1 … M of :data:`TAU_S`, one (n, k) array at a time, by
+    products (see ``_OCTAVES``): nothing of size lags × designs × poles is stored."""
+    e = np.exp(lam * _T0)
+    w = np.exp(lam * (_T0 / _SUB))
+    with np.errstate(under="ignore"):
+        for _ in range(_OCTAVES):
+            for _ in range(_SUB):
+                yield e
+                e = e * w
+            w = w * w
+    yield e
 
 
 def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndarray,
@@ -210,7 +210,6 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
         feeds the motion it drives).
     """
     m1, m2, k1 = qp.m1, qp.m2, qp.k1
-    lam, E = _sorted_exponentials(lam)
     qc = qp.q(c_f, rows)
     rl = qp.rl[rows]
     n = rows.size
@@ -228,10 +227,21 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
         return _peval(num, lam) * _peval(num, -lam) * inv_dq * inv_qn
 
     a = kernel(n_road)
-    rv = np.real(np.einsum("nk,nkj->nj", a, E))
+    rv = np.empty((TAU_S.size, n))                 # R_v(τ_j) ∝ Re Σ_k a_k e^{λ_k τ_j}
+    lam_t, a_t = np.ascontiguousarray(lam.T), np.ascontiguousarray(a.T)   # (poles, n)
+    rv[0] = np.real(np.sum(a_t, axis=0))
+    for j, e in enumerate(_chain(lam_t), start=1):
+        np.sum((a_t * e).real, axis=0, out=rv[j])
+    rv = rv.T
     rho = rv / np.where(rv[:, :1] > 0.0, rv[:, :1], 1.0)
     R = residual_autocovariance(rho, sigma_v, fr, qp.r_m_per_rad[rows])
-    L = _laplace(R, E, lam)
+    d = _slope_jumps(R)
+    dT = np.ascontiguousarray(d.T)
+    dE = dT[0] + np.zeros(lam_t.shape, dtype=complex)
+    for j, e in enumerate(_chain(lam_t), start=1):
+        dE += dT[j] * e
+    dE, e = dE.T, e.T
+    L = _laplace(R, d, dE, e, lam)
     out = {"var_v": kernel(n_v), "var_tyre": kernel(n_x1), "var_i": kernel(n_i)}
     out = {k: 2.0 * np.real(np.sum(h * L, axis=1)) for k, h in out.items()}
     # comfort: (W_k ẍ2)(s) = N_a(s) Wn(s) / (Q(s) Wd(s)): poles of Q and of W_k
@@ -241,7 +251,7 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     wp = np.broadcast_to(_WK_POLES, (n, _WK_POLES.size))
     h_w = (_peval(n_a, wp) * _peval(n_a, -wp) / (_peval(qc, wp) * _peval(qc, -wp))
            * _peval(_WK_NUM, wp) * _peval(_WK_NUM, -wp) * _WK_INV_DDEN * _WK_INV_DEN_NEG)
-    L_w = _laplace(R, _E_WK, _WK_POLES)
+    L_w = _laplace(R, d, d @ _E_WK, _E_WK[-1], _WK_POLES)
     out["var_acc_w"] = 2.0 * np.real(np.sum(h_q * L, axis=1) + np.sum(h_w * L_w, axis=1))
     out["p_residual"] = np.real(np.sum(_peval(n_v, lam) * inv_dq * L, axis=1))
     return out
