@@ -315,7 +315,7 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
         under Gaussian closure (:mod:`ehsa_opt.vehicle.residual_force`; default): it
         raises comfort, road holding and power where Coulomb friction dominates the
         damper (class B at 30 km/h with the friction × 2: comfort −6.6 % → −4.6 % against
-        the time domain) and costs about as much again.  ``method="exact"`` only (the
+        the time domain) and adds about a third to the cost.  ``method="exact"`` only (the
         quadrature path, also the fallback for designs with repeated poles, omits it).
     averaging_iter : int
         Iteration limit of that correction (secant update of the mode's linear

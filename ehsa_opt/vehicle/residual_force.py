@@ -45,7 +45,7 @@ E[F v] 7.90 W), and the total dissipation stays the linear system's (the
 dissipation bound of SPEC §4: the road's input power does not depend on an internal
 force).  What it does not
 capture: the non-Gaussian part (long stick phases), ``benchmarks/friction_fast_path.py``
-measures the rest.  Cost: about as much again as the linearisation itself.
+measures the rest.  Cost: about a third of the fast path's (4000 designs: ~0.05 s).
 """
 
 from __future__ import annotations
