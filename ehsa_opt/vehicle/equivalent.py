@@ -314,7 +314,7 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
         Add the response to the friction's non-linear residual force r = F_f(v) − c_f v
         under Gaussian closure (:mod:`ehsa_opt.vehicle.residual_force`; default): it
         raises comfort, road holding and power where Coulomb friction dominates the
-        damper (class B at 30 km/h with the friction × 2: comfort −6.6 % → −4.6 % against
+        damper (class B at 30 km/h with the friction × 2: comfort −6.6 % → −4.4 % against
         the time domain) and adds about a third to the cost.  ``method="exact"`` only (the
         quadrature path, also the fallback for designs with repeated poles, omits it).
     averaging_iter : int
