@@ -132,6 +132,15 @@ CASES = {
             "position_friction_width_m": 0.005}}, None, 2),
         ("magnetic_saturation", {"magnetic_saturation": {"saturation_per_A2": 0.03}}, None, 1),
         ("magnetic_saturation", {"magnetic_saturation": {"saturation_per_A2": 0.01}}, None, 2),
+        # near-detection-limit analogues of the held-out misses (chosen a priori, other
+        # seeds and nearby magnitudes than the held-out cases), and a second `none`
+        ("asymmetric_friction", {"asymmetric_friction": {"asym_coulomb_N": 0.5}}, None, 8),
+        ("winding_heating", {"winding_heating": {"winding_heating_K_per_J": 0.08}}, None, 8),
+        ("voltage_drop", {"voltage_drop": {"voltage_drop_V": 0.04}}, None, 8),
+        ("asymmetric_friction", {"asymmetric_friction": {"asym_coulomb_N": 0.7}}, None, 9),
+        ("winding_heating", {"winding_heating": {"winding_heating_K_per_J": 0.12}}, None, 9),
+        ("voltage_drop", {"voltage_drop": {"voltage_drop_V": 0.06}}, None, 9),
+        ("none", {}, None, 9),
     ],
     "heldout": [
         ("backlash", {"backlash": {"backlash_gap_m": 8e-6}}, None, 11),
