@@ -1,5 +1,7 @@
 import json
 
+import math
+
 import numpy as np
 import pytest
 
@@ -202,6 +204,19 @@ def test_decision_rule_needs_a_gain_beyond_the_noise_floor():
     assert excess_reduction(5.0, 1.0, 1.0) == pytest.approx(1.0)
     assert earns(5.0, 1.0, 1.0, -50.0, -20.0)
     assert not earns(5.0, 1.0, 1.0, -50.0, 3.0)  # no held-out evidence
+
+
+def test_sse_alternative_tolerates_a_force_change_below_the_data_resolution():
+    # a voltage-channel effect: SSE excess reduced 81 %, the force error (at the floor)
+    # unchanged up to rounding (1.5910 -> 1.5913 %); 3000 held-out force samples resolve
+    # floor/sqrt(2N) = 1.63/77.5 = 0.021 percentage points
+    from ehsa_opt.estimation.discrepancy.refit import earns, force_resolution
+    assert force_resolution(1.63, 3000) == pytest.approx(1.63 / math.sqrt(6000.0))
+    assert force_resolution(1.63, None) == 0.0
+    assert earns(1.5910, 1.5913, 1.63, -161.0, -307.0, 0.81, n_force=3000)
+    assert not earns(1.5910, 1.5913, 1.63, -161.0, -307.0, 0.81)        # exact: grows
+    assert not earns(1.5910, 1.64, 1.63, -161.0, -307.0, 0.81, n_force=3000)  # resolved
+    assert not earns(1.5910, 1.5913, 1.63, -161.0, 2.0, 0.81, n_force=3000)   # no BIC
 
 
 def test_a_round_at_the_noise_floor_is_skipped_exactly():

@@ -29,7 +29,8 @@ from .fit import (
 from .polish import polish
 
 __all__ = ["split_tests", "effective_samples", "split_friction", "fit_candidate", "compatible",
-           "earns", "can_earn", "excess_reduction", "force_noise_floor_percent", "MIN_EXCESS_REDUCTION",
+           "earns", "can_earn", "excess_reduction", "force_noise_floor_percent",
+           "force_resolution", "MIN_EXCESS_REDUCTION",
            "FRICTION_SHARES", "MISMATCH_RATIO", "REFINE_SUBSTEPS"]
 
 
@@ -405,16 +406,28 @@ def excess_reduction(err_before: float, err_after: float, floor: float) -> float
     return 1.0 - ex1 / ex0
 
 
+def force_resolution(floor: float, n_force: int | None) -> float:
+    """The smallest change of the relative force error (%) the data resolve: the noise
+    floor's own standard error, floor/√(2 N) for N force samples (an rms estimated from
+    N Gaussian residuals is uncertain by 1/√(2N) of itself); 0 when N is not given."""
+    return floor / math.sqrt(2.0 * n_force) if n_force else 0.0
+
+
 def earns(err_before: float, err_after: float, floor: float, dbic_fit: float,
-          dbic_heldout: float, sse_excess_reduction: float | None = None) -> bool:
+          dbic_heldout: float, sse_excess_reduction: float | None = None,
+          n_force: int | None = None) -> bool:
     """The decision rule: the held-out force error does not grow and falls by at least
     :data:`MIN_EXCESS_REDUCTION` of its excess over the noise floor — or, for an
     effect seen mainly in another channel (voltage), the held-out SSE of all
     noise-normalised channels falls by that share of its excess over noise
-    (``sse_excess_reduction`` = 1 − (SSE₁ − N)/(SSE₀ − N)) — and ΔBIC < 0 on the fit
-    tests and on the held-out tests (beyond what noise explains)."""
+    (``sse_excess_reduction`` = 1 − (SSE₁ − N)/(SSE₀ − N)) while the force error does
+    not grow by more than the data resolve (:func:`force_resolution` of the ``n_force``
+    held-out force samples: a voltage drop can leave the force error unchanged up to
+    rounding) — and ΔBIC < 0 on the fit tests and on the held-out tests (beyond what
+    noise explains)."""
     gain = excess_reduction(err_before, err_after, floor)
-    if sse_excess_reduction is not None and err_after <= err_before:
+    if (sse_excess_reduction is not None
+            and err_after <= err_before + force_resolution(floor, n_force)):
         gain = max(gain, sse_excess_reduction)
     return gain >= MIN_EXCESS_REDUCTION and dbic_fit < 0 and dbic_heldout < 0
 

@@ -61,7 +61,8 @@ def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
         ch_sse0[ch], channel_sse(ev_pts, ev_pred)[0][ch], ch_n[ch])
     c.resolved = significant(c.intervals, CANDIDATES[name].amplitudes)
     c.earns = (earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
-                     c.sse_reduction) and c.resolved)
+                     c.sse_reduction, n_force=sum(pt.y.shape[1] for pt in ev_pts))
+               and c.resolved)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0], pt.y[0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
