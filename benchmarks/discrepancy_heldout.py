@@ -263,8 +263,9 @@ def oracle(res, effects: dict, post: tuple | None, friction) -> dict:
     from ehsa_opt.estimation.discrepancy.decide import channel_sse, channel_sse_excess_reduction
     s0, n = channel_sse(held, base)
     sse_red = channel_sse_excess_reduction(s0, channel_sse(held, pred)[0], n)
-    return {"error_true": e1, "truth_earns": bool(earns(e0, e1, res.noise_floor, -1.0, -1.0,
-                                                        sse_red))}
+    return {"error_true": e1, "truth_earns": bool(earns(
+        e0, e1, res.noise_floor, -1.0, -1.0, sse_red,
+        n_force=sum(pt.y.shape[1] for pt in held)))}
 
 
 def correct(row: dict) -> bool:

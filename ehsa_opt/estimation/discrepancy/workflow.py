@@ -20,7 +20,9 @@ round after round, then propose a data-driven term for what no catalogue effect 
    at least :data:`~.refit.MIN_EXCESS_REDUCTION` of the held-out relative force
    error above the noise floor (the error the measurement noise alone gives) and
    ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff < 0 on the fit tests and on the
-   held-out tests (N_eff = Σ N/τ, τ the residual autocorrelation time).  Among
+   held-out tests (N_eff = Σ N/τ, τ the residual autocorrelation time); for an
+   effect seen in the voltage channel the same share of that channel's SSE excess,
+   the force error not growing by more than the data resolve (e_n/√(2N)).  Among
    the earning candidates the one with the lowest held-out ΔBIC is added
    (:func:`~.decide.choose_winner`: between nested effects that fit equally well,
    the simpler).  When the best earning candidate removes less than
