@@ -292,7 +292,9 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
         cur_err = win.error_after
         steps.append({"effect": win.effect, "error_after": cur_err,
-                      "excess_reduction": win.excess_reduction, "parameters": win.parameters})
+                      "excess_reduction": win.excess_reduction,
+                      "sse_excess_reduction": win.sse_reduction,
+                      "parameters": win.parameters})
         if joint is not None and win is not first:  # the path is complete: one step
             prev = steps.pop(-2)
             steps[-1] = {"effect": f"{prev['effect']} + {win.effect}", "error_after": cur_err,
