@@ -76,9 +76,9 @@ from scipy.interpolate import CubicSpline
 from ..physics.params import FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError, \
     RoadParams, VehicleParams
 from .averaging import amplitude_terms, averaged_damping
-from .residual_force import residual_variances
 from .fixed_point import illinois_update, model_fixed_point
 from .metrics import G, design_arrays, dimensionless_power, linear_metrics
+from .residual_force import residual_variances
 from .residues import QuarterCarPolynomials
 from .road import ROAD_BAND_CYCLES_PER_M, dissipation_bound_W, road_velocity_psd
 
