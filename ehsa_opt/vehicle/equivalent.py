@@ -536,10 +536,9 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
         var["var_tyre"][rows] += add["var_tyre"]
         var["var_v"][rows] += add["var_v"]
         var["p_load"][rows] += qp.Re[rows] * add["var_i"]
-        p_res[rows] = cf[rows] * add["var_v"] + add["p_residual"]
+        p_res[rows] = add["p_residual"]      # E[r v]: the residual's share of the friction's
         var["p_diss"][rows] += (qp.kt_over_ke[rows] * np.where(qp.open[rows], 0.0, qp.R[rows])
-                                * add["var_i"] + p_res[rows])
-        p_res[rows] = add["p_residual"]
+                                * add["var_i"] + cf[rows] * add["var_v"] + p_res[rows])
     g = G
     acc = np.sqrt(np.maximum(var["var_acc_w"], 0.0))
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -123,8 +123,9 @@ def residual_autocovariance(rho: np.ndarray, sigma: np.ndarray, fr: np.ndarray,
     rho2 = rho * rho
     one = 1.0 - rho2
     b = 1.0 + 2.0 * a
-    beta1 = A * _SQRT_2_PI + V + np.sum(S / (b * np.sqrt(b)), axis=1)
-    lin = 2.0 * A * V * _SQRT_2_PI + V * V + 2.0 * V * np.sum(S / (b * np.sqrt(b)), axis=1)
+    strib = np.sum(S / (b * np.sqrt(b)), axis=1)          # E[Σ S_i X² e^{−a_i X²}]
+    beta1 = A * _SQRT_2_PI + V + strib
+    lin = 2.0 * A * V * _SQRT_2_PI + V * V + 2.0 * V * strib
     # the Stribeck terms with their largest value (at ρ = 1); a term below 1e-3 of the
     # Coulomb part's for every design is dropped (e.g. the bearing's narrow hump squared)
     terms = []
