@@ -254,7 +254,8 @@ def test_weakly_damped_designs_grid_converged():
     ref = friction_metrics(VEHICLE, road, design, fr, iteration_n_freq=2048, n_freq=2048,
                            method="quadrature")
     got = friction_metrics(VEHICLE, road, design, fr, method="quadrature")
-    exact = friction_metrics(VEHICLE, road, design, fr)
+    # (the residual force is the exact path's alone: compare the linearised parts)
+    exact = friction_metrics(VEHICLE, road, design, fr, residual=False)
     for key in ("power_W", "comfort", "road_holding", "stroke_velocity_rms_m_s"):
         np.testing.assert_allclose(got[key], ref[key], rtol=1e-2, err_msg=key)
         np.testing.assert_allclose(exact[key], ref[key], rtol=1e-2, err_msg=key)

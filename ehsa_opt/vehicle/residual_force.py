@@ -51,26 +51,85 @@ measures the rest.  Cost: about a third of the fast path's (4000 designs: ~0.05 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from .residues import (_WK_DEN, _WK_INV_DDEN, _WK_INV_DEN_NEG, _WK_NUM, _WK_POLES,
                        QuarterCarPolynomials, _peval, _pder, _pmul)
 
-__all__ = ["residual_autocovariance", "residual_variances", "TAU_S"]
+__all__ = ["residual_autocovariance", "residual_variances", "hermite_coefficients",
+           "LagGrid", "DEFAULT_LAGS"]
 
 _SQRT_2_PI = math.sqrt(2.0 / math.pi)
-# Lags of the closure's integrals: 0, then octaves [T_k, 2 T_k), T_k = 10 µs · 2^k, each
-# cut into _SUB equal steps (nearly geometric: ≤ 25 % per step), up to 10 µs · 2^22 = 42 s.
-# Equal steps within an octave and doubling octaves make e^{λτ} a chain of products:
-# e^{λ(T_k + i h_k)} = e^{λ T_k} w_k^i with w_k = e^{λ h_k}, w_{k+1} = w_k² (no exp per lag).
-_T0, _OCTAVES, _SUB = 1e-5, 22, 4
-#: The lags, s.
-TAU_S = np.concatenate([[0.0], (_T0 * 2.0 ** np.arange(_OCTAVES)[:, None]
-                                * (1.0 + np.arange(_SUB)[None, :] / _SUB)).ravel(),
-                        [_T0 * 2.0 ** _OCTAVES]])
-_H_TAU = np.diff(TAU_S)
-_E_WK = np.exp(_WK_POLES[:, None] * TAU_S[None, :]).T    # W_k's poles, shared, (M+1, 6)
+
+
+@dataclass(frozen=True)
+class LagGrid:
+    """Lags of the closure's integrals: 0, then octaves [T_k, 2 T_k), T_k = t0 · 2^k, each
+    cut into ``sub`` equal steps (nearly geometric: ≤ 1/sub per step), up to t0 · 2^octaves.
+    Equal steps within an octave and doubling octaves make e^{λτ} a chain of products:
+    e^{λ(T_k + i h_k)} = e^{λ T_k} w_k^i with w_k = e^{λ h_k}, w_{k+1} = w_k² (no exp per
+    lag).  Only the remainder R_r − c₃ρ̃³ − c₅ρ̃⁵ = O(ρ⁷) is integrated on it.
+
+    Parameters
+    ----------
+    t0_s : float
+        First non-zero lag, s.
+    octaves : int
+        Number of octaves (the last lag is t0 · 2^octaves).
+    sub : int
+        Equal steps per octave.
+    """
+
+    t0_s: float = 1e-5
+    octaves: int = 22
+    sub: int = 3
+
+    def __post_init__(self) -> None:
+        if not (self.t0_s > 0.0 and self.octaves >= 1 and self.sub >= 1):
+            raise ValueError(f"LagGrid: need t0_s > 0, octaves >= 1 and sub >= 1, got {self}")
+
+    @cached_property
+    def tau_s(self) -> np.ndarray:
+        """The lags, s."""
+        k = np.arange(self.octaves)[:, None]
+        return np.concatenate([[0.0], (self.t0_s * 2.0 ** k
+                                       * (1.0 + np.arange(self.sub)[None, :] / self.sub)
+                                       ).ravel(), [self.t0_s * 2.0 ** self.octaves]])
+
+    @cached_property
+    def steps_s(self) -> np.ndarray:
+        return np.diff(self.tau_s)
+
+    @cached_property
+    def e_wk(self) -> np.ndarray:
+        """e^{q τ_j} at W_k's poles q, (lags, 8)."""
+        return np.exp(_WK_POLES[:, None] * self.tau_s[None, :]).T
+
+    def chain(self, lam: np.ndarray):
+        """e^{λ τ_j} for the lags j = 1 … M, one array of ``lam``'s shape at a time, by
+        products: nothing of size lags × designs × poles is stored."""
+        e = np.exp(lam * self.t0_s)
+        w = np.exp(lam * (self.t0_s / self.sub))
+        with np.errstate(under="ignore"):
+            for _ in range(self.octaves):
+                for _ in range(self.sub):
+                    yield e
+                    e = e * w
+                w = w * w
+        yield e
+
+
+#: The default grid (68 lags, 10 µs to 42 s).
+DEFAULT_LAGS = LagGrid()
+# W_k's slow poles (decay slower than 30/s: −11.6 ± 17.6j, −1.8 ± 1.8j), conjugate pairs
+# adjacent: the low-order part analytically there; at the fast ones (−444 ± 444j,
+# −62 ± 48j: gone within 0.1 s) the lag grid resolves everything
+_WK_SLOW = np.flatnonzero(_WK_POLES.real > -30.0)
+_WK_FAST = np.flatnonzero(_WK_POLES.real <= -30.0)
+assert np.allclose(_WK_POLES[_WK_SLOW][1::2], np.conj(_WK_POLES[_WK_SLOW][::2]))
 
 
 def _law_terms(sigma: np.ndarray, fr: np.ndarray, r: np.ndarray
@@ -141,6 +200,8 @@ def residual_autocovariance(rho: np.ndarray, sigma: np.ndarray, fr: np.ndarray,
     inner = np.broadcast_to((lin - beta1 * beta1)[:, None], rho.shape).copy()
     for size, coef, b0, b1 in terms:
         if np.all(size <= 1e-3 * scale):
+            # dropped, but its ρ¹ part kept (it is in β_1²): R_r keeps no ρ¹ term
+            inner += (coef / np.sqrt(b0) if b1 is None else coef / (b0 + b1) ** 1.5)[:, None]
             continue
         if b1 is None:      # c / √(b (1 − ρ²) + ρ²)
             inner += coef[:, None] / np.sqrt(b0[:, None] * one + rho2)
@@ -150,9 +211,106 @@ def residual_autocovariance(rho: np.ndarray, sigma: np.ndarray, fr: np.ndarray,
     return (A * A * (2.0 / math.pi))[:, None] * np.arcsin(rho) + inner * rho
 
 
-def _slope_jumps(R: np.ndarray) -> np.ndarray:
-    """d_j of R piecewise linear on TAU_S: −s_0, s_{j−1} − s_j, s_{M−1} (s the slopes)."""
-    s = np.diff(R, axis=1) / _H_TAU
+def hermite_coefficients(sigma: np.ndarray, fr: np.ndarray, r: np.ndarray,
+                         orders: tuple[int, ...] = (3, 5)) -> np.ndarray:
+    """c_n = a_n²/n! of R_F(ρ) = Σ_n c_n ρⁿ (Mehler), a_n = E[F(σX) He_n(X)], N².
+
+    For F(σX) = A sgn X + V X + Σ_i S_i X e^{−a_i X²} (as
+    :func:`residual_autocovariance`): E[sgn X He_n(X)] = 2φ(0) He_{n−1}(0) and, with
+    b = 1 + 2a and Y ~ N(0, 1/b), E[X e^{−aX²} He_n(X)] = b^{−1/2} E[Y He_n(Y)]:
+    n = 3: −√(2/π) and b^{−1/2}(3/b² − 3/b); n = 5: 3√(2/π) and
+    b^{−1/2}(15/b³ − 30/b² + 15/b).  The viscous term has only a_1.
+
+    Returns
+    -------
+    ndarray (n, len(orders))
+    """
+    A, _, S, a = _law_terms(np.asarray(sigma, dtype=float), fr, r)
+    b = 1.0 + 2.0 * a
+    rb = 1.0 / np.sqrt(b)
+    out = np.empty((A.size, len(orders)))
+    for i, n in enumerate(orders):
+        if n == 3:
+            an = -_SQRT_2_PI * A + np.sum(S * rb * (3.0 / b ** 2 - 3.0 / b), axis=1)
+        elif n == 5:
+            an = 3.0 * _SQRT_2_PI * A + np.sum(S * rb * (15.0 / b ** 3 - 30.0 / b ** 2
+                                                          + 15.0 / b), axis=1)
+        else:
+            raise ValueError(f"hermite_coefficients: order {n} not implemented (3, 5)")
+        out[:, i] = an * an / math.factorial(n)
+    return out
+
+
+def _multisets(k: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Multisets of size n from k poles as counts (m, k), and their multinomial weights
+    n!/Π c_i!."""
+    import itertools
+    cnt = np.array([np.bincount(c, minlength=k) for c in
+                    itertools.combinations_with_replacement(range(k), n)])
+    w = np.array([math.factorial(n) / math.prod(math.factorial(int(c)) for c in row)
+                  for row in cnt])
+    return cnt, w
+
+
+#: Orders of ρ̃ whose Laplace transforms are exact (the rest, O(ρ⁷), on the lag grid).
+_ORDERS = (3, 5)
+_COUNTS = np.concatenate([_multisets(4, n)[0] for n in _ORDERS])          # (m, 4)
+_WEIGHTS = [_multisets(4, n)[1] for n in _ORDERS]
+_ORDER_OF = np.concatenate([np.full(w.size, i) for i, w in enumerate(_WEIGHTS)])
+_WEIGHTS = np.concatenate(_WEIGHTS)
+
+
+def _power_laplace(alpha: np.ndarray, lam: np.ndarray, coef: np.ndarray,
+                   targets: np.ndarray) -> np.ndarray:
+    """∫₀^∞ Σ_n c_n ρ̃(τ)ⁿ e^{μτ} dτ for ρ̃ = Σ_k α_k e^{λ_k τ} (4 poles), exact:
+    ρ̃ⁿ = Σ_m w_m Π α^m e^{(m·λ)τ} over the multisets m, each term −w_m Π α^m / (m·λ + μ).
+
+    alpha, lam : (n, 4); coef : (n, len(_ORDERS)); targets : (n, T).  Returns (n, T)."""
+    den = lam @ _COUNTS.T.astype(complex)                                   # m·λ, (n, m)
+    pw = np.ones(alpha.shape + (_ORDERS[-1] + 1,), dtype=complex)           # α_k^e
+    for e in range(1, _ORDERS[-1] + 1):
+        pw[:, :, e] = pw[:, :, e - 1] * alpha
+    num = -_WEIGHTS * coef[:, _ORDER_OF] * pw[:, 0, _COUNTS[:, 0]]
+    for k in range(1, 4):
+        num *= pw[:, k, _COUNTS[:, k]]
+    out = np.empty(targets.shape, dtype=complex)
+    for t in range(targets.shape[1]):
+        out[:, t] = np.sum(num / (den + targets[:, t:t + 1]), axis=1)
+    return out
+
+
+def _low_order_laplace(alpha: np.ndarray, lam: np.ndarray, coef: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_power_laplace` at the quarter car's mode poles ``lam[:, 1:]`` (``lam``
+    (n, 5), the first the electrical one, left out of ρ̃) and at W_k's slow poles
+    (:data:`_WK_SLOW`), using L(μ̄) = conj L(μ) where the modes are two conjugate pairs.
+    Returns (n, 4), (n, 4)."""
+    n = lam.shape[0]
+    a4, l4 = alpha[:, 1:], lam[:, 1:]
+    tol = 1e-9 * np.abs(l4[:, 0])
+    paired = ((np.abs(l4[:, 1] - np.conj(l4[:, 0])) <= tol)
+              & (np.abs(l4[:, 3] - np.conj(l4[:, 2])) <= tol)
+              & (np.abs(l4[:, 0].imag) > tol) & (np.abs(l4[:, 2].imag) > tol))
+    wk_up = _WK_POLES[_WK_SLOW][::2]
+    L = np.empty((n, 4), dtype=complex)
+    L_w = np.empty((n, 4), dtype=complex)
+    for rows, cols in ((np.flatnonzero(paired), [0, 2]), (np.flatnonzero(~paired), [0, 1, 2, 3])):
+        if rows.size == 0:
+            continue
+        tg = np.concatenate([l4[rows][:, cols], np.broadcast_to(wk_up, (rows.size, 2))], axis=1)
+        out = _power_laplace(a4[rows], l4[rows], coef[rows], tg)
+        k = len(cols)
+        L[rows] = out[:, [0, 0, 1, 1]] if k == 2 else out[:, :4]
+        L_w[rows] = out[:, [k, k, k + 1, k + 1]]
+    L[paired, 1::2] = np.conj(L[paired, 1::2])
+    L_w[:, 1::2] = np.conj(L_w[:, 1::2])
+    return L, L_w
+
+
+def _slope_jumps(R: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """d_j of R piecewise linear on lags of steps h: −s_0, s_{j−1} − s_j, s_{M−1} (s the
+    slopes)."""
+    s = np.diff(R, axis=1) / h
     d = np.empty_like(R)
     d[:, 0] = -s[:, 0]
     d[:, 1:-1] = s[:, :-1] - s[:, 1:]
@@ -162,29 +320,15 @@ def _slope_jumps(R: np.ndarray) -> np.ndarray:
 
 def _laplace(R: np.ndarray, d: np.ndarray, dE: np.ndarray, e_end: np.ndarray,
              lam: np.ndarray) -> np.ndarray:
-    """∫_0^τmax R(τ) e^{λτ} dτ for R piecewise linear on TAU_S, exact in the exponential:
+    """∫_0^τmax R(τ) e^{λτ} dτ for R piecewise linear on the lags, exact in the exponential:
     per cell the integral of (R_j + s_j (τ − τ_j)) e^{λτ} telescopes to
     (R_M E_M − R_0)/λ − Σ_j d_j E_j / λ² (``dE`` = Σ_j d_j E_j, ``e_end`` = E_M)."""
     return (R[:, -1:] * e_end - R[:, :1]) / lam - dE / (lam * lam)
 
 
-def _chain(lam: np.ndarray):
-    """e^{λ τ_j} for the lags j = 1 … M of :data:`TAU_S`, one (n, k) array at a time, by
-    products (see ``_OCTAVES``): nothing of size lags × designs × poles is stored."""
-    e = np.exp(lam * _T0)
-    w = np.exp(lam * (_T0 / _SUB))
-    with np.errstate(under="ignore"):
-        for _ in range(_OCTAVES):
-            for _ in range(_SUB):
-                yield e
-                e = e * w
-            w = w * w
-    yield e
-
-
 def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndarray,
-                       c_f: np.ndarray, sigma_v: np.ndarray, fr: np.ndarray
-                       ) -> dict[str, np.ndarray]:
+                       c_f: np.ndarray, sigma_v: np.ndarray, fr: np.ndarray,
+                       lags: LagGrid = DEFAULT_LAGS) -> dict[str, np.ndarray]:
     """Variances the residual force adds to the linearised quarter car's outputs.
 
     Parameters
@@ -201,6 +345,8 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
         rms stroke velocity of that linear system, m/s (the closure's scale).
     fr : ndarray (n, 8)
         Friction sets.
+    lags : LagGrid
+        Where the closure's remainder O(ρ⁷) is integrated (default: 68 lags).
 
     Returns
     -------
@@ -214,6 +360,8 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     qc = qp.q(c_f, rows)
     rl = qp.rl[rows]
     n = rows.size
+    # the fastest pole first (the electrical one): left out of ρ̃, the analytic part's ρ
+    lam = np.take_along_axis(lam, np.argsort(-np.abs(lam), axis=1), axis=1)
     inv_dq = 1.0 / _peval(_pder(qc), lam)
     inv_qn = 1.0 / _peval(qc, -lam)
     # numerators for a force pair r between body and wheel (r adds to the damper force)
@@ -228,21 +376,41 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
         return _peval(num, lam) * _peval(num, -lam) * inv_dq * inv_qn
 
     a = kernel(n_road)
-    rv = np.empty((TAU_S.size, n))                 # R_v(τ_j) ∝ Re Σ_k a_k e^{λ_k τ_j}
+    tau, h_tau = lags.tau_s, lags.steps_s
+    rv = np.empty((tau.size, n))                 # R_v(τ_j) ∝ Re Σ_k a_k e^{λ_k τ_j}
     lam_t, a_t = np.ascontiguousarray(lam.T), np.ascontiguousarray(a.T)   # (poles, n)
     rv[0] = np.real(np.sum(a_t, axis=0))
-    for j, e in enumerate(_chain(lam_t), start=1):
+    for j, e in enumerate(lags.chain(lam_t), start=1):
         np.sum((a_t * e).real, axis=0, out=rv[j])
     rv = rv.T
     rho = rv / np.where(rv[:, :1] > 0.0, rv[:, :1], 1.0)
     R = residual_autocovariance(rho, sigma_v, fr, qp.r_m_per_rad[rows])
-    d = _slope_jumps(R)
+    # analytic low orders: Σ_n c_n ρ̃ⁿ, ρ̃ = ρ without the electrical pole (exact Laplace
+    # transforms); only the remainder R − Σ c_n ρ̃ⁿ = O(ρ⁷) goes on the lag grid
+    r0 = np.where(rv[:, 0] > 0.0, rv[:, 0], 1.0)
+    alpha = a / r0[:, None]
+    coef = hermite_coefficients(sigma_v, fr, qp.r_m_per_rad[rows], _ORDERS)
+    # ρ̃ = ρ without the (real) electrical pole's term
+    e_el = np.exp(lam[:, :1].real * tau)
+    rho_t = rho - alpha[:, :1].real * e_el
+    r2 = rho_t * rho_t
+    P = coef[:, :1] * rho_t * r2
+    if len(_ORDERS) > 1:
+        P += coef[:, 1:2] * rho_t * r2 * r2
+    G = R - P
+    d = _slope_jumps(G, h_tau)
     dT = np.ascontiguousarray(d.T)
     dE = dT[0] + np.zeros(lam_t.shape, dtype=complex)
-    for j, e in enumerate(_chain(lam_t), start=1):
+    for j, e in enumerate(lags.chain(lam_t), start=1):
         dE += dT[j] * e
     dE, e = dE.T, e.T
-    L = _laplace(R, d, dE, e, lam)
+    L = _laplace(G, d, dE, e, lam)
+    L_p, L_pw = _low_order_laplace(alpha, lam, coef)
+    L[:, 1:] += L_p
+    # at the electrical pole (gone within microseconds) the lag grid resolves P as well
+    d_p = _slope_jumps(P, h_tau)
+    L[:, 0] += _laplace(P, d_p, np.sum(d_p * e_el, axis=1, keepdims=True), e_el[:, -1:],
+                        lam[:, :1])[:, 0]
     out = {"var_v": kernel(n_v), "var_tyre": kernel(n_x1), "var_i": kernel(n_i)}
     out = {k: 2.0 * np.real(np.sum(h * L, axis=1)) for k, h in out.items()}
     # comfort: (W_k ẍ2)(s) = N_a(s) Wn(s) / (Q(s) Wd(s)): poles of Q and of W_k
@@ -252,7 +420,11 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     wp = np.broadcast_to(_WK_POLES, (n, _WK_POLES.size))
     h_w = (_peval(n_a, wp) * _peval(n_a, -wp) / (_peval(qc, wp) * _peval(qc, -wp))
            * _peval(_WK_NUM, wp) * _peval(_WK_NUM, -wp) * _WK_INV_DDEN * _WK_INV_DEN_NEG)
-    L_w = _laplace(R, d, d @ _E_WK, _E_WK[-1], _WK_POLES)
+    e_wk = lags.e_wk
+    L_w = _laplace(G, d, d @ e_wk, e_wk[-1], _WK_POLES)
+    L_w[:, _WK_SLOW] += L_pw
+    fast = _WK_FAST
+    L_w[:, fast] += _laplace(P, d_p, d_p @ e_wk[:, fast], e_wk[-1, fast], _WK_POLES[fast])
     out["var_acc_w"] = 2.0 * np.real(np.sum(h_q * L, axis=1) + np.sum(h_w * L_w, axis=1))
     out["p_residual"] = np.real(np.sum(_peval(n_v, lam) * inv_dq * L, axis=1))
     return out
