@@ -127,11 +127,6 @@ DEFAULT_LAGS = LagGrid()
 # W_k's slow poles (decay slower than 30/s: −11.6 ± 17.6j, −1.8 ± 1.8j), conjugate pairs
 # adjacent: the low-order part analytically there; at the fast ones (−444 ± 444j,
 # −62 ± 48j: gone within 0.1 s) the lag grid resolves everything
-_WK_SLOW = np.flatnonzero(_WK_POLES.real > -30.0)
-_WK_FAST = np.flatnonzero(_WK_POLES.real <= -30.0)
-assert np.allclose(_WK_POLES[_WK_SLOW][1::2], np.conj(_WK_POLES[_WK_SLOW][::2]))
-
-
 def _law_terms(sigma: np.ndarray, fr: np.ndarray, r: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The rod friction at v = σX as A sgn X + V X + Σ_i S_i X e^{−a_i X²}.
@@ -279,51 +274,74 @@ def _power_laplace(alpha: np.ndarray, lam: np.ndarray, coef: np.ndarray,
     return out
 
 
-def _low_order_laplace(alpha: np.ndarray, lam: np.ndarray, coef: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_power_laplace` at the quarter car's mode poles ``lam[:, 1:]`` (``lam``
-    (n, 5), the first the electrical one, left out of ρ̃) and at W_k's slow poles
-    (:data:`_WK_SLOW`), using L(μ̄) = conj L(μ) where the modes are two conjugate pairs.
-    Returns (n, 4), (n, 4)."""
-    n = lam.shape[0]
-    a4, l4 = alpha[:, 1:], lam[:, 1:]
-    tol = 1e-9 * np.abs(l4[:, 0])
-    paired = ((np.abs(l4[:, 1] - np.conj(l4[:, 0])) <= tol)
-              & (np.abs(l4[:, 3] - np.conj(l4[:, 2])) <= tol)
-              & (np.abs(l4[:, 0].imag) > tol) & (np.abs(l4[:, 2].imag) > tol))
-    wk_up = _WK_POLES[_WK_SLOW][::2]
-    L = np.empty((n, 4), dtype=complex)
-    L_w = np.empty((n, 4), dtype=complex)
-    for rows, cols in ((np.flatnonzero(paired), [0, 2]), (np.flatnonzero(~paired), [0, 1, 2, 3])):
-        if rows.size == 0:
-            continue
-        tg = np.concatenate([l4[rows][:, cols], np.broadcast_to(wk_up, (rows.size, 2))], axis=1)
-        out = _power_laplace(a4[rows], l4[rows], coef[rows], tg)
-        k = len(cols)
-        L[rows] = out[:, [0, 0, 1, 1]] if k == 2 else out[:, :4]
-        L_w[rows] = out[:, [k, k, k + 1, k + 1]]
-    L[paired, 1::2] = np.conj(L[paired, 1::2])
-    L_w[:, 1::2] = np.conj(L_w[:, 1::2])
-    return L, L_w
-
-
 def _slope_jumps(R: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """d_j of R piecewise linear on lags of steps h: −s_0, s_{j−1} − s_j, s_{M−1} (s the
-    slopes)."""
-    s = np.diff(R, axis=1) / h
+    """d_j of R (lags on axis 0) piecewise linear on lags of steps h (M,): −s_0,
+    s_{j−1} − s_j, s_{M−1} (s the slopes)."""
+    s = np.diff(R, axis=0) / h[:, None]
     d = np.empty_like(R)
-    d[:, 0] = -s[:, 0]
-    d[:, 1:-1] = s[:, :-1] - s[:, 1:]
-    d[:, -1] = s[:, -1]
+    d[0] = -s[0]
+    np.subtract(s[:-1], s[1:], out=d[1:-1])
+    d[-1] = s[-1]
     return d
 
 
-def _laplace(R: np.ndarray, d: np.ndarray, dE: np.ndarray, e_end: np.ndarray,
+def _laplace(r_0: np.ndarray, r_end: np.ndarray, dE: np.ndarray, e_end: np.ndarray,
              lam: np.ndarray) -> np.ndarray:
     """∫_0^τmax R(τ) e^{λτ} dτ for R piecewise linear on the lags, exact in the exponential:
     per cell the integral of (R_j + s_j (τ − τ_j)) e^{λτ} telescopes to
-    (R_M E_M − R_0)/λ − Σ_j d_j E_j / λ² (``dE`` = Σ_j d_j E_j, ``e_end`` = E_M)."""
-    return (R[:, -1:] * e_end - R[:, :1]) / lam - dE / (lam * lam)
+    (R_M E_M − R_0)/λ − Σ_j d_j E_j / λ² (``dE`` = Σ_j d_j E_j, ``e_end`` = E_M;
+    ``r_0``, ``r_end``: R at the first and last lag)."""
+    return (r_end * e_end - r_0) / lam - dE / (lam * lam)
+
+
+def _closure_transforms(alpha: np.ndarray, lam: np.ndarray, cols: list[int], weight: float,
+                        sigma: np.ndarray, fr: np.ndarray, r: np.ndarray, lags: LagGrid
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """Laplace transforms L(μ) = ∫₀^∞ R_r(τ) e^{μτ} dτ of the residual's autocovariance at
+    the quarter car's poles ``lam`` (m, 5; the first the electrical one) and W_k's poles.
+
+    ρ(τ) = Σ_k α_k e^{λ_k τ}: its electrical term by a real exponential, the modes' ρ̃ by
+    the poles ``cols`` with their amplitudes × ``weight`` (the upper poles of two
+    conjugate pairs × 2 — L at the others is the conjugate — or all four × 1).  The
+    low orders c₃ρ̃³ + c₅ρ̃⁵ are transformed exactly at the mode poles
+    (:func:`_power_laplace`), the remainder G = R_r − c₃ρ̃³ − c₅ρ̃⁵ = O(ρ⁷) on the lags; at
+    the fast poles (electrical, gone in microseconds) and at W_k's the lags resolve R_r
+    itself (checked against a converged grid: ``tests/test_residual_force.py``).
+    Returns (m, 5), (m, 8).  Lags run along axis 0 of the (lags, m) arrays."""
+    m = lam.shape[0]
+    tau, h = lags.tau_s, lags.steps_s
+    lam_el = lam[:, 0].real
+    e_el = np.exp(np.multiply.outer(tau, lam_el))                       # (M, m)
+    a_t = np.ascontiguousarray((weight * alpha[:, cols]).T)             # (k, m)
+    l_t = np.ascontiguousarray(lam[:, cols].T)
+    rho_t = np.empty((tau.size, m))                                     # ρ̃
+    rho_t[0] = np.sum(a_t.real, axis=0)
+    for j, e in enumerate(lags.chain(l_t), start=1):
+        np.sum((a_t * e).real, axis=0, out=rho_t[j])
+    rho = rho_t + alpha[:, 0].real * e_el
+    R = residual_autocovariance(rho.T, sigma, fr, r).T                  # (M, m)
+    coef = hermite_coefficients(sigma, fr, r, _ORDERS)
+    r2 = rho_t * rho_t
+    G = R - coef[:, 0] * rho_t * r2
+    if len(_ORDERS) > 1:
+        G -= coef[:, 1] * rho_t * r2 * r2
+    dG = _slope_jumps(G, h)
+    dE = dG[0] + np.zeros(l_t.shape, dtype=complex)
+    for j, e in enumerate(lags.chain(l_t), start=1):
+        dE += dG[j] * e
+    low = _laplace(G[0], G[-1], dE, e, l_t).T + _power_laplace(alpha[:, 1:], lam[:, 1:], coef,
+                                                               lam[:, cols])
+    L = np.empty((m, 5), dtype=complex)
+    if len(cols) == 2:
+        L[:, 1::2] = low
+        L[:, 2::2] = np.conj(low)
+    else:
+        L[:, 1:] = low
+    dR = _slope_jumps(R, h)
+    L[:, 0] = _laplace(R[0], R[-1], np.sum(dR * e_el, axis=0), e_el[-1], lam_el)
+    e_wk = lags.e_wk
+    L_w = _laplace(R[0][:, None], R[-1][:, None], dR.T @ e_wk, e_wk[-1], _WK_POLES)
+    return L, L_w
 
 
 def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndarray,
@@ -375,42 +393,22 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     def kernel(num: np.ndarray) -> np.ndarray:  # residues of N(s)N(−s)/(Q(s)Q(−s))
         return _peval(num, lam) * _peval(num, -lam) * inv_dq * inv_qn
 
-    a = kernel(n_road)
-    tau, h_tau = lags.tau_s, lags.steps_s
-    rv = np.empty((tau.size, n))                 # R_v(τ_j) ∝ Re Σ_k a_k e^{λ_k τ_j}
-    lam_t, a_t = np.ascontiguousarray(lam.T), np.ascontiguousarray(a.T)   # (poles, n)
-    rv[0] = np.real(np.sum(a_t, axis=0))
-    for j, e in enumerate(lags.chain(lam_t), start=1):
-        np.sum((a_t * e).real, axis=0, out=rv[j])
-    rv = rv.T
-    rho = rv / np.where(rv[:, :1] > 0.0, rv[:, :1], 1.0)
-    R = residual_autocovariance(rho, sigma_v, fr, qp.r_m_per_rad[rows])
-    # analytic low orders: Σ_n c_n ρ̃ⁿ, ρ̃ = ρ without the electrical pole (exact Laplace
-    # transforms); only the remainder R − Σ c_n ρ̃ⁿ = O(ρ⁷) goes on the lag grid
-    r0 = np.where(rv[:, 0] > 0.0, rv[:, 0], 1.0)
-    alpha = a / r0[:, None]
-    coef = hermite_coefficients(sigma_v, fr, qp.r_m_per_rad[rows], _ORDERS)
-    # ρ̃ = ρ without the (real) electrical pole's term
-    e_el = np.exp(lam[:, :1].real * tau)
-    rho_t = rho - alpha[:, :1].real * e_el
-    r2 = rho_t * rho_t
-    P = coef[:, :1] * rho_t * r2
-    if len(_ORDERS) > 1:
-        P += coef[:, 1:2] * rho_t * r2 * r2
-    G = R - P
-    d = _slope_jumps(G, h_tau)
-    dT = np.ascontiguousarray(d.T)
-    dE = dT[0] + np.zeros(lam_t.shape, dtype=complex)
-    for j, e in enumerate(lags.chain(lam_t), start=1):
-        dE += dT[j] * e
-    dE, e = dE.T, e.T
-    L = _laplace(G, d, dE, e, lam)
-    L_p, L_pw = _low_order_laplace(alpha, lam, coef)
-    L[:, 1:] += L_p
-    # at the electrical pole (gone within microseconds) the lag grid resolves P as well
-    d_p = _slope_jumps(P, h_tau)
-    L[:, 0] += _laplace(P, d_p, np.sum(d_p * e_el, axis=1, keepdims=True), e_el[:, -1:],
-                        lam[:, :1])[:, 0]
+    a = kernel(n_road)                        # R_v(τ) = Σ_k a_k e^{λ_k τ} (τ ≥ 0), real
+    r0 = np.real(np.sum(a, axis=1))            # R_v(0): ρ = R_v/R_v(0)
+    alpha = a / np.where(r0 > 0.0, r0, 1.0)[:, None]
+    # the modes: two conjugate pairs (the rule) or not (some overdamped)
+    tol = 1e-9 * np.abs(lam[:, 1])
+    paired = ((np.abs(lam[:, 2] - np.conj(lam[:, 1])) <= tol)
+              & (np.abs(lam[:, 4] - np.conj(lam[:, 3])) <= tol)
+              & (np.abs(lam[:, 1].imag) > tol) & (np.abs(lam[:, 3].imag) > tol))
+    L = np.empty((n, 5), dtype=complex)
+    L_w = np.empty((n, _WK_POLES.size), dtype=complex)
+    r = qp.r_m_per_rad[rows]
+    for sel, cols, weight in ((np.flatnonzero(paired), [1, 3], 2.0),
+                              (np.flatnonzero(~paired), [1, 2, 3, 4], 1.0)):
+        if sel.size:
+            L[sel], L_w[sel] = _closure_transforms(alpha[sel], lam[sel], cols, weight,
+                                                   sigma_v[sel], fr[sel], r[sel], lags)
     out = {"var_v": kernel(n_v), "var_tyre": kernel(n_x1), "var_i": kernel(n_i)}
     out = {k: 2.0 * np.real(np.sum(h * L, axis=1)) for k, h in out.items()}
     # comfort: (W_k ẍ2)(s) = N_a(s) Wn(s) / (Q(s) Wd(s)): poles of Q and of W_k
@@ -420,11 +418,6 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     wp = np.broadcast_to(_WK_POLES, (n, _WK_POLES.size))
     h_w = (_peval(n_a, wp) * _peval(n_a, -wp) / (_peval(qc, wp) * _peval(qc, -wp))
            * _peval(_WK_NUM, wp) * _peval(_WK_NUM, -wp) * _WK_INV_DDEN * _WK_INV_DEN_NEG)
-    e_wk = lags.e_wk
-    L_w = _laplace(G, d, d @ e_wk, e_wk[-1], _WK_POLES)
-    L_w[:, _WK_SLOW] += L_pw
-    fast = _WK_FAST
-    L_w[:, fast] += _laplace(P, d_p, d_p @ e_wk[:, fast], e_wk[-1, fast], _WK_POLES[fast])
     out["var_acc_w"] = 2.0 * np.real(np.sum(h_q * L, axis=1) + np.sum(h_w * L_w, axis=1))
     out["p_residual"] = np.real(np.sum(_peval(n_v, lam) * inv_dq * L, axis=1))
     return out
