@@ -108,18 +108,23 @@ class LagGrid:
         """e^{q τ_j} at W_k's poles q, (lags, 8)."""
         return np.exp(_WK_POLES[:, None] * self.tau_s[None, :]).T
 
-    def chain(self, lam: np.ndarray):
-        """e^{λ τ_j} for the lags j = 1 … M, one array of ``lam``'s shape at a time, by
-        products: nothing of size lags × designs × poles is stored."""
-        e = np.exp(lam * self.t0_s)
-        w = np.exp(lam * (self.t0_s / self.sub))
+    def exponentials(self, lam: np.ndarray) -> np.ndarray:
+        """e^{λ τ_j} at every lag, (lags, *lam.shape), by products: with z = e^{λ t0/sub}
+        and p_k = z^{2^k} (repeated squaring), τ_j = t0 2^k (sub + i)/sub gives
+        e^{λ τ_j} = p_k^{sub+i} — one exp per pole, a few array products in all."""
+        z = np.exp(lam * (self.t0_s / self.sub))
+        p = np.empty((self.octaves + 1,) + z.shape, dtype=complex)
+        p[0] = z
         with np.errstate(under="ignore"):
-            for _ in range(self.octaves):
-                for _ in range(self.sub):
-                    yield e
-                    e = e * w
-                w = w * w
-        yield e
+            for k in range(self.octaves):
+                p[k + 1] = p[k] * p[k]
+            pw = [np.ones_like(p[:-1]), p[:-1]]          # p_k^i, i = 0 … 2 sub − 1
+            for _ in range(2 * self.sub - 2):
+                pw.append(pw[-1] * p[:-1])
+            body = np.stack(pw[self.sub:], axis=1)    # (octaves, sub, ...)
+            last = p[-1] ** self.sub
+        return np.concatenate([np.ones((1,) + z.shape, dtype=complex),
+                               body.reshape((-1,) + z.shape), last[None]])
 
 
 #: Rows per block of the closure's (lags × rows) arrays: a block stays in a core's cache.
@@ -316,10 +321,8 @@ def _closure_transforms(alpha: np.ndarray, lam: np.ndarray, cols: list[int], wei
     e_el = np.exp(np.multiply.outer(tau, lam_el))                       # (M, m)
     a_t = np.ascontiguousarray((weight * alpha[:, cols]).T)             # (k, m)
     l_t = np.ascontiguousarray(lam[:, cols].T)
-    rho_t = np.empty((tau.size, m))                                     # ρ̃
-    rho_t[0] = np.sum(a_t.real, axis=0)
-    for j, e in enumerate(lags.chain(l_t), start=1):
-        np.sum((a_t * e).real, axis=0, out=rho_t[j])
+    E = lags.exponentials(l_t)                                          # (M, k, m)
+    rho_t = np.einsum("km,jkm->jm", a_t, E).real                        # ρ̃
     rho = rho_t + alpha[:, 0].real * e_el
     R = residual_autocovariance(rho.T, sigma, fr, r).T                  # (M, m)
     coef = hermite_coefficients(sigma, fr, r, _ORDERS)
@@ -328,10 +331,8 @@ def _closure_transforms(alpha: np.ndarray, lam: np.ndarray, cols: list[int], wei
     if len(_ORDERS) > 1:
         G -= coef[:, 1] * rho_t * r2 * r2
     dG = _slope_jumps(G, h)
-    dE = dG[0] + np.zeros(l_t.shape, dtype=complex)
-    for j, e in enumerate(lags.chain(l_t), start=1):
-        dE += dG[j] * e
-    low = _laplace(G[0], G[-1], dE, e, l_t).T + _power_laplace(alpha[:, 1:], lam[:, 1:], coef,
+    dE = np.einsum("jm,jkm->km", dG, E)
+    low = _laplace(G[0], G[-1], dE, E[-1], l_t).T + _power_laplace(alpha[:, 1:], lam[:, 1:], coef,
                                                                lam[:, cols])
     L = np.empty((m, 5), dtype=complex)
     if len(cols) == 2:

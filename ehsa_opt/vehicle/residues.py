@@ -112,14 +112,20 @@ def _band_weights(lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
     """2 [atan(ωb/μ) − atan(ωa/μ)], μ = −λ: ∫_{ωa}^{ωb} |H(jω)|² dω = Σ_k r_k H(−λ_k) × this.
 
     2 atan(ω/μ) = −j [Log(μ + jω) − Log(μ − jω)] for Re μ > 0 (both in the right
-    half-plane, no branch cut), and a product of two right-half-plane numbers stays
-    off the negative real axis, so the bracket is −j [Log A − Log B] with
-    A = (μ + jωb)(μ − jωa), B = (μ − jωb)(μ + jωa): two logarithms, no arctangent.
+    half-plane, no branch cut), so with μ = x + jy (x > 0) the bracket is, in real
+    arithmetic (four real arctangents and one logarithm, no complex one)::
+
+        atan((y+ωb)/x) − atan((y−ωb)/x) − atan((y+ωa)/x) + atan((y−ωa)/x)
+        − (j/2) ln(|μ + jωb|² |μ − jωa|² / (|μ − jωb|² |μ + jωa|²))
     """
-    mu = -lam
-    a = (mu + 1j * wb) * (mu - 1j * wa)
-    b = (mu - 1j * wb) * (mu + 1j * wa)
-    return -1j * (np.log(a) - np.log(b))
+    x, y = -lam.real, -lam.imag
+    ix = 1.0 / x
+    ang = (np.arctan((y + wb) * ix) - np.arctan((y - wb) * ix)
+           - np.arctan((y + wa) * ix) + np.arctan((y - wa) * ix))
+    x2 = x * x
+    mag = np.log(((x2 + (y + wb) ** 2) * (x2 + (y - wa) ** 2))
+                 / ((x2 + (y - wb) ** 2) * (x2 + (y + wa) ** 2)))
+    return ang - 0.5j * mag
 
 
 def _band_integral(res_h: np.ndarray, lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
