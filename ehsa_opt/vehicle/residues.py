@@ -58,6 +58,12 @@ _WK_INV_DDEN = 1.0 / np.polyval(_WK_DDEN[::-1], _WK_POLES)      # 1/Wd'(q) at W_
 _WK_INV_DEN_NEG = 1.0 / np.polyval(_WK_DEN[::-1], -_WK_POLES)  # 1/Wd(−q)
 
 
+# Newton on a simple root converges quadratically: after a relative step s the error is
+# about C s² (C = |Q''/2Q'| |λ|, moderate for the simple, separated poles ``check``
+# accepts), so a last step below 1e-9 leaves ~1e-18 and the confirming step is skipped
+_NEWTON_TOL = 1e-9
+
+
 def _pmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Product of batched polynomials (ascending coefficients on the last axis)."""
     out = np.zeros(np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
@@ -274,7 +280,7 @@ class QuarterCarPolynomials:
         """Newton steps on each root of Q (m, 6) from ``lam`` (m, 5).
 
         Returns the roots and whether each row converged to five distinct roots
-        (last step < 1e-12 relative, and the roots' sum and product equal −q4/q5 and
+        (last step < ``_NEWTON_TOL`` relative, and the roots' sum and product equal −q4/q5 and
         −q0/q5 (Vieta) to 1e-9, so no root was lost to a neighbour's basin).
         """
         lam = lam.copy()
@@ -286,7 +292,7 @@ class QuarterCarPolynomials:
                 corr = p / dp
                 lam -= corr
                 step = np.abs(corr) / np.maximum(np.abs(lam), 1e-300)
-                moving = np.max(step, axis=1) > 1e-13
+                moving = np.max(step, axis=1) > _NEWTON_TOL
             else:
                 z = lam[todo]
                 p, dp = _peval_d(qc[todo], z)
@@ -294,7 +300,7 @@ class QuarterCarPolynomials:
                 lam[todo] = z - corr
                 step[todo] = np.abs(corr) / np.maximum(np.abs(lam[todo]), 1e-300)
                 moving = np.zeros(lam.shape[0], dtype=bool)
-                moving[todo] = np.max(step[todo], axis=1) > 1e-13
+                moving[todo] = np.max(step[todo], axis=1) > _NEWTON_TOL
             if not np.any(moving):
                 break
             todo = np.flatnonzero(moving)
@@ -303,7 +309,7 @@ class QuarterCarPolynomials:
                 <= 1e-9 * np.sum(np.abs(lam), axis=1))
         with np.errstate(divide="ignore", invalid="ignore"):
             p_ok = np.abs(np.prod(lam, axis=1) * lead / -qc[:, 0] - 1.0) <= 1e-9
-        return lam, np.all(step <= 1e-12, axis=1) & s_ok & p_ok
+        return lam, np.all(step <= _NEWTON_TOL, axis=1) & s_ok & p_ok
 
     def follow(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray,
                c_old: np.ndarray) -> np.ndarray:
