@@ -56,8 +56,8 @@ from functools import cached_property
 
 import numpy as np
 
-from .residues import (_WK_DEN, _WK_INV_DDEN, _WK_INV_DEN_NEG, _WK_NUM, _WK_POLES,
-                       QuarterCarPolynomials, _peval, _pder, _pmul)
+from .residues import (_WK_AT_POLES, _WK_DEN2, _WK_NUM2, _WK_POLES, QuarterCarPolynomials,
+                       _at_wk, _even_square, _peval, _pder, _pmul)
 
 __all__ = ["residual_autocovariance", "residual_variances", "hermite_coefficients",
            "LagGrid", "DEFAULT_LAGS"]
@@ -384,7 +384,8 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     # the fastest pole first (the electrical one): left out of ρ̃, the analytic part's ρ
     lam = np.take_along_axis(lam, np.argsort(-np.abs(lam), axis=1), axis=1)
     inv_dq = 1.0 / _peval(_pder(qc), lam)
-    inv_qn = 1.0 / _peval(qc, -lam)
+    inv_q2 = inv_dq / _peval(qc, -lam)                  # 1/(Q'(λ) Q(−λ))
+    u = lam * lam
     # numerators for a force pair r between body and wheel (r adds to the damper force)
     nv0 = np.broadcast_to(np.array([0.0, -k1, 0.0, -(m1 + m2)]), (n, 4))
     n_v = _pmul(nv0, rl)                                          # stroke velocity
@@ -394,7 +395,7 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     n_road = _pmul(np.broadcast_to(np.array([0.0, 0.0, k1 * m2]), (n, 3)), rl)
 
     def kernel(num: np.ndarray) -> np.ndarray:  # residues of N(s)N(−s)/(Q(s)Q(−s))
-        return _peval(num, lam) * _peval(num, -lam) * inv_dq * inv_qn
+        return _peval(_even_square(num), u) * inv_q2
 
     a = kernel(n_road)                        # R_v(τ) = Σ_k a_k e^{λ_k τ} (τ ≥ 0), real
     r0 = np.real(np.sum(a, axis=1))            # R_v(0): ρ = R_v/R_v(0)
@@ -415,12 +416,8 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     out = {"var_v": kernel(n_v), "var_tyre": kernel(n_x1), "var_i": kernel(n_i)}
     out = {k: 2.0 * np.real(np.sum(h * L, axis=1)) for k, h in out.items()}
     # comfort: (W_k ẍ2)(s) = N_a(s) Wn(s) / (Q(s) Wd(s)): poles of Q and of W_k
-    wn_l, wd_l = _peval(_WK_NUM, lam), _peval(_WK_DEN, lam)
-    wn_n, wd_n = _peval(_WK_NUM, -lam), _peval(_WK_DEN, -lam)
-    h_q = kernel(n_a) * wn_l * wn_n / (wd_l * wd_n)
-    wp = np.broadcast_to(_WK_POLES, (n, _WK_POLES.size))
-    h_w = (_peval(n_a, wp) * _peval(n_a, -wp) / (_peval(qc, wp) * _peval(qc, -wp))
-           * _peval(_WK_NUM, wp) * _peval(_WK_NUM, -wp) * _WK_INV_DDEN * _WK_INV_DEN_NEG)
+    h_q = kernel(n_a) * (_peval(_WK_NUM2, u) / _peval(_WK_DEN2, u))
+    h_w = _at_wk(n_a) * _at_wk(n_a, -1.0) / (_at_wk(qc) * _at_wk(qc, -1.0)) * _WK_AT_POLES
     out["var_acc_w"] = 2.0 * np.real(np.sum(h_q * L, axis=1) + np.sum(h_w * L_w, axis=1))
     out["p_residual"] = np.real(np.sum(_peval(n_v, lam) * inv_dq * L, axis=1))
     return out

@@ -56,6 +56,8 @@ _WK_POLES = np.roots(_WK_DEN[::-1])
 _WK_DDEN = _WK_DEN[1:] * np.arange(1, _WK_DEN.size)
 _WK_INV_DDEN = 1.0 / np.polyval(_WK_DDEN[::-1], _WK_POLES)      # 1/Wd'(q) at W_k's poles
 _WK_INV_DEN_NEG = 1.0 / np.polyval(_WK_DEN[::-1], -_WK_POLES)  # 1/Wd(−q)
+_WK_VANDER = _WK_POLES[None, :] ** np.arange(16)[:, None]      # q^j, (16, 8)
+_WK_VANDER_NEG = (-_WK_POLES[None, :]) ** np.arange(16)[:, None]
 
 
 # Newton on a simple root converges quadratically: after a relative step s the error is
@@ -112,6 +114,18 @@ def _peval_d(c: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _pder(c: np.ndarray) -> np.ndarray:
     return c[..., 1:] * np.arange(1, c.shape[-1])
+
+
+def _even_square(c: np.ndarray) -> np.ndarray:
+    """N(s) N(−s) as a polynomial in u = s² (ascending coefficients; N ascending c on the
+    last axis): an even polynomial, so one Horner pass at λ² replaces two at ±λ."""
+    return _pmul(c, c * (-1.0) ** np.arange(c.shape[-1]))[..., ::2]
+
+
+def _at_wk(c: np.ndarray, sign: float = 1.0) -> np.ndarray:
+    """Polynomials c (n, k) at ±W_k's poles (fixed points: a product with their
+    Vandermonde matrix), (n, 8)."""
+    return c @ (_WK_VANDER if sign > 0 else _WK_VANDER_NEG)[:c.shape[-1]]
 
 
 def _band_weights(lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
@@ -184,6 +198,13 @@ def _ferrari_roots(qc: np.ndarray, guess: np.ndarray) -> np.ndarray:
         out[:, 1 + 2 * i] = (sg * sq + root) / 2.0 - a3 / 4.0
         out[:, 2 + 2 * i] = (sg * sq - root) / 2.0 - a3 / 4.0
     return out
+
+
+# W_k(s) W_k(−s) = WN2(s²)/WD2(s²), fixed
+_WK_NUM2, _WK_DEN2 = _even_square(_WK_NUM), _even_square(_WK_DEN)
+# at W_k's poles: Wn(q) Wn(−q) / (Wd'(q) Wd(−q)), the comfort kernel's fixed factor there
+_WK_AT_POLES = (np.polyval(_WK_NUM[::-1], _WK_POLES) * np.polyval(_WK_NUM[::-1], -_WK_POLES)
+                * _WK_INV_DDEN * _WK_INV_DEN_NEG)
 
 
 class QuarterCarPolynomials:
@@ -371,14 +392,14 @@ class QuarterCarPolynomials:
         k1, m2 = self.k1, self.m2
         rl = self.rl[rows]
         s2 = np.array([0.0, 0.0, 1.0])
-        # shared by every output: 1/Q'(λ), 1/Q(−λ) and the band weights of the poles
-        inv_dq = 1.0 / _peval(_pder(qc), lam)
-        inv_qn = 1.0 / _peval(qc, -lam)
-        band = _band_weights(lam, self.wa, self.wb)
+        # shared by every output: 1/(Q'(λ) Q(−λ)) × the band weights of the poles; each
+        # output's N(λ) N(−λ) is an even polynomial, evaluated once at λ²
+        u = lam * lam
+        w = self.scale * _band_weights(lam, self.wa, self.wb) / (_peval(_pder(qc), lam)
+                                                                 * _peval(qc, -lam))
 
         def var(num: np.ndarray) -> np.ndarray:
-            h = _peval(num, lam) * inv_dq * _peval(num, -lam) * inv_qn
-            return self.scale * np.real(np.sum(h * band, axis=1))
+            return np.real(np.sum(_peval(_even_square(num), u) * w, axis=1))
 
         out = {"var_v": var(k1 * m2 * _pmul(rl, s2))}
         var_i = var(self.cur_gain[rows, None] * s2)
@@ -390,13 +411,10 @@ class QuarterCarPolynomials:
         out["var_tyre"] = var(num_t[:, 1:])
         # comfort: ẍ2 = k1 s D̃ / Q times W_k = Wn/Wd; poles of Q and of Wd
         na = k1 * np.concatenate([np.zeros((dc.shape[0], 1)), dc], axis=1)  # k1 s D̃
-        num = _pmul(na, _WK_NUM)
-        hp = (_peval(num, lam) * inv_dq / _peval(_WK_DEN, lam)
-              * _peval(num, -lam) * inv_qn / _peval(_WK_DEN, -lam))
-        wp = np.broadcast_to(_WK_POLES, (lam.shape[0], _WK_POLES.size))
-        hw = (_peval(num, wp) / _peval(qc, wp) * _WK_INV_DDEN
-              * _peval(num, -wp) / _peval(qc, -wp) * _WK_INV_DEN_NEG)
-        out["var_acc_w"] = self.scale * (np.real(np.sum(hp * band, axis=1))
-                                         + np.real(hw @ _band_weights(_WK_POLES, self.wa,
+        hp = _peval(_even_square(na), u) * (_peval(_WK_NUM2, u) / _peval(_WK_DEN2, u))
+        hw = (_at_wk(na) * _at_wk(na, -1.0) / (_at_wk(qc) * _at_wk(qc, -1.0))
+              * _WK_AT_POLES)
+        out["var_acc_w"] = (np.real(np.sum(hp * w, axis=1))
+                            + self.scale * np.real(hw @ _band_weights(_WK_POLES, self.wa,
                                                                       self.wb)))
         return out
