@@ -84,28 +84,30 @@ _DLR = _LOG_RHO[1] - _LOG_RHO[0]
 def _t_l(rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """T(ρ) and L(ρ) for ρ ≥ 0 (small ρ: ρ/2, ρ²/4; large: 2/π − π/(12ρ²), 2ρ/π −
     ln 2 + π/(12ρ)); linear interpolation in ln ρ on the uniform table (the index is
-    computed, not searched: the same values as ``np.interp``)."""
+    computed, not searched: the same values as ``np.interp``), only where needed (on
+    the amplitude nodes most ρ are large: a Coulomb law's u_c is tiny)."""
     rho = np.maximum(np.asarray(rho, dtype=float), 0.0)
+    flat = rho.ravel()
     with np.errstate(divide="ignore"):
-        u = (np.log(rho) - _LOG_RHO[0]) * (1.0 / _DLR)
-    u = np.clip(u, 0.0, _LOG_RHO.size - 1.0)
-    i = np.minimum(u.astype(np.intp), _LOG_RHO.size - 2)
-    w = u - i
-    a = _T_TAB[i]
-    t = a + w * (_T_TAB[i + 1] - a)
-    a = _L_TAB[i]
-    l_ = a + w * (_L_TAB[i + 1] - a)
-    big = rho > _RHO_SWITCH
-    if np.any(big):
+        inv = 1.0 / flat
+    t = 2.0 / math.pi - (math.pi / 12.0) * inv * inv
+    l_ = (2.0 / math.pi) * flat - math.log(2.0) + (math.pi / 12.0) * inv
+    mid = np.flatnonzero(flat <= _RHO_SWITCH)
+    if mid.size:
+        r = flat[mid]
         with np.errstate(divide="ignore"):
-            inv = 1.0 / rho
-        t = np.where(big, 2.0 / math.pi - (math.pi / 12.0) * inv * inv, t)
-        l_ = np.where(big, (2.0 / math.pi) * rho - math.log(2.0) + (math.pi / 12.0) * inv, l_)
-    small = rho < 1e-4
-    if np.any(small):
-        t = np.where(small, 0.5 * rho, t)
-        l_ = np.where(small, 0.25 * rho * rho, l_)
-    return t, l_
+            u = (np.log(r) - _LOG_RHO[0]) * (1.0 / _DLR)
+        u = np.clip(u, 0.0, _LOG_RHO.size - 1.0)
+        i = np.minimum(u.astype(np.intp), _LOG_RHO.size - 2)
+        w = u - i
+        a = _T_TAB[i]
+        tm = a + w * (_T_TAB[i + 1] - a)
+        a = _L_TAB[i]
+        lm = a + w * (_L_TAB[i + 1] - a)
+        small = r < 1e-4
+        t[mid] = np.where(small, 0.5 * r, tm)
+        l_[mid] = np.where(small, 0.25 * r * r, lm)
+    return t.reshape(rho.shape), l_.reshape(rho.shape)
 
 
 # Large-argument (Hankel) series of e^−h I0(h) and e^−h (I0(h) − I1(h)), h ≥ 200:
@@ -132,34 +134,38 @@ _BESSEL_PIECES = np.stack([CubicSpline(_LN_H, f(np.exp(_LN_H))).c
 
 
 def _bessel_terms(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """i0e(h) and i0e(h) − i1e(h) for h ≥ 0 (series for h ≥ 200, tables below)."""
+    """i0e(h) and i0e(h) − i1e(h) for h ≥ 0 (series for h ≥ 200, tables below, each only
+    where needed: on the amplitude nodes most h are large)."""
     h = np.asarray(h, dtype=float)
-    with np.errstate(divide="ignore"):
-        lh = np.log(h)
-    u = (lh - _LN_H0) * (1.0 / _DLH)
-    u = np.clip(u, 0.0, _BESSEL_PIECES.shape[2] - 1.0)
-    i = u.astype(np.intp)
-    x = lh - (_LN_H0 + _DLH * i)
-    i0, d = (((c[0].take(i) * x + c[1].take(i)) * x + c[2].take(i)) * x + c[3].take(i)
-             for c in _BESSEL_PIECES)
-    tiny = h < 1e-8
-    if np.any(tiny):
-        i0 = np.where(tiny, 1.0 - h, i0)
-        d = np.where(tiny, 1.0 - 1.5 * h, d)
-    big = h >= _H_SWITCH
-    if np.any(big):
-        hb = np.where(big, h, _H_SWITCH)
-        xb = 1.0 / hb
-        pref = np.sqrt(xb / (2.0 * math.pi))
-        p0, p1 = np.full(xb.shape, _H0[-1]), np.full(xb.shape, _H01[-1])
+    flat = h.ravel()
+    i0, d = np.empty(flat.shape), np.empty(flat.shape)
+    big = flat >= _H_SWITCH
+    nb = np.count_nonzero(big)
+    sel = slice(None) if nb == flat.size else np.flatnonzero(big)
+    if nb:
+        x = 1.0 / flat[sel]
+        pref = np.sqrt(x * (1.0 / (2.0 * math.pi)))
+        p0, p1 = np.full(x.shape, _H0[-1]), np.full(x.shape, _H01[-1])
         for k in range(_H0.size - 2, -1, -1):
-            p0 *= xb
+            p0 *= x
             p0 += _H0[k]
-            p1 *= xb
+            p1 *= x
             p1 += _H01[k]
-        i0 = np.where(big, pref * p0, i0)
-        d = np.where(big, pref * p1, d)
-    return i0, d
+        i0[sel], d[sel] = pref * p0, pref * p1
+    if nb < flat.size:
+        sel = slice(None) if nb == 0 else np.flatnonzero(~big)
+        hs = flat[sel]
+        with np.errstate(divide="ignore"):
+            lh = np.log(hs)
+        u = np.clip((lh - _LN_H0) * (1.0 / _DLH), 0.0, _BESSEL_PIECES.shape[2] - 1.0)
+        i = u.astype(np.intp)
+        x = lh - (_LN_H0 + _DLH * i)
+        a, b = (((c[0].take(i) * x + c[1].take(i)) * x + c[2].take(i)) * x + c[3].take(i)
+                for c in _BESSEL_PIECES)
+        tiny = hs < 1e-8
+        i0[sel] = np.where(tiny, 1.0 - hs, a)
+        d[sel] = np.where(tiny, 1.0 - 1.5 * hs, b)
+    return i0.reshape(h.shape), d.reshape(h.shape)
 
 
 def harmonic_terms(amplitude: Any, breakaway: Any, coulomb: Any, breakaway_velocity: Any,
