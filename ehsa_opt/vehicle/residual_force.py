@@ -131,9 +131,8 @@ class LagGrid:
 _CHUNK = 512
 #: The default grid (68 lags, 10 µs to 42 s).
 DEFAULT_LAGS = LagGrid()
-# W_k's slow poles (decay slower than 30/s: −11.6 ± 17.6j, −1.8 ± 1.8j), conjugate pairs
-# adjacent: the low-order part analytically there; at the fast ones (−444 ± 444j,
-# −62 ± 48j: gone within 0.1 s) the lag grid resolves everything
+
+
 def _law_terms(sigma: np.ndarray, fr: np.ndarray, r: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The rod friction at v = σX as A sgn X + V X + Σ_i S_i X e^{−a_i X²}.
@@ -182,7 +181,6 @@ def residual_autocovariance(rho: np.ndarray, sigma: np.ndarray, fr: np.ndarray,
     A, V, S, a = _law_terms(sigma, fr, r)
     rho = np.clip(rho, -1.0, 1.0)
     rho2 = rho * rho
-    one = 1.0 - rho2
     b = 1.0 + 2.0 * a
     strib = np.sum(S / (b * np.sqrt(b)), axis=1)          # E[Σ S_i X² e^{−a_i X²}]
     beta1 = A * _SQRT_2_PI + V + strib
@@ -199,18 +197,33 @@ def residual_autocovariance(rho: np.ndarray, sigma: np.ndarray, fr: np.ndarray,
             q0 = 1.0 + 2.0 * (a[:, i] + a[:, j])
             terms.append((np.abs(w) / q0 ** 1.5, w, q0, 4.0 * a[:, i] * a[:, j]))
     scale = A * A + V * V + sum(t[0] for t in terms)
-    inner = np.broadcast_to((lin - beta1 * beta1)[:, None], rho.shape).copy()
+    k0 = lin - beta1 * beta1                  # the ρ-independent part of R_r/ρ, per design
+    inner = None
+    tmp = np.empty(rho.shape)
     for size, coef, b0, b1 in terms:
         if np.all(size <= 1e-3 * scale):
             # dropped, but its ρ¹ part kept (it is in β_1²): R_r keeps no ρ¹ term
-            inner += (coef / np.sqrt(b0) if b1 is None else coef / (b0 + b1) ** 1.5)[:, None]
+            k0 = k0 + (coef / np.sqrt(b0) if b1 is None else coef / (b0 + b1) ** 1.5)
             continue
-        if b1 is None:      # c / √(b (1 − ρ²) + ρ²)
-            inner += coef[:, None] / np.sqrt(b0[:, None] * one + rho2)
-        else:               # w / q^{3/2}, q = q0 + 4 a_i a_j (1 − ρ²)
-            q = b0[:, None] + b1[:, None] * one
-            inner += coef[:, None] / (q * np.sqrt(q))
-    return (A * A * (2.0 / math.pi))[:, None] * np.arcsin(rho) + inner * rho
+        # c / √(b (1 − ρ²) + ρ²) = c / √(b − (b − 1) ρ²); w / q^{3/2}, q = q0 + 4 a_i a_j
+        # (1 − ρ²) = (q0 + 4 a_i a_j) − 4 a_i a_j ρ²
+        top, slope = (b0, b0 - 1.0) if b1 is None else (b0 + b1, b1)
+        np.multiply(slope[:, None], rho2, out=tmp)
+        np.subtract(top[:, None], tmp, out=tmp)
+        if b1 is None:
+            np.sqrt(tmp, out=tmp)
+        else:
+            np.multiply(tmp, np.sqrt(tmp), out=tmp)
+        np.divide(coef[:, None], tmp, out=tmp)
+        if inner is None:
+            inner, tmp = tmp, np.empty(rho.shape)
+        else:
+            inner += tmp
+    inner = k0[:, None] if inner is None else inner + k0[:, None]
+    out = np.arcsin(rho)
+    out *= (A * A * (2.0 / math.pi))[:, None]
+    out += inner * rho
+    return out
 
 
 def hermite_coefficients(sigma: np.ndarray, fr: np.ndarray, r: np.ndarray,
