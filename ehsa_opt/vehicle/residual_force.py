@@ -57,7 +57,7 @@ from functools import cached_property
 import numpy as np
 
 from .residues import (_WK_AT_POLES, _WK_DEN2, _WK_NUM2, _WK_POLES, QuarterCarPolynomials,
-                       _at_wk, _even_square, _peval, _pder, _pmul)
+                       _at_wk, _even_square, _peval, _pder, _pmul, _rsum)
 
 __all__ = ["residual_autocovariance", "residual_variances", "hermite_coefficients",
            "LagGrid", "DEFAULT_LAGS"]
@@ -411,7 +411,7 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
         return _peval(_even_square(num), u) * inv_q2
 
     a = kernel(n_road)                        # R_v(τ) = Σ_k a_k e^{λ_k τ} (τ ≥ 0), real
-    r0 = np.real(np.sum(a, axis=1))            # R_v(0): ρ = R_v/R_v(0)
+    r0 = np.real(_rsum(a))                     # R_v(0): ρ = R_v/R_v(0)
     alpha = a / np.where(r0 > 0.0, r0, 1.0)[:, None]
     # the modes: two conjugate pairs (the rule) or not (some overdamped)
     tol = 1e-9 * np.abs(lam[:, 1])
@@ -427,11 +427,11 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
             L[sel], L_w[sel] = _closure_transforms(alpha[sel], lam[sel], cols, weight,
                                                    sigma_v[sel], fr[sel], r[sel], lags)
     out = {"var_v": kernel(n_v), "var_tyre": kernel(n_x1), "var_i": kernel(n_i)}
-    out = {k: 2.0 * np.real(np.sum(h * L, axis=1)) for k, h in out.items()}
+    out = {k: 2.0 * np.real(_rsum(h * L)) for k, h in out.items()}
     # comfort: (W_k ẍ2)(s) = N_a(s) Wn(s) / (Q(s) Wd(s)): poles of Q and of W_k
     h_q = kernel(n_a) * (_peval(_WK_NUM2, u) / _peval(_WK_DEN2, u))
     h_w = _at_wk(n_a) * _at_wk(n_a, -1.0) / (_at_wk(qc) * _at_wk(qc, -1.0)) * _WK_AT_POLES
-    out["var_acc_w"] = 2.0 * np.real(np.sum(h_q * L, axis=1) + np.sum(h_w * L_w, axis=1))
-    out["p_residual"] = np.real(np.sum(_peval(n_v, lam) * inv_dq * L, axis=1))
+    out["var_acc_w"] = 2.0 * np.real(_rsum(h_q * L) + _rsum(h_w * L_w))
+    out["p_residual"] = np.real(_rsum(_peval(n_v, lam) * inv_dq * L))
     return out
 

@@ -66,6 +66,24 @@ _WK_VANDER_NEG = (-_WK_POLES[None, :]) ** np.arange(16)[:, None]
 _NEWTON_TOL = 1e-9
 
 
+def _rsum(a: np.ndarray) -> np.ndarray:
+    """Sum over a short last axis (poles: 5 or 8).  Adding the columns is several times
+    faster than numpy's reduction along so short an axis (measured: 20 µs against 100 µs
+    on 4000 × 5)."""
+    out = a[..., 0] + a[..., 1]
+    for j in range(2, a.shape[-1]):
+        out += a[..., j]
+    return out
+
+
+def _rmax(a: np.ndarray) -> np.ndarray:
+    """Maximum over a short last axis (see :func:`_rsum`)."""
+    out = np.maximum(a[..., 0], a[..., 1])
+    for j in range(2, a.shape[-1]):
+        np.maximum(out, a[..., j], out=out)
+    return out
+
+
 def _pmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Product of batched polynomials (ascending coefficients on the last axis)."""
     out = np.zeros(np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
@@ -150,7 +168,7 @@ def _band_weights(lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
 
 def _band_integral(res_h: np.ndarray, lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
     """Σ_k r_k H(−λ_k) · 2 [atan(ωb/μ_k) − atan(ωa/μ_k)]: ∫ |H(jω)|² dω."""
-    return np.real(np.sum(res_h * _band_weights(lam, wa, wb), axis=-1))
+    return np.real(_rsum(res_h * _band_weights(lam, wa, wb)))
 
 
 def _ferrari_roots(qc: np.ndarray, guess: np.ndarray) -> np.ndarray:
@@ -313,7 +331,7 @@ class QuarterCarPolynomials:
                 corr = p / dp
                 lam -= corr
                 step = np.abs(corr) / np.maximum(np.abs(lam), 1e-300)
-                moving = np.max(step, axis=1) > _NEWTON_TOL
+                moving = _rmax(step) > _NEWTON_TOL
             else:
                 z = lam[todo]
                 p, dp = _peval_d(qc[todo], z)
@@ -321,16 +339,16 @@ class QuarterCarPolynomials:
                 lam[todo] = z - corr
                 step[todo] = np.abs(corr) / np.maximum(np.abs(lam[todo]), 1e-300)
                 moving = np.zeros(lam.shape[0], dtype=bool)
-                moving[todo] = np.max(step[todo], axis=1) > _NEWTON_TOL
+                moving[todo] = _rmax(step[todo]) > _NEWTON_TOL
             if not np.any(moving):
                 break
             todo = np.flatnonzero(moving)
         lead = qc[:, 5]
-        s_ok = (np.abs(np.sum(lam, axis=1) + qc[:, 4] / lead)
-                <= 1e-9 * np.sum(np.abs(lam), axis=1))
+        s_ok = np.abs(_rsum(lam) + qc[:, 4] / lead) <= 1e-9 * _rsum(np.abs(lam))
         with np.errstate(divide="ignore", invalid="ignore"):
-            p_ok = np.abs(np.prod(lam, axis=1) * lead / -qc[:, 0] - 1.0) <= 1e-9
-        return lam, np.all(step <= _NEWTON_TOL, axis=1) & s_ok & p_ok
+            prod = lam[:, 0] * lam[:, 1] * lam[:, 2] * lam[:, 3] * lam[:, 4]
+            p_ok = np.abs(prod * lead / -qc[:, 0] - 1.0) <= 1e-9
+        return lam, (_rmax(step) <= _NEWTON_TOL) & s_ok & p_ok
 
     def follow(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray,
                c_old: np.ndarray) -> np.ndarray:
@@ -357,8 +375,8 @@ class QuarterCarPolynomials:
             gaps.append(np.min(diff / np.maximum(mag[:, :, None], np.abs(other)[:, None, :]),
                                axis=(1, 2)))
         absq = _peval(np.abs(qc), mag).real
-        resid = np.max(np.abs(_peval(qc, lam)) / absq, axis=1)
-        return (np.minimum(*gaps) > 1e-7) & (resid < 1e-9) & np.all(lam.real < 0.0, axis=1)
+        resid = _rmax(np.abs(_peval(qc, lam)) / absq)
+        return (np.minimum(*gaps) > 1e-7) & (resid < 1e-9) & (_rmax(lam.real) < 0.0)
 
     # ------------------------------------------------------------------ variances
     def var_v(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray) -> np.ndarray:
@@ -399,7 +417,7 @@ class QuarterCarPolynomials:
                                                                  * _peval(qc, -lam))
 
         def var(num: np.ndarray) -> np.ndarray:
-            return np.real(np.sum(_peval(_even_square(num), u) * w, axis=1))
+            return np.real(_rsum(_peval(_even_square(num), u) * w))
 
         out = {"var_v": var(k1 * m2 * _pmul(rl, s2))}
         var_i = var(self.cur_gain[rows, None] * s2)
@@ -414,7 +432,7 @@ class QuarterCarPolynomials:
         hp = _peval(_even_square(na), u) * (_peval(_WK_NUM2, u) / _peval(_WK_DEN2, u))
         hw = (_at_wk(na) * _at_wk(na, -1.0) / (_at_wk(qc) * _at_wk(qc, -1.0))
               * _WK_AT_POLES)
-        out["var_acc_w"] = (np.real(np.sum(hp * w, axis=1))
+        out["var_acc_w"] = (np.real(_rsum(hp * w))
                             + self.scale * np.real(hw @ _band_weights(_WK_POLES, self.wa,
                                                                       self.wb)))
         return out
