@@ -494,15 +494,17 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
                                ROAD_BAND_CYCLES_PER_M[1] * v, road_velocity_psd(road))
     n = qp.n
     every = np.arange(n)
-    lam = qp.roots(qp.q0)           # frictionless poles; tracked as c_f changes
+    # frictionless poles, tracked as c_f changes, and Q'(λ) there, carried along
+    lam, dq = qp.roots(qp.q0, return_dq=True)
     c_lam = np.zeros(n)             # the damping of the poles in lam
-    sigma0 = np.sqrt(np.maximum(qp.var_v(c_lam, every, lam), 0.0))
+    sigma0 = np.sqrt(np.maximum(qp.var_v(c_lam, every, lam, dq), 0.0))
 
     def sigma_v_of(c: np.ndarray, rows: np.ndarray) -> np.ndarray:
         c = np.asarray(c, dtype=float)
-        lam[rows] = qp.follow(c, rows, lam[rows], c_lam[rows])
+        lam[rows], dq[rows] = qp.follow(c, rows, lam[rows], c_lam[rows], dq[rows],
+                                        return_dq=True)
         c_lam[rows] = c
-        return np.sqrt(np.maximum(qp.var_v(c, rows, lam[rows]), 0.0))
+        return np.sqrt(np.maximum(qp.var_v(c, rows, lam[rows], dq[rows]), 0.0))
 
     laws = _LawTerms(fr, r)
 
@@ -524,7 +526,7 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
             terms = amplitude_terms(np.minimum(sc, s0), fr[act], r[act])
             cf[act] = _energy_envelope(s0, sc, c, fr[act], r[act], terms, sigma_v_of, act,
                                        averaging_iter, rtol)
-    lam[:] = qp.follow(cf, every, lam, c_lam)
+    lam[:] = qp.follow(cf, every, lam, c_lam, dq)
     ok = qp.check(qp.q(cf, every), lam)
     var = qp.variances(cf, every, lam)
     p_res = np.zeros(n)

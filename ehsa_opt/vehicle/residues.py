@@ -280,8 +280,10 @@ class QuarterCarPolynomials:
         """Coefficients of Q for damping ``c`` (N s/m) on ``rows``, (m, 6)."""
         return self.q0[rows] + c[:, None] * self.q1[rows]
 
-    def roots(self, qc: np.ndarray) -> np.ndarray:
-        """The five roots of Q (m, 6), polished by Newton steps.
+    def roots(self, qc: np.ndarray, return_dq: bool = False
+              ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+        """The five roots of Q (m, 6), polished by Newton steps (and Q' there, with
+        ``return_dq``).
 
         The electrical root is far out (near −R/L): found by real Newton steps from
         −R/L and deflated; the remaining quartic (body and wheel modes) is solved in
@@ -291,15 +293,17 @@ class QuarterCarPolynomials:
         """
         m = qc.shape[0]
         lam = np.empty((m, 5), dtype=complex)
+        dq = np.empty((m, 5), dtype=complex)
         ok = np.zeros(m, dtype=bool)
         if m:
             # the roots' sum −q4/q5 is about the electrical root (the modes' real
             # parts are small beside it)
-            lam, ok = self.track(qc, _ferrari_roots(qc, -qc[:, 4] / qc[:, 5]), steps=4)
+            lam, ok, dq = self.track(qc, _ferrari_roots(qc, -qc[:, 4] / qc[:, 5]), steps=4)
         bad = np.flatnonzero(~ok)
         if bad.size:
             lam[bad] = self._eig_roots(qc[bad])
-        return lam
+            dq[bad] = _peval_d(qc[bad], lam[bad])[1]
+        return (lam, dq) if return_dq else lam
 
     def _eig_roots(self, qc: np.ndarray) -> np.ndarray:
         m = qc.shape[0]
@@ -310,31 +314,34 @@ class QuarterCarPolynomials:
         comp[:, 1:, :4] = np.eye(4)
         comp[:, :, 4] = -a
         lam = np.linalg.eigvals(comp).astype(complex) * self.w0
-        new, done = self.track(qc, lam, steps=1)
+        new, done, _ = self.track(qc, lam, steps=1)
         return np.where(done[:, None], new, lam)
 
     @staticmethod
     def track(qc: np.ndarray, lam: np.ndarray, steps: int = 8
-              ) -> tuple[np.ndarray, np.ndarray]:
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Newton steps on each root of Q (m, 6) from ``lam`` (m, 5).
 
-        Returns the roots and whether each row converged to five distinct roots
-        (last step < ``_NEWTON_TOL`` relative, and the roots' sum and product equal −q4/q5 and
-        −q0/q5 (Vieta) to 1e-9, so no root was lost to a neighbour's basin).
+        Returns the roots, whether each row converged to five distinct roots (last step
+        < ``_NEWTON_TOL`` relative, and the roots' sum and product equal −q4/q5 and
+        −q0/q5 (Vieta) to 1e-9, so no root was lost to a neighbour's basin), and Q'
+        at the roots (from the last step: relative error about that step's size).
         """
         lam = lam.copy()
         step = np.zeros(lam.shape)
+        dq = np.empty(lam.shape, dtype=complex)
         todo = None                     # all rows, then only those still moving
         for _ in range(steps):
             if todo is None:
-                p, dp = _peval_d(qc, lam)
-                corr = p / dp
+                p, dq = _peval_d(qc, lam)
+                corr = p / dq
                 lam -= corr
                 step = np.abs(corr) / np.maximum(np.abs(lam), 1e-300)
                 moving = _rmax(step) > _NEWTON_TOL
             else:
                 z = lam[todo]
                 p, dp = _peval_d(qc[todo], z)
+                dq[todo] = dp
                 corr = p / dp
                 lam[todo] = z - corr
                 step[todo] = np.abs(corr) / np.maximum(np.abs(lam[todo]), 1e-300)
@@ -348,21 +355,27 @@ class QuarterCarPolynomials:
         with np.errstate(divide="ignore", invalid="ignore"):
             prod = lam[:, 0] * lam[:, 1] * lam[:, 2] * lam[:, 3] * lam[:, 4]
             p_ok = np.abs(prod * lead / -qc[:, 0] - 1.0) <= 1e-9
-        return lam, (_rmax(step) <= _NEWTON_TOL) & s_ok & p_ok
+        return lam, (_rmax(step) <= _NEWTON_TOL) & s_ok & p_ok, dq
 
     def follow(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray,
-               c_old: np.ndarray) -> np.ndarray:
+               c_old: np.ndarray, dq_old: np.ndarray | None = None,
+               return_dq: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """Poles for damping ``c`` on ``rows`` tracked from the poles ``lam`` of damping
         ``c_old``: first-order prediction dλ/dc = −∂Q/∂c / Q'(λ), then Newton steps
-        (:meth:`roots` afresh where tracking does not converge)."""
+        (:meth:`roots` afresh where tracking does not converge).
+
+        ``dq_old``: Q'(λ) at the old poles if known (as returned with ``return_dq``,
+        which also returns Q' at the new poles, to the last Newton step's accuracy)."""
         qc = self.q(c, rows)
-        dq_old = _peval_d(self.q(c_old, rows), lam)[1]
+        if dq_old is None:
+            dq_old = _peval_d(self.q(c_old, rows), lam)[1]
         lam = lam - (c - c_old)[:, None] * (_peval(self.q1[rows, :5], lam) / dq_old)
-        new, done = self.track(qc, lam, steps=8)
+        new, done, dq = self.track(qc, lam, steps=8)
         if not np.all(done):
             bad = np.flatnonzero(~done)
             new[bad] = self.roots(qc[bad])
-        return new
+            dq[bad] = _peval_d(qc[bad], new[bad])[1]
+        return (new, dq) if return_dq else new
 
     def check(self, qc: np.ndarray, lam: np.ndarray) -> np.ndarray:
         """Rows whose poles are simple, stable and accurate (the residue formula holds)."""
@@ -379,8 +392,10 @@ class QuarterCarPolynomials:
         return (np.minimum(*gaps) > 1e-7) & (resid < 1e-9) & (_rmax(lam.real) < 0.0)
 
     # ------------------------------------------------------------------ variances
-    def var_v(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray) -> np.ndarray:
-        """Stroke-velocity variance σ_v² ((m/s)²) for damping c on ``rows`` with poles lam."""
+    def var_v(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray,
+              dq: np.ndarray | None = None) -> np.ndarray:
+        """Stroke-velocity variance σ_v² ((m/s)²) for damping c on ``rows`` with poles lam
+        (``dq``: Q'(λ) if known)."""
         qc = self.q(c, rows)
         # N_v(λ) N_v(−λ) = (k1 m2)² λ⁴ (R² − L² λ²); Q'(λ) by Horner; Q(−λ) = −2 Q_odd(λ)
         # (Q(λ) = 0: Q_even(λ) = −Q_odd(λ)), three coefficients in λ²
@@ -388,7 +403,9 @@ class QuarterCarPolynomials:
         rr, ll = self.rl[rows, :1], self.rl[rows, 1:]
         nn = (self.k1 * self.m2) ** 2 * (l2 * l2) * (rr * rr - (ll * ll) * l2)
         q_odd = lam * (qc[:, 1:2] + l2 * (qc[:, 3:4] + l2 * qc[:, 5:6]))
-        h = nn / (_peval(_pder(qc), lam) * (-2.0 * q_odd))
+        if dq is None:
+            dq = _peval(_pder(qc), lam)
+        h = nn / (dq * (-2.0 * q_odd))
         return self.scale * _band_integral(h, lam, self.wa, self.wb)
 
     def _var(self, num: np.ndarray, qc: np.ndarray, lam: np.ndarray) -> np.ndarray:
