@@ -14,7 +14,9 @@ from ehsa_opt.vehicle.equivalent import friction_array, friction_metrics
 from ehsa_opt.vehicle.fast_path_check import scaled_friction
 from ehsa_opt.vehicle.iso2631 import wk_abs2
 from ehsa_opt.vehicle.metrics import design_arrays
-from ehsa_opt.vehicle.residual_force import residual_autocovariance
+from ehsa_opt.vehicle import equivalent as equivalent_module
+from ehsa_opt.vehicle.residual_force import (LagGrid, _power_laplace, hermite_coefficients,
+                                             residual_autocovariance, residual_variances)
 from ehsa_opt.vehicle.road import ROAD_BAND_CYCLES_PER_M
 
 VEHICLE = VehicleParams()
@@ -128,3 +130,68 @@ def test_residual_keeps_the_dissipation_and_lowers_the_friction_power():
     assert np.all(with_r["friction_power_W"] < without["friction_power_W"])
     for key in ("comfort", "road_holding", "power_W", "stroke_velocity_rms_m_s"):
         assert np.all(with_r[key] > without[key]), key
+
+
+@pytest.mark.parametrize("scale, sigma", [(2.0, 0.02), (2.0, 0.1), (0.5, 0.003)])
+def test_hermite_coefficients_are_the_small_rho_expansion(scale, sigma):
+    # R_r(ρ) = c₃ρ³ + c₅ρ⁵ + O(ρ⁷): no ρ¹ term (r is uncorrelated with v), even where a
+    # negligible Stribeck product is dropped from the closed form (σ = 3 mm/s)
+    fr = friction_array([scaled_friction(load_truth(embedded_data_dir("bench_prototype"))
+                                         ["friction"], scale)])
+    s, r = np.array([sigma]), np.array([LEAD])
+    c3, c5 = hermite_coefficients(s, fr, r)[0]
+    rho = np.array([[1e-3, 0.02, 0.05]])
+    got = residual_autocovariance(rho, s, fr, r)[0]
+    assert got[0] == pytest.approx(c3 * 1e-9, rel=0.01)     # no ρ¹ term at ρ = 0.001
+    np.testing.assert_allclose(got, c3 * rho[0] ** 3 + c5 * rho[0] ** 5, rtol=3e-3)
+
+
+def test_power_laplace_matches_quadrature():
+    # ∫₀^∞ (c₃ρ̃³ + c₅ρ̃⁵) e^{μτ} dτ in closed form against scipy's quad, ρ̃ a sum of two
+    # damped oscillations (conjugate pairs, real ρ̃), μ one of the poles
+    from scipy import integrate
+    lam = np.array([[-0.6 + 25.0j, -0.6 - 25.0j, -1.6 + 3.8j, -1.6 - 3.8j]])
+    alpha = np.array([[0.2 - 0.1j, 0.2 + 0.1j, 0.3 + 0.05j, 0.3 - 0.05j]])
+    coef = np.array([[7.0, 3.0]])
+    mu = lam[:, [0, 2]]
+    got = _power_laplace(alpha, lam, coef, mu)[0]
+
+    def rho(t):
+        return float(np.real(np.sum(alpha[0] * np.exp(lam[0] * t))))
+    for k, m in enumerate(mu[0]):
+        def f(t, part):
+            p = 7.0 * rho(t) ** 3 + 3.0 * rho(t) ** 5
+            z = p * np.exp(m * t)
+            return z.real if part == 0 else z.imag
+        want = [integrate.quad(f, 0.0, 40.0, args=(part,), limit=4000, epsabs=1e-12)[0]
+                for part in (0, 1)]
+        assert got[k] == pytest.approx(complex(*want), rel=1e-7, abs=1e-10)
+
+
+def test_lag_grid_exponentials_and_validation():
+    grid = LagGrid()
+    lam = np.array([[-1.0 + 25.0j, -3.0 + 5.0j], [-0.5 + 60.0j, -100.0 + 1.0j]])
+    want = np.exp(grid.tau_s[:, None, None] * lam[None])
+    np.testing.assert_allclose(grid.exponentials(lam), want, rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="sub >= 1"):
+        LagGrid(sub=0)
+
+
+def test_lightly_damped_design_is_resolved(monkeypatch):
+    # heavy inertia, weak electrical damping, friction × 2 on a smooth slow road: the
+    # strut nearly locks and the whole car bounces on the tyre at 4 Hz with ζ ≈ 0.02 —
+    # the residual's autocovariance oscillates for seconds.  Integrating R_r itself on
+    # the geometric lags aliased this (power −1.5 %, comfort −0.9 % against a converged
+    # grid); with c₃ρ̃³ + c₅ρ̃⁵ exact, the default lags agree with 1440 lags to 0.4 %
+    design = {"total_inertia_gcm2": np.array([8450.0]), "lead_mm_per_rev": np.array([6.14]),
+              "speed_constant_rpm_per_V": np.array([42.2]), "load_ohm": np.array([1350.0])}
+    road = RoadParams("B", 30.0)
+    lin = friction_metrics(VEHICLE, road, design, FRICTION_X2, residual=False)
+    got = friction_metrics(VEHICLE, road, design, FRICTION_X2)
+    fine = LagGrid(t0_s=1e-7, octaves=30, sub=48)
+    monkeypatch.setattr(equivalent_module, "residual_variances",
+                        lambda *a: residual_variances(*a, lags=fine))
+    ref = friction_metrics(VEHICLE, road, design, FRICTION_X2)
+    assert ref["power_W"][0] / lin["power_W"][0] > 1.02       # the residual matters here
+    for key in ("comfort", "road_holding", "power_W", "stroke_velocity_rms_m_s"):
+        assert got[key][0] == pytest.approx(ref[key][0], rel=4e-3), key
