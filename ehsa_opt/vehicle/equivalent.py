@@ -526,7 +526,14 @@ def _exact_pass(vehicle: VehicleParams, road: RoadParams, d: Mapping[str, np.nda
             terms = amplitude_terms(np.minimum(sc, s0), fr[act], r[act])
             cf[act] = _energy_envelope(s0, sc, c, fr[act], r[act], terms, sigma_v_of, act,
                                        averaging_iter, rtol)
-    lam[:] = qp.follow(cf, every, lam, c_lam, dq)
+    # metrics at the damping the tracked poles belong to where that is within the
+    # correction's own stopping tolerance of c_f (its last step moved c_f by less):
+    # c_f is then that damping, consistent with the poles; the others are tracked to c_f
+    near = np.abs(cf - c_lam) <= 10.0 * rtol * np.abs(cf)
+    cf = np.where(near, c_lam, cf)
+    far = np.flatnonzero(~near)
+    if far.size:
+        lam[far] = qp.follow(cf[far], far, lam[far], c_lam[far], dq[far])
     ok = qp.check(qp.q(cf, every), lam)
     var = qp.variances(cf, every, lam)
     p_res = np.zeros(n)
