@@ -64,6 +64,7 @@ _WK_VANDER_NEG = (-_WK_POLES[None, :]) ** np.arange(16)[:, None]
 # about C s² (C = |Q''/2Q'| |λ|, moderate for the simple, separated poles ``check``
 # accepts), so a last step below 1e-9 leaves ~1e-18 and the confirming step is skipped
 _NEWTON_TOL = 1e-9
+_PAIRS = np.triu_indices(5, 1)     # the ten pairs of the five poles
 
 
 def _rsum(a: np.ndarray) -> np.ndarray:
@@ -380,13 +381,11 @@ class QuarterCarPolynomials:
     def check(self, qc: np.ndarray, lam: np.ndarray) -> np.ndarray:
         """Rows whose poles are simple, stable and accurate (the residue formula holds)."""
         mag = np.abs(lam)
-        gaps = []
-        for other in (lam, np.broadcast_to(_WK_POLES, (lam.shape[0], _WK_POLES.size))):
-            diff = np.abs(lam[:, :, None] - other[:, None, :])
-            if other is lam:
-                diff[:, np.eye(lam.shape[1], dtype=bool)] = np.inf
-            gaps.append(np.min(diff / np.maximum(mag[:, :, None], np.abs(other)[:, None, :]),
-                               axis=(1, 2)))
+        i, j = _PAIRS
+        own = np.abs(lam[:, i] - lam[:, j]) / np.maximum(mag[:, i], mag[:, j])   # (m, 10)
+        wk = (np.abs(lam[:, :, None] - _WK_POLES) / np.maximum(mag[:, :, None],
+                                                               np.abs(_WK_POLES)))
+        gaps = (np.min(own, axis=1), np.min(wk.reshape(lam.shape[0], -1), axis=1))
         absq = _peval(np.abs(qc), mag).real
         resid = _rmax(np.abs(_peval(qc, lam)) / absq)
         return (np.minimum(*gaps) > 1e-7) & (resid < 1e-9) & (_rmax(lam.real) < 0.0)
