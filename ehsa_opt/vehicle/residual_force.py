@@ -271,8 +271,23 @@ def _multisets(k: int, n: int) -> tuple[np.ndarray, np.ndarray]:
 _ORDERS = (3, 5)
 _COUNTS = np.concatenate([_multisets(4, n)[0] for n in _ORDERS])          # (m, 4)
 _WEIGHTS = [_multisets(4, n)[1] for n in _ORDERS]
-_ORDER_OF = np.concatenate([np.full(w.size, i) for i, w in enumerate(_WEIGHTS)])
-_WEIGHTS = np.concatenate(_WEIGHTS)
+
+
+def _monomial_tree(k: int, n: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """For degrees 2 … n, (parent, pole) index pairs building the degree-d monomials
+    Π α^m (multisets in ``itertools.combinations_with_replacement`` order) from the
+    degree-(d−1) ones: mono_d = mono_{d−1}[:, parent] · α[:, pole]."""
+    import itertools
+    out, prev = [], list(itertools.combinations_with_replacement(range(k), 1))
+    for d in range(2, n + 1):
+        cur = list(itertools.combinations_with_replacement(range(k), d))
+        where = {t: i for i, t in enumerate(prev)}
+        out.append((np.array([where[t[:-1]] for t in cur]), np.array([t[-1] for t in cur])))
+        prev = cur
+    return out
+
+
+_TREE = _monomial_tree(4, _ORDERS[-1])
 
 
 def _power_laplace(alpha: np.ndarray, lam: np.ndarray, coef: np.ndarray,
@@ -282,12 +297,13 @@ def _power_laplace(alpha: np.ndarray, lam: np.ndarray, coef: np.ndarray,
 
     alpha, lam : (n, 4); coef : (n, len(_ORDERS)); targets : (n, T).  Returns (n, T)."""
     den = lam @ _COUNTS.T.astype(complex)                                   # m·λ, (n, m)
-    pw = np.ones(alpha.shape + (_ORDERS[-1] + 1,), dtype=complex)           # α_k^e
-    for e in range(1, _ORDERS[-1] + 1):
-        pw[:, :, e] = pw[:, :, e - 1] * alpha
-    num = -_WEIGHTS * coef[:, _ORDER_OF] * pw[:, 0, _COUNTS[:, 0]]
-    for k in range(1, 4):
-        num *= pw[:, k, _COUNTS[:, k]]
+    mono, num = alpha, []
+    for d, (parent, pole) in enumerate(_TREE, start=2):                     # Π α^m
+        mono = mono[:, parent] * alpha[:, pole]
+        if d in _ORDERS:
+            i = _ORDERS.index(d)
+            num.append(mono * (-coef[:, i:i + 1] * _WEIGHTS[i]))
+    num = np.concatenate(num, axis=1)
     out = np.empty(targets.shape, dtype=complex)
     for t in range(targets.shape[1]):
         out[:, t] = np.sum(num / (den + targets[:, t:t + 1]), axis=1)
