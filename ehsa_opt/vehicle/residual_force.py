@@ -85,7 +85,7 @@ class LagGrid:
 
     t0_s: float = 1e-5
     octaves: int = 22
-    sub: int = 3
+    sub: int = 2
 
     def __post_init__(self) -> None:
         if not (self.t0_s > 0.0 and self.octaves >= 1 and self.sub >= 1):
@@ -129,7 +129,7 @@ class LagGrid:
 
 #: Rows per block of the closure's (lags × rows) arrays: a block stays in a core's cache.
 _CHUNK = 512
-#: The default grid (68 lags, 10 µs to 42 s).
+#: The default grid (46 lags, 10 µs to 42 s).
 DEFAULT_LAGS = LagGrid()
 
 
@@ -396,7 +396,7 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     fr : ndarray (n, 8)
         Friction sets.
     lags : LagGrid
-        Where the closure's remainder O(ρ⁷) is integrated (default: 68 lags).
+        Where the closure's remainder O(ρ⁷) is integrated (default: 46 lags).
 
     Returns
     -------
