@@ -185,25 +185,20 @@ def residual_autocovariance(rho: np.ndarray, sigma: np.ndarray, fr: np.ndarray,
     strib = np.sum(S / (b * np.sqrt(b)), axis=1)          # E[Σ S_i X² e^{−a_i X²}]
     beta1 = A * _SQRT_2_PI + V + strib
     lin = 2.0 * A * V * _SQRT_2_PI + V * V + 2.0 * V * strib
-    # the Stribeck terms with their largest value (at ρ = 1); a term below 1e-3 of the
-    # Coulomb part's for every design is dropped (e.g. the bearing's narrow hump squared)
+    # the Stribeck terms (a term is left out only where it is zero for every design — no
+    # Stribeck hump — so each design's value does not depend on the others in the batch)
     terms = []
     for i in range(2):     # Coulomb × Stribeck_i, both orders
-        c = 2.0 * S[:, i] * A * _SQRT_2_PI / b[:, i]
-        terms.append((np.abs(c), c, b[:, i], None))
+        terms.append((2.0 * S[:, i] * A * _SQRT_2_PI / b[:, i], b[:, i], None))
     for i in range(2):     # Stribeck_i × Stribeck_j
         for j in range(i, 2):
-            w = (1.0 if i == j else 2.0) * S[:, i] * S[:, j]
-            q0 = 1.0 + 2.0 * (a[:, i] + a[:, j])
-            terms.append((np.abs(w) / q0 ** 1.5, w, q0, 4.0 * a[:, i] * a[:, j]))
-    scale = A * A + V * V + sum(t[0] for t in terms)
+            terms.append(((1.0 if i == j else 2.0) * S[:, i] * S[:, j],
+                          1.0 + 2.0 * (a[:, i] + a[:, j]), 4.0 * a[:, i] * a[:, j]))
     k0 = lin - beta1 * beta1                  # the ρ-independent part of R_r/ρ, per design
     inner = None
     tmp = np.empty(rho.shape)
-    for size, coef, b0, b1 in terms:
-        if np.all(size <= 1e-3 * scale):
-            # dropped, but its ρ¹ part kept (it is in β_1²): R_r keeps no ρ¹ term
-            k0 = k0 + (coef / np.sqrt(b0) if b1 is None else coef / (b0 + b1) ** 1.5)
+    for coef, b0, b1 in terms:
+        if not np.any(coef):
             continue
         # c / √(b (1 − ρ²) + ρ²) = c / √(b − (b − 1) ρ²); w / q^{3/2}, q = q0 + 4 a_i a_j
         # (1 − ρ²) = (q0 + 4 a_i a_j) − 4 a_i a_j ρ²
