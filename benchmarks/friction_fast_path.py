@@ -21,8 +21,11 @@ Prints the error table (worst and median |relative error| of power, efficiency,
 comfort, road holding), the worst cases, errors by speed and friction level,
 and designs per second of both paths (time domain: the batched compiled
 simulation on 400 m versions of the held-out roads — the shortest record ever used,
-so the ratio is not inflated by the longer validation roads; fast path: the same
-pairs in one vectorised call, and a 4000-design population).
+so the ratio is not inflated by the longer validation roads — on its default two
+threads, and per core on one; fast path, always one thread: the same pairs in one
+vectorised call, and a 4000-design population).  A shared machine's speed drifts by
+tens of % within a minute: both paths are timed in alternating rounds
+(``--speed-rounds``), each ratio within its round, and the median quoted.
 
 Run from the repository root:  python benchmarks/friction_fast_path.py [--quick]
 """
@@ -235,12 +238,16 @@ def main() -> None:
                             residual=not args.no_residual) for c in held]
         n_pairs = sum(r["n_pairs"] for r in short)
         rate_time = n_pairs / sum(r["time_wall_s"] for r in short)
+        # per core: the time domain on one thread (the fast path always runs on one)
+        rate_time_1 = n_pairs / sum(
+            check_case(vehicle, RoadCase(c.iso_class, c.speed_km_per_h, c.seed, 400.0),
+                       list(hs.values()), frictions, threads=1)["time_wall_s"] for c in held)
         rate_pairs = n_pairs / sum(r["fast_wall_median_s"] for r in short)
         rate_pop = 4000 / population_s(residual=not args.no_residual,
                                        non_gaussian=not args.gaussian)
         rate_lin = 4000 / population_s(residual=False, non_gaussian=True)
-        rounds.append((rate_time, rate_pairs, rate_pop, rate_lin))
-    rt, rp, rpop, rlin = (np.array(x) for x in zip(*rounds))
+        rounds.append((rate_time, rate_pairs, rate_pop, rate_lin, rate_time_1))
+    rt, rp, rpop, rlin, rt1 = (np.array(x) for x in zip(*rounds))
     # the validation roads (>= 60 s each): what a reference within ~1 % costs
     rate_long = sum(r["n_pairs"] for r in raw[len(dev):]) / sum(
         r["time_wall_s"] for r in raw[len(dev):])
@@ -260,6 +267,9 @@ def main() -> None:
     print(line("fast path, validation pairs (median of 7):", rp))
     print(line("fast path, 4000-design population (max fr.):", rpop))
     print(line("... averaged c_f, no residual force:", rlin))
+    ratio1 = rpop / rt1
+    print(f"  per core (the time domain on one thread too: {np.median(rt1):.2f} /s): population "
+          f"{np.median(ratio1):.0f} x [{ratio1.min():.0f}-{ratio1.max():.0f}]")
 
 
 if __name__ == "__main__":

@@ -71,8 +71,8 @@ def scaled_friction(friction: FrictionParams | Mapping[str, float], scale: float
 
 def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[HarvesterParams],
                frictions: Sequence[FrictionParams], *, n_freq: int = 256,
-               fast_repeats: int = 1, non_gaussian: bool = True, residual: bool = True
-               ) -> dict[str, np.ndarray | float]:
+               fast_repeats: int = 1, non_gaussian: bool = True, residual: bool = True,
+               threads: int | None = None) -> dict[str, np.ndarray | float]:
     """Fast path vs time domain for every (harvester, friction) pair on one road.
 
     Parameters
@@ -88,6 +88,9 @@ def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[Harv
     residual : bool
         Passed to :func:`~ehsa_opt.vehicle.equivalent.friction_metrics` (False:
         without the friction's non-linear residual force).
+    threads : int, optional
+        Threads of the time-domain simulation (default: two on a machine with two or
+        more CPUs; the fast path runs on one).
 
     Returns
     -------
@@ -105,7 +108,7 @@ def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[Harv
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RoadHoldingWarning)
-        sim = simulate_quarter_car(vehicle, hs, fs, road, keep_series=False)
+        sim = simulate_quarter_car(vehicle, hs, fs, road, keep_series=False, threads=threads)
     t_time = time.perf_counter() - t0
     fields = ("motor_inertia_gcm2", "screw_inertia_gcm2", "lead_mm_per_rev",
               "internal_resistance_ohm", "voltage_constant_Vs_per_rad",
