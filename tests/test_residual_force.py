@@ -159,7 +159,7 @@ def test_power_laplace_matches_quadrature():
     def rho(t):
         return float(np.real(np.sum(alpha[0] * np.exp(lam[0] * t))))
     for k, m in enumerate(mu[0]):
-        def f(t, part):
+        def f(t, part, m=m):
             p = 7.0 * rho(t) ** 3 + 3.0 * rho(t) ** 5
             z = p * np.exp(m * t)
             return z.real if part == 0 else z.imag
