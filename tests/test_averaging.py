@@ -130,3 +130,21 @@ def test_averaged_fixed_point_holds_on_the_linear_path():
     again = averaged_damping(s0, sc, cf, np.broadcast_to(fr, (3, 8)), r)
     np.testing.assert_allclose(again, cf, rtol=2e-3)
     assert np.all(fast["dissipated_power_W"] > fast["friction_power_W"])
+
+
+def test_tabulated_cycle_averages_match_scipy_and_their_limits():
+    # the Bessel terms of the Stribeck hump from cubic tables in ln h (series beyond 200):
+    # against scipy's i0e/i1e; 0, ∞ and NaN arguments give their limits / NaN, no error
+    from scipy.special import i0e, i1e
+
+    from ehsa_opt.vehicle.averaging import _bessel_terms, _t_l
+    h = np.concatenate([[0.0, 1e-12, 1e-8, 199.99, 200.0, 1e4],
+                        np.exp(np.random.default_rng(3).uniform(-20.0, 8.0, 2000))])
+    i0, d = _bessel_terms(h)
+    np.testing.assert_allclose(i0, i0e(h), rtol=1e-9)
+    np.testing.assert_allclose(d, i0e(h) - i1e(h), rtol=1e-8)
+    i0, d = _bessel_terms(np.array([np.nan, np.inf]))
+    assert np.isnan(i0[0]) and np.isnan(d[0]) and i0[1] == 0.0 and d[1] == 0.0
+    t, l_ = _t_l(np.array([np.nan, 0.0, np.inf]))
+    assert np.isnan(t[0]) and np.isnan(l_[0])
+    assert t[1] == 0.0 and l_[1] == 0.0 and t[2] == pytest.approx(2.0 / np.pi)

@@ -98,7 +98,7 @@ def _t_l(rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         with np.errstate(divide="ignore"):
             u = (np.log(r) - _LOG_RHO[0]) * (1.0 / _DLR)
         u = np.clip(u, 0.0, _LOG_RHO.size - 1.0)
-        i = np.minimum(u.astype(np.intp), _LOG_RHO.size - 2)
+        i = np.minimum(np.nan_to_num(u).astype(np.intp), _LOG_RHO.size - 2)   # NaN stays NaN
         w = u - i
         a = _T_TAB[i]
         tm = a + w * (_T_TAB[i + 1] - a)
@@ -158,7 +158,7 @@ def _bessel_terms(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         with np.errstate(divide="ignore"):
             lh = np.log(hs)
         u = np.clip((lh - _LN_H0) * (1.0 / _DLH), 0.0, _BESSEL_PIECES.shape[2] - 1.0)
-        i = u.astype(np.intp)
+        i = np.nan_to_num(u).astype(np.intp)                  # (a NaN h gives NaN, below)
         x = lh - (_LN_H0 + _DLH * i)
         a, b = (((c[0].take(i) * x + c[1].take(i)) * x + c[2].take(i)) * x + c[3].take(i)
                 for c in _BESSEL_PIECES)
