@@ -276,8 +276,9 @@ def _multisets(k: int, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 #: Orders of ρ̃ whose Laplace transforms are exact (the rest, O(ρ⁷), on the lag grid).
 _ORDERS = (3, 5)
-_COUNTS = np.concatenate([_multisets(4, n)[0] for n in _ORDERS])          # (m, 4)
-_WEIGHTS = [_multisets(4, n)[1] for n in _ORDERS]
+_MULTISETS = [_multisets(4, n) for n in _ORDERS]
+_COUNTS = np.concatenate([c for c, _ in _MULTISETS])                       # (m, 4)
+_WEIGHTS = [w for _, w in _MULTISETS]
 
 
 def _monomial_tree(k: int, n: int) -> list[tuple[np.ndarray, np.ndarray]]:
