@@ -8,6 +8,7 @@ parameters are written next to it in ``truth.toml``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,6 +22,7 @@ from ..physics.bench_sim import simulate_bench
 from ..physics.motion import SineMotion
 from ..physics.params import FrictionParams, HarvesterParams
 from .bench_format import BenchTest, write_bench
+from .protocols import Protocol
 
 __all__ = ["SyntheticSpec", "generate_bench_tests", "write_synthetic", "PROTOTYPE_FRICTION",
            "TEST_FREQUENCIES_HZ", "TEST_LOADS_OHM", "TEST_AMPLITUDE_M", "test_file_name"]
@@ -56,6 +58,13 @@ class SyntheticSpec:
     frequencies_hz, loads_ohm : sequences
         The test matrix (all combinations).
     amplitude_m : float
+    amplitudes_m : sequence of float
+        If given, sine tests at every one of these amplitudes (replaces ``amplitude_m``;
+        file names then carry the amplitude).
+    protocols : sequence of Protocol
+        Non-sine tests (triangle / trapezoid strokes, multisines, road-like records),
+        written as ``excitation = "recorded"``; each is simulated from its exact motion
+        with an unrecorded lead-in (:class:`~ehsa_opt.datasets.protocols.Protocol`).
     cycles : float
         Recorded cycles per test (after one cycle of warm-up, not recorded).
     sample_rate_hz : float
@@ -70,6 +79,8 @@ class SyntheticSpec:
     frequencies_hz: Sequence[float] = TEST_FREQUENCIES_HZ
     loads_ohm: Sequence[float] = TEST_LOADS_OHM
     amplitude_m: float = TEST_AMPLITUDE_M
+    amplitudes_m: Sequence[float] = ()
+    protocols: Sequence[Protocol] = ()
     cycles: float = 2.0
     sample_rate_hz: float = 1000.0
     noise_force_N: float = 2.0
@@ -86,10 +97,25 @@ class SyntheticSpec:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"SyntheticSpec: {name} must be >= 0, got {v!r}")
-        if not self.frequencies_hz or any(f <= 0 for f in self.frequencies_hz):
+        if any(f <= 0 for f in self.frequencies_hz):
             raise ValueError("SyntheticSpec: frequencies_hz must be positive")
-        if not self.loads_ohm or any(r <= 0 for r in self.loads_ohm):
+        if not self.frequencies_hz and not self.protocols:
+            raise ValueError("SyntheticSpec: no test: give frequencies_hz or protocols")
+        if any(not (a > 0) for a in self.amplitudes_m):
+            raise ValueError("SyntheticSpec: amplitudes_m must be > 0 (metres)")
+        if any(not isinstance(p, Protocol) for p in self.protocols):
+            raise ValueError("SyntheticSpec: protocols must be Protocol objects")
+        if self.frequencies_hz and (not self.loads_ohm or any(r <= 0 for r in self.loads_ohm)):
             raise ValueError("SyntheticSpec: loads_ohm must be positive")
+
+    @property
+    def sine_amplitudes_m(self) -> tuple[float, ...]:
+        return tuple(self.amplitudes_m) or (self.amplitude_m,)
+
+    @property
+    def n_tests(self) -> int:
+        return (len(self.frequencies_hz) * len(self.loads_ohm) * len(self.sine_amplitudes_m)
+                + len(self.protocols))
 
     def model(self) -> BenchModel:
         comps = [make_component(name) for name in self.effects]
@@ -108,28 +134,46 @@ def generate_bench_tests(spec: SyntheticSpec, progress: Any = None) -> list[Benc
     model = spec.model()
     effect_values = {k: v for params in spec.effects.values() for k, v in params.items()}
     rng = np.random.default_rng(spec.seed)
+    dt = 1.0 / spec.sample_rate_hz
     tests = []
-    for load in spec.loads_ohm:
-        for f in spec.frequencies_hz:
-            period = 1.0 / f
-            dt = 1.0 / spec.sample_rate_hz
-            n = int(round(spec.cycles * period / dt)) + 1
-            n_warm = int(round(period / dt))
-            grid = (np.arange(-n_warm, n) * dt)
-            motion = SineMotion(spec.amplitude_m, f)
-            p = model.param_vector(load, spec.friction, effect_values)
-            sim = simulate_bench(model, motion, p, grid)
-            keep = slice(n_warm, None)
-            t = grid[keep] - grid[n_warm]
-            x = sim.displacement_m[keep] + rng.normal(0.0, spec.noise_displacement_m, t.size)
-            F = sim.force_N[keep] + rng.normal(0.0, spec.noise_force_N, t.size)
-            V = sim.voltage_V[keep] + rng.normal(0.0, spec.noise_voltage_V, t.size)
-            tests.append(BenchTest(file=test_file_name(f, load), frequency_hz=float(f),
-                                   amplitude_m=spec.amplitude_m, load_ohm=float(load),
-                                   excitation="sine", time_s=t, displacement_m=x, force_N=F,
-                                   voltage_V=V))
-            if progress is not None:
-                progress(len(tests))
+
+    def record(motion: Any, load: float, n: int, n_lead: int) -> tuple[np.ndarray, ...]:
+        grid = np.arange(-n_lead, n) * dt
+        p = model.param_vector(load, spec.friction, effect_values)
+        sim = simulate_bench(model, motion, p, grid)
+        keep = slice(n_lead, None)
+        t = grid[keep] - grid[n_lead]
+        x = sim.displacement_m[keep] + rng.normal(0.0, spec.noise_displacement_m, t.size)
+        F = sim.force_N[keep] + rng.normal(0.0, spec.noise_force_N, t.size)
+        V = sim.voltage_V[keep] + rng.normal(0.0, spec.noise_voltage_V, t.size)
+        return t, x, F, V
+
+    amps = spec.sine_amplitudes_m
+    for amp in amps:
+        for load in spec.loads_ohm:
+            for f in spec.frequencies_hz:
+                period = 1.0 / f
+                n = int(round(spec.cycles * period / dt)) + 1
+                n_warm = int(round(period / dt))
+                t, x, F, V = record(SineMotion(amp, f), load, n, n_warm)
+                name = test_file_name(f, load)
+                if len(amps) > 1:
+                    name = name[:-4] + f"_A{1e3 * amp:g}mm.csv"
+                tests.append(BenchTest(file=name, frequency_hz=float(f), amplitude_m=amp,
+                                       load_ohm=float(load), excitation="sine", time_s=t,
+                                       displacement_m=x, force_N=F, voltage_V=V))
+                if progress is not None:
+                    progress(len(tests))
+    for proto in spec.protocols:
+        n = int(round(proto.record_s / dt)) + 1
+        n_lead = int(round(proto.lead_s / dt))
+        t, x, F, V = record(proto.motion(), proto.load_ohm, n, n_lead)
+        tests.append(BenchTest(file=proto.file_name(), frequency_hz=None, amplitude_m=None,
+                               load_ohm=float(proto.load_ohm), excitation="recorded", time_s=t,
+                               displacement_m=x, force_N=F, voltage_V=V,
+                               description=proto.describe()))
+        if progress is not None:
+            progress(len(tests))
     return tests
 
 
@@ -150,7 +194,22 @@ def _truth_toml(spec: SyntheticSpec, command: str) -> str:
                   "displacement_m": spec.noise_displacement_m},
         "model": {"states": model.state_names},
     }
+    if spec.amplitudes_m:
+        doc["generator"]["sine_amplitudes_m"] = list(spec.sine_amplitudes_m)
+    if spec.protocols:
+        doc["protocols"] = [{"file": p.file_name(), "description": p.describe(),
+                             "lead_in_s": p.lead_s, "periodic": p.periodic,
+                             **{k: v for k, v in dataclasses.asdict(p).items()
+                                if v is not None}} for p in spec.protocols]
     return tomli_w.dumps(doc)
+
+
+def _protocol_lines(spec: SyntheticSpec) -> str:
+    if not spec.protocols:
+        return ""
+    lines = "".join(f"- `{p.file_name()}`: {p.describe()}\n" for p in spec.protocols)
+    return ("Non-sine tests (`excitation = \"recorded\"`; the motion runs for an unrecorded "
+            "lead-in before the record starts):\n\n" + lines + "\n")
 
 
 def _readme(spec: SyntheticSpec, command: str) -> str:
@@ -174,7 +233,7 @@ Test matrix (SPEC §3): frequencies {freqs} Hz × loads {loads} Ω, sine displac
 warm-up cycle, sampled at {spec.sample_rate_hz:g} Hz. Harvester: the `[harvester]` table of
 `bench.toml` (paper Table 1 where absent). Friction: `[friction]` of `truth.toml`.
 
-Hidden effects: {effects}.
+{_protocol_lines(spec)}Hidden effects: {effects}.
 Backlash makes the short force peaks after each velocity reversal that the paper's model
 missed (paper Fig 11, SPEC §8).
 

@@ -18,7 +18,7 @@ import numpy as np
 from .bench_model import BenchModel
 from .motion import SampledMotion, SineMotion
 
-__all__ = ["BenchSimulation", "simulate_bench"]
+__all__ = ["BenchSimulation", "simulate_bench", "max_step_s"]
 
 
 @dataclass
@@ -62,6 +62,15 @@ class BenchSimulation:
         return float((e["work_in"][-1] - out) / e["work_in_abs"][-1])
 
 
+def max_step_s(motion: Any, grid: np.ndarray) -> float:
+    """Largest CVODES step on a prescribed non-sine motion, s: the motion's own
+    ``max_step_s`` (half its shortest segment, its sample step, …) when it has one, and
+    never more than the output grid's median step."""
+    g = float(np.median(np.diff(grid)))
+    own = getattr(motion, "max_step_s", None)
+    return float(min(g, own)) if own is not None and own > 0 else g
+
+
 def _integrator(model: BenchModel, motion: Any, grid: np.ndarray, rtol: float,
                 atol: float) -> ca.Function:
     """Build (and for sine motions cache on the model) the CVODES integrator.
@@ -96,6 +105,11 @@ def _integrator(model: BenchModel, motion: Any, grid: np.ndarray, rtol: float,
         xdot = ca.MX(0)
     dae = {"x": x, "t": t, "p": pall, "ode": xdot, "quad": quad}
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 500000}
+    if not sine:
+        # a step may not jump over a feature of the motion: on a constant-velocity stroke
+        # the states sit at equilibrium, CVODES grows its step, and without this cap it
+        # steps over a 20 ms reversal as if it had not happened
+        opts["max_step_size"] = max_step_s(motion, grid)
     F = ca.integrator("bench_sim", "cvodes", dae, float(grid[0]), grid[1:].tolist(), opts)
     if key is not None:
         cache[key] = F

@@ -1,4 +1,6 @@
-"""Prescribed rod motions for bench simulation: a sine, or measured samples.
+"""Prescribed rod motions for bench simulation: a sine, protocols given in closed form
+(piecewise-constant acceleration: triangle / constant-velocity strokes, trapezoids;
+sums of sines: multisines, road-like records), or measured samples.
 
 Each motion gives CasADi expressions of time for displacement (m), velocity
 (m/s) and acceleration (m/s²), plus numpy evaluation for post-processing.
@@ -14,7 +16,8 @@ import casadi as ca
 import numpy as np
 from scipy.interpolate import make_smoothing_spline
 
-__all__ = ["SineMotion", "SampledMotion", "FilteredMotion"]
+__all__ = ["SineMotion", "PiecewiseMotion", "MultisineMotion", "SampledMotion",
+           "FilteredMotion"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +61,141 @@ class SineMotion:
         return np.vstack(self.expressions(t))
 
 
+def _is_symbolic(t: Any) -> bool:
+    return isinstance(t, (ca.SX, ca.MX))
+
+
+@dataclass(frozen=True)
+class PiecewiseMotion:
+    """A motion of piecewise-constant acceleration (exact, in closed form).
+
+    On ``[knots_s[k], knots_s[k+1])`` the acceleration is ``acceleration_m_per_s2[k]``;
+    before the first knot it is 0 (the motion continues at its initial velocity), after
+    the last knot it keeps the last value.  Velocity is continuous and piecewise linear,
+    displacement continuous and piecewise quadratic: constant-velocity strokes with
+    blended corners (the acceleration steps at the corners are the only non-smooth
+    points).  Written as a sum of ramps so CasADi can evaluate it::
+
+        a(t) = Σ Δa_k H(t − t_k),   v(t) = v_0 + Σ Δa_k (t − t_k)₊,
+        x(t) = x_0 + v_0 (t − t_0) + Σ Δa_k (t − t_k)₊² / 2
+
+    Attributes
+    ----------
+    knots_s : ndarray (K + 1,)
+        Strictly increasing knot times, s.
+    acceleration_m_per_s2 : ndarray (K,)
+        Acceleration on each segment, m/s².
+    x0_m, v0_m_per_s : float
+        Displacement and velocity at ``knots_s[0]``.
+    """
+
+    knots_s: np.ndarray
+    acceleration_m_per_s2: np.ndarray
+    x0_m: float = 0.0
+    v0_m_per_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.knots_s, dtype=float)
+        a = np.asarray(self.acceleration_m_per_s2, dtype=float)
+        if t.ndim != 1 or a.ndim != 1 or t.size != a.size + 1 or a.size < 1:
+            raise ValueError("PiecewiseMotion: knots_s needs one more entry than "
+                             "acceleration_m_per_s2 (>= 1 segment)")
+        if np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)) or not np.all(np.isfinite(a)):
+            raise ValueError("PiecewiseMotion: knots_s must be finite and strictly increasing, "
+                             "accelerations finite")
+        object.__setattr__(self, "knots_s", t)
+        object.__setattr__(self, "acceleration_m_per_s2", a)
+
+    @property
+    def max_step_s(self) -> float:
+        """Half the shortest segment, s: an integrator step never jumps over a corner."""
+        return 0.5 * float(np.min(np.diff(self.knots_s)))
+
+    @property
+    def corners_s(self) -> np.ndarray:
+        """Times where the acceleration steps (the motion's non-smooth points), s."""
+        jumps = np.diff(np.concatenate([[0.0], self.acceleration_m_per_s2]))
+        return self.knots_s[:-1][jumps != 0.0]
+
+    def expressions(self, t: Any) -> tuple[Any, Any, Any]:
+        tk = self.knots_s[:-1]
+        da = np.diff(np.concatenate([[0.0], self.acceleration_m_per_s2]))
+        t0, x0, v0 = float(self.knots_s[0]), float(self.x0_m), float(self.v0_m_per_s)
+        if _is_symbolic(t):
+            x, v, a = x0 + v0 * (t - t0), v0 + 0.0 * t, 0.0 * t
+            for tj, dj in zip(tk.tolist(), da.tolist()):
+                if dj == 0.0:
+                    continue
+                s = ca.fmax(t - tj, 0.0)
+                x, v, a = x + 0.5 * dj * s * s, v + dj * s, a + dj * ca.if_else(t >= tj, 1, 0)
+            return x, v, a
+        t = np.asarray(t, dtype=float)
+        # exact per segment (no cancellation of large ramps)
+        k = np.clip(np.searchsorted(self.knots_s, t, side="right") - 1, -1, tk.size - 1)
+        acc = self.acceleration_m_per_s2
+        h = np.diff(self.knots_s)
+        vk = v0 + np.concatenate([[0.0], np.cumsum(acc * h)])
+        xk = x0 + np.concatenate([[0.0], np.cumsum(vk[:-1] * h + 0.5 * acc * h * h)])
+        kk = np.maximum(k, 0)
+        ak = np.where(k >= 0, acc[kk], 0.0)
+        tb = np.where(k >= 0, self.knots_s[kk], t0)
+        xb = np.where(k >= 0, xk[kk], x0)
+        vb = np.where(k >= 0, vk[kk], v0)
+        s = t - tb
+        return xb + vb * s + 0.5 * ak * s * s, vb + ak * s, ak + 0.0 * s
+
+    def evaluate(self, t: np.ndarray) -> np.ndarray:
+        """Array (3, len(t)) of x, v, a."""
+        return np.vstack(self.expressions(np.asarray(t, dtype=float)))
+
+
+@dataclass(frozen=True)
+class MultisineMotion:
+    """x(t) = Σ_k A_k sin(2π f_k t + φ_k) (exact, in closed form).
+
+    Attributes
+    ----------
+    amplitudes_m, frequencies_hz, phases_rad : ndarray
+        One entry per component (amplitudes > 0 m, frequencies > 0 Hz).
+    """
+
+    amplitudes_m: np.ndarray
+    frequencies_hz: np.ndarray
+    phases_rad: np.ndarray
+
+    def __post_init__(self) -> None:
+        A, f, ph = (np.atleast_1d(np.asarray(v, dtype=float)) for v in
+                    (self.amplitudes_m, self.frequencies_hz, self.phases_rad))
+        if not (A.shape == f.shape == ph.shape and A.ndim == 1 and A.size >= 1):
+            raise ValueError("MultisineMotion: amplitudes_m, frequencies_hz, phases_rad must be "
+                             "1-D of the same length >= 1")
+        if np.any(~(A > 0)) or np.any(~(f > 0)) or not np.all(np.isfinite(ph)):
+            raise ValueError("MultisineMotion: amplitudes_m and frequencies_hz must be > 0, "
+                             "phases finite")
+        for name, v in (("amplitudes_m", A), ("frequencies_hz", f), ("phases_rad", ph)):
+            object.__setattr__(self, name, v)
+
+    @property
+    def max_step_s(self) -> float:
+        """A twentieth of the shortest period, s."""
+        return 0.05 / float(np.max(self.frequencies_hz))
+
+    def expressions(self, t: Any) -> tuple[Any, Any, Any]:
+        sym = _is_symbolic(t)
+        x = v = a = 0.0 * t
+        for A, f, ph in zip(self.amplitudes_m.tolist(), self.frequencies_hz.tolist(),
+                            self.phases_rad.tolist()):
+            w = 2.0 * math.pi * f
+            s = ca.sin(w * t + ph) if sym else np.sin(w * t + ph)
+            c = ca.cos(w * t + ph) if sym else np.cos(w * t + ph)
+            x, v, a = x + A * s, v + A * w * c, a - A * w * w * s
+        return x, v, a
+
+    def evaluate(self, t: np.ndarray) -> np.ndarray:
+        """Array (3, len(t)) of x, v, a."""
+        return np.vstack(self.expressions(np.asarray(t, dtype=float)))
+
+
 @dataclass(frozen=True)
 class SampledMotion:
     """Measured displacement samples, differentiated by a smoothing spline.
@@ -98,6 +236,11 @@ class SampledMotion:
             raise ValueError(f"SampledMotion.with_cutoff: cutoff_hz must be > 0 Hz, got {cutoff_hz}")
         dt = float(np.mean(np.diff(np.asarray(time_s, dtype=float))))
         return cls(time_s, displacement_m, 1.0 / (dt * (2.0 * math.pi * cutoff_hz) ** 4))
+
+    @property
+    def max_step_s(self) -> float:
+        """The shortest sample step, s (the interpolants are linear between samples)."""
+        return float(np.min(np.diff(self.time_s)))
 
     def evaluate(self, t: np.ndarray) -> np.ndarray:
         """Array (3, len(t)) of x, v, a from the smoothing spline."""
