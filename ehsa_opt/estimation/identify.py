@@ -80,6 +80,7 @@ from .identify_options import (
     PARAMETER_BOUNDS,
     START_RANGES,
     IdentifyOptions,
+    estimate_motion,
     test_motion,
 )
 from .identify_result import (
@@ -109,6 +110,12 @@ def _defaults(model: BenchModel) -> dict[str, float]:
         d.update({"inertia_kg": 0.0, "offset_N": 0.0})
     d.update({q.name: q.default for q in model.param_specs.values()})
     return d
+
+
+def _mass(model: BenchModel) -> float | None:
+    """Rod-equivalent inertia (kg) that turns acceleration noise into force noise (None
+    without generator: the inertia is fitted)."""
+    return model.harvester.equivalent_mass_kg() if model.generator else None
 
 
 def _bounds(model: BenchModel, name: str) -> tuple[float, float, float]:
@@ -169,7 +176,8 @@ def simulate_tests(tests: Sequence[BenchTest], harvester: HarvesterParams,
     for k, test in enumerate(tests):
         load = test.load_ohm if (test.load_ohm is not None and has_generator) else 1.0
         p = np.array([load, *[base[n] for n in model.param_names[1:]]])
-        motion = motions[k] if motions is not None else test_motion(test, options)
+        motion = motions[k] if motions is not None else test_motion(test, options,
+                                                                    _mass(model))
         if model.n_states == 0:
             uu = motion.evaluate(test.time_s)
             y = np.array(model.outputs.map(test.n_samples)(np.zeros((0, test.n_samples)), uu, p))
@@ -212,6 +220,7 @@ class _Setup:
     path: str
     full_states: list[np.ndarray | None]
     options: IdentifyOptions
+    resolved: list[np.ndarray]
 
     def nlp(self) -> core.NLP:
         opt = self.options
@@ -238,14 +247,17 @@ def _setup(tests: list[BenchTest], model: BenchModel, has_generator: bool, varie
     if model.n_states == 0:
         path = "rigid"
     opt = options
-    motions, blocks, y_meas, pbases, full = [], [], [], [], []
+    motions, blocks, y_meas, pbases, full, resolved = [], [], [], [], [], []
     for test in tests:
         load = test.load_ohm if (test.load_ohm is not None and has_generator) else 1.0
         pb = np.array([load] + [float(fixed[n]) if (n in fixed and not isinstance(fixed[n], str))
                                 else defaults[n] for n in names[1:]])
-        motion = test_motion(test, opt)
+        est = estimate_motion(test, opt, _mass(model))
+        motion = est.motion
         ntrim = int(round(opt.trim_fraction * test.n_samples))
         obs = np.arange(ntrim, test.n_samples - ntrim)
+        obs = obs[est.resolved[obs]]  # corners the spline cannot follow stay out
+        resolved.append(est.resolved)
         obs = obs[node_indices(obs.size, opt.max_samples - 1)]
         sig = [test.force_N] + ([test.voltage_V] if (test.voltage_V is not None
                                                      and has_generator) else [])
@@ -264,7 +276,8 @@ def _setup(tests: list[BenchTest], model: BenchModel, has_generator: bool, varie
         blocks.append(blk)
         y_meas.append(ym)
         pbases.append(pb)
-    return _Setup(model, space, tests, motions, blocks, y_meas, pbases, path, full, options)
+    return _Setup(model, space, tests, motions, blocks, y_meas, pbases, path, full, options,
+                  resolved)
 
 
 def _run_starts(su: _Setup, draws: list[dict[str, float]], ident: bool = True) -> list[dict]:
@@ -452,11 +465,11 @@ def _finish(su: _Setup, records: list[dict], seconds: float,
     best = min(ok, key=lambda r: r["objective"])
     params = {n: best["final"][n] for n in names}
     preds = _predictions(su, params)
-    per = test_errors(su.tests, preds)
+    per = test_errors(su.tests, preds, su.resolved)
     dF = max(r["delta_F"] for r in per)
     dV = max(r["delta_V"] for r in per) if all(r["delta_V"] is not None for r in per) else None
-    Fs = np.concatenate([p.force_N for p in preds])
-    Fe = np.concatenate([t.force_N for t in su.tests])
+    Fs = np.concatenate([p.force_N[m] for p, m in zip(preds, su.resolved)])
+    Fe = np.concatenate([t.force_N[m] for t, m in zip(su.tests, su.resolved)])
     rel = force_relative_error_percent(Fs, Fe)
     ident = best.get("ident") if identifiability else None
     msg = (f"{len(ok)}/{len(records)} starts converged; best objective {best['objective']:.6g} "
@@ -566,7 +579,9 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
                 preds = simulate_tests(held, data.harvester, jres.parameters,
                                        has_generator=data.has_generator, components=components,
                                        options=options)
-                hold_err = test_errors(held, preds)
+                mass = data.harvester.equivalent_mass_kg() if data.has_generator else None
+                hold_err = test_errors(held, preds, [estimate_motion(t, options, mass).resolved
+                                                     for t in held])
     return IdentificationReport(data, fits, bounds, jres, hold_files, hold_err, ident,
                                 time.perf_counter() - t0, starts)
 

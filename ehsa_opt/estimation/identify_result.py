@@ -189,16 +189,22 @@ def _jsonable(obj: Any) -> Any:
 
 
 
-def test_errors(tests: Sequence[BenchTest], preds: Sequence[Prediction]) -> list[dict]:
-    """Eq 5 δ_F, δ_V and the force relative error of each test on its full grid."""
+def test_errors(tests: Sequence[BenchTest], preds: Sequence[Prediction],
+                resolved: Sequence[np.ndarray] | None = None) -> list[dict]:
+    """Eq 5 δ_F, δ_V and the force relative error of each test on its full grid, or on
+    its ``resolved`` samples (recorded tests: outside the windows around corners that
+    the motion's derivatives do not resolve; ``resolved_percent`` says how many)."""
     rows = []
-    for t, pr in zip(tests, preds):
+    for k, (t, pr) in enumerate(zip(tests, preds)):
+        m = (np.asarray(resolved[k], bool) if resolved is not None
+             else np.ones(t.n_samples, bool))
         rows.append({"file": t.file,
-                     "delta_F": eq5_delta(pr.force_N, t.force_N),
-                     "delta_V": (eq5_delta(pr.voltage_V, t.voltage_V)
+                     "delta_F": eq5_delta(pr.force_N[m], t.force_N[m]),
+                     "delta_V": (eq5_delta(pr.voltage_V[m], t.voltage_V[m])
                                  if pr.voltage_V is not None else None),
-                     "force_relative_error_percent": force_relative_error_percent(pr.force_N,
-                                                                                  t.force_N)})
+                     "force_relative_error_percent": force_relative_error_percent(
+                         pr.force_N[m], t.force_N[m]),
+                     "resolved_percent": 100.0 * float(m.mean())})
     return rows
 
 
