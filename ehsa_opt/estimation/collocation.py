@@ -212,9 +212,19 @@ def theta_block(model: BenchModel, t_fine: np.ndarray, u_fine: np.ndarray, every
     if (Nf - 1) % every or (Nf - 1) // every + 1 != n_obs:
         raise ValueError("theta_block: the fine grid must hold every observation")
     key = ("theta", Nf, every, ny)
-    data = _flat(np.diff(t_fine), u_fine, pbase, y_obs, weights, sx, off)
+    W = _weight_matrix(weights, ny, n_obs)
+    data = _flat(np.diff(t_fine), u_fine, pbase, y_obs, W, sx, off)
     return Block(key, data, Z0.ravel(order="F"), n_obs, ny,
-                 {"sx": sx, "off": off, "weights": np.asarray(weights, float)})
+                 {"sx": sx, "off": off, "weights": W.max(axis=1), "weight_matrix": W})
+
+
+def _weight_matrix(weights: np.ndarray, ny: int, n_obs: int) -> np.ndarray:
+    """Per-sample weights (ny × n_obs) from per-channel (ny,) or per-sample weights (a
+    zero leaves a sample out: e.g. a corner the motion's derivatives do not resolve)."""
+    w = np.asarray(weights, float)
+    if w.ndim == 1:
+        w = w[:, None]
+    return np.broadcast_to(w, (ny, n_obs)).copy()
 
 
 def given_block(model: BenchModel, X_obs: np.ndarray, u_obs: np.ndarray, y_obs: np.ndarray,
@@ -222,8 +232,9 @@ def given_block(model: BenchModel, X_obs: np.ndarray, u_obs: np.ndarray, y_obs: 
     """Block whose states are data (integrated beforehand)."""
     ny, n_obs = y_obs.shape
     key = ("given", n_obs, ny)
-    return Block(key, _flat(X_obs, u_obs, pbase, y_obs, weights), np.zeros(0), n_obs, ny,
-                 {"weights": np.asarray(weights, float)})
+    W = _weight_matrix(weights, ny, n_obs)
+    return Block(key, _flat(X_obs, u_obs, pbase, y_obs, W), np.zeros(0), n_obs, ny,
+                 {"weights": W.max(axis=1), "weight_matrix": W})
 
 
 def build_block_symbols(model: BenchModel, space: Any, key: tuple, z: Any, sym: Any,
@@ -285,7 +296,7 @@ def build_block_symbols(model: BenchModel, space: Any, key: tuple, z: Any, sym: 
         U = data("u", 3, Nf)
         pbase = data("pbase", npar, 1)
         ym = data("ym", ny, n_obs)
-        wy = data("wy", ny, 1)
+        wy = data("wy", ny, n_obs)
         sx = data("sx", nx, 1)
         off = data("off", nx, Nf)
         P, _ = space.expression(z, pbase)
@@ -306,14 +317,14 @@ def build_block_symbols(model: BenchModel, space: Any, key: tuple, z: Any, sym: 
         uobs = data("uobs", 3, n_obs)
         pbase = data("pbase", npar, 1)
         ym = data("ym", ny, n_obs)
-        wy = data("wy", ny, 1)
+        wy = data("wy", ny, n_obs)
         P, _ = space.expression(z, pbase)
         y = model.outputs.map(n_obs)(Xg, uobs, P)
         w = sym(0, 1)
     else:
         raise ValueError(f"unknown transcription {kind!r}")
     y = y[:ny, :]
-    sse = [ca.sumsqr(wy[k] * (y[k, :] - ym[k, :])) for k in range(ny)]
+    sse = [ca.sumsqr(wy[k, :] * (y[k, :] - ym[k, :])) for k in range(ny)]
     return {"w": w, "p": ca.vertcat(*parts), "g": ca.vertcat(*g) if g else sym(0, 1),
             "sse": sse, "n_obs": n_obs, "y": y, "x0_cols": x0_cols}
 

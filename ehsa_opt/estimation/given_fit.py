@@ -91,7 +91,7 @@ def _unpack(model: BenchModel, space: ParamSpace, block: Block) -> tuple:
     u = d[k:k + 3 * n].reshape((3, n), order="F"); k += 3 * n
     pb = d[k:k + npar]; k += npar
     ym = d[k:k + ny * n].reshape((ny, n), order="F"); k += ny * n
-    return X, u, pb, ym, d[k:k + ny]
+    return X, u, pb, ym, d[k:k + ny * n].reshape((ny, n), order="F")
 
 
 def _order_map(space: ParamSpace, pbase: np.ndarray

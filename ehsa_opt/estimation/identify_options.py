@@ -20,9 +20,9 @@ __all__ = ["IdentifyOptions", "PARAMETER_BOUNDS", "START_RANGES", "test_motion",
 #: Cut-offs tried for recorded (non-sine) tests, as multiples of the sine cut-off; the
 #: largest whose acceleration noise stays at half the force noise is kept.
 RECORDED_CUTOFF_FACTORS: tuple[float, ...] = (1.0, 1.5, 2.0, 3.0)
-#: Half-width of the window left out around an unresolved corner, in cycles of the
-#: cut-off (0.5 / f_c: 17 ms at 30 Hz).
-CORNER_WINDOW_CYCLES: float = 1.0
+#: Margin added on each side of an unresolved corner, in cycles of the sine cut-off
+#: (0.5 / 30 Hz: 17 ms; the flagged extent itself shrinks as 1 / f_c).
+CORNER_WINDOW_CYCLES: float = 0.5
 #: Threshold on the two-cut-off acceleration difference, in its noise standard deviations.
 CORNER_THRESHOLD_SIGMA: float = 6.0
 #: Recorded samples whose estimated speed is below this many of its noise standard
@@ -209,16 +209,18 @@ def estimate_motion(test: BenchTest, options: IdentifyOptions | None = None,
     * corners: the spline's acceleration at f_c and at 2 f_c differ where the motion
       has content the spline cannot follow (an acceleration step); samples where the
       difference exceeds :data:`CORNER_THRESHOLD_SIGMA` noise standard deviations
-      (and 1 % of the rms acceleration) are unresolved, widened by
-      :data:`CORNER_WINDOW_CYCLES` / f_c on each side;
+      (and 1 % of the rms acceleration) are unresolved; around each such run (found at
+      the sine cut-off f_0, its half-length h_0) the window c ± (h_0 f_0 / f_c +
+      :data:`CORNER_WINDOW_CYCLES` / f_0) is left out;
     * dwells: samples whose speed is below :data:`DWELL_THRESHOLD_SIGMA` of its noise
       (a rod at rest: the force there is whatever the stuck friction holds, which no
       function of the velocity gives).
 
-    Accuracy outside the windows (tested; 1 kHz, 2 µm displacement noise, f_c = 30 Hz,
-    triangles at 0.06–0.2 m/s with 1–10 ms corner blends, trapezoids, multisines,
-    road-like records): velocity within 0.5 % of the peak speed, acceleration within
-    0.15 m/s².  Nothing assumes the record is periodic.
+    Accuracy outside the windows (tested: 1 kHz, 2 µm displacement noise, 2 N force
+    noise, inertia 11.9 and 47.5 kg, so f_c = 60 and 30 Hz; triangles at 0.06–0.3 m/s
+    with 1–10 ms corner blends, trapezoids, multisines, road-like records): velocity
+    within 1 % of the peak speed, acceleration within 0.25 m/s² (rms < 0.06 m/s²).
+    Nothing assumes the record is periodic.
     """
     opt = options or IdentifyOptions()
     n = test.n_samples
@@ -260,7 +262,7 @@ def _recorded(test: BenchTest, fc0: float, mass_kg: float | None) -> MotionEstim
         runs = np.split(flagged, np.flatnonzero(np.diff(flagged) > 1) + 1)
         for run in runs:
             c = 0.5 * (t[run[0]] + t[run[-1]])
-            h = 0.5 * (t[run[-1]] - t[run[0]]) * fc0 / fc + CORNER_WINDOW_CYCLES / fc
+            h = 0.5 * (t[run[-1]] - t[run[0]]) * fc0 / fc + CORNER_WINDOW_CYCLES / fc0
             resolved[(t >= c - h) & (t <= c + h)] = False
     motion = SampledMotion.with_cutoff(t, x, fc)
     if sx > 0:

@@ -57,7 +57,7 @@ def zoom(result: Any, n_tests: int = 2) -> Any:
     allp = result.fit_tests + result.heldout_tests
     w = result.winner
     order = sorted(range(len(allp)), key=lambda k: -np.max(np.abs(
-        (allp[k].y[0] - result.baseline_pred[k][0]) / allp[k].sigma[0])))[:n_tests]
+        (allp[k].y[0] - result.baseline_pred[k][0]) * allp[k].wnorm[0])))[:n_tests]
     ny = allp[0].y.shape[0]
     fig, axes = plt.subplots(ny, len(order), figsize=(5 * len(order), 2.6 * ny), squeeze=False)
     for j, k in enumerate(order):

@@ -183,7 +183,7 @@ def _absorbed_columns(pt: PreparedTest, rig: Rig, u_brk: float) -> np.ndarray:
     cols = [np.tanh(v / uc), np.exp(-(v / ust) ** 2) * v / ust, v]
     if not rig.has_generator:
         cols += [a, np.ones(N)]
-    F = np.column_stack(cols) / pt.sigma[0]
+    F = np.column_stack(cols) * pt.wnorm[0][:, None]
     ny = pt.y.shape[0]
     return np.vstack([F] + [np.zeros_like(F)] * (ny - 1))
 
@@ -203,7 +203,7 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
     candidates (e.g. voltage_drop on a rig without generator) get score NaN.
     """
     names = list(names or CANDIDATES)
-    r = np.concatenate([((pt.y - yp) / pt.sigma[:, None]).ravel() for pt, yp in
+    r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel() for pt, yp in
                         zip(prepared, baseline_pred)])
     u_brk = float(baseline.get("nut_breakaway_velocity_m_per_s", 0.01))
     B = np.vstack([_absorbed_columns(pt, rig, u_brk) for pt in prepared])
@@ -227,7 +227,7 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
         for probe in cand.probes:
             vals = {**spec_defaults, **baseline, **probe}
             pred = predict(prepared, crig, vals)
-            cols.append(np.concatenate([((yp - yb) / pt.sigma[:, None]).ravel() for pt, yp, yb
+            cols.append(np.concatenate([((yp - yb) * pt.wnorm).ravel() for pt, yp, yb
                                         in zip(prepared, pred, baseline_pred)]))
         S = np.column_stack(cols)
         S = S - Qb @ (Qb.T @ S)

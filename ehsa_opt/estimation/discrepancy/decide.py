@@ -53,7 +53,7 @@ def channel_sse(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray]
     sse, n = np.zeros(ny), np.zeros(ny)
     for pt, yp in zip(prepared, preds):
         for ch in range(pt.y.shape[0]):
-            sse[ch] += float(np.sum(((pt.y[ch] - yp[ch]) / pt.sigma[ch]) ** 2))
+            sse[ch] += float(np.sum(((pt.y[ch] - yp[ch]) * pt.wnorm[ch]) ** 2))
             n[ch] += pt.y.shape[1]
     return sse, n
 

@@ -41,6 +41,7 @@ from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .. import core
 from ..collocation import given_block, theta_block
 from ..given_fit import GivenFit, fit_given
+from ..identify_options import IdentifyOptions, estimate_motion
 from ..identify_result import force_relative_error_percent
 
 __all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
@@ -133,6 +134,24 @@ class PreparedTest:
     y: np.ndarray  # (ny, N) measured force [, voltage]
     sigma: np.ndarray  # (ny,)
     fixed: dict[str, float]
+    #: (N,) 1 where the motion's derivatives are resolved, 0 in windows around corners
+    #: and dwells of recorded tests (left out of every objective and statistic)
+    weight: np.ndarray | None = None
+    #: rod-equivalent inertia the recorded motion's cut-off was chosen with (kg)
+    mass_kg: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.weight is None:
+            self.weight = np.ones(self.time_s.size)
+
+    @property
+    def wnorm(self) -> np.ndarray:
+        """(ny, N) weights of the residuals: resolved samples over the noise level."""
+        return self.weight[None, :] / self.sigma[:, None]
+
+    @property
+    def n_resolved(self) -> int:
+        return int(np.count_nonzero(self.weight))
 
 
 def _sine_motion(test: BenchTest) -> SineMotion:
@@ -145,26 +164,35 @@ def _sine_motion(test: BenchTest) -> SineMotion:
 
 
 def prepare_tests(tests: Sequence[BenchTest], has_generator: bool = True,
-                  derivative_cutoff_hz: float | None = None) -> list[PreparedTest]:
+                  derivative_cutoff_hz: float | None = None,
+                  mass_kg: float | None = None) -> list[PreparedTest]:
     """Motion, measured outputs and noise levels of each test.
 
     Sine tests: the sine of the test frequency fitted to the measured
-    displacement.  Recorded tests: :class:`FilteredMotion` with cut-off
-    ``derivative_cutoff_hz`` (default: a tenth of the sample rate).
+    displacement.  Recorded tests: the identification's motion estimate
+    (:func:`~ehsa_opt.estimation.identify_options.estimate_motion`: smoothing spline,
+    its cut-off from the noise and the rod-equivalent inertia ``mass_kg``, corner and dwell windows
+    weighted out), or :class:`FilteredMotion` with cut-off ``derivative_cutoff_hz``
+    when that is given or the rig has no generator (inverse-model practice, EMPS:
+    a tenth of the sample rate by default).
     """
     out = []
     for t in tests:
+        weight = None
         if t.excitation == "sine" and t.frequency_hz:
             motion: Any = _sine_motion(t)
-        else:
+        elif derivative_cutoff_hz is not None or not has_generator:
             fs = 1.0 / float(np.median(np.diff(t.time_s)))
             motion = FilteredMotion(t.time_s, t.displacement_m, derivative_cutoff_hz or fs / 10)
+        else:
+            est = estimate_motion(t, IdentifyOptions.for_rig(has_generator), mass_kg)
+            motion, weight = est.motion, est.resolved.astype(float)
         u = motion.evaluate(t.time_s)
         ys = [t.force_N] + ([t.voltage_V] if has_generator and t.voltage_V is not None else [])
         y = np.vstack(ys)
         sig = np.array([noise_std(row) for row in y])
         fixed = {"load_ohm": float(t.load_ohm)} if has_generator else dict(NO_GENERATOR_FIXED)
-        out.append(PreparedTest(t, motion, t.time_s, u, y, sig, fixed))
+        out.append(PreparedTest(t, motion, t.time_s, u, y, sig, fixed, weight, mass_kg))
     return out
 
 
@@ -193,9 +221,9 @@ def linear_baseline(prepared: Sequence[PreparedTest], rig: Rig,
             else:
                 known = 0.0 * v
                 cols += [a, np.ones_like(v)]
-            w = 1.0 / pt.sigma[0]
+            w = pt.wnorm[0][:, None]
             rows.append(np.column_stack(cols) * w)
-            rhs.append((F - known) * w)
+            rhs.append((F - known) * w[:, 0])
         A, b = np.vstack(rows), np.concatenate(rhs)
         coef, *_ = np.linalg.lstsq(A, b, rcond=None)
         sse = float(np.sum((A @ coef - b) ** 2))
@@ -335,7 +363,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     for pt in prepared:
         pbase = np.array([pt.fixed[n] if n in pt.fixed else default_of(n)
                           for n in model.param_names])
-        w = 1.0 / pt.sigma
+        w = pt.wnorm
         if model.n_states:
             tf = _fine_grid(pt.time_s, M)
             uf = pt.motion.evaluate(tf) if M > 1 else pt.u
@@ -420,7 +448,7 @@ def _covariance(nlp: core.NLP, w: np.ndarray, p: np.ndarray, blocks: Sequence[An
     collocation constraints by the core; initial states marginalised)."""
     try:
         dy = nlp.sensitivities(w, p)
-        wt = np.concatenate([np.repeat(b.info["weights"], b.n_obs) for b in blocks])
+        wt = np.concatenate([b.info["weight_matrix"].ravel() for b in blocks])
         S = dy * wt[:, None]
         return np.linalg.pinv(S.T @ S)[:nz, :nz] * s2
     except Exception as exc:  # noqa: BLE001 - intervals are a report extra, never fatal

@@ -34,7 +34,7 @@ def _lag_tests(pts: Sequence[PreparedTest], tau: float, has_generator: bool
         nt = _replace(t, time_s=t.time_s[keep], displacement_m=t.displacement_m[keep],
                       force_N=F[keep],
                       voltage_V=t.voltage_V[keep] if t.voltage_V is not None else None)
-        out += prepare_tests([nt], has_generator)
+        out += prepare_tests([nt], has_generator, mass_kg=pt.mass_kg)
     return out
 
 
@@ -93,4 +93,4 @@ def _crop_like(pt: PreparedTest, like: PreparedTest) -> PreparedTest:
     nt = _replace(t, time_s=t.time_s[keep], displacement_m=t.displacement_m[keep],
                   force_N=t.force_N[keep],
                   voltage_V=t.voltage_V[keep] if t.voltage_V is not None else None)
-    return prepare_tests([nt], pt.y.shape[0] > 1)[0]
+    return prepare_tests([nt], pt.y.shape[0] > 1, mass_kg=pt.mass_kg)[0]

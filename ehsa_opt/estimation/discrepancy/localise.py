@@ -189,7 +189,7 @@ def localise(prepared: Sequence[PreparedTest], predictions: Sequence[np.ndarray]
         res, coords = [], {k: [] for k in COORDINATES}
         per_test = []
         for k, (pt, yp) in enumerate(zip(prepared, predictions)):
-            r = (pt.y[ch] - yp[ch]) / pt.sigma[ch]
+            r = (pt.y[ch] - yp[ch]) * pt.wnorm[ch]
             res.append(r)
             per_test.append(float(np.sqrt(np.mean(r ** 2))))
             x, v, _ = pt.u
@@ -253,7 +253,7 @@ def rotor_angle_spectrum(prepared: Sequence[PreparedTest], predictions: Sequence
     """
     r_all, th_all = [], []
     for pt, yp in zip(prepared, predictions):
-        r = (pt.y[0] - yp[0]) / pt.sigma[0]
+        r = (pt.y[0] - yp[0]) * pt.wnorm[0]
         r_all.append(r - r.mean())
         th_all.append(pt.u[0] / lead_m_per_rad)
     r, th = np.concatenate(r_all), np.concatenate(th_all)
@@ -293,7 +293,7 @@ def stroke_window(prepared: Sequence[PreparedTest], predictions: Sequence[np.nda
     for pt, yp in zip(prepared, predictions):
         xs.append(pt.u[0])
         ss.append(np.tanh(pt.u[1] / smoothing_m_per_s))
-        rs.append((pt.y[0] - yp[0]) / pt.sigma[0])
+        rs.append((pt.y[0] - yp[0]) * pt.wnorm[0])
     x, r, sg = np.concatenate(xs), np.concatenate(rs), np.concatenate(ss)
     lo, hi = float(x.min()), float(x.max())
     stroke = hi - lo

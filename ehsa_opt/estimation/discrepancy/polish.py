@@ -107,7 +107,7 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         counter[0] += 1
         vals = {**base, **{n: float(v) for n, v in zip(free, values(z))}}
         preds = predict(prepared, rig, vals)
-        r = np.concatenate([((pt.y - yp) / pt.sigma[:, None]).ravel()
+        r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
                             for pt, yp in zip(prepared, preds)])
         return np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=-1e6)
 

@@ -87,19 +87,20 @@ def effective_samples(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarr
     total = 0.0
     for pt, yp in zip(prepared, preds):
         for ch in range(pt.y.shape[0]):
-            r = (pt.y[ch] - yp[ch]) / pt.sigma[ch]
-            total += r.size / _tau(r)
+            r = (pt.y[ch] - yp[ch]) * pt.wnorm[ch]
+            total += pt.n_resolved / _tau(r[pt.weight > 0])
     return total
 
 
 def _sse(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> float:
-    return float(sum(np.sum(((pt.y - yp) / pt.sigma[:, None]) ** 2)
+    return float(sum(np.sum(((pt.y - yp) * pt.wnorm) ** 2)
                      for pt, yp in zip(prepared, preds)))
 
 
 def _force_error(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> float:
-    return force_relative_error_percent(np.concatenate([p[0] for p in preds]),
-                                        np.concatenate([pt.y[0] for pt in prepared]))
+    return force_relative_error_percent(
+        np.concatenate([p[0][pt.weight > 0] for pt, p in zip(prepared, preds)]),
+        np.concatenate([pt.y[0][pt.weight > 0] for pt in prepared]))
 
 
 def _screen_sse(prepared: Sequence[PreparedTest], rig: Rig, preds: Sequence[np.ndarray],
@@ -109,7 +110,7 @@ def _screen_sse(prepared: Sequence[PreparedTest], rig: Rig, preds: Sequence[np.n
     simulated with the baseline friction, which absorbed part of the effect."""
     from .candidates import _absorbed_columns
     u_brk = float(baseline.get("nut_breakaway_velocity_m_per_s", 0.01))
-    r = np.concatenate([((pt.y - yp) / pt.sigma[:, None]).ravel()
+    r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
                         for pt, yp in zip(prepared, preds)])
     B = np.vstack([_absorbed_columns(pt, rig, u_brk) for pt in prepared])
     coef, *_ = np.linalg.lstsq(B, r, rcond=None)
@@ -389,8 +390,8 @@ MIN_SSE_EXCESS = 0.25
 def force_noise_floor_percent(prepared: Sequence[PreparedTest]) -> float:
     """Relative force error (%) that the measurement noise alone gives:
     100 √(Σ σ_i² N_i) / ‖F‖ (σ_i the noise level estimated from test i)."""
-    num = sum(float(pt.sigma[0]) ** 2 * pt.y.shape[1] for pt in prepared)
-    den = float(np.sum(np.concatenate([pt.y[0] for pt in prepared]) ** 2))
+    num = sum(float(pt.sigma[0]) ** 2 * pt.n_resolved for pt in prepared)
+    den = float(np.sum(np.concatenate([pt.y[0][pt.weight > 0] for pt in prepared]) ** 2))
     return 100.0 * math.sqrt(num / den) if den > 0 else 0.0
 
 

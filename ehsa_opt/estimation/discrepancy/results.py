@@ -195,8 +195,9 @@ class DiscrepancyResult:
         w = self.winner
         allp = self.fit_tests + self.heldout_tests
         for k, pt in enumerate(allp):
-            before = force_relative_error_percent(self.baseline_pred[k][0], pt.y[0])
-            after = (force_relative_error_percent(w.predictions[k][0], pt.y[0])
+            m = pt.weight > 0  # resolved samples (recorded tests: corners left out)
+            before = force_relative_error_percent(self.baseline_pred[k][0][m], pt.y[0][m])
+            after = (force_relative_error_percent(w.predictions[k][0][m], pt.y[0][m])
                      if w is not None and w.predictions is not None else before)
             rows.append({"test": pt.test.label, "file": pt.test.file,
                          "set": "fit" if k < len(self.fit_tests) else "held-out",

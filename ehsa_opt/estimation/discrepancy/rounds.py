@@ -64,7 +64,7 @@ def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
                      c.sse_reduction, n_force=sum(pt.y.shape[1] for pt in ev_pts))
                and c.resolved)
     c.predictions = pf + ph
-    c.per_test_after = [force_relative_error_percent(y[0], pt.y[0])
+    c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
     pars = ", ".join(f"{n} {v:.3g}" + (f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv else "")
                      for (n, v), iv in zip(c.parameters.items(), c.intervals.values()))

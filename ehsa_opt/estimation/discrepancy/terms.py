@@ -149,10 +149,10 @@ def _stack(pts, preds, lead, centres, width):
     for pt, yp in zip(pts, preds):
         X, names, groups = feature_library(pt, yp, lead_m_per_rad=lead, centres=centres,
                                            width_m=width)
-        w = 1.0 / pt.sigma[0]  # noise-weighted, like the fits
-        Xs.append(X * w)
+        w = pt.wnorm[0]  # noise-weighted (resolved samples), like the fits
+        Xs.append(X * w[:, None])
         ys.append((pt.y[0] - yp[0]) * w)
-        ws.append(np.full(pt.y.shape[1], w))
+        ws.append(w)
     return np.vstack(Xs), np.concatenate(ys), np.concatenate(ws), names, groups
 
 
@@ -271,13 +271,14 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
         Xe, _, _ = feature_library(pt, yp, lead_m_per_rad=lead_m_per_rad, centres=centres,
                                    width_m=width)
         corr = Xe @ coef
-        r0 = (pt.y[0] - yp[0]) / pt.sigma[0]
-        r1 = (pt.y[0] - yp[0] - corr) / pt.sigma[0]
+        r0 = (pt.y[0] - yp[0]) * pt.wnorm[0]
+        r1 = (pt.y[0] - yp[0] - corr) * pt.wnorm[0]
         sse_b += float(r0 @ r0)
         sse_a += float(r1 @ r1)
-        pb.append(yp[0])
-        pa.append(yp[0] + corr)
-        ym.append(pt.y[0])
+        k = pt.weight > 0
+        pb.append(yp[0][k])
+        pa.append((yp[0] + corr)[k])
+        ym.append(pt.y[0][k])
     m = np.concatenate(ym)
     e0 = force_relative_error_percent(np.concatenate(pb), m)
     e1 = force_relative_error_percent(np.concatenate(pa), m)
@@ -302,7 +303,7 @@ def _shift_lag(pts, preds) -> tuple[float, float] | None:
     SSE of (F − F̂(t − τ))/σ, and that SSE; None when τ = 0 is best."""
     sses = []
     for tau in LAG_GRID_S:
-        sses.append(sum(float(np.sum(((pt.y[0] - _shifted(pt, yp, tau)) / pt.sigma[0]) ** 2))
+        sses.append(sum(float(np.sum(((pt.y[0] - _shifted(pt, yp, tau)) * pt.wnorm[0]) ** 2))
                         for pt, yp in zip(pts, preds)))
     k = int(np.argmin(sses))
     if abs(LAG_GRID_S[k]) < 1e-9:
@@ -316,11 +317,12 @@ def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
     sse_b = sse_a = 0.0
     for pt, yp in zip(eval_pts, eval_preds):
         sh = _shifted(pt, yp, tau)
-        sse_b += float(np.sum(((pt.y[0] - yp[0]) / pt.sigma[0]) ** 2))
-        sse_a += float(np.sum(((pt.y[0] - sh) / pt.sigma[0]) ** 2))
-        pb.append(yp[0])
-        pa.append(sh)
-        ym.append(pt.y[0])
+        sse_b += float(np.sum(((pt.y[0] - yp[0]) * pt.wnorm[0]) ** 2))
+        sse_a += float(np.sum(((pt.y[0] - sh) * pt.wnorm[0]) ** 2))
+        k = pt.weight > 0
+        pb.append(yp[0][k])
+        pa.append(sh[k])
+        ym.append(pt.y[0][k])
     m = np.concatenate(ym)
     word = "delayed" if tau > 0 else "ahead"
     return TermProposal(True, f"time shift of the model force (fit-set SSE {sse_fit0:.4g} -> "

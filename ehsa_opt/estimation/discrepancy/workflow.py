@@ -137,8 +137,9 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     if settings.max_samples is not None:
         fit_t = [_crop(t, settings.max_samples) for t in fit_t]
         held_t = [_crop(t, settings.max_samples) for t in held_t]
-    fit_pts = prepare_tests(fit_t, data.has_generator)
-    held_pts = prepare_tests(held_t, data.has_generator) if held_t else []
+    mass = data.harvester.equivalent_mass_kg() if data.has_generator else None
+    fit_pts = prepare_tests(fit_t, data.has_generator, mass_kg=mass)
+    held_pts = prepare_tests(held_t, data.has_generator, mass_kg=mass) if held_t else []
     sub_pts = _spread(fit_pts, settings.max_fit_tests)
     say(f"{len(fit_pts)} fit tests ({len(sub_pts)} for candidate fits), "
         f"{len(held_pts)} {evaluation} tests")
