@@ -39,8 +39,10 @@ def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = 
     """Convert ``emps_estimation.csv`` (and the validation set) to bench format.
 
     Writes ``out_dir/bench.toml`` + ``emps_estimation.csv`` and
-    ``out_dir/validation/`` with the pulse test (``pulses.csv`` keeps the external
-    pulse force, which the model does not contain).
+    ``out_dir/validation/`` with the pulse test (``pulses.csv``: the pulse signal, a
+    0/5 square wave that the benchmark calls ``pulses_N``; at each edge the recorded force
+    steps by g_tau x 5 V, so it is 5 V added to the controller output, already contained
+    in the force — a marker of the pulse edges, not a missing force).
     """
     src = Path(source_dir)
     h, est = _read(src / "emps_estimation.csv")
@@ -58,9 +60,11 @@ def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = 
     vtest = BenchTest(file="emps_validation_pulses.csv", frequency_hz=None, amplitude_m=None,
                       load_ohm=None, excitation="recorded", time_s=val[:, 0],
                       displacement_m=val[:, 1], force_N=GAIN_N_PER_V * val[:, 3],
-                      description="validation with external force pulses (not in the model); "
-                                  "pulse force in pulses.csv")
-    pulses = "time_s,pulse_force_N\n" + "\n".join(
+                      description="validation with pulses: a 0/5 V square wave (period 1 s) "
+                                  "added to the controller output, so each of its 49 edges "
+                                  "steps the recorded force by g_tau x 5 V = 176 N; the force "
+                                  "here contains the pulses, pulses.csv marks them")
+    pulses = "time_s,pulse_V\n" + "\n".join(
         f"{t:.9g},{f:.9g}" for t, f in zip(val[:, 0], val[:, 4]))
     out = Path(out_dir)
     readme = (out / "README.md").read_text() if (out / "README.md").exists() else ""

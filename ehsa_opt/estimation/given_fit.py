@@ -51,10 +51,14 @@ class GivenFit(SolveRecord):
         Σ (w_k (y − ŷ))² without the 1/N and the regularisation.
     jacobian : ndarray (N_res, nv)
         d(weighted residuals)/dz at ``w``.
+    residual : ndarray (N_res,)
+        The weighted residuals at ``w`` (channel-major per block), for a covariance
+        that respects their autocorrelation.
     """
 
     sse: float = float("nan")
     jacobian: np.ndarray | None = None
+    residual: np.ndarray | None = None
 
 
 def _functions(model: BenchModel, space: ParamSpace, ny: int
@@ -208,5 +212,5 @@ def fit_given(model: BenchModel, space: ParamSpace, blocks: Sequence[Block],
         out.append(GivenFit(bool(sol.status > 0 and finite), f"least_squares: {sol.message}",
                             z, float(r @ r / n_tot + regularisation * np.sum((z - zref) ** 2)),
                             int(sol.nfev), time.perf_counter() - t0, sse=float(r @ r),
-                            jacobian=J.copy()))
+                            jacobian=J.copy(), residual=np.array(r, copy=True)))
     return out

@@ -51,7 +51,7 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
     """
     varied = list(varied)
     nv = len(varied)
-    rows, weights, pos = [], [], 0
+    rows, weights, pos, resid, sizes = [], [], 0, [], []
     for ym in y_meas:
         npts = ym.shape[1]
         for k in range(ym.shape[0]):
@@ -60,6 +60,8 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
             sigma = max(float(np.std(r)), 1e-12)
             rows.append(np.arange(block.start, block.stop))
             weights.append(np.full(npts, 1.0 / sigma))
+            resid.append(r / sigma)
+            sizes.append(npts)
             pos += npts
     rows_i = np.concatenate(rows)
     Wt = np.concatenate(weights)
@@ -89,8 +91,16 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
                 if abs(c) > 0.1}
         directions.append({"relative_eigenvalue": float(max(rel[k], 0.0)), "vector": comp,
                            "main": main, "identifiable": bool(rel[k] >= rtol)})
-    cov_z = np.linalg.pinv(Fz, rcond=rtol)
+    # intervals: the Newey-West sandwich (the residuals of a time series are
+    # autocorrelated: the independent-samples covariance pinv(Fz) is too narrow by
+    # about their correlation time), initial states profiled out
+    from .covariance import hac_covariance
+    colscale = np.concatenate([scales, np.ones(Jw.shape[1] - nv)])
+    hac = hac_covariance(Jw * colscale[None, :], np.concatenate(resid), groups=sizes,
+                         n_nuisance=Jw.shape[1] - nv, rcond=rtol)
+    cov_z = hac.cov
     cov = cov_z * np.outer(scales, scales)
+    cov_iid = np.linalg.pinv(Fz, rcond=rtol) * np.outer(scales, scales)
     params = dict(params)
     sd = np.sqrt(np.clip(np.diag(cov), 0, None))
     ci = {n: [params[n] - 1.96 * sd[j], params[n] + 1.96 * sd[j]] for j, n in enumerate(varied)}
@@ -136,7 +146,12 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
             "directions": directions,
             "non_identifiable": [d["main"] for d in weak],
             "condition_number": float(ev[-1] / max(ev[0], 1e-300)), "threshold": rtol,
-            "parameter_ci95": ci, "combinations": combos}
+            "parameter_ci95": ci, "combinations": combos,
+            "interval_method": hac.method, "effective_samples": hac.n_eff,
+            "samples": hac.n, "hac_bandwidth_samples": hac.bandwidth,
+            "parameter_ci95_iid": {n: [params[n] - 1.96 * float(np.sqrt(max(cov_iid[j, j], 0))),
+                                       params[n] + 1.96 * float(np.sqrt(max(cov_iid[j, j], 0)))]
+                                   for j, n in enumerate(varied)}}
 
 
 

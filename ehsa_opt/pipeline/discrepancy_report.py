@@ -151,8 +151,8 @@ def _floor(res: DiscrepancyResult) -> float | None:
 
 def _json_default(o: Any) -> Any:
     import numpy as np
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
+    if isinstance(o, (np.floating, np.integer, np.bool_)):
+        return o.item()  # a numpy bool is a JSON boolean, never the string 'False'
     if isinstance(o, np.ndarray):
         return o.tolist()
     return str(o)

@@ -123,7 +123,9 @@ def ranking(result: Any) -> Any:
                  label="ΔBIC held-out")
     axes[1].axvline(0, color="k", lw=0.8)
     axes[1].set_xscale("symlog")
-    axes[1].set_xlabel("ΔBIC (< 0: earns its parameters)", fontsize=8)
+    axes[1].set_xlabel("ΔBIC (< 0 on both is necessary, not sufficient: the effect must\n"
+                       "also reduce the error by the rule's practical size; earns: see the table)",
+                       fontsize=7)
     axes[1].legend(fontsize=7)
     for a in axes:
         a.tick_params(labelsize=7)

@@ -265,7 +265,11 @@ class FitOutcome:
         Per start: status, objective, iterations.
     seconds : float
     covariance : ndarray or None
-        Gauss–Newton covariance of the free parameters (scaled by the residual variance).
+        Covariance of the free parameters: Newey–West sandwich on the Gauss–Newton
+        Jacobian (autocorrelated residuals; :mod:`ehsa_opt.estimation.covariance`).
+    covariance_info : dict or None
+        How it was computed: method, N_eff, bandwidth, inflation over the
+        independent-samples covariance.
     """
 
     success: bool
@@ -278,6 +282,7 @@ class FitOutcome:
     starts: list[dict] = field(default_factory=list)
     seconds: float = 0.0
     covariance: np.ndarray | None = None
+    covariance_info: dict | None = None
 
     def interval(self, name: str, z: float = 1.96) -> tuple[float, float] | None:
         """~95 % interval of a fitted parameter (None if not fitted or unavailable)."""
@@ -407,9 +412,9 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     vals = space.values_of(best.w, np.zeros(len(model.param_names)))
     params.update({n: vals[n] for n in free})
     sse = float(nlp.ssefun(best.w, p))
-    cov = _covariance(nlp, best.w, p, blocks, len(free), sse / max(n_obs - len(free), 1))
+    cov, hac = _covariance(nlp, best.w, p, blocks, len(free), prepared)
     return FitOutcome(best.success, best.status, params, free, sse / n_obs, sse, n_obs, records,
-                      time.perf_counter() - t0, cov)
+                      time.perf_counter() - t0, cov, hac)
 
 
 def _fit_given(model: BenchModel, space: core.ParamSpace, blocks: Sequence[Any],
@@ -435,26 +440,46 @@ def _outcome_given(fits: list[GivenFit], space: core.ParamSpace, blocks: Sequenc
     vals = space.values_of(best.w, np.zeros(len(space.names)))
     params.update({n: vals[n] for n in free})
     S = best.jacobian / np.array(space.scale)  # d(weighted residuals)/d(physical values)
-    s2 = best.sse / max(n_obs - len(free), 1)
-    cov = np.linalg.pinv(S.T @ S) * s2
+    cov, hac = _hac(S, best.residual, [b.n_obs for b in blocks for _ in range(b.ny)])
     return FitOutcome(best.success, best.status, params, free, best.sse / n_obs, best.sse,
-                      n_obs, records, time.perf_counter() - t0, cov)
+                      n_obs, records, time.perf_counter() - t0, cov, hac)
+
+
+def _hac(S: np.ndarray, r: np.ndarray | None, groups: list[int], n_nuisance: int = 0
+         ) -> tuple[np.ndarray | None, dict | None]:
+    """Newey–West covariance of the free parameters (:func:`~ehsa_opt.estimation.
+    covariance.hac_covariance`, one segment per test and channel) and its summary."""
+    from ..covariance import hac_covariance
+    if r is None or S.shape[0] != np.size(r):
+        return None, None
+    try:
+        h = hac_covariance(S, r, groups=groups, n_nuisance=n_nuisance)
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        import warnings
+        warnings.warn(f"parameter covariance unavailable: {exc}")
+        return None, None
+    return h.cov, {"method": h.method, "n_eff": h.n_eff, "n": h.n,
+                   "bandwidth_samples": h.bandwidth,
+                   "inflation_over_iid": [float(x) for x in h.inflation]}
 
 
 def _covariance(nlp: core.NLP, w: np.ndarray, p: np.ndarray, blocks: Sequence[Any], nz: int,
-                s2: float) -> np.ndarray | None:
-    """Gauss–Newton covariance of the free parameters, cov = s² (SᵀS)⁺ with S the total
+                prepared: Sequence[PreparedTest]) -> tuple[np.ndarray | None, dict | None]:
+    """Newey–West covariance of the free parameters (:func:`_hac`) with S the total
     sensitivity of the noise-normalised residuals (states eliminated through the
-    collocation constraints by the core; initial states marginalised)."""
+    collocation constraints by the core; initial states profiled out)."""
     try:
         dy = nlp.sensitivities(w, p)
         wt = np.concatenate([b.info["weight_matrix"].ravel() for b in blocks])
         S = dy * wt[:, None]
-        return np.linalg.pinv(S.T @ S)[:nz, :nz] * s2
+        ym = np.concatenate([pt.y.ravel() for pt in prepared])  # per test, channel, sample
+        r = (ym - np.asarray(nlp.yfun(w, p)).ravel()) * wt
     except Exception as exc:  # noqa: BLE001 - intervals are a report extra, never fatal
         import warnings
         warnings.warn(f"parameter covariance unavailable: {exc}")
-        return None
+        return None, None
+    return _hac(S, r, [b.n_obs for b in blocks for _ in range(b.ny)],
+                n_nuisance=S.shape[1] - nz)
 
 
 # ------------------------------------------------------------------ predictions

@@ -130,8 +130,16 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     out = {**base, **{n: float(v) for n, v in zip(free, x1)}}
     # Gauss-Newton covariance from the final Jacobian (chain rule to physical units)
     dxdz = np.where(is_log, np.log(10.0) * x1, scales)
-    cov = gauss_newton_covariance(np.asarray(sol.jac, dtype=float) / dxdz[None, :],
-                                  sse1 / max(r0.size - len(free), 1))
+    Jx = np.asarray(sol.jac, dtype=float) / dxdz[None, :]
+    cov = gauss_newton_covariance(Jx, sse1 / max(r0.size - len(free), 1))
+    try:  # autocorrelated residuals: the Newey-West sandwich where the data determine
+        from ..covariance import hac_covariance
+        h = hac_covariance(Jx, np.asarray(sol.fun, dtype=float),
+                           groups=[pt.y.shape[1] for pt in prepared for _ in pt.y])
+        known = np.isfinite(cov)
+        cov = np.where(known, h.cov, cov)
+    except (ValueError, np.linalg.LinAlgError):
+        pass  # the Gauss-Newton covariance stays
     return PolishOutcome(True, sol.message, out, sse0, sse1, counter[0],
                          time.perf_counter() - t0, free, cov)
 

@@ -102,6 +102,7 @@ class CandidateResult:
     delta_bic_heldout: float = math.nan
     sse_heldout: float = math.nan
     sse_reduction: float | None = None
+    sse_route: bool = False  # the other-channel (SSE) route was open (force at its floor)
     resolved: bool = True
     earns: bool = False
     parameters: dict[str, float] = field(default_factory=dict)
@@ -112,12 +113,13 @@ class CandidateResult:
 
     def as_dict(self) -> dict:
         return {"effect": self.effect, "round": self.round, "applicable": self.applicable,
-                "score": self.score, "chi2": self.chi2, "re_identified": self.fitted,
+                "score": self.score, "chi2": self.chi2, "re_identified": bool(self.fitted),
                 "error_before": self.error_before, "error_after": self.error_after,
                 "excess_error_reduction": self.excess_reduction,
                 "delta_bic_fit": self.delta_bic_fit, "delta_bic_heldout": self.delta_bic_heldout,
                 "sse_excess_reduction": self.sse_reduction,
-                "earns_its_parameters": self.earns, "parameters": self.parameters,
+                "sse_route_open": bool(self.sse_route),
+                "earns_its_parameters": bool(self.earns), "parameters": self.parameters,
                 "intervals_95": {k: list(v) if v else None for k, v in self.intervals.items()},
                 "ipopt_status": self.fit.message if self.fit else None,
                 "fit_seconds": self.fit.seconds if self.fit else None}

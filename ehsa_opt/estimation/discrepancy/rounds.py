@@ -22,6 +22,7 @@ from .refit import (
     _dbic,
     _force_error,
     _sse,
+    can_earn,
     compatible,
     earns,
     effective_samples,
@@ -60,9 +61,13 @@ def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
     c.sse_reduction = channel_sse_excess_reduction(
         ch_sse0[ch], channel_sse(ev_pts, ev_pred)[0][ch], ch_n[ch])
     c.resolved = significant(c.intervals, CANDIDATES[name].amplitudes)
-    c.earns = (earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
-                     c.sse_reduction, n_force=sum(pt.y.shape[1] for pt in ev_pts))
-               and c.resolved)
+    # the SSE (other-channel) route is offered only where the force error has no excess
+    # beyond noise left to remove (the stated rule); elsewhere the force decides
+    c.sse_route = not can_earn(cur_err, floor, 0.0, 1.0)
+    c.earns = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
+                         c.sse_reduction if c.sse_route else None,
+                         n_force=sum(pt.y.shape[1] for pt in ev_pts))
+                   and c.resolved)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
