@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +17,8 @@ from ..estimation.discrepancy import (
 from ..utils.io import atomic_write_json, atomic_write_text
 from .base import Context, StepOutput
 
-__all__ = ["write_report", "report_markdown", "step_discrepancy", "truth_error"]
+__all__ = ["write_report", "write_partial_report", "report_markdown", "step_discrepancy",
+           "truth_error"]
 
 #: Published EMPS figures (Janot et al. 2019, SPEC §9).
 _EMPS_PUBLISHED = {"before": 4.08, "after": 3.11, "f_v_pos": 166.7, "f_v_neg": 240.4,
@@ -142,6 +144,52 @@ def write_report(res: DiscrepancyResult, out_dir: str | Path) -> tuple[Path, Pat
     atomic_write_text(md, f"# Model-discrepancy report: {res.data_path}\n\n"
                       + report_markdown(res, floor=floor))
     return js, md
+
+
+_ROUND = re.compile(r"^round (\d+) \(error ([0-9.eE+-]+) %, floor ([0-9.eE+-]+) %")
+_ADDED = re.compile(r"^round (\d+): added (.+), (.+?) error ([0-9.eE+-]+) %")
+
+
+def write_partial_report(out_dir: str | Path, data_dir: str | Path, messages: list[str],
+                         budget_s: float, seconds: float) -> tuple[Path, str]:
+    """The stated result of a run cut at its time budget: ``discrepancy.json`` (with
+    ``success = false``, ``partial = true``) and ``report.md``, built from the progress
+    messages of the workflow — the effects named in the rounds that completed, the error
+    before and after them, and the last message (where it was cut).
+
+    Returns the JSON path and the one-line message."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    before = floor = None
+    steps, rounds = [], 0
+    for m in messages:
+        if (g := _ROUND.match(m)):
+            rounds = int(g.group(1))
+            if before is None:
+                before, floor = float(g.group(2)), float(g.group(3))
+        elif (g := _ADDED.match(m)):
+            steps.append({"effect": g.group(2), "error_after": float(g.group(4)),
+                          "evaluation": g.group(3)})
+    named = [st["effect"] for st in steps]
+    where = (f"in round {rounds}" if rounds else "before the first round (baseline fit)")
+    answer = " + ".join(named) if named else "undecided"
+    msg = (f"time budget of {budget_s:.0f} s reached {where} after {seconds:.0f} s: partial "
+           f"answer `{answer}` (" + (f"named in the completed rounds; error "
+                                     f"{before:.3f} % -> {steps[-1]['error_after']:.3f} %"
+                                     if named else "no round completed with a named effect")
+           + "); raise --budget-s, or reduce the data (--max-tests) for a full answer")
+    doc = {"effect": answer, "effects": named, "steps": steps, "success": False,
+           "partial": True, "message": msg, "budget_s": budget_s, "seconds": seconds,
+           "error_before": before, "error_after": steps[-1]["error_after"] if steps else before,
+           "noise_floor_percent": floor, "data": str(data_dir),
+           "last_message": messages[-1] if messages else None, "log": messages}
+    js = out / "discrepancy.json"
+    atomic_write_json(js, doc, indent=2)
+    atomic_write_text(out / "report.md",
+                      f"# Model-discrepancy report: {data_dir}\n\n**Cut at the time budget.** "
+                      f"{msg}.\n\nLast progress message: `{doc['last_message']}`\n\n"
+                      "Progress of the run:\n\n" + "\n".join(f"- {m}" for m in messages) + "\n")
+    return js, msg
 
 
 def _floor(res: DiscrepancyResult) -> float | None:
