@@ -12,7 +12,6 @@ import errno
 import json
 import os
 import sys
-import warnings
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -43,13 +42,10 @@ _POSITIVE, _NON_NEGATIVE = _count(1), _count(0)
 
 
 def _NON_NEGATIVE_FLOAT(text: str) -> float:
-    """argparse type: a finite number >= 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not (value >= 0.0 and value != float("inf")):
-        raise argparse.ArgumentTypeError(f"{text} must be a finite number >= 0")
+    """argparse type: a finite number >= 0 (s)."""
+    value = float(text) if text.replace(".", "", 1).isdigit() else -1.0
+    if not 0.0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"'{text}' must be a finite number >= 0")
     return value
 
 
@@ -341,40 +337,13 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     return 0 if ok else 1
 # ------------------------------------------------------------------ discrepancy
 def _cmd_discrepancy(args: argparse.Namespace) -> int:
-    from .estimation.discrepancy import DiscrepancySettings, run_discrepancy
-    from .pipeline.discrepancy_report import write_partial_report, write_report
+    from .estimation.discrepancy import DiscrepancySettings
+    from .pipeline.discrepancy_report import run_with_budget
 
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
                                    max_tests=args.max_tests)
-
-    def job(say) -> None:
-        res = run_discrepancy(args.data_dir, settings, log=say)
-        js, md = write_report(res, args.out)
-        say(res.message)
-        floor = json.loads(js.read_text()).get("error_true_parameters")
-        if floor is not None:
-            say(f"true parameters (truth.toml) on the same tests: {floor:.3f} %")
-        say(f"wrote {js} and {md} ({res.seconds:.0f} s)")
-
-    if not args.budget_s:
-        job(lambda m: print(m, flush=True))
-        return 0
-    from .datasets.bench_format import load_bench
-    from .utils.process import run_with_deadline
-    with warnings.catch_warnings():  # syntax and layout errors here, before any work
-        warnings.simplefilter("ignore")
-        load_bench(args.data_dir, lenient=True)
-    print(f"time budget {args.budget_s:g} s (--budget-s; 0 for none)", flush=True)
-    run = run_with_deadline(job, args.budget_s, lambda m: print(m, flush=True))
-    if run.error is not None:
-        raise ValueError(f"discrepancy on {args.data_dir}: {run.error[0]}: {run.error[1]}")
-    if not run.finished:
-        js, msg = write_partial_report(args.out, args.data_dir, run.messages, args.budget_s,
-                                       run.seconds)
-        print(msg)
-        print(f"wrote {js}")
-        return 1
-    return 0
+    return run_with_budget(args.data_dir, args.out, settings, args.budget_s,
+                           lambda m: print(m, flush=True))
 
 
 # ------------------------------------------------------------------ reproduce
@@ -565,9 +534,8 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--max-tests", type=_POSITIVE, default=None,
                    help="use at most this many tests, spread over the grid")
     d.add_argument("--budget-s", type=_NON_NEGATIVE_FLOAT, default=170.0,
-                   help="wall-time budget in s (default 170): when it is reached the run "
-                        "stops and writes a partial answer (the effects named in the "
-                        "completed rounds), exit 1; 0 for no budget")
+                   help="wall-time budget, s (default 170; 0: none): when reached, a "
+                        "partial answer (effects of the completed rounds), exit 1")
     d.set_defaults(func=_cmd_discrepancy)
 
     r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data "

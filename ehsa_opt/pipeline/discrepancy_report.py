@@ -17,7 +17,7 @@ from ..estimation.discrepancy import (
 from ..utils.io import atomic_write_json, atomic_write_text
 from .base import Context, StepOutput
 
-__all__ = ["write_report", "write_partial_report", "report_markdown", "step_discrepancy",
+__all__ = ["write_report", "write_partial_report", "run_with_budget", "report_markdown", "step_discrepancy",
            "truth_error"]
 
 #: Published EMPS figures (Janot et al. 2019, SPEC §9).
@@ -144,6 +144,46 @@ def write_report(res: DiscrepancyResult, out_dir: str | Path) -> tuple[Path, Pat
     atomic_write_text(md, f"# Model-discrepancy report: {res.data_path}\n\n"
                       + report_markdown(res, floor=floor))
     return js, md
+
+
+def run_with_budget(data_dir: str | Path, out_dir: str | Path, settings: DiscrepancySettings,
+                    budget_s: float | None, say) -> int:
+    """``ehsa-opt discrepancy``: the workflow and its report, within a wall-time budget.
+
+    The run goes to a forked worker (:func:`~ehsa_opt.utils.process.run_with_deadline`)
+    that is killed when ``budget_s`` is reached; the report is then the partial answer of
+    :func:`write_partial_report`.  Syntax and layout errors of the data are raised here,
+    before any work.  Returns the exit code: 0 done, 1 cut at the budget.
+    ``budget_s`` 0 or None: no budget, the run stays in this process."""
+    def job(send) -> None:
+        res = run_discrepancy(data_dir, settings, log=send)
+        js, md = write_report(res, out_dir)
+        send(res.message)
+        floor = json.loads(js.read_text()).get("error_true_parameters")
+        if floor is not None:
+            send(f"true parameters (truth.toml) on the same tests: {floor:.3f} %")
+        send(f"wrote {js} and {md} ({res.seconds:.0f} s)")
+
+    if not budget_s:
+        job(say)
+        return 0
+    import warnings
+
+    from ..datasets.bench_format import load_bench
+    from ..utils.process import run_with_deadline
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        load_bench(data_dir, lenient=True)
+    say(f"time budget {budget_s:g} s (--budget-s; 0 for none)")
+    run = run_with_deadline(job, budget_s, say)
+    if run.error is not None:
+        raise ValueError(f"discrepancy on {data_dir}: {run.error[0]}: {run.error[1]}")
+    if not run.finished:
+        js, msg = write_partial_report(out_dir, data_dir, run.messages, budget_s, run.seconds)
+        say(msg)
+        say(f"wrote {js}")
+        return 1
+    return 0
 
 
 _ROUND = re.compile(r"^round (\d+) \(error ([0-9.eE+-]+) %, floor ([0-9.eE+-]+) %")
