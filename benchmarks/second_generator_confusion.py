@@ -19,7 +19,10 @@ noise floor, wall time, peak memory; then the summary (catalogue cases right, cl
 none, out-of-catalogue behaviour, budget: cases over 3 min or 1 GB).
 
     PYTHONPATH=. python benchmarks/second_generator_confusion.py [--set cases|tuning]
-        [--cases ID,ID|SUBSTRING] [--jobs 2] [--cut-s 360] [--out FILE]
+        [--cases ID,ID|SUBSTRING] [--jobs 2] [--budget-s S] [--cut-s 360] [--out FILE]
+
+A case cut by the command's own budget (``--budget-s``) gives its stated partial answer
+(``budget: ...``); one still running at ``--cut-s`` is killed by this script.
 """
 
 from __future__ import annotations
@@ -67,10 +70,10 @@ def campaign_dir(root: Path, case: tuple) -> Path:
     return d
 
 
-def run_cli(data: Path, out: Path, jobs: int, cut_s: float) -> dict:
+def run_cli(data: Path, out: Path, jobs: int, cut_s: float, budget_s: float | None) -> dict:
     """Run ``ehsa-opt discrepancy`` in a fresh process group; wall time, ru_maxrss, log."""
     cmd = [sys.executable, "-m", "ehsa_opt.cli", "discrepancy", str(data), "--out", str(out),
-           "--jobs", str(jobs)]
+           "--jobs", str(jobs)] + ([] if budget_s is None else ["--budget-s", f"{budget_s:g}"])
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     log_path = out.with_suffix(".log")
     t0 = time.perf_counter()
@@ -115,12 +118,15 @@ def run_case(case: tuple, args) -> dict:
         shutil.rmtree(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     with heavy_lock(args.lock):
-        run = run_cli(data, out, args.jobs, args.cut_s)
+        run = run_cli(data, out, args.jobs, args.cut_s, args.budget_s)
     row = {"case": cid, "expected": expected, "rig": rig, "protocol": protocol,
            "tests": n_tests, "seed": seed, **{k: v for k, v in run.items() if k != "log"}}
     js = out / "discrepancy.json"
     if js.exists():
         doc = json.loads(js.read_text())
+        if doc.get("partial"):  # the command's own budget cut it: a stated partial answer
+            row["cut"] = True
+            doc["effect"] = "budget: " + doc["effect"]
         row.update(answer=doc["effect"], named=doc["effects"], steps=[
             {"effect": s["effect"], "error_after": s.get("error_after"),
              "parameters": s.get("parameters")} for s in doc["steps"]],
@@ -192,6 +198,9 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2, help="--jobs of ehsa-opt discrepancy")
     ap.add_argument("--cut-s", type=float, default=360.0,
                     help="kill a case after this many seconds (reported as cut)")
+    ap.add_argument("--budget-s", type=float, default=None,
+                    help="--budget-s of ehsa-opt discrepancy (default: the command's own; "
+                         "0 for none, to see how long an uncut run takes)")
     ap.add_argument("--lock", default="/tmp/ehsa-heavy.lock",
                     help="lock file held while generating and running ('' for none)")
     ap.add_argument("--data-root", default=str(ROOT / "results" / "second_generator" / "data"))
@@ -214,7 +223,8 @@ def main(argv=None) -> int:
         if args.out:
             from ehsa_opt.utils.io import atomic_write_text
             atomic_write_text(Path(args.out), json.dumps(rows, indent=2, default=str))
-    print(f"\n{args.set}: {len(rows)} cases, jobs={args.jobs}, "
+    print(f"\n{args.set}: {len(rows)} cases, jobs={args.jobs}, budget "
+          f"{'default' if args.budget_s is None else args.budget_s}, cap {args.cut_s:g} s, "
           f"total {time.perf_counter() - t_all:.0f} s")
     print(summary(rows))
     return 0
