@@ -237,13 +237,11 @@ def _truth(c: Campaign, model: RigModel) -> dict:
                          "sample_rate_hz": c.sample_rate_hz},
             "harvester": asdict(model.harvester), "nut_friction": asdict(model.nut),
             "bearing_friction": asdict(model.bearing),
-            "effects": {k: v for k, v in asdict(c.effects).items()
-                        if v != getattr(Effects(), k) or k in _ACTIVE_KEYS(c.effects)},
-            "noise": asdict(c.noise)}
-
-
-def _ACTIVE_KEYS(e: Effects) -> set[str]:
-    return {k for k, v in asdict(e).items() if v != getattr(Effects(), k)}
+            "changed_from_default": sorted(k for k, v in asdict(c.effects).items()
+                                           if v != getattr(Effects(), k))
+            + (["asym_coulomb_N", "asym_viscous_Ns_per_m"]
+               if c.asym_coulomb_N or c.asym_viscous_Ns_per_m else []),
+            "effects": asdict(c.effects), "noise": asdict(c.noise)}
 
 
 def write_campaign(path: str | Path, c: Campaign, *, overwrite: bool = False) -> Path:
