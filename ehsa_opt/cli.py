@@ -41,6 +41,14 @@ def _count(minimum: int) -> Callable[[str], int]:
 _POSITIVE, _NON_NEGATIVE = _count(1), _count(0)
 
 
+def _NON_NEGATIVE_FLOAT(text: str) -> float:
+    """argparse type: a finite number >= 0 (s)."""
+    value = float(text) if text.replace(".", "", 1).isdigit() else -1.0
+    if not 0.0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"'{text}' must be a finite number >= 0")
+    return value
+
+
 def _check_output_dir(path: str, option: str) -> None:
     """Refuse an output folder that cannot be used, before any work is done."""
     p = Path(path)
@@ -329,19 +337,13 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     return 0 if ok else 1
 # ------------------------------------------------------------------ discrepancy
 def _cmd_discrepancy(args: argparse.Namespace) -> int:
-    from .estimation.discrepancy import DiscrepancySettings, run_discrepancy
-    from .pipeline.discrepancy_report import write_report
+    from .estimation.discrepancy import DiscrepancySettings
+    from .pipeline.discrepancy_report import run_with_budget
 
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
                                    max_tests=args.max_tests)
-    res = run_discrepancy(args.data_dir, settings, log=lambda m: print(m, flush=True))
-    js, md = write_report(res, args.out)
-    print(res.message)
-    floor = json.loads(js.read_text()).get("error_true_parameters")
-    if floor is not None:
-        print(f"true parameters (truth.toml) on the same tests: {floor:.3f} %")
-    print(f"wrote {js} and {md} ({res.seconds:.0f} s)")
-    return 0
+    return run_with_budget(args.data_dir, args.out, settings, args.budget_s,
+                           lambda m: print(m, flush=True))
 
 
 # ------------------------------------------------------------------ reproduce
@@ -531,6 +533,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--top", type=_POSITIVE, default=3, help="candidates re-identified (default 3)")
     d.add_argument("--max-tests", type=_POSITIVE, default=None,
                    help="use at most this many tests, spread over the grid")
+    d.add_argument("--budget-s", type=_NON_NEGATIVE_FLOAT, default=170.0,
+                   help="wall-time budget, s (default 170; 0: none): when reached, a "
+                        "partial answer (effects of the completed rounds), exit 1")
     d.set_defaults(func=_cmd_discrepancy)
 
     r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data "

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +17,8 @@ from ..estimation.discrepancy import (
 from ..utils.io import atomic_write_json, atomic_write_text
 from .base import Context, StepOutput
 
-__all__ = ["write_report", "report_markdown", "step_discrepancy", "truth_error"]
+__all__ = ["write_report", "write_partial_report", "run_with_budget", "report_markdown", "step_discrepancy",
+           "truth_error"]
 
 #: Published EMPS figures (Janot et al. 2019, SPEC §9).
 _EMPS_PUBLISHED = {"before": 4.08, "after": 3.11, "f_v_pos": 166.7, "f_v_neg": 240.4,
@@ -142,6 +144,92 @@ def write_report(res: DiscrepancyResult, out_dir: str | Path) -> tuple[Path, Pat
     atomic_write_text(md, f"# Model-discrepancy report: {res.data_path}\n\n"
                       + report_markdown(res, floor=floor))
     return js, md
+
+
+def run_with_budget(data_dir: str | Path, out_dir: str | Path, settings: DiscrepancySettings,
+                    budget_s: float | None, say) -> int:
+    """``ehsa-opt discrepancy``: the workflow and its report, within a wall-time budget.
+
+    The run goes to a forked worker (:func:`~ehsa_opt.utils.process.run_with_deadline`)
+    that is killed when ``budget_s`` is reached; the report is then the partial answer of
+    :func:`write_partial_report`.  Syntax and layout errors of the data are raised here,
+    before any work.  Returns the exit code: 0 done, 1 cut at the budget.
+    ``budget_s`` 0 or None: no budget, the run stays in this process."""
+    def job(send) -> None:
+        res = run_discrepancy(data_dir, settings, log=send)
+        js, md = write_report(res, out_dir)
+        send(res.message)
+        floor = json.loads(js.read_text()).get("error_true_parameters")
+        if floor is not None:
+            send(f"true parameters (truth.toml) on the same tests: {floor:.3f} %")
+        send(f"wrote {js} and {md} ({res.seconds:.0f} s)")
+
+    if not budget_s:
+        job(say)
+        return 0
+    import warnings
+
+    from ..datasets.bench_format import load_bench
+    from ..utils.process import run_with_deadline
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        load_bench(data_dir, lenient=True)
+    say(f"time budget {budget_s:g} s (--budget-s; 0 for none)")
+    run = run_with_deadline(job, budget_s, say)
+    if run.error is not None:
+        raise ValueError(f"discrepancy on {data_dir}: {run.error[0]}: {run.error[1]}")
+    if not run.finished:
+        js, msg = write_partial_report(out_dir, data_dir, run.messages, budget_s, run.seconds)
+        say(msg)
+        say(f"wrote {js}")
+        return 1
+    return 0
+
+
+_ROUND = re.compile(r"^round (\d+) \(error ([0-9.eE+-]+) %, floor ([0-9.eE+-]+) %")
+_ADDED = re.compile(r"^round (\d+): added (.+), (.+?) error ([0-9.eE+-]+) %")
+
+
+def write_partial_report(out_dir: str | Path, data_dir: str | Path, messages: list[str],
+                         budget_s: float, seconds: float) -> tuple[Path, str]:
+    """The stated result of a run cut at its time budget: ``discrepancy.json`` (with
+    ``success = false``, ``partial = true``) and ``report.md``, built from the progress
+    messages of the workflow — the effects named in the rounds that completed, the error
+    before and after them, and the last message (where it was cut).
+
+    Returns the JSON path and the one-line message."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    before = floor = None
+    steps, rounds = [], 0
+    for m in messages:
+        if (g := _ROUND.match(m)):
+            rounds = int(g.group(1))
+            if before is None:
+                before, floor = float(g.group(2)), float(g.group(3))
+        elif (g := _ADDED.match(m)):
+            steps.append({"effect": g.group(2), "error_after": float(g.group(4)),
+                          "evaluation": g.group(3)})
+    named = [st["effect"] for st in steps]
+    where = (f"in round {rounds}" if rounds else "before the first round (baseline fit)")
+    answer = " + ".join(named) if named else "undecided"
+    msg = (f"time budget of {budget_s:.0f} s reached {where} after {seconds:.0f} s: partial "
+           f"answer `{answer}` (" + (f"named in the completed rounds; error "
+                                     f"{before:.3f} % -> {steps[-1]['error_after']:.3f} %"
+                                     if named else "no round completed with a named effect")
+           + "); raise --budget-s, or reduce the data (--max-tests) for a full answer")
+    doc = {"effect": answer, "effects": named, "steps": steps, "success": False,
+           "partial": True, "message": msg, "budget_s": budget_s, "seconds": seconds,
+           "error_before": before, "error_after": steps[-1]["error_after"] if steps else before,
+           "noise_floor_percent": floor, "data": str(data_dir),
+           "last_message": messages[-1] if messages else None, "log": messages}
+    js = out / "discrepancy.json"
+    atomic_write_json(js, doc, indent=2)
+    atomic_write_text(out / "report.md",
+                      f"# Model-discrepancy report: {data_dir}\n\n**Cut at the time budget.** "
+                      f"{msg}.\n\nLast progress message: `{doc['last_message']}`\n\n"
+                      "Progress of the run:\n\n" + "\n".join(f"- {m}" for m in messages) + "\n")
+    return js, msg
 
 
 def _floor(res: DiscrepancyResult) -> float | None:

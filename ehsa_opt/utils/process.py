@@ -11,14 +11,16 @@ polls ``os.getppid()`` and exits when the parent has gone.
 from __future__ import annotations
 
 import ctypes
+import json
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 import os
 import signal
 import sys
 import threading
 import time
 
-__all__ = ["die_with_parent", "single_threaded_blas"]
+__all__ = ["die_with_parent", "single_threaded_blas", "DeadlineOutcome", "run_with_deadline"]
 
 _PR_SET_PDEATHSIG = 1
 _installed = False
@@ -72,3 +74,100 @@ def single_threaded_blas():
     from threadpoolctl import threadpool_limits
     with threadpool_limits(limits=1, user_api="blas"):
         yield
+
+
+@dataclass
+class DeadlineOutcome:
+    """What :func:`run_with_deadline` saw.
+
+    Attributes
+    ----------
+    finished : bool
+        The target returned before the deadline.
+    error : tuple of (str, str) or None
+        ``(exception class name, message)`` when the target raised.
+    messages : list of str
+        Every message the target sent, in order.
+    seconds : float
+        Wall time until the target returned or was killed.
+    """
+
+    finished: bool
+    error: tuple[str, str] | None = None
+    messages: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+
+def _deadline_child(conn, target) -> None:
+    def send(msg) -> None:
+        conn.send_bytes(json.dumps(["log", str(msg)]).encode())
+
+    try:
+        target(send)
+        conn.send_bytes(json.dumps(["done"]).encode())
+    except BaseException as exc:  # reported to the parent, which decides
+        conn.send_bytes(json.dumps(["error", type(exc).__name__, str(exc)]).encode())
+    finally:
+        conn.close()
+
+
+def run_with_deadline(target, seconds: float, on_message=None) -> DeadlineOutcome:
+    """Run ``target(send)`` in a forked child and kill it (and, through
+    :func:`die_with_parent`, its own workers) when ``seconds`` have passed.
+
+    ``send(message)`` passes a progress message (text) to the parent, which relays it to
+    ``on_message`` at once and keeps it, so that a run cut at the deadline still says how
+    far it got.  Messages travel as JSON over a pipe (nothing is unpickled).  The target
+    must leave its results in files (the child's memory is lost).
+
+    Parameters
+    ----------
+    target : callable
+        ``target(send) -> None``.
+    seconds : float
+        Wall-time budget, s.
+    on_message : callable, optional
+        Called with each message as it arrives (e.g. ``print``).
+    """
+    import multiprocessing as mp
+
+    die_with_parent()
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    t0 = time.monotonic()
+    proc = ctx.Process(target=_deadline_child, args=(send, target), daemon=False)
+    proc.start()
+    send.close()
+    out = DeadlineOutcome(finished=False)
+    deadline = t0 + seconds
+    while True:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            proc.kill()
+            break
+        if not recv.poll(min(left, 0.5)):
+            if not proc.is_alive() and not recv.poll(0):
+                break
+            continue
+        try:
+            msg = json.loads(recv.recv_bytes())
+        except EOFError:
+            break
+        if msg[0] == "log":
+            out.messages.append(msg[1])
+            if on_message is not None:
+                on_message(msg[1])
+        elif msg[0] == "done":
+            out.finished = True
+            break
+        else:
+            out.error = (msg[1], msg[2])
+            break
+    proc.join()
+    recv.close()
+    out.seconds = time.monotonic() - t0
+    if not out.finished and out.error is None and proc.exitcode not in (None, -9) \
+            and left > 0:
+        out.error = ("ChildProcessError", f"the worker process ended with exit code "
+                                          f"{proc.exitcode} before finishing")
+    return out

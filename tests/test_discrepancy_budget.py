@@ -1,0 +1,74 @@
+"""The wall-time budget of ``ehsa-opt discrepancy``: a run that reaches it stops, says so,
+and leaves a partial answer (the rounds completed), never a silent hour."""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+
+from ehsa_opt.cli import main
+from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
+from ehsa_opt.pipeline.discrepancy_report import write_partial_report
+from ehsa_opt.utils.process import run_with_deadline
+
+
+def _slow(send):
+    send("started")
+    send(f"pid {os.getpid()}")
+    time.sleep(60)
+    send("never")
+
+
+def test_deadline_kills_the_worker_and_keeps_its_messages():
+    t0 = time.monotonic()
+    out = run_with_deadline(_slow, 1.0)
+    assert time.monotonic() - t0 < 10
+    assert not out.finished and out.error is None
+    assert out.messages[0] == "started" and "never" not in out.messages
+    pid = int(out.messages[1].split()[1])
+    try:  # the worker is gone
+        os.kill(pid, 0)
+        alive = True
+    except ProcessLookupError:
+        alive = False
+    assert not alive
+
+
+def test_deadline_reports_errors_and_completion():
+    def bad(send):
+        raise ValueError("no such test")
+    out = run_with_deadline(bad, 30.0)
+    assert out.error == ("ValueError", "no such test")
+    seen = []
+    out = run_with_deadline(lambda send: send("hello"), 30.0, seen.append)
+    assert out.finished and seen == ["hello"] and out.seconds < 30
+
+
+def test_partial_report_from_the_progress_messages(tmp_path):
+    msgs = ["10 fit tests (8 for candidate fits), 5 held-out tests",
+            "baseline: ok, chi2/N 3.2 (4.0 s)",
+            "round 1 (error 12.500 %, floor 1.200 %, SSE/N 3.1)",
+            "round 1: added backlash, held-out error 2.100 %",
+            "round 2 (error 2.100 %, floor 1.200 %, SSE/N 1.1)"]
+    js, msg = write_partial_report(tmp_path / "o", tmp_path / "data", msgs, 60.0, 61.0)
+    doc = json.loads(js.read_text())
+    assert doc["partial"] and not doc["success"]
+    assert doc["effects"] == ["backlash"] and doc["effect"] == "backlash"
+    assert doc["error_before"] == 12.5 and doc["error_after"] == 2.1
+    assert "round 2" in msg and "60 s" in msg
+    assert "Cut at the time budget" in (tmp_path / "o" / "report.md").read_text()
+
+
+def test_cli_budget_cuts_with_a_stated_partial_answer(tmp_path, capsys):
+    d = tmp_path / "data"
+    write_synthetic(d, SyntheticSpec(frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(15.0, 109.0),
+                                     cycles=1.0, seed=2))
+    out = tmp_path / "out"
+    t0 = time.monotonic()
+    rc = main(["discrepancy", str(d), "--out", str(out), "--budget-s", "2"])
+    assert time.monotonic() - t0 < 30
+    assert rc == 1
+    doc = json.loads((out / "discrepancy.json").read_text())
+    assert doc["partial"] and doc["budget_s"] == 2.0
+    assert "time budget of 2 s reached" in capsys.readouterr().out
