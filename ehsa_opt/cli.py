@@ -265,6 +265,20 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                                                 "friction") if k in worst)
               + "): the tyre would leave the ground and the linear tyre model is invalid "
                 "there", file=sys.stderr)
+    from .vehicle.coverage import OUT_OF_RANGE_LIMIT
+    far = [r for r in rows if max(float(r.get("out_of_range_time_fraction") or 0.0),
+                                  float(r.get("out_of_range_friction_energy_fraction") or 0.0)
+                                  ) > OUT_OF_RANGE_LIMIT]
+    if far:
+        w = max(far, key=lambda r: float(r["out_of_range_time_fraction"]))
+        print(f"warning: in {len(far)} of {len(rows)} cases more than "
+              f"{100 * OUT_OF_RANGE_LIMIT:g} % of the time or of the friction's dissipated "
+              f"energy is at stroke velocities above the friction's identified range "
+              f"({spec.identified_range_m_per_s:.3g} m/s, {spec.identified_range_source}); "
+              f"worst {100 * float(w['out_of_range_time_fraction']):.0f} % of the time ("
+              + ", ".join(f"{k} = {w[k]}" for k in ("vehicle", "iso_class", "speed_km_per_h",
+                                                     "friction") if k in w)
+              + "): columns out_of_range_* of sweep.csv", file=sys.stderr)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
     print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
     return 0
@@ -376,16 +390,26 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
         from .datasets.friction_source import load_friction
         prob = dataclasses.replace(prob, friction=load_friction(args.friction))
+    from .datasets.friction_source import identified_range_for
+    v_range, range_src = identified_range_for(args.friction or (), args.problem)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RoadHoldingWarning)
         sim = _in_file(args.problem, simulate_quarter_car, prob.vehicle, prob.harvester,
                        prob.friction, prob.road,
                        settle_s=prob.simulation.settle_s,
                        sample_rate_hz=prob.simulation.sample_rate_hz,
-                       base_dir=prob.base_dir, keep_series=False)
+                       base_dir=prob.base_dir, keep_series=False,
+                       identified_range_m_per_s=v_range)
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
     m = dict(sim.metrics_of(0))
+    from .vehicle.coverage import coverage_warning
+    cov = {"time_fraction": m["out_of_range_time_fraction"],
+           "energy_fraction": m["out_of_range_friction_energy_fraction"] or float("nan")}
+    m["identified_range_m_per_s"] = v_range
+    cov_warn = coverage_warning(cov, v_range)
+    if cov_warn:
+        print(f"warning: {cov_warn} [{range_src}]", file=sys.stderr)
     if not sim.success:
         raise ValueError(f"{args.problem}: simulation failed: {sim.message}")
     # load power R_e i² is instantaneous, so its peak gives the peak current and the peak
@@ -419,7 +443,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             ("peak power (W)", m["peak_power_W"]),
             ("peak terminal voltage i R_e (V)", m["peak_terminal_voltage_V"]),
             ("peak current (A)", m["peak_current_A"]),
-            ("energy balance residual (%)", 100.0 * m["energy_residual"])]
+            ("energy balance residual (%)", 100.0 * m["energy_residual"]),
+            (f"time with |v| > identified {v_range:.3g} m/s (%)",
+             100.0 * m["out_of_range_time_fraction"]),
+            ("friction energy at |v| > identified (%)",
+             None if m["out_of_range_friction_energy_fraction"] is None
+             else 100.0 * m["out_of_range_friction_energy_fraction"])]
     print(f"{args.problem}: {sim.road_source}, "
           f"{'frictionless' if prob.friction is None else 'with friction'}, "
           f"{sim.stats['steps']} steps in {sim.stats['wall_s']:.2f} s")
