@@ -13,7 +13,7 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 from .datasets.bench_format import BenchDataError
 from .physics.params import ParameterError
@@ -203,7 +203,8 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                            stop_after=args.stop_after,
                            mapper=mapper if args.scheduler else None, progress=tick,
                            frictions=frictions, friction_mode=args.friction_mode,
-                           friction_labels=tuple(args.friction or ()))
+                           friction_labels=tuple(args.friction or ()),
+                           **_range_kw(args.friction, args.problem))
     _design_figures(outcome, out / "figures")
     d, o = outcome["design"], outcome["objectives"]
     m = outcome["metrics"]
@@ -220,6 +221,15 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
               f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
               f"{outcome.get('front_vs_goal_attainment')}")
+    oor = outcome.get("out_of_range")
+    if oor:
+        e = [x for x in oor["energy_fraction"] if x is not None]
+        print(f"stroke velocity above the identified {oor['identified_range_m_per_s']:.3g} m/s: "
+              f"{100 * max(oor['time_fraction']):.1f} % of the time"
+              + (f", {100 * max(e):.1f} % of the friction energy" if e else "")
+              + f" (fast path; {oor['source']})")
+        if oor["warning"]:
+            print(f"warning: {oor['warning']}", file=sys.stderr)
     if "time_domain_check" in outcome:
         chk = outcome["time_domain_check"]
         print(f"time-domain check with friction ({chk['n_designs']} designs, "
@@ -229,6 +239,13 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
                                             else ""))
     return 0 if outcome["success"] or args.stop_after else 1
+
+
+def _range_kw(friction: Any, problem: str) -> dict[str, Any]:
+    """The identified range a design's friction rests on (``optimize``)."""
+    from .datasets.friction_source import identified_range_for
+    v, src = identified_range_for(friction or (), problem)
+    return {"identified_range_m_per_s": v, "identified_range_source": src}
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:

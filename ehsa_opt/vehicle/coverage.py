@@ -27,7 +27,8 @@ from ..datasets.friction_source import RANGE_SOURCE_EMBEDDED, embedded_range_m_p
 from ..physics.friction import rod_friction_N
 
 __all__ = ["OUT_OF_RANGE_LIMIT", "embedded_range_m_per_s", "gaussian_coverage",
-           "series_coverage", "coverage_warning", "coverage_text", "RANGE_SOURCE_EMBEDDED"]
+           "series_coverage", "coverage_warning", "coverage_text", "RANGE_SOURCE_EMBEDDED",
+           "design_coverage"]
 
 #: Warn when more than this fraction of the time or of the friction's dissipated energy
 #: falls at stroke velocities above the identified range.
@@ -123,12 +124,44 @@ def coverage_text(cov: Mapping[str, Any], v_max_m_per_s: float) -> str:
 
 def coverage_warning(cov: Mapping[str, Any], v_max_m_per_s: float,
                      limit: float = OUT_OF_RANGE_LIMIT) -> str | None:
-    """A warning when a fraction exceeds ``limit`` (None otherwise)."""
+    """A warning when a fraction exceeds ``limit`` (None otherwise; None without friction,
+    whose energy fraction is NaN: nothing is extrapolated then)."""
     t = float(np.nanmax(np.asarray(cov["time_fraction"], dtype=float)))
     e = np.asarray(cov.get("energy_fraction", np.nan), dtype=float)
-    e = float(np.nanmax(e)) if not np.all(np.isnan(e)) else 0.0
+    if np.all(np.isnan(e)):
+        return None
+    e = float(np.nanmax(e))
     if max(t, e) <= limit:
         return None
     return (coverage_text(cov, v_max_m_per_s) + f" — above the {100 * limit:g} % limit: the "
             "friction there is an extrapolation of the fitted law (see the min/max sets' "
             "band; `ehsa-opt plan-tests` proposes bench tests that cover it)")
+
+
+def design_coverage(vehicle: Any, road: Any, design: Mapping[str, Any], frictions: Any,
+                    v_max_m_per_s: float, base: Any = None) -> dict[str, np.ndarray]:
+    """Out-of-range fractions of designs on the fast path: σ_v of the friction-aware
+    equivalent linearisation (:func:`ehsa_opt.vehicle.equivalent.friction_metrics`; the
+    exact linear path when ``frictions`` is empty) and :func:`gaussian_coverage`.
+
+    ``design`` as :func:`ehsa_opt.vehicle.metrics.linear_metrics`; ``frictions`` a
+    sequence of FrictionParams (one row of fractions each) or empty.  Returns arrays
+    (frictions or 1) × designs.
+    """
+    from .equivalent import friction_metrics
+    from .metrics import design_arrays, linear_metrics
+    d = design_arrays(design, base)
+    lead = np.asarray(d["r_m_per_rad"], dtype=float)
+    frs = list(frictions or [])
+    times, energies = [], []
+    if not frs:
+        m = linear_metrics(vehicle, road, design, base=base)
+        c = gaussian_coverage(m["stroke_velocity_rms_m_s"], v_max_m_per_s)
+        return {"time_fraction": c["time_fraction"][None], "energy_fraction":
+                c["energy_fraction"][None]}
+    for fr in frs:
+        m = friction_metrics(vehicle, road, design, fr, base=base)
+        c = gaussian_coverage(m["stroke_velocity_rms_m_s"], v_max_m_per_s, fr, lead)
+        times.append(c["time_fraction"])
+        energies.append(c["energy_fraction"])
+    return {"time_fraction": np.array(times), "energy_fraction": np.array(energies)}
