@@ -13,7 +13,7 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Callable, Sequence
 
 from .datasets.bench_format import BenchDataError
 from .physics.params import ParameterError
@@ -177,6 +177,7 @@ def _design_figures(outcome: dict, out_dir: Path) -> list[Path]:
 
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
+    from .datasets.friction_source import identified_range_kw
     from .design.config import check_method, load_design_config
     from .design.optimize import check_out_dir, optimize
     from .design.sweep import executor
@@ -204,7 +205,7 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                            mapper=mapper if args.scheduler else None, progress=tick,
                            frictions=frictions, friction_mode=args.friction_mode,
                            friction_labels=tuple(args.friction or ()),
-                           **_range_kw(args.friction, args.problem))
+                           **identified_range_kw(args.friction, args.problem))
     _design_figures(outcome, out / "figures")
     d, o = outcome["design"], outcome["objectives"]
     m = outcome["metrics"]
@@ -221,15 +222,10 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
               f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
               f"{outcome.get('front_vs_goal_attainment')}")
-    oor = outcome.get("out_of_range")
-    if oor:
-        e = [x for x in oor["energy_fraction"] if x is not None]
-        print(f"stroke velocity above the identified {oor['identified_range_m_per_s']:.3g} m/s: "
-              f"{100 * max(oor['time_fraction']):.1f} % of the time"
-              + (f", {100 * max(e):.1f} % of the friction energy" if e else "")
-              + f" (fast path; {oor['source']})")
-        if oor["warning"]:
-            print(f"warning: {oor['warning']}", file=sys.stderr)
+    if outcome.get("out_of_range"):
+        from .vehicle.coverage import out_of_range_lines
+        for line, to_err in out_of_range_lines(outcome["out_of_range"]):
+            print(line, file=sys.stderr if to_err else sys.stdout)
     if "time_domain_check" in outcome:
         chk = outcome["time_domain_check"]
         print(f"time-domain check with friction ({chk['n_designs']} designs, "
@@ -239,13 +235,6 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
                                             else ""))
     return 0 if outcome["success"] or args.stop_after else 1
-
-
-def _range_kw(friction: Any, problem: str) -> dict[str, Any]:
-    """The identified range a design's friction rests on (``optimize``)."""
-    from .datasets.friction_source import identified_range_for
-    v, src = identified_range_for(friction or (), problem)
-    return {"identified_range_m_per_s": v, "identified_range_source": src}
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
@@ -282,20 +271,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                                                 "friction") if k in worst)
               + "): the tyre would leave the ground and the linear tyre model is invalid "
                 "there", file=sys.stderr)
-    from .vehicle.coverage import OUT_OF_RANGE_LIMIT
-    far = [r for r in rows if max(float(r.get("out_of_range_time_fraction") or 0.0),
-                                  float(r.get("out_of_range_friction_energy_fraction") or 0.0)
-                                  ) > OUT_OF_RANGE_LIMIT]
-    if far:
-        w = max(far, key=lambda r: float(r["out_of_range_time_fraction"]))
-        print(f"warning: in {len(far)} of {len(rows)} cases more than "
-              f"{100 * OUT_OF_RANGE_LIMIT:g} % of the time or of the friction's dissipated "
-              f"energy is at stroke velocities above the friction's identified range "
-              f"({spec.identified_range_m_per_s:.3g} m/s, {spec.identified_range_source}); "
-              f"worst {100 * float(w['out_of_range_time_fraction']):.0f} % of the time ("
-              + ", ".join(f"{k} = {w[k]}" for k in ("vehicle", "iso_class", "speed_km_per_h",
-                                                     "friction") if k in w)
-              + "): columns out_of_range_* of sweep.csv", file=sys.stderr)
+    from .design.sweep import out_of_range_warning
+    if out_of_range_warning(rows, spec):
+        print(f"warning: {out_of_range_warning(rows, spec)}", file=sys.stderr)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
     print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
     return 0
@@ -342,21 +320,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         p = rep.fits[0].parameters
         print(f"  M = {p['inertia_kg']:.2f} kg, F_v = {p['nut_viscous_Ns_per_m']:.1f} N s/m, "
               f"F_C = {p['nut_coulomb_N']:.2f} N, offset = {p['offset_N']:.2f} N")
-    env = doc.get("friction_envelope")
-    if env:
-        import numpy as np
-        v = np.array(env["velocity_m_per_s"], dtype=float)
-        at = [x for x in (0.02, 0.05, 0.1, 0.2, 0.3) if x <= v.max()]
-        print("  rod friction (N) at " + ", ".join(f"{x:g}" for x in at) + " m/s:")
-        for case in ("min", "best", "max"):
-            vals = np.interp(at, v, np.array(env["sets_rod_N"][case], dtype=float))
-            print(f"    {case:<5s} " + "  ".join(f"{x:7.1f}" for x in vals))
-        for case in ("min", "max"):
-            vals = np.interp(at, v, np.array(env["paper_method"]["rod_N"][case], dtype=float))
-            print(f"    paper {case} " + "  ".join(f"{x:7.1f}" for x in vals)
-                  + "  (paper's per-parameter method)")
-        print(f"  friction sets min/best/max: {out / 'identification.json'}:CASE "
-              f"(--friction, or [friction] from = ... in a problem file)")
+    from .estimation.bounds import envelope_lines
+    for line in envelope_lines(doc, out / "identification.json"):
+        print(line)
     return 0 if ok else 1
 # ------------------------------------------------------------------ discrepancy
 def _cmd_discrepancy(args: argparse.Namespace) -> int:
@@ -420,13 +386,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
     m = dict(sim.metrics_of(0))
-    from .vehicle.coverage import coverage_warning
-    cov = {"time_fraction": m["out_of_range_time_fraction"],
-           "energy_fraction": m["out_of_range_friction_energy_fraction"] or float("nan")}
+    from .vehicle.coverage import coverage_rows, metrics_warning
     m["identified_range_m_per_s"] = v_range
-    cov_warn = coverage_warning(cov, v_range)
-    if cov_warn:
-        print(f"warning: {cov_warn} [{range_src}]", file=sys.stderr)
+    if metrics_warning(m, v_range):
+        print(f"warning: {metrics_warning(m, v_range)} [{range_src}]", file=sys.stderr)
     if not sim.success:
         raise ValueError(f"{args.problem}: simulation failed: {sim.message}")
     # load power R_e i² is instantaneous, so its peak gives the peak current and the peak
@@ -461,11 +424,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             ("peak terminal voltage i R_e (V)", m["peak_terminal_voltage_V"]),
             ("peak current (A)", m["peak_current_A"]),
             ("energy balance residual (%)", 100.0 * m["energy_residual"]),
-            (f"time with |v| > identified {v_range:.3g} m/s (%)",
-             100.0 * m["out_of_range_time_fraction"]),
-            ("friction energy at |v| > identified (%)",
-             None if m["out_of_range_friction_energy_fraction"] is None
-             else 100.0 * m["out_of_range_friction_energy_fraction"])]
+            *coverage_rows(m, v_range)]
     print(f"{args.problem}: {sim.road_source}, "
           f"{'frictionless' if prob.friction is None else 'with friction'}, "
           f"{sim.stats['steps']} steps in {sim.stats['wall_s']:.2f} s")

@@ -23,7 +23,7 @@ from ..physics.params import FRICTION_NAMES, FrictionParams, ParameterError, fro
 
 __all__ = ["FRICTION_CASES", "parse_friction_spec", "load_friction_sets", "load_friction",
            "friction_from_table", "load_velocity_range", "identified_range_for", "embedded_range_m_per_s",
-           "RANGE_SOURCE_EMBEDDED"]
+           "RANGE_SOURCE_EMBEDDED", "identified_range_kw"]
 
 #: The friction cases an identification result provides.
 FRICTION_CASES: tuple[str, ...] = ("min", "best", "max")
@@ -171,3 +171,10 @@ def embedded_range_m_per_s() -> float:
     doc = load_toml(embedded_data_dir() / "bench.toml")
     return max(2.0 * math.pi * float(t["frequency_hz"]) * float(t["amplitude_m"])
                for t in doc["test"] if "frequency_hz" in t and "amplitude_m" in t)
+
+
+def identified_range_kw(friction_specs: Any, problem_path: str | Path) -> dict[str, Any]:
+    """``identified_range_m_per_s`` / ``identified_range_source`` keywords of
+    :func:`identified_range_for` (for ``optimize``)."""
+    v, src = identified_range_for(friction_specs or (), problem_path)
+    return {"identified_range_m_per_s": v, "identified_range_source": src}

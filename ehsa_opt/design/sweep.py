@@ -46,7 +46,8 @@ from ..physics.params import (
 )
 
 __all__ = ["SweepSpec", "SweepTask", "run_sweep", "parse_sweep", "executor", "harvesters_from",
-           "default_friction_sets", "rows_to_csv", "METRIC_COLUMNS", "DESIGN_KEYS"]
+           "default_friction_sets", "rows_to_csv", "METRIC_COLUMNS", "DESIGN_KEYS",
+           "out_of_range_warning"]
 
 #: Output columns of every case.
 METRIC_COLUMNS: tuple[str, ...] = (
@@ -325,6 +326,32 @@ def run_sweep(spec: SweepSpec, jobs: int = 1, scheduler: Any = None,
     if progress is not None:
         progress(len(tasks), len(tasks))
     return [row for part in parts for row in part]
+
+
+def out_of_range_warning(rows: Sequence[Mapping[str, Any]], spec: "SweepSpec") -> str | None:
+    """A warning naming how many cases put more than the limit of their time or friction
+    energy above the identified range, and the worst one (None when none does; the
+    frictionless cases count by time only when some case has friction)."""
+    from ..vehicle.coverage import OUT_OF_RANGE_LIMIT
+
+    def frac(r: Mapping[str, Any], k: str) -> float:
+        x = r.get(k)
+        return 0.0 if x is None or x == "" or x != x else float(x)
+    if not any(r.get("friction") != "none" for r in rows):
+        return None
+    far = [r for r in rows if max(frac(r, "out_of_range_time_fraction"),
+                                  frac(r, "out_of_range_friction_energy_fraction"))
+           > OUT_OF_RANGE_LIMIT]
+    if not far:
+        return None
+    w = max(far, key=lambda r: frac(r, "out_of_range_time_fraction"))
+    case = ", ".join(f"{k} = {w[k]}" for k in _CASE_KEYS if k in w)
+    return (f"in {len(far)} of {len(rows)} cases more than {100 * OUT_OF_RANGE_LIMIT:g} % of "
+            f"the time or of the friction's dissipated energy is at stroke velocities above "
+            f"the friction's identified range ({spec.identified_range_m_per_s:.3g} m/s, "
+            f"{spec.identified_range_source}); worst "
+            f"{100 * frac(w, 'out_of_range_time_fraction'):.0f} % of the time ({case}): "
+            f"columns out_of_range_* of sweep.csv")
 
 
 def rows_to_csv(rows: Sequence[Mapping[str, Any]]) -> str:

@@ -58,7 +58,7 @@ from ..physics.params import FRICTION_NAMES, FrictionParams
 
 __all__ = ["FrictionBounds", "friction_bounds", "paper_friction_sets", "velocity_grid",
            "test_peak_velocity_m_per_s", "identification_json", "DATA_METHOD", "PAPER_METHOD",
-           "fit_envelope", "ordered_set", "V_MAX_M_PER_S"]
+           "fit_envelope", "ordered_set", "V_MAX_M_PER_S", "envelope_lines"]
 
 #: Velocity up to which the sets are ordered and banded (the vehicle studies' largest).
 V_MAX_M_PER_S = 3.0
@@ -561,3 +561,30 @@ def identification_json(report: Any) -> dict:
         return doc
     doc.update(fb.to_json())
     return doc
+
+
+def envelope_lines(doc: Mapping[str, Any], path: Any) -> list[str]:
+    """Printed summary of an identification.json's sets: rod friction of ``min`` /
+    ``best`` / ``max`` and of the paper's sets inside the identified range and beyond it
+    (marked as extrapolated)."""
+    env = doc.get("friction_envelope")
+    if not env:
+        return []
+    v = np.array(env["velocity_m_per_s"], dtype=float)
+    hi = (env.get("identified_range_m_per_s") or [0.0, float(v.max())])[1]
+    at = [x for x in (0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0, 3.0) if x <= v.max() + 1e-9]
+    out = [f"  rod friction (N) at " + ", ".join(f"{x:g}" for x in at) + " m/s "
+           f"(identified up to {hi:.3g} m/s; * = extrapolated):",
+           "          " + "  ".join(f"{x:6g}{'*' if x > hi else ' '}" for x in at)]
+    for case in ("min", "best", "max"):
+        vals = np.interp(at, v, np.array(env["sets_rod_N"][case], dtype=float))
+        out.append(f"    {case:<5s} " + "  ".join(f"{x:7.1f}" for x in vals))
+    for case in ("min", "max"):
+        vals = np.interp(at, v, np.array(env["paper_method"]["rod_N"].get(case, [np.nan] * v.size),
+                                         dtype=float))
+        out.append(f"    paper {case} " + "  ".join(f"{x:7.1f}" for x in vals)
+                   + "  (paper's per-parameter method)")
+    out.append(f"  friction sets min/best/max: {path}:CASE (--friction, or [friction] from = "
+               f"... in a problem file); min <= best <= max at every velocity up to "
+               f"{float(v.max()):g} m/s")
+    return out

@@ -28,7 +28,7 @@ from ..physics.friction import rod_friction_N
 
 __all__ = ["OUT_OF_RANGE_LIMIT", "embedded_range_m_per_s", "gaussian_coverage",
            "series_coverage", "coverage_warning", "coverage_text", "RANGE_SOURCE_EMBEDDED",
-           "design_coverage"]
+           "design_coverage", "metrics_warning", "coverage_rows", "out_of_range_lines"]
 
 #: Warn when more than this fraction of the time or of the friction's dissipated energy
 #: falls at stroke velocities above the identified range.
@@ -165,3 +165,30 @@ def design_coverage(vehicle: Any, road: Any, design: Mapping[str, Any], friction
         times.append(c["time_fraction"])
         energies.append(c["energy_fraction"])
     return {"time_fraction": np.array(times), "energy_fraction": np.array(energies)}
+
+
+def metrics_warning(m: Mapping[str, Any], v_max_m_per_s: float) -> str | None:
+    """:func:`coverage_warning` of a simulation's metrics (``out_of_range_*`` keys)."""
+    e = m.get("out_of_range_friction_energy_fraction")
+    return coverage_warning({"time_fraction": m["out_of_range_time_fraction"],
+                             "energy_fraction": np.nan if e is None else e}, v_max_m_per_s)
+
+
+def coverage_rows(m: Mapping[str, Any], v_max_m_per_s: float) -> list[tuple[str, Any]]:
+    """(label, value in %) rows of a simulation's printed table."""
+    e = m.get("out_of_range_friction_energy_fraction")
+    return [(f"time with |v| > identified {v_max_m_per_s:.3g} m/s (%)",
+             100.0 * m["out_of_range_time_fraction"]),
+            ("friction energy at |v| > identified (%)", None if e is None else 100.0 * e)]
+
+
+def out_of_range_lines(oor: Mapping[str, Any]) -> list[tuple[str, bool]]:
+    """Printed lines (text, to stderr) of an optimisation's ``out_of_range`` block."""
+    e = [x for x in oor["energy_fraction"] if x is not None]
+    out = [(f"stroke velocity above the identified {oor['identified_range_m_per_s']:.3g} m/s: "
+            f"{100 * max(oor['time_fraction']):.1f} % of the time"
+            + (f", {100 * max(e):.1f} % of the friction energy" if e else "")
+            + f" (fast path; {oor['source']})", False)]
+    if oor.get("warning"):
+        out.append((f"warning: {oor['warning']}", True))
+    return out
