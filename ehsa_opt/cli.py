@@ -185,6 +185,7 @@ def _design_figures(outcome: dict, out_dir: Path) -> list[Path]:
 
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
+    from .datasets.friction_source import identified_range_kw
     from .design.config import check_method, load_design_config
     from .design.optimize import check_out_dir, optimize
     from .design.sweep import executor
@@ -211,7 +212,8 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                            stop_after=args.stop_after,
                            mapper=mapper if args.scheduler else None, progress=tick,
                            frictions=frictions, friction_mode=args.friction_mode,
-                           friction_labels=tuple(args.friction or ()))
+                           friction_labels=tuple(args.friction or ()),
+                           **identified_range_kw(args.friction, args.problem))
     _design_figures(outcome, out / "figures")
     d, o = outcome["design"], outcome["objectives"]
     m = outcome["metrics"]
@@ -228,6 +230,10 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
               f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
               f"{outcome.get('front_vs_goal_attainment')}")
+    if outcome.get("out_of_range"):
+        from .vehicle.coverage import out_of_range_lines
+        for line, to_err in out_of_range_lines(outcome["out_of_range"]):
+            print(line, file=sys.stderr if to_err else sys.stdout)
     if "time_domain_check" in outcome:
         chk = outcome["time_domain_check"]
         print(f"time-domain check with friction ({chk['n_designs']} designs, "
@@ -273,6 +279,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                                                 "friction") if k in worst)
               + "): the tyre would leave the ground and the linear tyre model is invalid "
                 "there", file=sys.stderr)
+    from .design.sweep import out_of_range_warning
+    if out_of_range_warning(rows, spec):
+        print(f"warning: {out_of_range_warning(rows, spec)}", file=sys.stderr)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
     print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
     return 0
@@ -319,21 +328,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         p = rep.fits[0].parameters
         print(f"  M = {p['inertia_kg']:.2f} kg, F_v = {p['nut_viscous_Ns_per_m']:.1f} N s/m, "
               f"F_C = {p['nut_coulomb_N']:.2f} N, offset = {p['offset_N']:.2f} N")
-    env = doc.get("friction_envelope")
-    if env:
-        import numpy as np
-        v = np.array(env["velocity_m_per_s"], dtype=float)
-        at = [x for x in (0.02, 0.05, 0.1, 0.2, 0.3) if x <= v.max()]
-        print("  rod friction (N) at " + ", ".join(f"{x:g}" for x in at) + " m/s:")
-        for case in ("min", "best", "max"):
-            vals = np.interp(at, v, np.array(env["sets_rod_N"][case], dtype=float))
-            print(f"    {case:<5s} " + "  ".join(f"{x:7.1f}" for x in vals))
-        for case in ("min", "max"):
-            vals = np.interp(at, v, np.array(env["paper_method"]["rod_N"][case], dtype=float))
-            print(f"    paper {case} " + "  ".join(f"{x:7.1f}" for x in vals)
-                  + "  (paper's per-parameter method)")
-        print(f"  friction sets min/best/max: {out / 'identification.json'}:CASE "
-              f"(--friction, or [friction] from = ... in a problem file)")
+    from .estimation.bounds import envelope_lines
+    for line in envelope_lines(doc, out / "identification.json"):
+        print(line)
     return 0 if ok else 1
 # ------------------------------------------------------------------ discrepancy
 def _cmd_discrepancy(args: argparse.Namespace) -> int:
@@ -378,16 +375,23 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
         from .datasets.friction_source import load_friction
         prob = dataclasses.replace(prob, friction=load_friction(args.friction))
+    from .datasets.friction_source import identified_range_for
+    v_range, range_src = identified_range_for(args.friction or (), args.problem)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RoadHoldingWarning)
         sim = _in_file(args.problem, simulate_quarter_car, prob.vehicle, prob.harvester,
                        prob.friction, prob.road,
                        settle_s=prob.simulation.settle_s,
                        sample_rate_hz=prob.simulation.sample_rate_hz,
-                       base_dir=prob.base_dir, keep_series=False)
+                       base_dir=prob.base_dir, keep_series=False,
+                       identified_range_m_per_s=v_range)
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
     m = dict(sim.metrics_of(0))
+    from .vehicle.coverage import coverage_rows, metrics_warning
+    m["identified_range_m_per_s"] = v_range
+    if metrics_warning(m, v_range):
+        print(f"warning: {metrics_warning(m, v_range)} [{range_src}]", file=sys.stderr)
     if not sim.success:
         raise ValueError(f"{args.problem}: simulation failed: {sim.message}")
     # load power R_e i² is instantaneous, so its peak gives the peak current and the peak
@@ -421,7 +425,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             ("peak power (W)", m["peak_power_W"]),
             ("peak terminal voltage i R_e (V)", m["peak_terminal_voltage_V"]),
             ("peak current (A)", m["peak_current_A"]),
-            ("energy balance residual (%)", 100.0 * m["energy_residual"])]
+            ("energy balance residual (%)", 100.0 * m["energy_residual"]),
+            *coverage_rows(m, v_range)]
     print(f"{args.problem}: {sim.road_source}, "
           f"{'frictionless' if prob.friction is None else 'with friction'}, "
           f"{sim.stats['steps']} steps in {sim.stats['wall_s']:.2f} s")

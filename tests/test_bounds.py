@@ -43,9 +43,24 @@ def test_sets_bracket_the_truth_within_25_percent(clean) -> None:
     hi = np.asarray(rod_friction_N(v, fb.sets["max"], r))
     assert np.all(lo <= t) and np.all(hi >= t)
     assert np.all(lo >= 0.75 * t) and np.all(hi <= 1.25 * t)
-    # the sets realise the envelope: at/below the lower, at/above the upper curve
-    assert np.all(fb.sets_rod_N["min"] <= fb.lower_N + 1e-6)
-    assert np.all(fb.sets_rod_N["max"] >= fb.upper_N - 1e-6)
+    # the sets realise the envelope (where the data reach): at/below the lower, at/above
+    # the upper curve; beyond the data the envelope is not defined
+    m = np.isfinite(fb.lower_N)
+    assert m.any() and not m.all() and fb.velocity_m_per_s[-1] == pytest.approx(3.0)
+    assert np.all(fb.sets_rod_N["min"][m] <= fb.lower_N[m] + 1e-6)
+    assert np.all(fb.sets_rod_N["max"][m] >= fb.upper_N[m] - 1e-6)
+    # ordered at every velocity of 0-3 m/s (by construction: also off the grid)
+    vv = np.concatenate([np.geomspace(1e-6, 1e-2, 300), np.linspace(1e-2, 3.0, 600)])
+    rods = [np.asarray(rod_friction_N(vv, fb.sets[c], r)) for c in ("min", "best", "max")]
+    assert np.all(rods[0] <= rods[1] + 1e-9) and np.all(rods[1] <= rods[2] + 1e-9)
+    # beyond the data the band widens and (clean data) holds the truth up to 1.5 m/s
+    vo = np.linspace(fb.data_range_m_per_s[1], 1.5, 40)[1:]
+    to = np.asarray(rod_friction_N(vo, truth, r))
+    inside = (np.asarray(rod_friction_N(vo, fb.sets["min"], r)) <= to) & (
+        to <= np.asarray(rod_friction_N(vo, fb.sets["max"], r)))
+    assert inside.mean() >= 0.9
+    width = fb.margin_band_N[1] - fb.margin_band_N[0]
+    assert width[-1] > 2.0 * width[np.flatnonzero(m)[-1]]
     # the paper's per-parameter sets are much wider than what the data support
     pmin = np.asarray(rod_friction_N(v, fb.paper_sets["min"], r))
     pmax = np.asarray(rod_friction_N(v, fb.paper_sets["max"], r))
@@ -57,6 +72,14 @@ def test_identification_json_round_trip(clean, tmp_path) -> None:
     doc = identification_json(rep)
     env = doc["friction_envelope"]
     assert len(env["velocity_m_per_s"]) == len(env["lower_N"]) == len(env["upper_N"])
+    rng = doc["velocity_range"]
+    lo, hi = rng["campaign_m_per_s"]
+    assert hi == pytest.approx(2 * np.pi * 3.5 * 0.015, rel=1e-6) and 0 < lo < hi
+    assert set(rng["tests_peak_m_per_s"]) == {t["file"] for t in doc["tests"]}
+    assert env["identified_range_m_per_s"] == [lo, hi]
+    band = env["extrapolation_band"]
+    assert len(band["margin_low_N"]) == len(env["velocity_m_per_s"])
+    assert band["law"]["n_effective"] < band["law"]["n_samples"]
     assert "paper's method" in env["paper_method"]["description"]
     p = tmp_path / "identification.json"
     p.write_text(json.dumps(doc))

@@ -22,7 +22,8 @@ from typing import Any, Mapping
 from ..physics.params import FRICTION_NAMES, FrictionParams, ParameterError, from_mapping
 
 __all__ = ["FRICTION_CASES", "parse_friction_spec", "load_friction_sets", "load_friction",
-           "friction_from_table"]
+           "friction_from_table", "load_velocity_range", "identified_range_for", "embedded_range_m_per_s",
+           "RANGE_SOURCE_EMBEDDED", "identified_range_kw"]
 
 #: The friction cases an identification result provides.
 FRICTION_CASES: tuple[str, ...] = ("min", "best", "max")
@@ -103,3 +104,77 @@ def friction_from_table(table: Mapping[str, Any], where: str,
         return load_friction(path, case)
     except ParameterError as exc:
         raise ParameterError(f"{where}: {exc}") from None
+
+
+def load_velocity_range(path: str | Path) -> float | None:
+    """Upper end (m/s) of the stroke velocities an ``identification.json``'s data cover
+    (``velocity_range.campaign_m_per_s``; for files written before it, the envelope's
+    largest velocity), or None when the file has neither."""
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    if not isinstance(doc, Mapping):
+        return None
+    rng = doc.get("velocity_range")
+    if isinstance(rng, Mapping) and isinstance(rng.get("campaign_m_per_s"), list):
+        return float(rng["campaign_m_per_s"][1])
+    env = doc.get("friction_envelope")
+    if isinstance(env, Mapping) and env.get("velocity_m_per_s"):
+        return float(max(x for x in env["velocity_m_per_s"] if x is not None))
+    return None
+
+
+def identified_range_for(friction_specs: Any = (), problem_path: str | Path | None = None
+                         ) -> tuple[float, str]:
+    """The identified range (m/s) that a vehicle result's friction rests on, and where it
+    comes from: the smallest of the ``--friction FILE[:CASE]`` files' ranges, else the
+    problem file's ``[friction] from``, else the embedded bench campaign's."""
+    specs = [friction_specs] if isinstance(friction_specs, (str, Path)) else \
+        list(friction_specs or ())
+    found = []
+    for spec in specs:
+        file, _ = parse_friction_spec(spec)
+        v = load_velocity_range(file)
+        if v is not None:
+            found.append((v, f"identified range of {file}"))
+    if not found and problem_path is not None:
+        from ..physics.params import load_toml
+        try:
+            doc = load_toml(problem_path)
+        except (OSError, ParameterError, ValueError):
+            doc = {}
+        tab = doc.get("friction") if isinstance(doc, Mapping) else None
+        if isinstance(tab, Mapping) and isinstance(tab.get("from"), str):
+            src = Path(tab["from"])
+            src = src if src.is_absolute() else Path(problem_path).parent / src
+            v = load_velocity_range(src)
+            if v is not None:
+                found.append((v, f"identified range of {src}"))
+    if found:
+        return min(found)
+    return embedded_range_m_per_s(), RANGE_SOURCE_EMBEDDED
+
+
+RANGE_SOURCE_EMBEDDED = ("the embedded bench campaign's range (friction not from an "
+                         "identification: typed values are assumed to rest on data like it)")
+
+
+def embedded_range_m_per_s() -> float:
+    """Peak stroke velocity of the embedded bench campaign (largest 2π f A of its sine
+    tests), m/s."""
+    import math
+
+    from ..physics.params import load_toml
+    from .embedded import embedded_data_dir
+    doc = load_toml(embedded_data_dir() / "bench.toml")
+    return max(2.0 * math.pi * float(t["frequency_hz"]) * float(t["amplitude_m"])
+               for t in doc["test"] if "frequency_hz" in t and "amplitude_m" in t)
+
+
+def identified_range_kw(friction_specs: Any, problem_path: str | Path) -> dict[str, Any]:
+    """``identified_range_m_per_s`` / ``identified_range_source`` keywords of
+    :func:`identified_range_for` (for ``optimize``)."""
+    v, src = identified_range_for(friction_specs or (), problem_path)
+    return {"identified_range_m_per_s": v, "identified_range_source": src}

@@ -114,14 +114,19 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
              progress: Callable[[int, int], None] | None = None,
              frictions: Sequence[FrictionParams] | None = None,
              friction_mode: str | None = None, friction_labels: Sequence[str] = (),
-             check_time_domain: bool = True) -> OptimizeOutcome:
+             check_time_domain: bool = True,
+             identified_range_m_per_s: float | None = None,
+             identified_range_source: str = "") -> OptimizeOutcome:
     """Run the design study of ``cfg`` and write ``out_dir/result.json`` (and
     ``pareto.csv``, ``history.json``).
 
     For NSGA-II the goal-attainment point is computed too (``with_goal_attainment``)
     so the front can be drawn against it and checked for dominance.  ``frictions`` /
     ``friction_mode``: see :func:`build_problem`; with friction the result is checked in
-    the time domain (``check_time_domain``).
+    the time domain (``check_time_domain``).  ``identified_range_m_per_s``: the friction's
+    identified range (default the embedded campaign's); ``result.json`` states the
+    fractions of time and friction energy the chosen design spends above it
+    (``out_of_range``, fast path).
     """
     from ..utils.io import atomic_write_json, atomic_write_text
 
@@ -192,6 +197,8 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
                 "best_ratio_per_point_min": float(np.min(np.max(pr.F / f_ga, axis=1)))}
         atomic_write_text(out / "pareto.csv", pr.to_csv_text())
         outcome.result = pr
+    outcome["out_of_range"] = _out_of_range(cfg, ev, outcome["design"],
+                                            identified_range_m_per_s, identified_range_source)
     if check_time_domain and hasattr(ev, "frictions"):
         if method == "nsga2":
             designs = {k: np.asarray(v, float) for k, v in outcome.result.designs.items()}
@@ -210,6 +217,26 @@ def check_out_dir(out_dir: str | Path) -> Path:
     if out.exists() and not out.is_dir():
         raise ParameterError(f"--out {out}: exists and is not a directory")
     return out
+
+
+def _out_of_range(cfg: DesignConfig, ev: Any, design: Mapping[str, float],
+                  v_range: float | None, source: str) -> dict[str, Any]:
+    """Fractions of time and friction energy the design spends above the identified
+    range, per friction set (fast path: Gaussian stroke velocity)."""
+    from ..datasets.friction_source import RANGE_SOURCE_EMBEDDED, embedded_range_m_per_s
+    from ..vehicle.coverage import OUT_OF_RANGE_LIMIT, coverage_warning, design_coverage
+    if v_range is None:
+        v_range, source = embedded_range_m_per_s(), RANGE_SOURCE_EMBEDDED
+    frs = list(getattr(ev, "frictions", ()) or ())
+    dm = ev.design_mapping({k: np.array([float(v)]) for k, v in design.items()})
+    cov = design_coverage(cfg.vehicle, cfg.road, dm, frs, v_range, base=cfg.harvester)
+    t = [float(x) for x in cov["time_fraction"][:, 0]]
+    e = [None if not np.isfinite(x) else float(x) for x in cov["energy_fraction"][:, 0]]
+    worst = {"time_fraction": np.array(t), "energy_fraction": np.array(
+        [np.nan if x is None else x for x in e])}
+    return {"identified_range_m_per_s": float(v_range), "source": source,
+            "limit": OUT_OF_RANGE_LIMIT, "time_fraction": t, "energy_fraction": e,
+            "warning": coverage_warning(worst, v_range)}
 
 
 def _friction_block(ev: Any, labels: Sequence[str]) -> dict[str, Any] | None:

@@ -46,12 +46,14 @@ from ..physics.params import (
 )
 
 __all__ = ["SweepSpec", "SweepTask", "run_sweep", "parse_sweep", "executor", "harvesters_from",
-           "default_friction_sets", "rows_to_csv", "METRIC_COLUMNS", "DESIGN_KEYS"]
+           "default_friction_sets", "rows_to_csv", "METRIC_COLUMNS", "DESIGN_KEYS",
+           "out_of_range_warning"]
 
 #: Output columns of every case.
 METRIC_COLUMNS: tuple[str, ...] = (
     "comfort", "comfort_weighted_rms_m_s2", "road_holding", "power_W", "power_dimensionless",
-    "efficiency", "dissipated_power_W", "dissipation_bound_W", "peak_power_W")
+    "efficiency", "dissipated_power_W", "dissipation_bound_W", "peak_power_W",
+    "out_of_range_time_fraction", "out_of_range_friction_energy_fraction")
 
 #: Keys a sweep may vary in [sweep.design].
 DESIGN_KEYS: tuple[str, ...] = tuple(
@@ -103,6 +105,8 @@ class SweepSpec:
     seed: int = 0
     settle_s: float = 2.0
     sample_rate_hz: float = 1000.0
+    identified_range_m_per_s: float | None = None
+    identified_range_source: str = ""
 
     def __post_init__(self) -> None:
         for k, vals in self.design:
@@ -135,7 +139,8 @@ class SweepSpec:
                               length_m=self.road_length_m, seed=self.seed)
             out.append(SweepTask(vn, veh, road, fn, fr, self.base,
                                  tuple((k, tuple(a.tolist())) for k, a in grid.items()),
-                                 self.settle_s, self.sample_rate_hz))
+                                 self.settle_s, self.sample_rate_hz,
+                                 self.identified_range_m_per_s))
         return out
 
     @property
@@ -158,6 +163,7 @@ class SweepTask:
     design: tuple[tuple[str, tuple[float, ...]], ...]
     settle_s: float = 2.0
     sample_rate_hz: float = 1000.0
+    identified_range_m_per_s: float | None = None
 
     def designs(self) -> dict[str, np.ndarray]:
         return {k: np.asarray(v, float) for k, v in self.design}
@@ -170,9 +176,15 @@ class SweepTask:
             ev = QuarterCarObjectives(self.vehicle, self.road, self.base)
             from ..vehicle.metrics import linear_metrics
             m = linear_metrics(self.vehicle, self.road, ev.design_mapping(d))
+            if self.identified_range_m_per_s is not None:
+                from ..vehicle.coverage import gaussian_coverage
+                cov = gaussian_coverage(m["stroke_velocity_rms_m_s"],
+                                        self.identified_range_m_per_s)
+                m = dict(m, out_of_range_time_fraction=cov["time_fraction"])
         else:
             m = _time_domain_metrics(self.vehicle, self.road, self.base, d, self.friction,
-                                     self.settle_s, self.sample_rate_hz)
+                                     self.settle_s, self.sample_rate_hz,
+                                     self.identified_range_m_per_s)
         rows = []
         for i in range(n):
             row: dict[str, Any] = {"vehicle": self.vehicle_name, "iso_class": self.road.iso_class,
@@ -210,14 +222,16 @@ def harvesters_from(base: HarvesterParams, designs: Mapping[str, np.ndarray]
 
 def _time_domain_metrics(vehicle: VehicleParams, road: RoadParams, base: HarvesterParams,
                          designs: Mapping[str, np.ndarray], friction: FrictionParams,
-                         settle_s: float = 2.0, sample_rate_hz: float = 1000.0
+                         settle_s: float = 2.0, sample_rate_hz: float = 1000.0,
+                         identified_range_m_per_s: float | None = None
                          ) -> dict[str, np.ndarray]:
     """Metrics of designs with friction: one batched time-domain simulation
     (:func:`ehsa_opt.vehicle.simulate.simulate_quarter_car`) on the task's road."""
     from ..vehicle.simulate import simulate_quarter_car
     hs = harvesters_from(base, designs)
     sim = simulate_quarter_car(vehicle, hs, [friction] * len(hs), road, settle_s=settle_s,
-                               sample_rate_hz=sample_rate_hz, keep_series=False, warn=False)
+                               sample_rate_hz=sample_rate_hz, keep_series=False, warn=False,
+                               identified_range_m_per_s=identified_range_m_per_s)
     if not sim.success:
         raise RuntimeError(f"time-domain simulation failed ({sim.message}) for {road}")
     return sim.metrics
@@ -312,6 +326,32 @@ def run_sweep(spec: SweepSpec, jobs: int = 1, scheduler: Any = None,
     if progress is not None:
         progress(len(tasks), len(tasks))
     return [row for part in parts for row in part]
+
+
+def out_of_range_warning(rows: Sequence[Mapping[str, Any]], spec: "SweepSpec") -> str | None:
+    """A warning naming how many cases put more than the limit of their time or friction
+    energy above the identified range, and the worst one (None when none does; the
+    frictionless cases count by time only when some case has friction)."""
+    from ..vehicle.coverage import OUT_OF_RANGE_LIMIT
+
+    def frac(r: Mapping[str, Any], k: str) -> float:
+        x = r.get(k)
+        return 0.0 if x is None or x == "" or x != x else float(x)
+    if not any(r.get("friction") != "none" for r in rows):
+        return None
+    far = [r for r in rows if max(frac(r, "out_of_range_time_fraction"),
+                                  frac(r, "out_of_range_friction_energy_fraction"))
+           > OUT_OF_RANGE_LIMIT]
+    if not far:
+        return None
+    w = max(far, key=lambda r: frac(r, "out_of_range_time_fraction"))
+    case = ", ".join(f"{k} = {w[k]}" for k in _CASE_KEYS if k in w)
+    return (f"in {len(far)} of {len(rows)} cases more than {100 * OUT_OF_RANGE_LIMIT:g} % of "
+            f"the time or of the friction's dissipated energy is at stroke velocities above "
+            f"the friction's identified range ({spec.identified_range_m_per_s:.3g} m/s, "
+            f"{spec.identified_range_source}); worst "
+            f"{100 * frac(w, 'out_of_range_time_fraction'):.0f} % of the time ({case}): "
+            f"columns out_of_range_* of sweep.csv")
 
 
 def rows_to_csv(rows: Sequence[Mapping[str, Any]]) -> str:
@@ -410,7 +450,18 @@ def parse_sweep(doc: Mapping[str, Any], path: str = "problem",
         except (TypeError, ValueError):
             raise ParameterError(f"{where}.design {k}: give a list of numbers, got {v!r}") \
                 from None
+    from ..datasets.friction_source import (
+        RANGE_SOURCE_EMBEDDED,
+        embedded_range_m_per_s,
+        load_velocity_range,
+    )
+    v_range, v_src = None, ""
+    if src is not None:
+        v_range, v_src = load_velocity_range(p), f"identified range of {p}"
+    if v_range is None:
+        v_range, v_src = embedded_range_m_per_s(), RANGE_SOURCE_EMBEDDED
     return SweepSpec(base=base, vehicles=vehicles, iso_classes=classes, speeds_km_per_h=speeds,
                      frictions=tuple(frictions), design=tuple(design),
                      road_length_m=road.length_m, seed=road.seed, settle_s=sim.settle_s,
-                     sample_rate_hz=sim.sample_rate_hz)
+                     sample_rate_hz=sim.sample_rate_hz, identified_range_m_per_s=v_range,
+                     identified_range_source=v_src)

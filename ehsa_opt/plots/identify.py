@@ -132,8 +132,11 @@ def identifiability_figure(report: Any) -> Any:
     a1.grid(alpha=0.3, which="both")
     r = report.data.harvester.lead_m_per_rad
     if good and "nut_coulomb_N" in good[0][1].parameters:
-        v = np.linspace(0.002, 0.35, 300)
-        for k, (_, f) in enumerate(good):
+        from ..estimation.bounds import test_peak_velocity_m_per_s
+        for k, (t, f) in enumerate(good):
+            # each test only up to its own peak velocity: beyond it the curve is an
+            # extrapolation no measurement supports
+            v = np.linspace(0.002, max(test_peak_velocity_m_per_s(t), 0.003), 200)
             p = [f.parameters[n] for n in FRICTION_NAMES]
             lab = k == 0
             a2.plot(v, rod_friction_N(v, p, r), color="k", lw=0.8, alpha=0.6,
@@ -146,7 +149,8 @@ def identifiability_figure(report: Any) -> Any:
         a2.set_ylabel("friction force at the rod (N)")
         a2.legend(fontsize=8, loc="upper left", framealpha=0.9)
         a2.grid(alpha=0.3)
-        a2.set_title("All tests: the total is tight, its split is not", fontsize=9)
+        a2.set_title("Each test up to its own peak velocity: the total agrees, the split "
+                     "does not", fontsize=9)
     fig.tight_layout()
     return fig
 
@@ -213,36 +217,56 @@ def report_figures(report: Any, out_dir: Path) -> list[Path]:
 
 
 def friction_bounds(fb: Any, truth: Any = None, title: str = "") -> Any:
-    """Rod friction F_ns(v) + T_b(v/r)/r against velocity: per-test fits, the
-    data-supported envelope and sets, the paper's per-parameter sets (and the truth of
-    synthetic data)."""
+    """Rod friction F_ns(v) + T_b(v/r)/r against velocity.  Left: the sets and the best
+    law's band over the whole range (0–3 m/s) with the identified range shaded; right:
+    the identified range — per-test fits, the envelope, the sets and the paper's
+    per-parameter sets (and the truth of synthetic data)."""
     from ..physics.friction import rod_friction_N
     v = np.asarray(fb.velocity_m_per_s)
+    lo, hi = getattr(fb, "data_range_m_per_s", (v.min(), v.max()))
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.0))
-    for a, paper in ((ax, False), (ax2, True)):
-        for k, row in enumerate(fb.per_test_N):
-            a.plot(v, row, color="0.75", lw=0.7,
-                   label="per-test fits (up to each test's peak velocity)" if k == 0 else None)
-        a.fill_between(v, fb.lower_N, fb.upper_N, color="C0", alpha=0.2,
-                       label="envelope with 95 % Fisher bands")
-        a.plot(v, fb.sets_rod_N["min"], "C0--", lw=1.3, label="data-supported min set")
-        a.plot(v, fb.sets_rod_N["best"], "C2-", lw=1.5, label="best (joint fit)")
-        a.plot(v, fb.sets_rod_N["max"], "C3--", lw=1.3, label="data-supported max set")
-        if paper and fb.paper_rod_N:
-            a.plot(v, fb.paper_rod_N["min"], "C4:", lw=1.6, label="paper's method: min")
-            a.plot(v, fb.paper_rod_N["max"], "C1:", lw=1.6, label="paper's method: max")
-        if truth is not None:
-            a.plot(v, np.asarray(rod_friction_N(v, truth, fb.lead_m_per_rad), dtype=float),
-                   "k-", lw=0.9, label="truth (synthetic data)")
+    tr = (np.asarray(rod_friction_N(v, truth, fb.lead_m_per_rad), dtype=float)
+          if truth is not None else None)
+    ax.axvspan(0.0, hi, color="0.85", alpha=0.6, lw=0,
+               label=f"identified range (0–{hi:.2f} m/s)")
+    if getattr(fb, "law_band_N", None) is not None:
+        ax.fill_between(v, fb.law_band_N[0], fb.law_band_N[1], color="C2", alpha=0.25,
+                        label="best law's 95 % band (sandwich)")
+    for a in (ax, ax2):
+        a.plot(v, fb.sets_rod_N["min"], "C0--", lw=1.3, label="min set")
+        a.plot(v, fb.sets_rod_N["best"], "C2-", lw=1.5, label="best set")
+        a.plot(v, fb.sets_rod_N["max"], "C3--", lw=1.3, label="max set")
+        if tr is not None:
+            a.plot(v, tr, "k-", lw=0.9, label="truth (synthetic data)")
         a.set_xlabel("rod velocity (m/s)")
         a.set_ylabel("friction force at the rod (N)")
         a.grid(alpha=0.3)
-    handles, labels = ax2.get_legend_handles_labels()
+    ax.set_xlim(0.0, float(v.max()))
+    ax.set_ylim(bottom=0.0)
+    for k, row in enumerate(fb.per_test_N):
+        ax2.plot(v, row, color="0.7", lw=0.7,
+                 label="per-test fits (up to each test's peak velocity)" if k == 0 else None)
+    ax2.fill_between(v, fb.lower_N, fb.upper_N, color="C0", alpha=0.15,
+                     label="envelope of the tests")
+    if fb.paper_rod_N:
+        ax2.plot(v, fb.paper_rod_N["min"], "C4:", lw=1.6, label="paper's method: min")
+        ax2.plot(v, fb.paper_rod_N["max"], "C1:", lw=1.6, label="paper's method: max")
+    inside = v <= hi * (1 + 1e-9)
+    ax2.set_xlim(0.0, hi)
+    top = [np.nanmax(fb.upper_N[inside])] + [float(np.max(c[inside]))
+                                              for c in fb.sets_rod_N.values()]
+    ax2.set_ylim(0.0, 1.15 * max(top))
+    handles, labels = [], []
+    for a in (ax, ax2):
+        for h, lab in zip(*a.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
     fig.legend(handles, labels, fontsize=8, loc="lower center", ncol=4, frameon=False,
                bbox_to_anchor=(0.5, -0.02))
-    ax.set_title("Data-supported bounds", fontsize=10)
-    ax2.set_title("Beside the paper's per-parameter bounds", fontsize=10)
+    ax.set_title("Sets over 0–3 m/s: measured (shaded) and extrapolated", fontsize=10)
+    ax2.set_title("The identified range: tests, envelope, paper's bounds", fontsize=10)
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout(rect=(0, 0.12, 1, 1))
+    fig.tight_layout(rect=(0, 0.14, 1, 1))
     return fig

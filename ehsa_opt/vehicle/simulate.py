@@ -346,8 +346,10 @@ def _as_list(obj: Any, cls: type, n: int | None) -> list:
 
 def _window_metrics(zt: np.ndarray, y: np.ndarray, params: np.ndarray, x0_keep: np.ndarray,
                     h: float, sample_rate_hz: float, vehicle: VehicleParams, speed: float,
-                    bound: float | None) -> dict[str, np.ndarray]:
-    """Metrics and energy-balance residual of a batch over the metric window."""
+                    bound: float | None, v_range: float | None = None
+                    ) -> dict[str, np.ndarray]:
+    """Metrics and energy-balance residual of a batch over the metric window (with
+    ``v_range``: the fractions of time and friction energy above it)."""
     n_b = zt.shape[0]
     # Energy balance over the window: road work = Δ stored + R i² + friction.
     ends = [0, -1]
@@ -375,6 +377,13 @@ def _window_metrics(zt: np.ndarray, y: np.ndarray, params: np.ndarray, x0_keep: 
     p_diss = y[:, col["damper_power_W"], :].mean(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         eff = np.where(p_diss > 0.0, p_mean / p_diss, 0.0)
+    extra = {}
+    if v_range is not None:
+        from .coverage import series_coverage
+        cov = series_coverage(y[:, col["stroke_velocity_m_s"], :], v_range,
+                              np.maximum(y[:, col["friction_power_W"], :], 0.0))
+        extra = {"out_of_range_time_fraction": cov["time_fraction"],
+                 "out_of_range_friction_energy_fraction": cov["energy_fraction"]}
     return {
         "comfort": acc_w / G,
         "comfort_weighted_rms_m_s2": acc_w,
@@ -386,6 +395,7 @@ def _window_metrics(zt: np.ndarray, y: np.ndarray, params: np.ndarray, x0_keep: 
         "dissipation_bound_W": np.full(n_b, np.nan if bound is None else bound),
         "peak_power_W": power.max(axis=1),
         "energy_residual": residual,
+        **extra,
     }
 
 
@@ -397,7 +407,9 @@ def simulate_quarter_car(vehicle: VehicleParams,
                          base_dir: str | Path | None = None,
                          keep_series: bool | Sequence[str] = False,
                          jit: bool = True, warn: bool = True,
-                         threads: int | None = None) -> QuarterCarSimulation:
+                         threads: int | None = None,
+                         identified_range_m_per_s: float | None = None
+                         ) -> QuarterCarSimulation:
     """Simulate one or many harvester/friction designs on one road (time domain).
 
     Parameters
@@ -425,6 +437,10 @@ def simulate_quarter_car(vehicle: VehicleParams,
     threads : int, optional
         Threads sharing the chunks of designs (default: 2 on a multi-core machine, 1
         inside a worker process); the results do not depend on it.
+    identified_range_m_per_s : float, optional
+        The friction's identified range (peak stroke velocity of the bench campaign):
+        the metrics then hold ``out_of_range_time_fraction`` and
+        ``out_of_range_friction_energy_fraction`` (:mod:`ehsa_opt.vehicle.coverage`).
 
     Returns
     -------
@@ -498,13 +514,14 @@ def simulate_quarter_car(vehicle: VehicleParams,
                 (zt, STATE_NAMES)
             arr[sl] = src[:, names.index(name), :]
         return _window_metrics(zt, y, params[:, sl], x0_keep, h, sample_rate_hz, vehicle,
-                               profile.speed_m_per_s, bound)
+                               profile.speed_m_per_s, bound, identified_range_m_per_s)
 
     t0 = time.perf_counter()
     parts = _map_threads(work, _chunks(len(hs), x_pad.size - 1), threads)
     wall = time.perf_counter() - t0
     metrics = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    finite = all(np.all(np.isfinite(a)) for k, a in metrics.items() if k != "dissipation_bound_W")
+    finite = all(np.all(np.isfinite(a)) for k, a in metrics.items()
+                 if k not in ("dissipation_bound_W", "out_of_range_friction_energy_fraction"))
     msg = "ok" if finite else "non-finite results: the step diverged (check parameters)"
     if warn:
         for b in np.flatnonzero(metrics["road_holding"] > 1.0):

@@ -1,0 +1,105 @@
+"""The rod-friction regression and its sandwich covariance (estimation/rod_law.py): the
+Newey-West interval keeps its coverage on autocorrelated residuals where the i.i.d. one
+does not; the ordered sets of estimation/bounds.py."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ehsa_opt.estimation.bounds import ordered_set
+from ehsa_opt.estimation.rod_law import (
+    FrictionSamples,
+    andrews_bandwidth,
+    hac_covariance,
+    rod_law_fit,
+)
+from ehsa_opt.physics.friction import rod_friction_N
+from ehsa_opt.physics.params import FrictionParams
+
+TRUTH = FrictionParams(60.0, 40.0, 0.01, 150.0, 0.02, 0.015, 1.0, 3e-5)
+LEAD = 5e-3 / (2 * np.pi)
+
+
+def _ar1(rng: np.random.Generator, n: int, rho: float, sd: float) -> np.ndarray:
+    e = np.empty(n)
+    e[0] = rng.normal(0, sd)
+    w = rng.normal(0, sd * np.sqrt(1 - rho ** 2), n)
+    for k in range(1, n):
+        e[k] = rho * e[k - 1] + w[k]
+    return e
+
+
+def test_newey_west_covers_where_iid_does_not() -> None:
+    """Slope of y = a + b sin(t) + AR(1) noise (rho 0.95), 4 blocks of 500 samples: the
+    95 % interval of b from the HAC covariance covers the truth in >= 88 % of 300
+    repetitions, the i.i.d. one in < 60 %."""
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 6 * np.pi, 500)
+    X = np.column_stack([np.ones_like(t), np.sin(t)])
+    hits_hac = hits_iid = 0
+    reps = 300
+    for _ in range(reps):
+        Js, es = [], []
+        XtX, Xty = np.zeros((2, 2)), np.zeros(2)
+        ys = []
+        for _b in range(4):
+            y = 1.0 + 2.0 * np.sin(t) + _ar1(rng, t.size, 0.95, 1.0)
+            ys.append(y)
+            XtX += X.T @ X
+            Xty += X.T @ y
+        beta = np.linalg.solve(XtX, Xty)
+        for y in ys:
+            Js.append(X)
+            es.append(y - X @ beta)
+        cov, cov_iid, L, neff = hac_covariance(Js, es)
+        hits_hac += abs(beta[1] - 2.0) <= 1.96 * np.sqrt(cov[1, 1])
+        hits_iid += abs(beta[1] - 2.0) <= 1.96 * np.sqrt(cov_iid[1, 1])
+        assert sum(neff) < 0.3 * 4 * t.size   # effective sample size well below n
+    assert hits_hac / reps >= 0.88
+    assert hits_iid / reps < 0.6
+
+
+def test_andrews_bandwidth_grows_with_autocorrelation() -> None:
+    rng = np.random.default_rng(0)
+    white = rng.normal(size=2000)
+    assert andrews_bandwidth(white) <= 3
+    assert andrews_bandwidth(_ar1(rng, 2000, 0.95, 1.0)) > 20
+
+
+def test_rod_law_refit_recovers_the_rod_friction_and_bands_widen_beyond_the_data() -> None:
+    rng = np.random.default_rng(5)
+    vs, ys = [], []
+    for f in (0.5, 1.5, 3.0):
+        tt = np.arange(0, 2 / f, 1e-3)
+        v = 2 * np.pi * f * 0.015 * np.cos(2 * np.pi * f * tt)
+        vs.append(v)
+        ys.append(np.asarray(rod_friction_N(v, TRUTH, LEAD)) + _ar1(rng, v.size, 0.9, 3.0))
+    smp = FrictionSamples(["a", "b", "c"], vs, ys)
+    start = FrictionParams(40.0, 30.0, 0.02, 100.0, 0.01, 0.01, 2.0, 1e-5).as_dict()
+    fit = rod_law_fit(smp, start, LEAD, refit=True)
+    v = np.array([0.05, 0.2, 0.28])
+    assert np.allclose(fit.rod_N(v), rod_friction_N(v, TRUTH, LEAD), rtol=0.03)
+    hw = fit.half_width_N(np.array([0.2, 0.6, 1.5]))
+    assert hw[0] < hw[1] < hw[2]
+    assert np.all(fit.std_N(v, "hac") > fit.std_N(v, "iid"))
+    assert fit.covariance_cluster is None  # three tests: too few clusters
+
+
+@pytest.mark.parametrize("side", ["below", "above"])
+def test_ordered_set_keeps_its_margin_and_its_order(side: str) -> None:
+    v = np.concatenate([np.geomspace(0.005, 0.02, 8), np.linspace(0.02, 3.0, 60)])
+    best = np.asarray(rod_friction_N(v, TRUTH, LEAD))
+    margin = 0.05 * best + 2.0 + 5.0 * np.maximum(v - 0.3, 0.0)
+    fr = ordered_set(TRUTH, v, margin, LEAD, side)
+    got = np.asarray(rod_friction_N(v, fr, LEAD))
+    if side == "below":
+        assert np.all(got <= best - margin + 1e-6)
+    else:
+        assert np.all(got >= best + margin - 1e-6)
+    vv = np.linspace(0.0, 5.0, 2001)   # off the grid, beyond it too
+    b2 = np.asarray(rod_friction_N(vv, TRUTH, LEAD))
+    g2 = np.asarray(rod_friction_N(vv, fr, LEAD))
+    assert np.all(g2 <= b2 + 1e-9) if side == "below" else np.all(g2 >= b2 - 1e-9)
+    with pytest.raises(ValueError, match="side"):
+        ordered_set(TRUTH, v, margin, LEAD, "sideways")
