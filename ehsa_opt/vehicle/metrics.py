@@ -30,6 +30,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..physics.harvester import equivalent_impedance
 from ..physics.params import (
     HarvesterParams,
     ParameterError,
@@ -41,7 +42,7 @@ from .iso2631 import wk_abs2
 from .road import ROAD_BAND_CYCLES_PER_M, dissipation_bound_W, road_velocity_psd
 
 __all__ = ["G", "METRIC_KEYS", "DESIGN_KEYS", "design_arrays", "linear_metrics",
-           "dimensionless_power", "efficiency_bound"]
+           "dimensionless_power", "efficiency_bound", "linear_frequency_response"]
 
 #: Standard gravity, m/s².
 G = 9.80665
@@ -70,6 +71,42 @@ def efficiency_bound(harvester: HarvesterParams) -> float:
     if math.isinf(harvester.load_ohm):
         return 0.0
     return harvester.load_ohm / (harvester.load_ohm + harvester.internal_resistance_ohm)
+
+
+def linear_frequency_response(vehicle: VehicleParams, harvester: HarvesterParams,
+                              frequencies_hz: ArrayLike) -> dict[str, np.ndarray]:
+    """Exact complex steady-state response of the frictionless quarter car to a road
+    sine x0 = Im(X0 e^{jωt}), per unit road amplitude X0.
+
+    Solves the 2×2 complex system (m2 s² + D) X2 − D X1 = 0,
+    −D X2 + (m1 s² + D + k1) X1 = k1 X0 with D = k2 + s Z(s) and Z the harvester's
+    impedance (inerter + electrical branch with its inductance), s = jω.
+
+    Returns
+    -------
+    dict of complex ndarray (F,)
+        ``x2``, ``x1`` (m per m), ``stroke_velocity`` (m/s per m), ``current``
+        (A per m, K_e s (X2 − X1) / (r (R + s L))), ``voltage`` (V per m, R_e × current).
+    """
+    f = np.asarray(frequencies_hz, dtype=float)
+    w = 2.0 * math.pi * f
+    s = 1j * w
+    m2, m1 = vehicle.sprung_mass_kg, vehicle.unsprung_mass_kg
+    k2, k1 = vehicle.suspension_stiffness_N_per_m, vehicle.tyre_stiffness_N_per_m
+    dyn = k2 + s * equivalent_impedance(harvester, w)
+    a11, a22 = m2 * s ** 2 + dyn, m1 * s ** 2 + dyn + k1
+    det = a11 * a22 - dyn * dyn
+    x2, x1 = k1 * dyn / det, k1 * a11 / det
+    v = s * (x2 - x1)
+    R = harvester.total_resistance_ohm()
+    if math.isinf(R):
+        cur = np.zeros_like(v)
+    else:
+        cur = harvester.voltage_constant_Vs_per_rad * v / (
+            harvester.lead_m_per_rad * (R + s * harvester.inductance_H))
+    volt = (np.zeros_like(cur) if math.isinf(harvester.load_ohm)
+            else harvester.load_ohm * cur)
+    return {"x2": x2, "x1": x1, "stroke_velocity": v, "current": cur, "voltage": volt}
 
 
 def _check_range(name: str, value: np.ndarray, md: Mapping[str, Any]) -> None:
