@@ -95,3 +95,58 @@ def test_road_study_retunes_to_equal_slopes_and_friction_costs_power():
     fixed = road_study(VehicleParams(), paper_optimum_harvester(), fc, RoadParams(length_m=150.0),
                        retune=False)
     assert fixed.loads_ohm == [75.0, 75.0, 75.0]
+
+
+def test_invalid_road_results_are_flagged_in_the_table_and_left_out_of_conclusions():
+    """The single seater with the prototype: road holding > 1 (tyre leaves the ground)."""
+    from ehsa_opt.pipeline.quarter_car_report import road_study_conclusions
+    from ehsa_opt.vehicle.validity import check_validity
+    fc = friction_cases(None)
+    vehicle = VehicleParams.preset("single_seater")
+    study = road_study(vehicle, HarvesterParams(load_ohm=10.0), fc, RoadParams(length_m=200.0),
+                       n_loads=6)
+    m = study.sim.metrics
+    assert np.all(m["road_holding"] > 1.0)
+    validity = check_validity(m, stroke_limit_m=vehicle.stroke_limit_m)
+    assert not validity.valid.any()
+    assert all(validity.codes(i) == ["tyre_lift"] for i in range(3))
+    assert validity.cell(0).startswith("**INVALID: tyre leaves the ground")
+    text = road_study_conclusions(study, validity)
+    assert "No conclusion" in text and "hardly changes" not in text
+    # the passenger car on the same road is valid and concluded on
+    car = road_study(VehicleParams(), HarvesterParams(load_ohm=10.0), fc,
+                     RoadParams(length_m=200.0), n_loads=6)
+    ok = check_validity(car.sim.metrics, stroke_limit_m=0.1)
+    assert ok.all_valid and ok.cell(1) == "valid"
+    assert "comfort" in road_study_conclusions(car, ok)
+
+
+def test_validity_stroke_limit_fast_path_region_and_joined_flags():
+    from ehsa_opt.vehicle.validity import (GAUSSIAN_PEAK_FACTOR, Validity, ValidityFlag,
+                                           check_validity, register_check, VALIDITY_CHECKS)
+    # time domain: the peak stroke; frequency path: GAUSSIAN_PEAK_FACTOR x rms
+    v = check_validity({"road_holding": [0.5, 0.5], "peak_stroke_m": [0.09, 0.12]},
+                       stroke_limit_m=0.1)
+    assert v.valid.tolist() == [True, False] and v.codes(1) == ["stroke_limit"]
+    assert "120 mm (peak) beyond the 100 mm limit" in v.cell(1)
+    rms = 0.1 / GAUSSIAN_PEAK_FACTOR
+    v = check_validity({"road_holding": [0.5, 0.5], "stroke_rms_m": [0.99 * rms, 1.01 * rms]},
+                       stroke_limit_m=0.1)
+    assert v.valid.tolist() == [True, False]
+    # fast path outside its validated region, on the design variables
+    v = check_validity({"road_holding": [0.5, 0.5]}, design={"load_ohm": [50.0, 5e3]},
+                       fast_path_region={"load_ohm": (1.0, 1e3)})
+    assert v.valid.tolist() == [True, False] and v.codes(1) == ["fast_path_region"]
+    # another check joins the registry; flags from elsewhere join a Validity
+    register_check("test_extra", lambda m, ctx: ["extra" if x > 0.9 else None
+                                                 for x in m["road_holding"]])
+    try:
+        v = check_validity({"road_holding": [0.95, 1.2]})
+        assert v.codes(0) == ["test_extra"] and v.codes(1) == ["tyre_lift", "test_extra"]
+    finally:
+        del VALIDITY_CHECKS["test_extra"]
+    other = Validity(((ValidityFlag("friction_range", "friction extrapolated"),), ()))
+    j = check_validity({"road_holding": [0.5, 1.5]}).join(other)
+    assert j.codes(0) == ["friction_range"] and j.codes(1) == ["tyre_lift"]
+    with pytest.raises(ValueError, match="road_holding"):
+        check_validity({"power_W": [1.0]})

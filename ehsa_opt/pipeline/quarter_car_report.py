@@ -17,6 +17,7 @@ from ..plots import quarter_car as qplots
 from ..vehicle.iso2631 import ISO2631_WK_TABLE, wk_exact, wk_fit_error, wk_state_space
 from ..vehicle.metrics import METRIC_KEYS, linear_frequency_response, linear_metrics
 from ..vehicle.simulate import simulate_quarter_car
+from ..vehicle.validity import check_validity
 from ..vehicle.studies import (
     PAPER_FIG14_RANGES,
     force_velocity_loops,
@@ -28,7 +29,7 @@ from ..vehicle.studies import (
 from .base import Context, StepOutput
 
 __all__ = ["step_quarter_car_paths", "step_fig13", "step_fig14", "step_fig15_16", "step_fig21",
-           "friction_inputs"]
+           "friction_inputs", "road_study_conclusions", "COMFORT_SAME_PERCENT"]
 
 
 def friction_inputs(ctx: Context) -> Any:
@@ -263,32 +264,68 @@ def _road_step(ctx: Context, preset: str, fig: str, load: float) -> tuple[str, l
     plots.save(study.plot(), ctx.out_dir / rel)
     m = study.sim.metrics
     drops = study.power_drop_percent()
+    validity = check_validity(m, stroke_limit_m=vehicle.stroke_limit_m)
     rows = ["| friction | R_e (Ω) | slope (N s/m) | power (W) | change | efficiency | "
-            "comfort α | road holding |", "|---|---|---|---|---|---|---|---|"]
+            "comfort α | road holding | peak stroke (mm) | validity |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
     for i, c in enumerate(study.cases):
         note = "" if study.reachable[i] else " (target not reachable)"
         rows.append(f"| {c} | {study.loads_ohm[i]:.3g}{note} | {study.slopes_Ns_per_m[i]:.0f} | "
                     f"{m['power_W'][i]:.1f} | {drops[c]:+.1f} % | "
                     f"{100 * m['efficiency'][i]:.1f} % | {m['comfort'][i]:.3f} | "
-                    f"{m['road_holding'][i]:.3f} |")
-    rh = float(np.max(m["road_holding"]))
-    warn = (f"\n\n**Warning:** road holding reaches {rh:.2f} > 1 — the tyre would leave the "
-            "ground; the linear tyre model is invalid there (SPEC §4: the prototype's inertance "
-            "dominates so light a corner)." if rh > 1 else "")
+                    f"{m['road_holding'][i]:.3f} | {1e3 * m['peak_stroke_m'][i]:.0f} | "
+                    f"{validity.cell(i)} |")
     md = (f"{preset}, class C at 100 km/h, {road.length_m:g} m; the frictionless case uses "
           f"R_e = {load:g} Ω and each friction case is re-tuned (one batch of loads, "
           "interpolated) so that the three damping slopes (least squares of the non-inertial "
-          f"damper force on stroke velocity) match. Friction: {fc.source}.\n\n"
-          + "\n".join(rows) +
-          "\n\nPaper: average power fell **70–80 %** with friction at equal damping slopes. "
-          f"Ours falls {-drops['min']:.0f} % (min) and {-drops['max']:.0f} % (max): the share "
-          "of the damping taken by friction sets the loss, and our friction is much smaller "
-          "than the paper's (see Fig 14). As in the paper, comfort hardly changes at equal "
-          "slopes (paper: average acceleration 3 m/s² in all three cases; ours "
-          + ", ".join(f"{v:.2f}" for v in m["comfort_weighted_rms_m_s2"]) + " m/s²)." + warn + f"\n\n![{fig}]({rel})\n")
+          f"damper force on stroke velocity) match. Friction: {fc.source}. Validity: road "
+          f"holding ≤ 1 (tyre on the ground) and peak stroke ≤ {1e3 * vehicle.stroke_limit_m:g} "
+          "mm (the vehicle's stroke limit).\n\n" + "\n".join(rows) + "\n\n"
+          + road_study_conclusions(study, validity) + f"\n\n![{fig}]({rel})\n")
     res = {"loads_ohm": study.loads_ohm, "power_W": m["power_W"].tolist(),
-           "power_change_percent": drops, "slopes": study.slopes_Ns_per_m.tolist()}
+           "power_change_percent": drops, "slopes": study.slopes_Ns_per_m.tolist(),
+           "validity": validity.as_list()}
     return md, [rel], res
+
+
+#: Spread of the weighted rms acceleration (max/min − 1) below which comfort "hardly
+#: changes" between friction cases.
+COMFORT_SAME_PERCENT = 5.0
+
+
+def road_study_conclusions(study: Any, validity: Any) -> str:
+    """The Figs 15/16 conclusion sentences, generated from the valid rows only."""
+    m = study.sim.metrics
+    valid = validity.valid
+    cases = study.cases
+    i0 = cases.index("none")
+    if not valid[i0]:
+        return ("**No conclusion is drawn from this vehicle:** the frictionless reference is "
+                f"invalid ({'; '.join(f.message for f in validity.flags[i0])}), so neither the power loss nor the "
+                "comfort at equal slopes can be compared with the paper's (70–80 % loss, "
+                "average acceleration 3 m/s² in all three cases).")
+    drops = study.power_drop_percent()
+    ok = [c for i, c in enumerate(cases) if valid[i] and c != "none"]
+    bad = [c for i, c in enumerate(cases) if not valid[i]]
+    out = ["Paper: average power fell **70–80 %** with friction at equal damping slopes."]
+    if ok:
+        out.append("Ours falls " + " and ".join(f"{-drops[c]:.0f} % ({c})" for c in ok)
+                   + ": the share of the damping taken by friction sets the loss"
+                   + (", and ours is smaller than the paper's (see Fig 14)."
+                      if all(-drops[c] < 70 for c in ok) else "."))
+    acc = {c: float(m["comfort_weighted_rms_m_s2"][cases.index(c)]) for c in ["none"] + ok}
+    spread = 100 * (max(acc.values()) / min(acc.values()) - 1)
+    vals = ", ".join(f"{v:.2f}" for v in acc.values())
+    if len(acc) > 1:
+        out.append(("As in the paper, comfort hardly changes at equal slopes"
+                    if spread < COMFORT_SAME_PERCENT else
+                    "Unlike the paper, comfort changes at equal slopes")
+                   + f" (weighted rms acceleration {vals} m/s², spread {spread:.1f} %; paper: "
+                   "3 m/s² in all three cases).")
+    if bad:
+        out.append("Left out of these sentences (invalid, flagged in the table): "
+                   + ", ".join(bad) + ".")
+    return " ".join(out)
 
 
 def step_fig15_16(ctx: Context) -> StepOutput:
@@ -323,19 +360,23 @@ def step_fig21(ctx: Context) -> StepOutput:
     m = study.sim.metrics
     paper = {"none": (174.9, 81.0, None), "min": (148.61, 67.58, 710.0),
              "max": (110.1, 49.64, 580.0)}
+    validity = check_validity(m, stroke_limit_m=ctx.vehicle()[0].stroke_limit_m)
     rows = ["| friction | power (W) ours / paper | efficiency ours / paper | peak power (W) "
-            "ours / paper |", "|---|---|---|---|"]
+            "ours / paper | validity |", "|---|---|---|---|---|"]
     for i, c in enumerate(study.cases):
         pp, pe, pk = paper[c]
         rows.append(f"| {c} | {m['power_W'][i]:.1f} / {pp} | {100 * m['efficiency'][i]:.1f} % / "
-                    f"{pe} % | {m['peak_power_W'][i]:.0f} / {pk if pk else '–'} |")
+                    f"{pe} % | {m['peak_power_W'][i]:.0f} / {pk if pk else '–'} | "
+                    f"{validity.cell(i)} |")
     md = (f"Design: {src}. Passenger car, class C at 100 km/h, {road.length_m:g} m. "
           f"Friction: {fc.source}.\n\n" + "\n".join(rows) +
           "\n\nThe paper's vehicle parameters and friction values are not in its text, so "
           "absolute powers differ (our bound at 100 km/h is "
           f"{float(m['dissipation_bound_W'][0]):.0f} W, below the paper's 174.9 W frictionless "
           "power, so its car or road must have been different). "
-          + ("The ordering none > min > max friction in power and efficiency is reproduced."
+          + ("No ordering is stated: a row is invalid (flagged in the table)."
+             if not validity.all_valid else
+             "The ordering none > min > max friction in power and efficiency is reproduced."
              if (m["power_W"][0] > m["power_W"][1] > m["power_W"][2]
                  and m["efficiency"][0] > m["efficiency"][1] > m["efficiency"][2])
              else "The paper's ordering none > min > max friction is NOT reproduced here.")
@@ -343,4 +384,5 @@ def step_fig21(ctx: Context) -> StepOutput:
           f"![Fig 21]({rel})\n")
     return StepOutput(md, [rel], {"power_W": m["power_W"].tolist(),
                                   "efficiency": m["efficiency"].tolist(),
+                                  "validity": validity.as_list(),
                                   "peak_power_W": m["peak_power_W"].tolist()})

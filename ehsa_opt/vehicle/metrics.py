@@ -297,8 +297,9 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
         ``comfort`` (α, –), ``comfort_weighted_rms_m_s2``, ``road_holding``
         (η_rh, –), ``power_W`` (mean power in R_e), ``power_dimensionless`` (ρ_g),
         ``efficiency`` (η_g, –), ``dissipated_power_W`` (mean power absorbed
-        by the damper, inertial part excluded), ``dissipation_bound_W``, and
-        ``stroke_velocity_rms_m_s`` (σ_v).
+        by the damper, inertial part excluded), ``dissipation_bound_W``,
+        ``stroke_velocity_rms_m_s`` (σ_v), ``current_rms_A``, ``voltage_rms_V`` (R_e × rms
+        current; 0 in open circuit) and ``stroke_rms_m`` (rms of x2 − x1).
     """
     if road.profile_csv is not None:
         raise ValueError("linear_metrics needs an ISO 8608 road (a PSD); a measured profile "
@@ -327,7 +328,7 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
     phi_v = road_velocity_psd(road)
     base_grid = np.logspace(math.log10(f_lo), math.log10(f_hi), int(n_freq))
     out = {k: np.empty(n) for k in ("var_acc_w", "var_tyre", "p_load", "p_diss", "var_v",
-                                    "c_f")}
+                                    "c_f", "var_i", "var_stroke")}
     for lo in range(0, n, _CHUNK):
         sl = slice(lo, min(lo + _CHUNK, n))
         J, r, ke, kt = flat["J_kgm2"][sl], flat["r_m_per_rad"][sl], flat["Ke"][sl], flat["Kt"][sl]
@@ -386,6 +387,8 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
         out["p_load"][sl] = np.where(open_c, 0.0, np.where(open_c, 0.0, Re) * integ(cur2))
         out["p_diss"][sl] = integ(yd * vrel2)
         out["var_v"][sl] = integ(vrel2)
+        out["var_i"][sl] = integ(cur2)
+        out["var_stroke"][sl] = integ(vrel2 / w2)
     acc_rms = np.sqrt(out["var_acc_w"])
     power = out["p_load"]
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -401,5 +404,10 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
         "dissipation_bound_W": np.full(n, dissipation_bound_W(vehicle, road)),
         "stroke_velocity_rms_m_s": np.sqrt(out["var_v"]),
         "friction_damping_Ns_per_m": out["c_f"],
+        "current_rms_A": np.sqrt(out["var_i"]),
+        "voltage_rms_V": np.where(np.isinf(flat["Re_ohm"]), 0.0,
+                                  np.where(np.isinf(flat["Re_ohm"]), 0.0, flat["Re_ohm"])
+                                  * np.sqrt(out["var_i"])),
+        "stroke_rms_m": np.sqrt(out["var_stroke"]),
     }
     return {k: a.reshape(shape) for k, a in res.items()}
