@@ -51,6 +51,8 @@ class FrictionSpeedTask:
         m = sim.metrics
         lin = linear_metrics(self.vehicle, self.road, {"load_ohm": self.harvester.load_ohm},
                              base=self.harvester, n_freq=1024)
+        from ..vehicle.validity import check_validity
+        validity = check_validity(m, stroke_limit_m=self.vehicle.stroke_limit_m)
         ref = names.index("none") if "none" in names else None
         rows = []
         for b, name in enumerate(names):
@@ -64,7 +66,11 @@ class FrictionSpeedTask:
                    "dissipated_power_W": float(m["dissipated_power_W"][b]),
                    "energy_residual": float(m["energy_residual"][b]),
                    "linear_power_W": float(np.ravel(lin["power_W"])[0]),
-                   "linear_comfort": float(np.ravel(lin["comfort"])[0])}
+                   "linear_comfort": float(np.ravel(lin["comfort"])[0]),
+                   **{k: float(m[k][b]) for k in ("peak_stroke_m", "peak_voltage_V",
+                                                  "peak_current_A", "voltage_rms_V",
+                                                  "current_rms_A")},
+                   "validity": [f.message for f in validity.flags[b]]}
             if ref is not None:
                 row["comfort_change_pct"] = 100.0 * (1.0 - m["comfort"][b] / m["comfort"][ref])
                 row["road_holding_change_pct"] = 100.0 * (1.0 - m["road_holding"][b]

@@ -323,13 +323,19 @@ class FrictionParams:
 # --------------------------------------------------------------------------- vehicle
 @dataclass(frozen=True)
 class VehicleParams:
-    """Quarter car (SPEC §4): sprung mass m2, unsprung mass m1, k2, k1."""
+    """Quarter car: sprung mass m2, unsprung mass m1, k2, k1, and the suspension's stroke
+    limit (the largest |x2 − x1| from static; a result beyond it hits the bump stops,
+    which the model does not have, and is flagged invalid)."""
 
     sprung_mass_kg: float = _num(375.0, "kg", "sprung mass m2", gt=0.0, le=1e5)
     unsprung_mass_kg: float = _num(45.0, "kg", "unsprung mass m1", gt=0.0, le=1e4)
     suspension_stiffness_N_per_m: float = _num(22e3, "N/m", "suspension stiffness k2", gt=0.0,
                                                le=1e8)
     tyre_stiffness_N_per_m: float = _num(200e3, "N/m", "tyre stiffness k1", gt=0.0, le=1e9)
+    stroke_limit_m: float = _num(0.1, "m", "suspension stroke limit |x2 - x1| "
+                                 "(assumption: +/-100 mm, a passenger car's bump-to-rebound "
+                                 "travel is about 200 mm)", gt=0.0, le=2.0,
+                                 hint="the stroke limit is in metres, e.g. 0.1")
 
     def __post_init__(self) -> None:
         _validate_numbers(self, "vehicle")

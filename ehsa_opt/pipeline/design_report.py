@@ -293,6 +293,12 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
                           ("road_holding_change_pct", "road holding change (%)", "+.2f")):
         lines.append(f"| {lab} | " + " | ".join(cell(c, key, j, fmt) for j, c in
                                                enumerate(("none", "min", "max"))) + " |")
+    lines.append("| validity (tyre on the ground, stroke within the limit) | " + " | ".join(
+        ("valid" if not at100.get(c, {}).get("validity") else
+         "**INVALID: " + "; ".join(at100[c]["validity"]) + "**")
+        for c in ("none", "min", "max")) + " |")
+    invalid_runs = [f"{r['friction']} at {r['speed_km_per_h']:g} km/h" for r in rows
+                    if r.get("validity")]
     h_opt = HarvesterParams.from_design(ga["total_inertia_gcm2"], ga["lead_mm_per_rev"],
                                         ga["speed_constant_rpm_per_V"], ga["load_ohm"],
                                         base=cfg.harvester)
@@ -307,6 +313,9 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
                  f"frequency path {none100['linear_power_W']:.2f} W and α = "
                  f"{none100['linear_comfort']:.4f}; energy balance closes to "
                  f"{max(abs(r['energy_residual']) for r in rows):.1e} (relative) in every run.\n\n")
+    if invalid_runs:
+        check += ("**Invalid runs** (left out of the comparison below): "
+                  + ", ".join(invalid_runs) + ".\n\n")
     explain = (
         f"**Against the paper.** Friction costs power and efficiency as in the paper "
         f"(efficiency falls from R_e/(R_e+R_i) = {none100.get('efficiency_pct', float('nan')):.1f} % "

@@ -15,8 +15,9 @@ from .. import plots
 from ..physics.params import HarvesterParams, RoadParams, VehicleParams
 from ..plots import quarter_car as qplots
 from ..vehicle.iso2631 import ISO2631_WK_TABLE, wk_exact, wk_fit_error, wk_state_space
-from ..vehicle.metrics import METRIC_KEYS, linear_metrics
+from ..vehicle.metrics import METRIC_KEYS, linear_frequency_response, linear_metrics
 from ..vehicle.simulate import simulate_quarter_car
+from ..vehicle.validity import check_validity
 from ..vehicle.studies import (
     PAPER_FIG14_RANGES,
     force_velocity_loops,
@@ -28,7 +29,7 @@ from ..vehicle.studies import (
 from .base import Context, StepOutput
 
 __all__ = ["step_quarter_car_paths", "step_fig13", "step_fig14", "step_fig15_16", "step_fig21",
-           "friction_inputs"]
+           "friction_inputs", "road_study_conclusions", "COMFORT_SAME_PERCENT"]
 
 
 def friction_inputs(ctx: Context) -> Any:
@@ -111,45 +112,98 @@ def step_fig13(ctx: Context) -> StepOutput:
     if (na := _not_applicable(ctx)) is not None:
         return na
     fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
-    # log grid plus points around the body (~1.1 Hz) and wheel-hop (~8 Hz) modes, so the
+    loads = [15.0, 47.0, 109.0]
+    v_road = 2.0 * np.pi * 0.01  # 10 mm at 1 Hz, falling as 1/f
+    # log grid plus the exact frictionless peaks of x2 and V_g per load, plus points around the body (~1.1 Hz) and wheel-hop (~8 Hz) modes, so the
     # resonances are resolved in quick mode too
     freqs = np.unique(np.round(np.concatenate([
         np.geomspace(0.5, 20.0, 12 if ctx.quick else 30),
         np.linspace(0.8, 1.6, 5 if ctx.quick else 9),
-        np.linspace(6.5, 10.0, 5 if ctx.quick else 9)]), 4))
-    v_road = 2.0 * np.pi * 0.01  # 10 mm at 1 Hz, falling as 1/f
-    study = stepped_sine_response(ctx.vehicle()[0], ctx.harvester(), fc, [15.0, 47.0, 109.0],
+        np.linspace(6.5, 10.0, 5 if ctx.quick else 9),
+        _exact_peaks(ctx.vehicle()[0], ctx.harvester(), loads)]), 4))
+    study = stepped_sine_response(ctx.vehicle()[0], ctx.harvester(), fc, loads,
                                   freqs, velocity_amplitude_m_per_s=v_road)
     rel = "figures/fig13_frequency_response.png"
     plots.save(study.plot(), ctx.out_dir / rel)
-    k_body = int(np.argmax(study.sprung_transmissibility[0, 0]))
     i_none, i_max = study.cases.index("none"), study.cases.index("max")
     ratio = 100 * study.voltage_amplitude_V[i_max, 1] / study.voltage_amplitude_V[i_none, 1]
     ratio_lo, ratio_hi = float(ratio[0]), float(ratio[-1])
-    rows = ["| friction | R_e (Ω) | peak x2/x0 | at (Hz) | max V_g amplitude (V) |",
-            "|---|---|---|---|---|"]
+    rows = ["| friction | R_e (Ω) | peak x2/x0 | at (Hz) | max V_g amplitude (V) | at (Hz) | "
+            "steady |", "|---|---|---|---|---|---|---|"]
     for i, c in enumerate(study.cases):
         for j, r in enumerate(study.loads_ohm):
             k = int(np.argmax(study.sprung_transmissibility[i, j]))
+            kv = int(np.argmax(study.voltage_amplitude_V[i, j]))
+            ok = bool(study.settled[i, j].all())
             rows.append(f"| {c} | {r:g} | {study.sprung_transmissibility[i, j, k]:.2f} | "
                         f"{study.frequencies_hz[k]:.2f} | "
-                        f"{study.voltage_amplitude_V[i, j].max():.1f} |")
-    md = (f"Stepped-sine simulation (nonlinear: friction), passenger car, Table 1 prototype, "
-          f"road sine of constant velocity amplitude {1e3 * v_road:.1f} mm/s (10 mm at 1 Hz, "
-          f"displacement falling as 1/f like a road's, so the voltages stay physical) "
-          f"**(assumption: the paper's road input is not in the text)**, "
+                        f"{study.voltage_amplitude_V[i, j, kv]:.1f} | "
+                        f"{study.frequencies_hz[kv]:.2f} | "
+                        + ("yes" if ok else "**NO** at " + ", ".join(
+                            f"{study.frequencies_hz[q]:.2f} Hz (change "
+                            f"{100 * study.amplitude_change[i, j, q]:.1f} %)"
+                            for q in np.flatnonzero(~study.settled[i, j])))
+                        + " |")
+    for j, r in enumerate(study.loads_ohm):
+        k = int(np.argmax(study.linear_transmissibility[j]))
+        kv = int(np.argmax(study.linear_voltage_amplitude_V[j]))
+        rows.append(f"| none, exact linear | {r:g} | {study.linear_transmissibility[j, k]:.2f} | "
+                    f"{study.frequencies_hz[k]:.2f} | "
+                    f"{study.linear_voltage_amplitude_V[j, kv]:.1f} | "
+                    f"{study.frequencies_hz[kv]:.2f} | exact |")
+    # conclusions from the numbers: settled points only
+    ok_none, ok_max = study.settled[i_none], study.settled[i_max]
+    peak = lambda i, j: float(np.nanmax(np.where(study.settled[i, j],  # noqa: E731
+                                              study.sprung_transmissibility[i, j], np.nan)))
+    flat = [(r, 100 * (1 - peak(i_max, j) / peak(i_none, j)))
+            for j, r in enumerate(study.loads_ohm)
+            if study.settled[[i_max, i_none], j, :][:, (study.frequencies_hz > 0.7)
+                                                    & (study.frequencies_hz < 1.7)].all()]
+    flat_text = ("lowers the body-resonance peak of x2/x0 by "
+                 + ", ".join(f"{v:.0f} % (R_e = {r:g} Ω)" for r, v in flat)
+                 if flat else "changes the body-resonance peak by an amount not stated "
+                 "(points near it did not settle)")
+    n_bad = int(np.size(study.settled) - np.count_nonzero(study.settled))
+    unsettled = ("" if n_bad == 0 else
+                 f" **{n_bad} points did not settle** within the time limit; they are marked "
+                 "in the table and left out of the sentences below.")
+    volt_text = (f"with the 'max' friction the voltage at R_e = {study.loads_ohm[1]:g} Ω is "
+                 f"{ratio_lo:.0f} % of the frictionless value at {study.frequencies_hz[0]:g} Hz "
+                 f"and {ratio_hi:.0f} % at {study.frequencies_hz[-1]:g} Hz"
+                 if ok_none[1, [0, -1]].all() and ok_max[1, [0, -1]].all() else
+                 "the voltage ratio at the band's ends is not stated (a point did not settle)")
+    md = (f"Stepped-sine simulation at steady state (nonlinear: friction), passenger car, "
+          f"Table 1 prototype, road sine of constant velocity amplitude {1e3 * v_road:.1f} mm/s "
+          f"(10 mm at 1 Hz, displacement falling as 1/f like a road's, so the voltages stay "
+          f"physical) **(assumption: the paper's road input is not in the text)**, "
           f"{len(freqs)} frequencies 0.5–20 Hz, loads 15/47/109 Ω. Friction: {fc.source}.\n\n"
-          + "\n".join(rows) +
+          "Steady state by construction: each point starts from the exact frictionless steady "
+          "state and runs in windows of whole cycles (≥ 1 s) until the fundamental amplitudes "
+          f"of x2 and V_g change by less than {100 * study.tolerance:g} % from one window to "
+          "the next. Check: without friction the simulation equals the exact linear response "
+          f"within **{100 * study.frictionless_deviation():.2f} %** at every frequency and "
+          "load (rows 'exact linear')." + unsettled + "\n\n" + "\n".join(rows) +
           "\n\nThe paper (text of its Fig 13): the generator voltage varies with the friction "
-          "magnitude and falls as the sprung-mass displacement falls. Ours: with the 'max' "
-          f"friction the voltage at R_e = 47 Ω is {ratio_lo:.0f} % of the frictionless value at "
-          f"{study.frequencies_hz[0]:g} Hz and {ratio_hi:.0f} % at "
-          f"{study.frequencies_hz[-1]:g} Hz (friction matters most at low frequency, where the "
-          "stroke velocity is small), and friction flattens the body resonance (near "
-          f"{study.frequencies_hz[k_body]:.1f} Hz). Paper "
-          f"values are only graphical, so no numbers are compared.\n\n![Fig 13]({rel})\n")
+          f"magnitude and falls as the sprung-mass displacement falls. Ours: {volt_text} "
+          "(friction matters most at low frequency, where the stroke velocity is small), and "
+          f"the 'max' friction {flat_text}. Paper values are only graphical, so no numbers "
+          f"are compared.\n\n![Fig 13]({rel})\n")
     return StepOutput(md, [rel], {"voltage_amplitude_V": study.voltage_amplitude_V.tolist(),
-                                  "frequencies_hz": study.frequencies_hz.tolist()})
+                                  "frequencies_hz": study.frequencies_hz.tolist(),
+                                  "settled": study.settled.tolist(),
+                                  "frictionless_deviation": study.frictionless_deviation()})
+
+
+def _exact_peaks(vehicle: VehicleParams, harvester: HarvesterParams,
+                 loads: list[float]) -> np.ndarray:
+    """Frequencies of the exact frictionless maxima of x2/x0 and of V_g (constant-velocity
+    road) per load, on a dense grid (so the stepped sine samples the true peaks)."""
+    f = np.geomspace(0.5, 20.0, 4000)
+    out = []
+    for r in loads:
+        lin = linear_frequency_response(vehicle, harvester.replace(load_ohm=r), f)
+        out += [f[np.argmax(np.abs(lin["x2"]))], f[np.argmax(np.abs(lin["voltage"]) / f)]]
+    return np.array(out)
 
 
 def step_fig14(ctx: Context) -> StepOutput:
@@ -210,32 +264,68 @@ def _road_step(ctx: Context, preset: str, fig: str, load: float) -> tuple[str, l
     plots.save(study.plot(), ctx.out_dir / rel)
     m = study.sim.metrics
     drops = study.power_drop_percent()
+    validity = check_validity(m, stroke_limit_m=vehicle.stroke_limit_m)
     rows = ["| friction | R_e (Ω) | slope (N s/m) | power (W) | change | efficiency | "
-            "comfort α | road holding |", "|---|---|---|---|---|---|---|---|"]
+            "comfort α | road holding | peak stroke (mm) | validity |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
     for i, c in enumerate(study.cases):
         note = "" if study.reachable[i] else " (target not reachable)"
         rows.append(f"| {c} | {study.loads_ohm[i]:.3g}{note} | {study.slopes_Ns_per_m[i]:.0f} | "
                     f"{m['power_W'][i]:.1f} | {drops[c]:+.1f} % | "
                     f"{100 * m['efficiency'][i]:.1f} % | {m['comfort'][i]:.3f} | "
-                    f"{m['road_holding'][i]:.3f} |")
-    rh = float(np.max(m["road_holding"]))
-    warn = (f"\n\n**Warning:** road holding reaches {rh:.2f} > 1 — the tyre would leave the "
-            "ground; the linear tyre model is invalid there (SPEC §4: the prototype's inertance "
-            "dominates so light a corner)." if rh > 1 else "")
+                    f"{m['road_holding'][i]:.3f} | {1e3 * m['peak_stroke_m'][i]:.0f} | "
+                    f"{validity.cell(i)} |")
     md = (f"{preset}, class C at 100 km/h, {road.length_m:g} m; the frictionless case uses "
           f"R_e = {load:g} Ω and each friction case is re-tuned (one batch of loads, "
           "interpolated) so that the three damping slopes (least squares of the non-inertial "
-          f"damper force on stroke velocity) match. Friction: {fc.source}.\n\n"
-          + "\n".join(rows) +
-          "\n\nPaper: average power fell **70–80 %** with friction at equal damping slopes. "
-          f"Ours falls {-drops['min']:.0f} % (min) and {-drops['max']:.0f} % (max): the share "
-          "of the damping taken by friction sets the loss, and our friction is much smaller "
-          "than the paper's (see Fig 14). As in the paper, comfort hardly changes at equal "
-          "slopes (paper: average acceleration 3 m/s² in all three cases; ours "
-          + ", ".join(f"{v:.2f}" for v in m["comfort_weighted_rms_m_s2"]) + " m/s²)." + warn + f"\n\n![{fig}]({rel})\n")
+          f"damper force on stroke velocity) match. Friction: {fc.source}. Validity: road "
+          f"holding ≤ 1 (tyre on the ground) and peak stroke ≤ {1e3 * vehicle.stroke_limit_m:g} "
+          "mm (the vehicle's stroke limit).\n\n" + "\n".join(rows) + "\n\n"
+          + road_study_conclusions(study, validity) + f"\n\n![{fig}]({rel})\n")
     res = {"loads_ohm": study.loads_ohm, "power_W": m["power_W"].tolist(),
-           "power_change_percent": drops, "slopes": study.slopes_Ns_per_m.tolist()}
+           "power_change_percent": drops, "slopes": study.slopes_Ns_per_m.tolist(),
+           "validity": validity.as_list()}
     return md, [rel], res
+
+
+#: Spread of the weighted rms acceleration (max/min − 1) below which comfort "hardly
+#: changes" between friction cases.
+COMFORT_SAME_PERCENT = 5.0
+
+
+def road_study_conclusions(study: Any, validity: Any) -> str:
+    """The Figs 15/16 conclusion sentences, generated from the valid rows only."""
+    m = study.sim.metrics
+    valid = validity.valid
+    cases = study.cases
+    i0 = cases.index("none")
+    if not valid[i0]:
+        return ("**No conclusion is drawn from this vehicle:** the frictionless reference is "
+                f"invalid ({'; '.join(f.message for f in validity.flags[i0])}), so neither the power loss nor the "
+                "comfort at equal slopes can be compared with the paper's (70–80 % loss, "
+                "average acceleration 3 m/s² in all three cases).")
+    drops = study.power_drop_percent()
+    ok = [c for i, c in enumerate(cases) if valid[i] and c != "none"]
+    bad = [c for i, c in enumerate(cases) if not valid[i]]
+    out = ["Paper: average power fell **70–80 %** with friction at equal damping slopes."]
+    if ok:
+        out.append("Ours falls " + " and ".join(f"{-drops[c]:.0f} % ({c})" for c in ok)
+                   + ": the share of the damping taken by friction sets the loss"
+                   + (", and ours is smaller than the paper's (see Fig 14)."
+                      if all(-drops[c] < 70 for c in ok) else "."))
+    acc = {c: float(m["comfort_weighted_rms_m_s2"][cases.index(c)]) for c in ["none"] + ok}
+    spread = 100 * (max(acc.values()) / min(acc.values()) - 1)
+    vals = ", ".join(f"{v:.2f}" for v in acc.values())
+    if len(acc) > 1:
+        out.append(("As in the paper, comfort hardly changes at equal slopes"
+                    if spread < COMFORT_SAME_PERCENT else
+                    "Unlike the paper, comfort changes at equal slopes")
+                   + f" (weighted rms acceleration {vals} m/s², spread {spread:.1f} %; paper: "
+                   "3 m/s² in all three cases).")
+    if bad:
+        out.append("Left out of these sentences (invalid, flagged in the table): "
+                   + ", ".join(bad) + ".")
+    return " ".join(out)
 
 
 def step_fig15_16(ctx: Context) -> StepOutput:
@@ -270,19 +360,23 @@ def step_fig21(ctx: Context) -> StepOutput:
     m = study.sim.metrics
     paper = {"none": (174.9, 81.0, None), "min": (148.61, 67.58, 710.0),
              "max": (110.1, 49.64, 580.0)}
+    validity = check_validity(m, stroke_limit_m=ctx.vehicle()[0].stroke_limit_m)
     rows = ["| friction | power (W) ours / paper | efficiency ours / paper | peak power (W) "
-            "ours / paper |", "|---|---|---|---|"]
+            "ours / paper | validity |", "|---|---|---|---|---|"]
     for i, c in enumerate(study.cases):
         pp, pe, pk = paper[c]
         rows.append(f"| {c} | {m['power_W'][i]:.1f} / {pp} | {100 * m['efficiency'][i]:.1f} % / "
-                    f"{pe} % | {m['peak_power_W'][i]:.0f} / {pk if pk else '–'} |")
+                    f"{pe} % | {m['peak_power_W'][i]:.0f} / {pk if pk else '–'} | "
+                    f"{validity.cell(i)} |")
     md = (f"Design: {src}. Passenger car, class C at 100 km/h, {road.length_m:g} m. "
           f"Friction: {fc.source}.\n\n" + "\n".join(rows) +
           "\n\nThe paper's vehicle parameters and friction values are not in its text, so "
           "absolute powers differ (our bound at 100 km/h is "
           f"{float(m['dissipation_bound_W'][0]):.0f} W, below the paper's 174.9 W frictionless "
           "power, so its car or road must have been different). "
-          + ("The ordering none > min > max friction in power and efficiency is reproduced."
+          + ("No ordering is stated: a row is invalid (flagged in the table)."
+             if not validity.all_valid else
+             "The ordering none > min > max friction in power and efficiency is reproduced."
              if (m["power_W"][0] > m["power_W"][1] > m["power_W"][2]
                  and m["efficiency"][0] > m["efficiency"][1] > m["efficiency"][2])
              else "The paper's ordering none > min > max friction is NOT reproduced here.")
@@ -290,4 +384,5 @@ def step_fig21(ctx: Context) -> StepOutput:
           f"![Fig 21]({rel})\n")
     return StepOutput(md, [rel], {"power_W": m["power_W"].tolist(),
                                   "efficiency": m["efficiency"].tolist(),
+                                  "validity": validity.as_list(),
                                   "peak_power_W": m["peak_power_W"].tolist()})

@@ -47,6 +47,13 @@ def fig13_frequency_response(study: Any) -> Any:
                       label=f"{case} friction, R_e = {load:g} Ω")
             ax[0].loglog(study.frequencies_hz, study.voltage_amplitude_V[i, j], **kw)
             ax[1].loglog(study.frequencies_hz, study.sprung_transmissibility[i, j], **kw)
+            bad = (~study.settled[i, j] if getattr(study, "settled", None) is not None
+                   else np.zeros(study.frequencies_hz.size, bool))
+            if bad.any():  # not at steady state: marked, never silently drawn as a result
+                for a, y in ((ax[0], study.voltage_amplitude_V), (ax[1],
+                                                                   study.sprung_transmissibility)):
+                    a.plot(study.frequencies_hz[bad], y[i, j][bad], "x", color=kw["color"],
+                           ms=7, mew=1.5)
     ax[0].set_ylabel("generator voltage amplitude (V)")
     ax[1].set_ylabel("sprung displacement / road amplitude (–)")
     for a in ax:
@@ -59,7 +66,10 @@ def fig13_frequency_response(study: Any) -> Any:
     road = (f"road sine of constant velocity amplitude {1e3 * va:.1f} mm/s (displacement "
             f"{1e3 * study.amplitude_m:.3g} mm at 1 Hz, falling as 1/f)" if va else
             f"road sine amplitude {1e3 * study.amplitude_m:g} mm")
-    fig.suptitle(f"Stepped sine: {road}\nfriction: {study.friction_source}", fontsize=9)
+    unsettled = getattr(study, "settled", None) is not None and not np.all(study.settled)
+    fig.suptitle(f"Stepped sine at steady state: {road}\nfriction: {study.friction_source}"
+                 + ("\n× = not at steady state within the time limit" if unsettled else ""),
+                 fontsize=9)
     fig.tight_layout(rect=(0, 0.1 if len(labels) > 6 else 0.06, 1, 1))
     return fig
 

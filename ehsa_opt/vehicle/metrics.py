@@ -30,6 +30,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..physics.harvester import equivalent_impedance
 from ..physics.params import (
     HarvesterParams,
     ParameterError,
@@ -41,7 +42,7 @@ from .iso2631 import wk_abs2
 from .road import ROAD_BAND_CYCLES_PER_M, dissipation_bound_W, road_velocity_psd
 
 __all__ = ["G", "METRIC_KEYS", "DESIGN_KEYS", "design_arrays", "linear_metrics",
-           "dimensionless_power", "efficiency_bound"]
+           "dimensionless_power", "efficiency_bound", "linear_frequency_response"]
 
 #: Standard gravity, m/s².
 G = 9.80665
@@ -70,6 +71,42 @@ def efficiency_bound(harvester: HarvesterParams) -> float:
     if math.isinf(harvester.load_ohm):
         return 0.0
     return harvester.load_ohm / (harvester.load_ohm + harvester.internal_resistance_ohm)
+
+
+def linear_frequency_response(vehicle: VehicleParams, harvester: HarvesterParams,
+                              frequencies_hz: ArrayLike) -> dict[str, np.ndarray]:
+    """Exact complex steady-state response of the frictionless quarter car to a road
+    sine x0 = Im(X0 e^{jωt}), per unit road amplitude X0.
+
+    Solves the 2×2 complex system (m2 s² + D) X2 − D X1 = 0,
+    −D X2 + (m1 s² + D + k1) X1 = k1 X0 with D = k2 + s Z(s) and Z the harvester's
+    impedance (inerter + electrical branch with its inductance), s = jω.
+
+    Returns
+    -------
+    dict of complex ndarray (F,)
+        ``x2``, ``x1`` (m per m), ``stroke_velocity`` (m/s per m), ``current``
+        (A per m, K_e s (X2 − X1) / (r (R + s L))), ``voltage`` (V per m, R_e × current).
+    """
+    f = np.asarray(frequencies_hz, dtype=float)
+    w = 2.0 * math.pi * f
+    s = 1j * w
+    m2, m1 = vehicle.sprung_mass_kg, vehicle.unsprung_mass_kg
+    k2, k1 = vehicle.suspension_stiffness_N_per_m, vehicle.tyre_stiffness_N_per_m
+    dyn = k2 + s * equivalent_impedance(harvester, w)
+    a11, a22 = m2 * s ** 2 + dyn, m1 * s ** 2 + dyn + k1
+    det = a11 * a22 - dyn * dyn
+    x2, x1 = k1 * dyn / det, k1 * a11 / det
+    v = s * (x2 - x1)
+    R = harvester.total_resistance_ohm()
+    if math.isinf(R):
+        cur = np.zeros_like(v)
+    else:
+        cur = harvester.voltage_constant_Vs_per_rad * v / (
+            harvester.lead_m_per_rad * (R + s * harvester.inductance_H))
+    volt = (np.zeros_like(cur) if math.isinf(harvester.load_ohm)
+            else harvester.load_ohm * cur)
+    return {"x2": x2, "x1": x1, "stroke_velocity": v, "current": cur, "voltage": volt}
 
 
 def _check_range(name: str, value: np.ndarray, md: Mapping[str, Any]) -> None:
@@ -260,8 +297,9 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
         ``comfort`` (α, –), ``comfort_weighted_rms_m_s2``, ``road_holding``
         (η_rh, –), ``power_W`` (mean power in R_e), ``power_dimensionless`` (ρ_g),
         ``efficiency`` (η_g, –), ``dissipated_power_W`` (mean power absorbed
-        by the damper, inertial part excluded), ``dissipation_bound_W``, and
-        ``stroke_velocity_rms_m_s`` (σ_v).
+        by the damper, inertial part excluded), ``dissipation_bound_W``,
+        ``stroke_velocity_rms_m_s`` (σ_v), ``current_rms_A``, ``voltage_rms_V`` (R_e × rms
+        current; 0 in open circuit) and ``stroke_rms_m`` (rms of x2 − x1).
     """
     if road.profile_csv is not None:
         raise ValueError("linear_metrics needs an ISO 8608 road (a PSD); a measured profile "
@@ -290,7 +328,7 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
     phi_v = road_velocity_psd(road)
     base_grid = np.logspace(math.log10(f_lo), math.log10(f_hi), int(n_freq))
     out = {k: np.empty(n) for k in ("var_acc_w", "var_tyre", "p_load", "p_diss", "var_v",
-                                    "c_f")}
+                                    "c_f", "var_i", "var_stroke")}
     for lo in range(0, n, _CHUNK):
         sl = slice(lo, min(lo + _CHUNK, n))
         J, r, ke, kt = flat["J_kgm2"][sl], flat["r_m_per_rad"][sl], flat["Ke"][sl], flat["Kt"][sl]
@@ -349,6 +387,8 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
         out["p_load"][sl] = np.where(open_c, 0.0, np.where(open_c, 0.0, Re) * integ(cur2))
         out["p_diss"][sl] = integ(yd * vrel2)
         out["var_v"][sl] = integ(vrel2)
+        out["var_i"][sl] = integ(cur2)
+        out["var_stroke"][sl] = integ(vrel2 / w2)
     acc_rms = np.sqrt(out["var_acc_w"])
     power = out["p_load"]
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -364,5 +404,10 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
         "dissipation_bound_W": np.full(n, dissipation_bound_W(vehicle, road)),
         "stroke_velocity_rms_m_s": np.sqrt(out["var_v"]),
         "friction_damping_Ns_per_m": out["c_f"],
+        "current_rms_A": np.sqrt(out["var_i"]),
+        "voltage_rms_V": np.where(np.isinf(flat["Re_ohm"]), 0.0,
+                                  np.where(np.isinf(flat["Re_ohm"]), 0.0, flat["Re_ohm"])
+                                  * np.sqrt(out["var_i"])),
+        "stroke_rms_m": np.sqrt(out["var_stroke"]),
     }
     return {k: a.reshape(shape) for k, a in res.items()}

@@ -289,7 +289,9 @@ class QuarterCarSimulation:
     message : str
     metrics : dict of ndarray (B,)
         The keys of :data:`~ehsa_opt.vehicle.metrics.METRIC_KEYS` plus ``energy_residual``
-        (relative closure of the energy balance) and ``peak_power_W``.
+        (relative closure of the energy balance), ``peak_power_W`` and the rms and peak
+        of stroke, generator voltage and current (``stroke_rms_m``, ``peak_stroke_m``,
+        ``voltage_rms_V``, ``peak_voltage_V``, ``current_rms_A``, ``peak_current_A``).
     time_s : ndarray (N,)
         Times of the kept samples (0 = start of the metric window).
     road_m : ndarray (N,)
@@ -396,7 +398,22 @@ def _window_metrics(zt: np.ndarray, y: np.ndarray, params: np.ndarray, x0_keep: 
         "peak_power_W": power.max(axis=1),
         "energy_residual": residual,
         **extra,
+        **_rating_metrics(zt, y),
     }
+
+
+def _rating_metrics(zt: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+    """rms and peak of the stroke x2 − x1, generator voltage and current over the window
+    (what a motor's rated limits and the stroke limit are checked against)."""
+    stroke = zt[:, STATE_NAMES.index("x2_m"), :] - zt[:, STATE_NAMES.index("x1_m"), :]
+    volt = y[:, STEP_OUTPUT_NAMES.index("voltage_V"), :]
+    cur = zt[:, STATE_NAMES.index("current_A"), :]
+    out = {}
+    for name, sig, unit in (("stroke", stroke, "m"), ("voltage", volt, "V"),
+                            ("current", cur, "A")):
+        out[f"{name}_rms_{unit}"] = np.sqrt(np.mean(sig * sig, axis=1))
+        out[f"peak_{name}_{unit}"] = np.max(np.abs(sig), axis=1)
+    return out
 
 
 def simulate_quarter_car(vehicle: VehicleParams,

@@ -27,12 +27,14 @@ from ..physics.bench_sim import simulate_bench
 from ..physics.motion import SineMotion
 from ..physics.params import (
     FRICTION_NAMES,
+    ParameterError,
     FrictionParams,
     HarvesterParams,
     RoadParams,
     VehicleParams,
 )
 from ..physics.quarter_car_model import PARAM_NAMES, STATE_NAMES, param_vector
+from .metrics import linear_frequency_response
 from .road import road_psd_m3
 from .simulate import QuarterCarSimulation, simulate_batch, simulate_quarter_car
 
@@ -100,18 +102,25 @@ def paper_optimum_harvester() -> HarvesterParams:
     return HarvesterParams.from_design(250.0, 7.0, 29.8, 75.0)
 
 
-def _fundamental(sig: np.ndarray, t: np.ndarray, f: float) -> np.ndarray:
-    """Amplitude of the component at ``f`` over whole cycles (last axis)."""
-    w = 2.0 * math.pi * f
-    c = 2.0 * np.mean(sig * np.cos(w * t), axis=-1)
-    s = 2.0 * np.mean(sig * np.sin(w * t), axis=-1)
-    return np.hypot(c, s)
+def _fundamental(sig: np.ndarray, t: np.ndarray, f: float, harmonics: int = 3) -> np.ndarray:
+    """Amplitude of the component at ``f`` (last axis) by least squares on a constant,
+    the fundamental and ``harmonics - 1`` higher harmonics, so a window that is whole
+    cycles only up to one time step (or carries friction's odd harmonics) leaks nothing
+    measurable into the fundamental."""
+    w = 2.0 * math.pi * f * (t - t[0])
+    cols = [np.ones_like(w)]
+    for k in range(1, harmonics + 1):
+        cols += [np.cos(k * w), np.sin(k * w)]
+    basis = np.stack(cols, axis=1)
+    coef, *_ = np.linalg.lstsq(basis, sig.reshape(-1, sig.shape[-1]).T, rcond=None)
+    amp = np.hypot(coef[1], coef[2])
+    return amp.reshape(sig.shape[:-1])
 
 
 # --------------------------------------------------------------------------- Fig 13
 @dataclass
 class FrequencyResponseStudy:
-    """Stepped-sine responses (paper Fig 13).
+    """Stepped-sine steady-state responses (paper Fig 13).
 
     Attributes
     ----------
@@ -119,12 +128,23 @@ class FrequencyResponseStudy:
     loads_ohm : list of float (L,)
     cases : list of str (C,)
     voltage_amplitude_V : ndarray (C, L, F)
-        Fundamental amplitude of the generator voltage V_g = R_e i.
+        Fundamental amplitude of the generator voltage V_g = R_e i at steady state.
     sprung_transmissibility : ndarray (C, L, F)
-        Fundamental amplitude of x2 divided by the road amplitude.
+        Fundamental amplitude of x2 divided by the road amplitude at steady state.
     amplitude_m : float
         Road sine amplitude (constant-displacement input), or the amplitude at 1 Hz of a
         constant-velocity input.
+    settled : ndarray of bool (C, L, F)
+        Whether both amplitudes changed by less than ``tolerance`` (relative) between the
+        last two measurement windows; a point that did not settle within ``max_time_s``
+        is False and must be flagged where it is shown.
+    amplitude_change : ndarray (C, L, F)
+        That last relative change (the larger of x2 and V_g).
+    linear_voltage_amplitude_V, linear_transmissibility : ndarray (L, F)
+        The exact frictionless responses (:func:`~ehsa_opt.vehicle.metrics.linear_frequency_response`),
+        the check of the simulation: the case "none" must match them.
+    tolerance : float
+        The settling tolerance on the window-to-window amplitude change.
     velocity_amplitude_m_per_s : float or None
         Road velocity amplitude of a constant-velocity input (displacement
         v / (2π f), falling with frequency like a real road); None = constant displacement.
@@ -140,73 +160,123 @@ class FrequencyResponseStudy:
     vehicle: VehicleParams
     stats: dict = field(default_factory=dict)
     velocity_amplitude_m_per_s: float | None = None
+    settled: np.ndarray | None = None
+    amplitude_change: np.ndarray | None = None
+    linear_voltage_amplitude_V: np.ndarray | None = None
+    linear_transmissibility: np.ndarray | None = None
+    tolerance: float = 1e-3
+
+    def frictionless_deviation(self) -> float:
+        """Largest relative deviation of the case "none" from the exact linear response
+        over every frequency, load and both outputs (nan without a case "none")."""
+        if "none" not in self.cases or self.linear_transmissibility is None:
+            return float("nan")
+        i = self.cases.index("none")
+        dv = np.abs(self.voltage_amplitude_V[i] / self.linear_voltage_amplitude_V - 1.0)
+        dx = np.abs(self.sprung_transmissibility[i] / self.linear_transmissibility - 1.0)
+        return float(max(np.max(dv), np.max(dx)))
 
     def plot(self) -> Any:
         from ..plots.quarter_car import fig13_frequency_response
         return fig13_frequency_response(self)
 
 
+def _steady_start(vehicle: VehicleParams, harvester: HarvesterParams, loads: Sequence[float],
+                  f: float, amp: float) -> np.ndarray:
+    """States (5, L) at t = 0 of the exact frictionless steady state under
+    x0 = amp sin(2π f t): x = amp Im(H), ẋ = amp ω Re(H), i = amp Im(H_i)."""
+    w = 2.0 * math.pi * f
+    z = np.empty((len(STATE_NAMES), len(loads)))
+    for j, r in enumerate(loads):
+        lin = linear_frequency_response(vehicle, harvester.replace(load_ohm=float(r)), [f])
+        x2, x1, cur = lin["x2"][0], lin["x1"][0], lin["current"][0]
+        z[:, j] = amp * np.array([x2.imag, x1.imag, w * x2.real, w * x1.real, cur.imag])
+    return z
+
+
 def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
                           frictions: FrictionCases, loads_ohm: Sequence[float],
                           frequencies_hz: Sequence[float], amplitude_m: float = 0.01,
-                          sample_rate_hz: float = 1000.0, settle_cycles: float = 6.0,
-                          settle_min_s: float = 3.0, measure_cycles: int = 4,
+                          sample_rate_hz: float = 1000.0, tolerance: float = 1e-3,
+                          window_min_s: float = 1.0, max_time_s: float = 60.0,
                           velocity_amplitude_m_per_s: float | None = None
                           ) -> FrequencyResponseStudy:
-    """Generator voltage and sprung-mass displacement vs road sine frequency.
+    """Steady-state generator voltage and sprung-mass displacement vs road sine frequency.
 
     With ``velocity_amplitude_m_per_s`` the road is a sine of constant *velocity*
     amplitude (displacement v / (2π f): it falls with frequency like a road's, ISO 8608
     slope −1 in velocity terms flat), so the voltages stay physical at high frequency;
     otherwise the displacement amplitude is ``amplitude_m`` at every frequency.
 
-    For each frequency one compiled batch simulates every (friction case, load)
-    pair: the road is x0 = A sin(2π f t) (amplitude ramped in over the first half
-    of the settling time); after max(settle_cycles, settle_min_s)
-    the fundamental amplitudes over ``measure_cycles`` whole cycles are taken
-    (friction makes the system nonlinear, hence simulation, not Eqs 2–3).
+    Steady state by construction.  For each frequency one compiled batch simulates every
+    (friction case, load) pair, starting from the *exact* frictionless steady state
+    (:func:`~ehsa_opt.vehicle.metrics.linear_frequency_response`; with friction this is
+    the best linear guess, and only the friction's correction is a transient).  The
+    simulation runs in windows of whole cycles lasting at least ``window_min_s``, the
+    fundamental amplitudes of x2 and V_g are measured in each window (least squares), and
+    it stops when every pair's amplitudes change by less than ``tolerance`` (relative)
+    from one window to the next, or at ``max_time_s`` (the pairs that have not settled
+    are marked in :attr:`FrequencyResponseStudy.settled`).  Friction makes the system
+    nonlinear, hence simulation; without friction the result is checked against the
+    exact response (:meth:`FrequencyResponseStudy.frictionless_deviation`).
     """
+    if not 0.0 < tolerance < 0.1:
+        raise ParameterError(f"stepped sine: tolerance = {tolerance:g} must be in (0, 0.1) "
+                             "(a relative change of the amplitude between windows)")
     cases = list(frictions.cases)
-    pairs = [(c, r) for c in cases for r in loads_ohm]
-    params = np.stack([param_vector(vehicle, harvester.replace(load_ohm=float(r)),
+    loads = [float(r) for r in loads_ohm]
+    pairs = [(c, r) for c in cases for r in loads]
+    params = np.stack([param_vector(vehicle, harvester.replace(load_ohm=r),
                                     frictions.cases[c]) for c, r in pairs], axis=1)
     freqs = np.asarray(frequencies_hz, dtype=float)
-    volt = np.empty((len(cases), len(loads_ohm), freqs.size))
-    trans = np.empty_like(volt)
+    shape = (len(cases), len(loads), freqs.size)
+    volt, trans = np.empty(shape), np.empty(shape)
+    settled, change = np.zeros(shape, dtype=bool), np.empty(shape)
+    lin_v, lin_x = np.empty(shape[1:]), np.empty(shape[1:])
     h = 1.0 / sample_rate_hz
-    steps = 0
+    steps, sim_time = 0, []
     re = params[PARAM_NAMES.index("load_ohm")]
+    i_x2, i_cur = STATE_NAMES.index("x2_m"), STATE_NAMES.index("current_A")
     for k, f in enumerate(freqs):
-        t_settle = max(settle_cycles / f, settle_min_s)
-        n_cyc = max(1, int(round(t_settle * f)))
-        t_settle = n_cyc / f
-        n_total = int(round((t_settle + measure_cycles / f) * sample_rate_hz))
-        t = np.arange(n_total + 1) * h
-        # amplitude ramped in over the first half of the settling time (raised cosine):
-        # the body mode is then hardly excited by the start
-        t_ramp = 0.5 * t_settle
-        env = np.where(t < t_ramp, 0.5 * (1.0 - np.cos(math.pi * t / t_ramp)), 1.0)
         amp = (amplitude_m if velocity_amplitude_m_per_s is None
                else velocity_amplitude_m_per_s / (2.0 * math.pi * f))
-        x0 = amp * env * np.sin(2.0 * math.pi * f * t)
-        zt, _, _ = simulate_batch(params, x0, h)
-        steps += n_total * len(pairs)
-        tt = t[1:]
-        keep = tt > t_settle + 0.5 * h
-        tk = tt[keep]
-        # use whole cycles only
-        n_keep = int(math.floor((tk[-1] - tk[0] + h) * f + 1e-9) / f * sample_rate_hz)
-        tk = tk[:n_keep]
-        x2 = zt[:, STATE_NAMES.index("x2_m"), keep][:, :n_keep]
-        vg = re[:, None] * zt[:, STATE_NAMES.index("current_A"), keep][:, :n_keep]
-        volt[:, :, k] = _fundamental(vg, tk, f).reshape(len(cases), len(loads_ohm))
-        trans[:, :, k] = (_fundamental(x2, tk, f) / amp).reshape(len(cases),
-                                                                  len(loads_ohm))
+        for j, r in enumerate(loads):
+            lin = linear_frequency_response(vehicle, harvester.replace(load_ohm=r), [f])
+            lin_v[j, k], lin_x[j, k] = abs(lin["voltage"][0]) * amp, abs(lin["x2"][0])
+        z = np.tile(_steady_start(vehicle, harvester, loads, f, amp), (1, len(cases)))
+        n_win = int(round(math.ceil(window_min_s * f - 1e-9) / f * sample_rate_hz))
+        # per pair: last amplitudes (x2/x0, V_g), last change; settled pairs stop
+        last = np.full((2, len(pairs)), np.nan)
+        rel = np.full(len(pairs), np.inf)
+        active = np.arange(len(pairs))
+        t0 = 0.0
+        while active.size and t0 < max_time_s:
+            t = t0 + np.arange(n_win + 1) * h
+            zt, _, _ = simulate_batch(params[:, active], amp * np.sin(2.0 * math.pi * f * t),
+                                      h, z0=z[:, active])
+            steps += n_win * active.size
+            z[:, active] = zt[:, :, -1].T
+            tt = t[1:]
+            cur = np.stack([_fundamental(zt[:, i_x2], tt, f) / amp,
+                            _fundamental(re[active, None] * zt[:, i_cur], tt, f)])
+            if t0 > 0.0:
+                rel[active] = np.max(np.abs(cur - last[:, active])
+                                     / np.maximum(np.abs(cur), 1e-300), axis=0)
+            last[:, active] = cur
+            t0 = float(t[-1])
+            active = active[~(rel[active] < tolerance)]
+        trans[:, :, k] = last[0].reshape(len(cases), len(loads))
+        volt[:, :, k] = last[1].reshape(len(cases), len(loads))
+        settled[:, :, k] = (rel < tolerance).reshape(len(cases), len(loads))
+        change[:, :, k] = rel.reshape(len(cases), len(loads))
+        sim_time.append(t0)
     a_ref = (amplitude_m if velocity_amplitude_m_per_s is None
              else velocity_amplitude_m_per_s / (2.0 * math.pi))
-    return FrequencyResponseStudy(freqs, [float(r) for r in loads_ohm], cases, volt, trans,
-                                  a_ref, frictions.source, vehicle,
-                                  {"step_designs": steps}, velocity_amplitude_m_per_s)
+    return FrequencyResponseStudy(freqs, loads, cases, volt, trans, a_ref, frictions.source,
+                                  vehicle, {"step_designs": steps,
+                                            "simulated_s_per_frequency": sim_time},
+                                  velocity_amplitude_m_per_s, settled, change, lin_v, lin_x,
+                                  float(tolerance))
 
 
 # --------------------------------------------------------------------------- Fig 14
