@@ -87,18 +87,27 @@ def _os_error_message(exc: OSError) -> str:
     return f"{name}: {fix}"
 
 
-def _parse_effect_params(items: Sequence[str]) -> dict[str, float]:
+def _parse_effect_params(items: Sequence[str], option: str = "--effect-param",
+                         example: str = "backlash_gap_m=1e-4") -> dict[str, float]:
     out = {}
     for item in items:
         if "=" not in item:
-            raise _UsageError(f"--effect-param '{item}': write NAME=VALUE, e.g. "
-                              f"backlash_gap_m=1e-4")
+            raise _UsageError(f"{option} '{item}': write NAME=VALUE, e.g. {example}")
         k, v = item.split("=", 1)
         try:
             out[k.strip()] = float(v)
         except ValueError:
-            raise _UsageError(f"--effect-param '{item}': '{v}' is not a number") from None
+            raise _UsageError(f"{option} '{item}': '{v}' is not a number") from None
     return out
+
+
+def _float_list(text: str, option: str) -> tuple[float, ...]:
+    """``"0.5,1,2"`` → (0.5, 1.0, 2.0); an empty string → () (no sine tests)."""
+    try:
+        return tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise _UsageError(f"{option} {text!r}: give comma-separated numbers, e.g. "
+                          f"'0.5,1,2' (or '' for none)") from None
 
 
 # ------------------------------------------------------------------ bench
@@ -118,14 +127,39 @@ def _cmd_bench_generate(args: argparse.Namespace) -> int:
     if unknown:
         raise _UsageError(f"--effect-param: {', '.join(sorted(unknown))} belong to no chosen "
                           f"--effect (chosen: {', '.join(effects) or 'none'})")
-    spec = SyntheticSpec(effects=effects, seed=args.seed, noise_force_N=args.noise_force_N,
-                         noise_voltage_V=args.noise_voltage_V, cycles=args.cycles)
-    n = len(spec.frequencies_hz) * len(spec.loads_ohm)
+    from .datasets.protocols import parse_protocol
+    from .physics.params import HarvesterParams
+    try:
+        protocols = [parse_protocol(p) for p in args.protocol]
+    except ValueError as exc:
+        raise _UsageError(f"--protocol: {exc}") from None
+    harv = _parse_effect_params(args.harvester, "--harvester", "lead_mm_per_rev=10")
+    extra: dict = {}
+    if args.frequencies_hz is not None:
+        extra["frequencies_hz"] = _float_list(args.frequencies_hz, "--frequencies-hz")
+    if args.loads_ohm is not None:
+        extra["loads_ohm"] = _float_list(args.loads_ohm, "--loads-ohm")
+    try:
+        spec = SyntheticSpec(harvester=HarvesterParams(**harv), effects=effects, seed=args.seed,
+                             noise_force_N=args.noise_force_N,
+                             noise_voltage_V=args.noise_voltage_V, cycles=args.cycles,
+                             amplitudes_m=tuple(args.amplitude_m), protocols=protocols, **extra)
+    except TypeError as exc:
+        raise _UsageError(f"--harvester: {exc}") from None
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from None
+    n = spec.n_tests
     command = "ehsa-opt bench generate " + " ".join(
         [args.out_dir] + [f"--effect {e}" for e in args.effect]
         + [f"--effect-param {e}" for e in args.effect_param]
         + [f"--seed {args.seed}", f"--noise-force-N {args.noise_force_N:g}",
-           f"--noise-voltage-V {args.noise_voltage_V:g}", f"--cycles {args.cycles:g}"])
+           f"--noise-voltage-V {args.noise_voltage_V:g}", f"--cycles {args.cycles:g}"]
+        + [f"--harvester {h}" for h in args.harvester]
+        + [f"--amplitude-m {a:g}" for a in args.amplitude_m]
+        + ([f"--frequencies-hz '{args.frequencies_hz}'"] if args.frequencies_hz is not None
+           else [])
+        + ([f"--loads-ohm '{args.loads_ohm}'"] if args.loads_ohm is not None else [])
+        + [f"--protocol '{p}'" for p in args.protocol])
     with progress_bar(total=n, desc="bench tests", unit="test") as bar:
         out = write_synthetic(args.out_dir, spec, command=command, overwrite=args.overwrite,
                               progress=lambda k: bar.update(1))
@@ -440,7 +474,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     bench = sub.add_parser("bench", help="generate, check or convert bench data")
     bsub = bench.add_subparsers(dest="bench_command", required=True, metavar="ACTION")
-    g = bsub.add_parser("generate", help="write synthetic bench data for the paper's 21 tests")
+    g = bsub.add_parser("generate", help="write synthetic bench data (the paper's 21 sine tests by "
+                        "default; other rigs, amplitudes and non-sine protocols)")
     g.add_argument("out_dir", metavar="OUT_DIR")
     g.add_argument("--seed", type=_NON_NEGATIVE, default=0, help="noise seed (default 0)")
     from .physics.components import COMPONENTS
@@ -452,6 +487,18 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--noise-force-N", type=float, default=2.0, help="force noise std (N)")
     g.add_argument("--noise-voltage-V", type=float, default=0.05, help="voltage noise std (V)")
     g.add_argument("--cycles", type=float, default=2.0, help="recorded cycles per test")
+    g.add_argument("--harvester", action="append", default=[], metavar="NAME=VALUE",
+                   help="harvester constant (repeatable), e.g. lead_mm_per_rev=10")
+    g.add_argument("--frequencies-hz", default=None, metavar="LIST",
+                   help="sine frequencies, comma-separated ('' for no sine tests)")
+    g.add_argument("--loads-ohm", default=None, metavar="LIST",
+                   help="loads of the sine tests, comma-separated")
+    g.add_argument("--amplitude-m", action="append", type=float, default=[], metavar="A",
+                   help="sine amplitude in metres (repeatable: every amplitude)")
+    g.add_argument("--protocol", action="append", default=[], metavar="KIND:NAME=VALUE,...",
+                   help="a non-sine test written as excitation = \"recorded\" (repeatable), "
+                        "KIND one of triangle, trapezoid, multisine, road; e.g. "
+                        "triangle:load_ohm=10,velocity_m_per_s=0.06,amplitude_m=0.02")
     g.add_argument("--overwrite", action="store_true", help="replace a non-empty OUT_DIR")
     g.set_defaults(func=_cmd_bench_generate)
     c = bsub.add_parser("check", help="validate a bench data directory")
