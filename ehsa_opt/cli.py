@@ -87,65 +87,18 @@ def _os_error_message(exc: OSError) -> str:
     return f"{name}: {fix}"
 
 
-def _parse_effect_params(items: Sequence[str], option: str = "--effect-param",
-                         example: str = "backlash_gap_m=1e-4") -> dict[str, float]:
-    out = {}
-    for item in items:
-        if "=" not in item:
-            raise _UsageError(f"{option} '{item}': write NAME=VALUE, e.g. {example}")
-        k, v = item.split("=", 1)
-        try:
-            out[k.strip()] = float(v)
-        except ValueError:
-            raise _UsageError(f"{option} '{item}': '{v}' is not a number") from None
-    return out
-
-
-def _float_list(text: str, option: str) -> tuple[float, ...]:
-    """``"0.5,1,2"`` → (0.5, 1.0, 2.0); an empty string → () (no sine tests)."""
-    try:
-        return tuple(float(v) for v in text.split(",") if v.strip())
-    except ValueError:
-        raise _UsageError(f"{option} {text!r}: give comma-separated numbers, e.g. "
-                          f"'0.5,1,2' (or '' for none)") from None
-
-
 # ------------------------------------------------------------------ bench
 def _cmd_bench_generate(args: argparse.Namespace) -> int:
-    from .datasets.synthetic import SyntheticSpec, write_synthetic
-    from .physics import COMPONENTS, make_component
+    from .datasets.synthetic import spec_from_options, write_synthetic
     from .utils.progress import progress_bar
 
-    effect_params = _parse_effect_params(args.effect_param)
-    effects: dict[str, dict[str, float]] = {}
-    for name in args.effect:
-        comp = make_component(name)
-        effects[name] = {k: v for k, v in effect_params.items()
-                         if k in {q.name for q in comp.parameters}}
-    known = {q.name for n in effects for q in COMPONENTS[n].parameters}
-    unknown = set(effect_params) - known
-    if unknown:
-        raise _UsageError(f"--effect-param: {', '.join(sorted(unknown))} belong to no chosen "
-                          f"--effect (chosen: {', '.join(effects) or 'none'})")
-    from .datasets.protocols import parse_protocol
-    from .physics.params import HarvesterParams
     try:
-        protocols = [parse_protocol(p) for p in args.protocol]
-    except ValueError as exc:
-        raise _UsageError(f"--protocol: {exc}") from None
-    harv = _parse_effect_params(args.harvester, "--harvester", "lead_mm_per_rev=10")
-    extra: dict = {}
-    if args.frequencies_hz is not None:
-        extra["frequencies_hz"] = _float_list(args.frequencies_hz, "--frequencies-hz")
-    if args.loads_ohm is not None:
-        extra["loads_ohm"] = _float_list(args.loads_ohm, "--loads-ohm")
-    try:
-        spec = SyntheticSpec(harvester=HarvesterParams(**harv), effects=effects, seed=args.seed,
-                             noise_force_N=args.noise_force_N,
-                             noise_voltage_V=args.noise_voltage_V, cycles=args.cycles,
-                             amplitudes_m=tuple(args.amplitude_m), protocols=protocols, **extra)
-    except TypeError as exc:
-        raise _UsageError(f"--harvester: {exc}") from None
+        spec = spec_from_options(
+            effects=args.effect, effect_params=args.effect_param, harvester=args.harvester,
+            frequencies_hz=args.frequencies_hz, loads_ohm=args.loads_ohm,
+            amplitudes_m=args.amplitude_m, protocols=args.protocol, seed=args.seed,
+            noise_force_N=args.noise_force_N, noise_voltage_V=args.noise_voltage_V,
+            cycles=args.cycles)
     except ValueError as exc:
         raise _UsageError(str(exc)) from None
     n = spec.n_tests
@@ -156,9 +109,8 @@ def _cmd_bench_generate(args: argparse.Namespace) -> int:
            f"--noise-voltage-V {args.noise_voltage_V:g}", f"--cycles {args.cycles:g}"]
         + [f"--harvester {h}" for h in args.harvester]
         + [f"--amplitude-m {a:g}" for a in args.amplitude_m]
-        + ([f"--frequencies-hz '{args.frequencies_hz}'"] if args.frequencies_hz is not None
-           else [])
-        + ([f"--loads-ohm '{args.loads_ohm}'"] if args.loads_ohm is not None else [])
+        + [f"{o} '{v}'" for o, v in (("--frequencies-hz", args.frequencies_hz),
+                                      ("--loads-ohm", args.loads_ohm)) if v is not None]
         + [f"--protocol '{p}'" for p in args.protocol])
     with progress_bar(total=n, desc="bench tests", unit="test") as bar:
         out = write_synthetic(args.out_dir, spec, command=command, overwrite=args.overwrite,
@@ -487,18 +439,15 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--noise-force-N", type=float, default=2.0, help="force noise std (N)")
     g.add_argument("--noise-voltage-V", type=float, default=0.05, help="voltage noise std (V)")
     g.add_argument("--cycles", type=float, default=2.0, help="recorded cycles per test")
-    g.add_argument("--harvester", action="append", default=[], metavar="NAME=VALUE",
-                   help="harvester constant (repeatable), e.g. lead_mm_per_rev=10")
-    g.add_argument("--frequencies-hz", default=None, metavar="LIST",
-                   help="sine frequencies, comma-separated ('' for no sine tests)")
-    g.add_argument("--loads-ohm", default=None, metavar="LIST",
-                   help="loads of the sine tests, comma-separated")
-    g.add_argument("--amplitude-m", action="append", type=float, default=[], metavar="A",
-                   help="sine amplitude in metres (repeatable: every amplitude)")
-    g.add_argument("--protocol", action="append", default=[], metavar="KIND:NAME=VALUE,...",
-                   help="a non-sine test written as excitation = \"recorded\" (repeatable), "
-                        "KIND one of triangle, trapezoid, multisine, road; e.g. "
-                        "triangle:load_ohm=10,velocity_m_per_s=0.06,amplitude_m=0.02")
+    for opt, hlp in (("--harvester", "harvester constant NAME=VALUE, e.g. lead_mm_per_rev=10"),
+                     ("--protocol", "non-sine test (excitation = recorded) KIND:NAME=VALUE,..., "
+                      "KIND triangle|trapezoid|multisine|road, e.g. triangle:load_ohm=10,"
+                      "velocity_m_per_s=0.06")):
+        g.add_argument(opt, action="append", default=[], help=hlp + " (repeatable)")
+    g.add_argument("--frequencies-hz", help="sine frequencies, comma list ('' for none)")
+    g.add_argument("--loads-ohm", help="loads of the sine tests, comma list")
+    g.add_argument("--amplitude-m", action="append", type=float, default=[],
+                   help="sine amplitude, m (repeatable)")
     g.add_argument("--overwrite", action="store_true", help="replace a non-empty OUT_DIR")
     g.set_defaults(func=_cmd_bench_generate)
     c = bsub.add_parser("check", help="validate a bench data directory")

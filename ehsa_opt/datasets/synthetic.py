@@ -24,7 +24,7 @@ from ..physics.params import FrictionParams, HarvesterParams
 from .bench_format import BenchTest, write_bench
 from .protocols import Protocol
 
-__all__ = ["SyntheticSpec", "generate_bench_tests", "write_synthetic", "PROTOTYPE_FRICTION",
+__all__ = ["SyntheticSpec", "spec_from_options", "generate_bench_tests", "write_synthetic", "PROTOTYPE_FRICTION",
            "TEST_FREQUENCIES_HZ", "TEST_LOADS_OHM", "TEST_AMPLITUDE_M", "test_file_name"]
 
 #: Paper §3 test matrix (SPEC §3; 0.5 Hz steps and ohms are assumptions).
@@ -262,3 +262,63 @@ def write_synthetic(out_dir: str | Path, spec: SyntheticSpec, *, command: str = 
     extra = {"truth.toml": _truth_toml(spec, command), "README.md": _readme(spec, command)}
     return write_bench(out_dir, tests, harvester=spec.harvester, rig=rig, extra_files=extra,
                        overwrite=overwrite)
+
+
+def _pairs(items: Sequence[str], option: str, example: str) -> dict[str, float]:
+    out = {}
+    for item in items:
+        name, eq, value = item.partition("=")
+        if not eq:
+            raise ValueError(f"{option} '{item}': write NAME=VALUE, e.g. {example}")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise ValueError(f"{option} '{item}': '{value}' is not a number") from None
+    return out
+
+
+def _float_list(text: str, option: str) -> tuple[float, ...]:
+    """``"0.5,1,2"`` → (0.5, 1.0, 2.0); an empty string → () (no sine tests)."""
+    try:
+        return tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise ValueError(f"{option} {text!r}: give comma-separated numbers, e.g. "
+                         f"'0.5,1,2' (or '' for none)") from None
+
+
+def spec_from_options(*, effects: Sequence[str] = (), effect_params: Sequence[str] = (),
+                      harvester: Sequence[str] = (), frequencies_hz: str | None = None,
+                      loads_ohm: str | None = None, amplitudes_m: Sequence[float] = (),
+                      protocols: Sequence[str] = (), **fields: Any) -> SyntheticSpec:
+    """A :class:`SyntheticSpec` from the command line's strings (``bench generate``):
+    effect names, ``NAME=VALUE`` effect parameters and harvester constants, comma lists
+    of frequencies and loads, ``KIND:NAME=VALUE,...`` protocols
+    (:func:`~ehsa_opt.datasets.protocols.parse_protocol`).  ValueError names the option
+    and the fix."""
+    from ..physics import COMPONENTS
+    from .protocols import parse_protocol
+    params = _pairs(effect_params, "--effect-param", "backlash_gap_m=1e-4")
+    eff: dict[str, dict[str, float]] = {}
+    for name in effects:
+        comp = make_component(name)
+        eff[name] = {k: v for k, v in params.items() if k in {q.name for q in comp.parameters}}
+    known = {q.name for n in eff for q in COMPONENTS[n].parameters}
+    unknown = set(params) - known
+    if unknown:
+        raise ValueError(f"--effect-param: {', '.join(sorted(unknown))} belong to no chosen "
+                         f"--effect (chosen: {', '.join(eff) or 'none'})")
+    try:
+        protos = [parse_protocol(p) for p in protocols]
+    except ValueError as exc:
+        raise ValueError(f"--protocol: {exc}") from None
+    extra: dict[str, Any] = dict(fields)
+    if frequencies_hz is not None:
+        extra["frequencies_hz"] = _float_list(frequencies_hz, "--frequencies-hz")
+    if loads_ohm is not None:
+        extra["loads_ohm"] = _float_list(loads_ohm, "--loads-ohm")
+    try:
+        harv = HarvesterParams(**_pairs(harvester, "--harvester", "lead_mm_per_rev=10"))
+    except TypeError as exc:
+        raise ValueError(f"--harvester: {exc}") from None
+    return SyntheticSpec(harvester=harv, effects=eff, amplitudes_m=tuple(amplitudes_m),
+                         protocols=protos, **extra)
