@@ -95,45 +95,31 @@ def _os_error_message(exc: OSError) -> str:
     return f"{name}: {fix}"
 
 
-def _parse_effect_params(items: Sequence[str]) -> dict[str, float]:
-    out = {}
-    for item in items:
-        if "=" not in item:
-            raise _UsageError(f"--effect-param '{item}': write NAME=VALUE, e.g. "
-                              f"backlash_gap_m=1e-4")
-        k, v = item.split("=", 1)
-        try:
-            out[k.strip()] = float(v)
-        except ValueError:
-            raise _UsageError(f"--effect-param '{item}': '{v}' is not a number") from None
-    return out
-
-
 # ------------------------------------------------------------------ bench
 def _cmd_bench_generate(args: argparse.Namespace) -> int:
-    from .datasets.synthetic import SyntheticSpec, write_synthetic
-    from .physics import COMPONENTS, make_component
+    from .datasets.synthetic import spec_from_options, write_synthetic
     from .utils.progress import progress_bar
 
-    effect_params = _parse_effect_params(args.effect_param)
-    effects: dict[str, dict[str, float]] = {}
-    for name in args.effect:
-        comp = make_component(name)
-        effects[name] = {k: v for k, v in effect_params.items()
-                         if k in {q.name for q in comp.parameters}}
-    known = {q.name for n in effects for q in COMPONENTS[n].parameters}
-    unknown = set(effect_params) - known
-    if unknown:
-        raise _UsageError(f"--effect-param: {', '.join(sorted(unknown))} belong to no chosen "
-                          f"--effect (chosen: {', '.join(effects) or 'none'})")
-    spec = SyntheticSpec(effects=effects, seed=args.seed, noise_force_N=args.noise_force_N,
-                         noise_voltage_V=args.noise_voltage_V, cycles=args.cycles)
-    n = len(spec.frequencies_hz) * len(spec.loads_ohm)
+    try:
+        spec = spec_from_options(
+            effects=args.effect, effect_params=args.effect_param, harvester=args.harvester,
+            frequencies_hz=args.frequencies_hz, loads_ohm=args.loads_ohm,
+            amplitudes_m=args.amplitude_m, protocols=args.protocol, seed=args.seed,
+            noise_force_N=args.noise_force_N, noise_voltage_V=args.noise_voltage_V,
+            cycles=args.cycles)
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from None
+    n = spec.n_tests
     command = "ehsa-opt bench generate " + " ".join(
         [args.out_dir] + [f"--effect {e}" for e in args.effect]
         + [f"--effect-param {e}" for e in args.effect_param]
         + [f"--seed {args.seed}", f"--noise-force-N {args.noise_force_N:g}",
-           f"--noise-voltage-V {args.noise_voltage_V:g}", f"--cycles {args.cycles:g}"])
+           f"--noise-voltage-V {args.noise_voltage_V:g}", f"--cycles {args.cycles:g}"]
+        + [f"--harvester {h}" for h in args.harvester]
+        + [f"--amplitude-m {a:g}" for a in args.amplitude_m]
+        + [f"{o} '{v}'" for o, v in (("--frequencies-hz", args.frequencies_hz),
+                                      ("--loads-ohm", args.loads_ohm)) if v is not None]
+        + [f"--protocol '{p}'" for p in args.protocol])
     with progress_bar(total=n, desc="bench tests", unit="test") as bar:
         out = write_synthetic(args.out_dir, spec, command=command, overwrite=args.overwrite,
                               progress=lambda k: bar.update(1))
@@ -447,7 +433,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     bench = sub.add_parser("bench", help="generate, check or convert bench data")
     bsub = bench.add_subparsers(dest="bench_command", required=True, metavar="ACTION")
-    g = bsub.add_parser("generate", help="write synthetic bench data for the paper's 21 tests")
+    g = bsub.add_parser("generate", help="write synthetic bench data (the paper's 21 sine tests by "
+                        "default; other rigs, amplitudes and non-sine protocols)")
     g.add_argument("out_dir", metavar="OUT_DIR")
     g.add_argument("--seed", type=_NON_NEGATIVE, default=0, help="noise seed (default 0)")
     from .physics.components import COMPONENTS
@@ -459,6 +446,15 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--noise-force-N", type=float, default=2.0, help="force noise std (N)")
     g.add_argument("--noise-voltage-V", type=float, default=0.05, help="voltage noise std (V)")
     g.add_argument("--cycles", type=float, default=2.0, help="recorded cycles per test")
+    for opt, hlp in (("--harvester", "harvester constant NAME=VALUE, e.g. lead_mm_per_rev=10"),
+                     ("--protocol", "non-sine test (excitation = recorded) KIND:NAME=VALUE,..., "
+                      "KIND triangle|trapezoid|multisine|road, e.g. triangle:load_ohm=10,"
+                      "velocity_m_per_s=0.06")):
+        g.add_argument(opt, action="append", default=[], help=hlp + " (repeatable)")
+    g.add_argument("--frequencies-hz", help="sine frequencies, comma list ('' for none)")
+    g.add_argument("--loads-ohm", help="loads of the sine tests, comma list")
+    g.add_argument("--amplitude-m", action="append", type=float, default=[],
+                   help="sine amplitude, m (repeatable)")
     g.add_argument("--overwrite", action="store_true", help="replace a non-empty OUT_DIR")
     g.set_defaults(func=_cmd_bench_generate)
     c = bsub.add_parser("check", help="validate a bench data directory")

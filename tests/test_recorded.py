@@ -146,3 +146,27 @@ def test_recorded_tests_identified_at_the_noise_floor(recorded_campaign):
         assert tr["force_relative_error_percent"] < 1.35 * floor, t.file
         assert e < 1.35 * floor, t.file
         assert fit.per_test[0]["resolved_percent"] > 25
+
+
+@pytest.fixture(scope="module")
+def mixed_campaign(tmp_path_factory):
+    """Another rig's clean campaign: sines at two amplitudes and triangle strokes."""
+    protos = [Protocol("triangle", r, amplitude_m=0.02, velocity_m_per_s=v, corner_s=0.01)
+              for v in (0.06, 0.2) for r in (10.0, 33.0)]
+    spec = SyntheticSpec(harvester=OTHER, friction=FRICTION, frequencies_hz=(1.0, 3.5),
+                         loads_ohm=(10.0, 33.0), amplitudes_m=(0.01, 0.02), protocols=protos,
+                         seed=5)
+    return write_synthetic(tmp_path_factory.mktemp("mixed") / "bench", spec)
+
+
+@pytest.mark.slow
+def test_clean_mixed_campaign_names_no_effect(mixed_campaign):
+    """Sines and constant-velocity strokes of another harvester, nothing hidden: no
+    effect is named and the baseline's held-out error is at the noise floor (the
+    baseline used to simulate triangle tests with the wrong sign on whole plateaus and
+    then named ``compliance``)."""
+    from ehsa_opt.estimation.discrepancy import run_discrepancy
+    from ehsa_opt.estimation.discrepancy.results import DiscrepancySettings
+    res = run_discrepancy(mixed_campaign, DiscrepancySettings(top=2))
+    assert res.effect == "none"
+    assert res.error_after == res.error_before < 1.1 * res.noise_floor

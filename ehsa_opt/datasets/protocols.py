@@ -13,6 +13,7 @@ sharpest corner a sampled record can describe).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -21,7 +22,7 @@ import numpy as np
 
 from ..physics.motion import MultisineMotion, PiecewiseMotion
 
-__all__ = ["Protocol", "PROTOCOL_KINDS"]
+__all__ = ["Protocol", "PROTOCOL_KINDS", "parse_protocol"]
 
 PROTOCOL_KINDS = ("triangle", "trapezoid", "multisine", "road")
 
@@ -133,8 +134,8 @@ class Protocol:
     def describe(self) -> str:
         if self.kind == "triangle":
             return (f"triangle strokes ±{1e3 * self.amplitude_m:g} mm at "
-                    f"{self.velocity_m_per_s:g} m/s, corners blended over "
-                    f"{1e3 * self.corner_s:g} ms")
+                    f"{self.velocity_m_per_s:g} m/s, reversals blended over "
+                    f"{2e3 * self.corner_s:g} ms")
         if self.kind == "trapezoid":
             return (f"trapezoid ±{1e3 * self.amplitude_m:g} mm at {self.velocity_m_per_s:g} m/s, "
                     f"{1e3 * self.hold_s:g} ms dwell, corners {1e3 * self.corner_s:g} ms")
@@ -201,3 +202,31 @@ class Protocol:
         keep = np.diff(kn) > 0
         kn = np.concatenate([kn[:-1][keep], [kn[-1]]])
         return PiecewiseMotion(kn, ac[keep], 0.0, v0)
+
+
+def parse_protocol(text: str) -> Protocol:
+    """A protocol from ``KIND:NAME=VALUE,...``, e.g.
+    ``triangle:load_ohm=10,velocity_m_per_s=0.06,amplitude_m=0.02`` (the command line's
+    form; ValueError names the bad part and the valid names)."""
+    kind, _, rest = text.partition(":")
+    kind = kind.strip()
+    if kind not in PROTOCOL_KINDS:
+        raise ValueError(f"protocol {text!r}: kind {kind!r} unknown (one of "
+                         f"{', '.join(PROTOCOL_KINDS)}), e.g. "
+                         f"triangle:load_ohm=10,velocity_m_per_s=0.06")
+    fields = {f.name: f.type for f in dataclasses.fields(Protocol) if f.name != "kind"}
+    vals: dict[str, Any] = {}
+    for item in filter(None, (p.strip() for p in rest.split(","))):
+        name, eq, value = item.partition("=")
+        name = name.strip()
+        if not eq or name not in fields:
+            raise ValueError(f"protocol {text!r}: {item!r} is not NAME=VALUE with NAME one of "
+                             f"{', '.join(fields)}")
+        try:
+            num = float(value)
+        except ValueError:
+            raise ValueError(f"protocol {text!r}: {name} = {value!r} is not a number") from None
+        vals[name] = int(num) if name in ("components", "seed") else num
+    if "load_ohm" not in vals:
+        raise ValueError(f"protocol {text!r}: load_ohm is required (e.g. load_ohm=10)")
+    return Protocol(kind, **vals)

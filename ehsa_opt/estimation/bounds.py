@@ -57,7 +57,8 @@ from ..physics.friction import bearing_friction_Nm, rod_friction_N, simscape_fri
 from ..physics.params import FRICTION_NAMES, FrictionParams
 
 __all__ = ["FrictionBounds", "friction_bounds", "paper_friction_sets", "velocity_grid",
-           "test_peak_velocity_m_per_s", "identification_json", "DATA_METHOD", "PAPER_METHOD",
+           "test_peak_velocity_m_per_s", "test_velocity_range_m_per_s",
+           "identification_json", "DATA_METHOD", "PAPER_METHOD",
            "fit_envelope", "ordered_set", "V_MAX_M_PER_S", "envelope_lines"]
 
 #: Velocity up to which the sets are ordered and banded (the vehicle studies' largest).
@@ -107,6 +108,24 @@ def test_peak_velocity_m_per_s(test: Any) -> float:
     motion = SampledMotion(t[::step], x[::step])
     v = motion.evaluate(t[::step])[1]
     return float(np.percentile(np.abs(v), 99.0))
+
+
+def test_velocity_range_m_per_s(test: Any, mass_kg: float | None = None
+                                ) -> tuple[float, float]:
+    """Rod speeds at which a test's data determine the friction, m/s: (0, peak) for a
+    sine test; for a recorded test the 1st–99th percentile of |v| over the samples the
+    fit used (outside the corner and dwell windows of
+    :func:`~ehsa_opt.estimation.identify_options.estimate_motion`) — a constant-velocity
+    stroke says nothing about the friction between its plateau speed and zero, which it
+    crosses only inside the reversal windows."""
+    if getattr(test, "excitation", "sine") == "sine" and test.frequency_hz and test.amplitude_m:
+        return 0.0, test_peak_velocity_m_per_s(test)
+    from .identify_options import estimate_motion
+    est = estimate_motion(test, None, mass_kg)
+    v = np.abs(est.motion.evaluate(test.time_s)[1])[est.resolved]
+    if v.size < 10:
+        return math.nan, math.nan  # nothing resolved: the test bounds nothing
+    return float(np.percentile(v, 1.0)), float(np.percentile(v, 99.0))
 
 
 def _friction(params: Mapping[str, float], has_generator: bool) -> FrictionParams:
@@ -456,7 +475,13 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
     if not good:
         raise ValueError("friction_bounds: no successful per-test fit; nothing bounds the "
                          "friction")
-    vpeak = np.array([test_peak_velocity_m_per_s(t) for t, _ in good])
+    mass = data.harvester.equivalent_mass_kg() if gen else None
+    vrange = np.array([test_velocity_range_m_per_s(t, mass) for t, _ in good])
+    good = [g for g, rr in zip(good, vrange) if np.all(np.isfinite(rr))]
+    vrange = vrange[np.all(np.isfinite(vrange), axis=1)]
+    if not good:
+        raise ValueError("friction_bounds: no per-test fit resolves any velocity")
+    vpeak, vlow = vrange[:, 1], vrange[:, 0]
     v_data = float(vpeak.max())
     # from 10 % of the slowest test's peak velocity (the lowest velocity at which the
     # Fisher analysis evaluates the rod friction): below it a sine test spends too little
@@ -464,6 +489,9 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
     # would set the bounds of every set
     v_lo = max(1e-3, 0.1 * float(vpeak.min()))
     v = _campaign_grid(v_lo, v_data, max(float(v_max_m_per_s), v_data), n_grid)
+    # every recorded test's own speeds on the grid (a plateau speed between grid points
+    # would otherwise reach no grid point)
+    v = np.unique(np.concatenate([v, vrange[vlow > 0].ravel()]))
     frs = [_friction(f.parameters, gen) for _, f in good]
     curves = np.array([_rod(v, fr, lead) for fr in frs])
     joint = getattr(report, "joint", None)
@@ -480,7 +508,7 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
                                      [samples_all.friction_N[k]]))
             half[k] = rod_law_fit(smp, fr.as_dict(), lead, has_generator=gen).half_width_N(
                 v, level)
-    reach = v[None, :] <= vpeak[:, None] * (1.0 + 1e-9)
+    reach = (v[None, :] <= vpeak[:, None] * (1.0 + 1e-9)) & (v[None, :] >= vlow[:, None])
     per_test = np.where(reach, curves, np.nan)
     with np.errstate(all="ignore"):
         import warnings

@@ -432,12 +432,12 @@ def _given_hessian(model: BenchModel, space: ParamSpace, keys: Sequence[tuple], 
     lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", ng)
     z, x, u = ca.SX.sym("z", nv), ca.SX.sym("x", nx), ca.SX.sym("u", 3)
     pb = ca.SX.sym("pb", npar)
-    funs: dict[int, ca.Function] = {}
+    funs: dict[tuple[int, int], ca.Function] = {}
     Hz = ca.SX(nv, nv)
     pos, ch = nv, 0  # P = [zref, block data...]
     for key, size in zip(keys, data_sizes):
         _, n, ny = key
-        if ny not in funs:
+        if (ny, n) not in funs:
             ym, wy, mu = ca.SX.sym("ym", ny), ca.SX.sym("wy", ny), ca.SX.sym("mu", ny)
             Pz, _ = space.expression(z, pb)
             y = model.outputs(x, u, Pz)[:ny]
@@ -448,8 +448,8 @@ def _given_hessian(model: BenchModel, space: ParamSpace, keys: Sequence[tuple], 
                     g = ca.jacobian(y[k], z)
                     hy, _ = ca.hessian(y[k], z)
                     h += 2 * mu[k] * wy[k] ** 2 * (ca.mtimes(g.T, g) + (y[k] - ym[k]) * hy)
-            funs[ny] = ca.Function("h", [z, x, u, pb, ym, wy, mu], [ca.triu(h)],
-                                   {"cse": True}).map("hmap", "serial", n, [0, 3, 5, 6], [0])
+            funs[(ny, n)] = ca.Function("h", [z, x, u, pb, ym, wy, mu], [ca.triu(h)],
+                                   {"cse": True}).map("hmap", "serial", n, [0, 3, 6], [0])
         d = P[pos:pos + size]
         a = 0
         Xg = ca.reshape(d[a:a + nx * n], nx, n)
@@ -460,9 +460,9 @@ def _given_hessian(model: BenchModel, space: ParamSpace, keys: Sequence[tuple], 
         a += npar
         ymg = ca.reshape(d[a:a + ny * n], ny, n)
         a += ny * n
-        wyg = d[a:a + ny]
+        wyg = ca.reshape(d[a:a + ny * n], ny, n)  # per-sample weights
         mu = lam_g[n_eq + ch:n_eq + ch + ny] / n
-        Hz = Hz + funs[ny](W[:nv], Xg, ug, pbase, ymg, wyg, mu)
+        Hz = Hz + funs[(ny, n)](W[:nv], Xg, ug, pbase, ymg, wyg, mu)
         pos += size
         ch += ny
     nw = int(W.numel())

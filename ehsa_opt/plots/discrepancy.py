@@ -62,7 +62,7 @@ def zoom(result: Any, n_tests: int = 2) -> Any:
     fig, axes = plt.subplots(ny, len(order), figsize=(5 * len(order), 2.6 * ny), squeeze=False)
     for j, k in enumerate(order):
         pt = allp[k]
-        r = np.abs(pt.y[0] - result.baseline_pred[k][0])
+        r = np.abs(pt.y[0] - result.baseline_pred[k][0]) * (pt.weight > 0)
         i0 = int(np.argmax(r))
         t = pt.time_s
         span = 0.12 / (pt.motion.frequency_hz if hasattr(pt.motion, "frequency_hz") else 1.0)
@@ -76,6 +76,11 @@ def zoom(result: Any, n_tests: int = 2) -> Any:
             if w is not None and w.predictions is not None:
                 ax.plot(t[sel], w.predictions[k][ch][sel], "-", lw=1.2, color="C0",
                         label=f"+ {w.effect}")
+            out = sel & (pt.weight == 0)  # corner / dwell windows, not fitted
+            if out.any():
+                ax.fill_between(t[sel], 0, 1, where=out[sel], color="0.85", lw=0,
+                                transform=ax.get_xaxis_transform(),
+                                label="not resolved (left out)")
             ax.set_ylabel(["force (N)", "voltage (V)"][ch], fontsize=8)
             ax.tick_params(labelsize=7)
             ax.grid(alpha=0.3)

@@ -483,12 +483,13 @@ def _covariance(nlp: core.NLP, w: np.ndarray, p: np.ndarray, blocks: Sequence[An
 
 
 # ------------------------------------------------------------------ predictions
-def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float]
-            ) -> list[np.ndarray]:
+def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
+            rtol: float = 1e-7) -> list[np.ndarray]:
     """Simulated outputs (ny, N) of each test with the given parameters.
 
-    Models with states are integrated by CVODES from rest-consistent initial
-    states, one unrecorded warm-up cycle before the record for sine tests.
+    Models with states are integrated by CVODES (relative tolerance ``rtol``) from
+    rest-consistent initial states, one unrecorded warm-up cycle before the record for
+    sine tests.
     """
     model = rig.model()
     out = []
@@ -501,7 +502,7 @@ def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str,
                                                           pt.u, p))
             out.append(y[:ny])
             continue
-        sim = _simulate(model, pt, vals)
+        sim = _simulate(model, pt, vals, rtol=rtol)
         out.append(np.vstack([sim.force_N, sim.voltage_V])[:ny])
     return out
 
@@ -514,7 +515,7 @@ class _Sim:
 
 
 def _simulate(model: BenchModel, pt: PreparedTest, values: Mapping[str, float],
-              grid: np.ndarray | None = None) -> _Sim:
+              grid: np.ndarray | None = None, rtol: float = 1e-7) -> _Sim:
     """CVODES simulation on the test's grid (or ``grid``; one warm-up cycle before
     sine records)."""
     vals = {**pt.fixed, **values}
@@ -525,10 +526,10 @@ def _simulate(model: BenchModel, pt: PreparedTest, values: Mapping[str, float],
         dt = float(np.median(np.diff(t)))
         nw = int(round(period / dt))
         grid = np.concatenate([t[0] - dt * np.arange(nw, 0, -1), t])
-        sim = simulate_bench(model, pt.motion, p, grid, rtol=1e-7, atol=1e-9)
+        sim = simulate_bench(model, pt.motion, p, grid, rtol=rtol, atol=rtol * 1e-2)
         keep = slice(nw, None)
     else:
         motion = pt.motion.sampled() if isinstance(pt.motion, FilteredMotion) else pt.motion
-        sim = simulate_bench(model, motion, p, t, rtol=1e-7, atol=1e-9)
+        sim = simulate_bench(model, motion, p, t, rtol=rtol, atol=rtol * 1e-2)
         keep = slice(None)
     return _Sim(sim.force_N[keep], sim.voltage_V[keep], sim.states[:, keep])
