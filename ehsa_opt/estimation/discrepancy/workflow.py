@@ -54,6 +54,7 @@ import numpy as np
 from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
 from .candidates import CANDIDATES, components_for, signature_scores
+from .evidence import WHITE_P, disturbance_masks, residual_is_white
 from .fit import (
     Rig,
     fit_group,
@@ -214,9 +215,16 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
             notes.append(note)
             all_cands += [cands[n] for n in order]
             break
+        masks, mask_note = disturbance_masks(
+            held_pts, Path(str(getattr(data, "path", "") or ".")) / "validation"
+            if evaluation == "validation set" else None)
+        if mask_note and mask_note not in notes:
+            say(mask_note)
+            notes.append(mask_note)
         judge = dict(comps=comps, fit_pts=fit_pts, held_pts=held_pts, sse_fit=sse_fit,
                      sse_held=sse_held, n_eff_fit=n_eff_fit, n_eff_held=n_eff_held,
-                     cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say)
+                     cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say,
+                     cur_ev_pred=cur_held or cur_fit, masks=masks)
 
         def fit_and_judge(names: list[str]) -> None:
             args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts, cur_rig,
@@ -334,12 +342,20 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     validation = None
     if evaluation == "validation set" and not rig.has_generator:
         from .openloop import validation_summary
+        from .openloop import BEST_PUBLISHED_MM, direction_dependent
+        fitted = {c.effect: c.fit.parameters for c in all_cands
+                  if c.fitted and c.fit is not None and c.fit.parameters and c.round == 1}
         validation = validation_summary(held_pts[0].test, base.parameters, cur_params, err0,
-                                        cur_err)
-        msg += (f"; open-loop position error on the validation record "
-                f"{validation['open_loop_final']['percent_of_norm_q']:.2f} % of |q| "
-                f"(reference parameters "
-                f"{validation['open_loop_reference_parameters']['percent_of_norm_q']:.2f} %)")
+                                        cur_err, fitted)
+        asym = [c for c in all_cands if c.effect == "asymmetric_friction" and c.fitted
+                and c.fit is not None and c.fit.parameters]
+        if asym:
+            validation["direction_dependent"] = direction_dependent(asym[-1].fit)
+        msg += (f"; open-loop position error on the validation record (the benchmark's "
+                f"metric) {validation['open_loop_final']['rms_mm']:.2f} mm "
+                f"(reference IDIM-LS parameters "
+                f"{validation['open_loop_reference_parameters']['rms_mm']:.2f} mm, best "
+                f"published {BEST_PUBLISHED_MM} mm)")
     return DiscrepancyResult(
         ok, msg, effect, err0, cur_err, evaluation, all_cands, base, rig, fit_pts, held_pts,
         base_fit_pred + base_held_pred, loc0, loc1, {"fit": n_eff_fit, "heldout": n_eff_held},
@@ -357,7 +373,14 @@ TERM_PREFERENCE = 0.5
 
 
 def _term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> TermProposal:
-    """The data-driven term of the current residual, judged by the decision rule."""
+    """The data-driven term of the current residual, judged by the decision rule —
+    none when the residual of the fit tests is white (Ljung–Box, :mod:`.evidence`):
+    a term fitted to a white residual is fitted to noise."""
+    white, p = residual_is_white(fit_pts, fit_pred)
+    if white:
+        return TermProposal(True, f"the residual is white (Ljung-Box p = {p:.2g} > "
+                                  f"{WHITE_P:g} on every fit test): no term proposed",
+                            description="none (white residual)")
     term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead, seed=seed)
     if term.columns:
         d_b = _dbic(term.sse_after, term.sse_before, len(term.columns), n_eff)
