@@ -228,7 +228,13 @@ class DiscrepancyResult:
                             "dBIC = N_eff ln(SSE_new/SSE_old) + k ln(N_eff) < 0 on the fit and "
                             "on the held-out tests; effects are added one at a time (lowest "
                             "held-out dBIC first) until none earns; the SSE alternative is "
-                            "judged per channel",
+                            "judged per channel, and only where the force error has no excess "
+                            "beyond noise; or on the effect's own evidence: dBIC < 0 on both, "
+                            "the held-out error not growing and the median over contiguous "
+                            "blocks of the held-out records (documented disturbances masked) "
+                            "of the excess removed at least min_excess_reduction; an "
+                            "effect's amplitude interval (Newey-West) must exclude zero; a "
+                            "data-driven term only when the residual is not white (Ljung-Box)",
                     "min_excess_reduction": MIN_EXCESS_REDUCTION,
                     "noise_floor_percent": self.noise_floor},
                 "term": self.term.as_dict() if self.term else None,
