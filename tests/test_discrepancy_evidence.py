@@ -99,3 +99,19 @@ def test_a_white_residual_gives_no_term():
     term = _term(pts[:4], preds[:4], pts[4:], preds[4:], 0.01 / (2 * math.pi), 0, 0.5, 500.0)
     assert not term.columns and not term.earns
     assert "white" in term.message
+
+
+def test_noise_floor_is_not_biased_by_a_fast_curving_signal():
+    """On the embedded data's fastest tests (true force noise 2.0 N, truth.toml) the
+    floor's fourth-difference estimate is within 6 %, the second difference is not."""
+    from ehsa_opt.datasets.bench_format import load_bench
+    from ehsa_opt.datasets.embedded import embedded_data_dir
+    from ehsa_opt.estimation.discrepancy.fit import noise_std
+    from ehsa_opt.estimation.discrepancy.refit import floor_noise_std
+    tests = [t for t in load_bench(embedded_data_dir("bench_prototype")).tests
+             if t.frequency_hz >= 3.0]
+    assert tests
+    f4 = np.sqrt(np.mean([floor_noise_std(t.force_N) ** 2 for t in tests]))
+    f2 = np.sqrt(np.mean([noise_std(t.force_N) ** 2 for t in tests]))
+    assert f4 == pytest.approx(2.0, rel=0.06)
+    assert f2 > 1.05 * 2.0 and f2 > f4 + 0.1
