@@ -9,6 +9,7 @@ from .components import (
                          Cogging,
                          Compliance,
                          Component,
+                         Flexibility,
                          MagneticSaturation,
                          ParamSpec,
                          PositionFriction,
@@ -25,6 +26,6 @@ from .harvester import (
 
 __all__ = ["BenchModel", "Component", "ParamSpec", "Backlash", "Compliance", "AsymmetricFriction",
            "Cogging", "VoltageDrop", "WindingHeating", "PositionFriction", "MagneticSaturation",
-           "COMPONENTS",
+           "Flexibility", "COMPONENTS",
            "make_component", "equivalent_mass_kg", "equivalent_damping_Ns_per_m",
            "equivalent_stiffness_N_per_m", "equivalent_impedance"]

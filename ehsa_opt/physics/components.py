@@ -39,7 +39,7 @@ from typing import Any, ClassVar
 import casadi as ca
 
 __all__ = ["ParamSpec", "Component", "Backlash", "Compliance", "AsymmetricFriction", "Cogging",
-           "VoltageDrop", "WindingHeating", "PositionFriction", "MagneticSaturation",
+           "VoltageDrop", "WindingHeating", "PositionFriction", "MagneticSaturation", "Flexibility",
            "smooth_ramp", "smooth_step", "smooth_abs", "COMPONENTS",
            "make_component"]
 
@@ -456,11 +456,97 @@ class MagneticSaturation(Component):
         return 1.0 / (1.0 + beta * i * i)
 
 
+class Flexibility(Component):
+    """A flexibility of the mechanism: the load as a second mass on a spring and damper.
+
+    Two masses joined by a spring k and damper c: the driven side (where the force
+    acts and the position is measured) and the load side, whose position is a state.
+    With the load mass m, ω = 2π f = √(k/m) and ζ = c/(2 m ω), the deflection
+    d = x − x_load obeys::
+
+        d̈ = a − ω² d − 2ζω ḋ          (the load is pulled through the spring)
+        F_extra = m (ω² d + 2ζω ḋ − a)  (= −m d̈: the load's inertia seen through it)
+
+    so the measured force is (M − m) a + k d + c ḋ + friction + offset, M the total
+    inertia of the rig (``inertia_kg``).  Rigid (ω → ∞, or m = 0: exactly inert)
+    it is the one-mass model.  The state starts at rest (d = ḋ = 0).  Written for a
+    rig without generator (EMPS: motor side measured, load side a state); on a
+    generator bench the elastic transmission is :class:`Compliance`.
+
+    Parameters
+    ----------
+    frequency_hz : float or None
+        Starting value of f returned by :meth:`defaults` (the discrepancy workflow
+        sets it from the residual's spectral peak); None: the ParamSpec default.
+    """
+
+    name = "flexibility"
+    states = ("flex_deflection_m", "flex_deflection_rate_m_per_s")
+    start_attributes = ("frequency_hz",)
+    parameters = (
+        ParamSpec("flex_load_mass_kg", "kg", 0.0, 0.0, 1e4,
+                  "m, the load-side mass beyond the spring"),
+        ParamSpec("flex_frequency_hz", "Hz", 100.0, 1.0, 2000.0,
+                  "f = √(k/m)/2π, the load's resonance with the driven side held"),
+        ParamSpec("flex_damping_ratio", "1", 0.1, 1e-3, 5.0, "ζ = c/(2 m ω)"),
+    )
+
+    def __init__(self, frequency_hz: float | None = None) -> None:
+        q = self.parameters[1]
+        if frequency_hz is not None and not q.lower <= frequency_hz <= q.upper:
+            raise ValueError(f"Flexibility: frequency_hz = {frequency_hz} outside "
+                             f"[{q.lower}, {q.upper}] Hz")
+        self.frequency_hz = None if frequency_hz is None else float(frequency_hz)
+
+    def defaults(self) -> dict[str, float]:
+        out = super().defaults()
+        if self.frequency_hz is not None:
+            out["flex_frequency_hz"] = self.frequency_hz
+        return out
+
+    @staticmethod
+    def _w(p: dict) -> Any:
+        return 2 * ca.pi * p["flex_frequency_hz"]
+
+    def _spring(self, s: dict, p: dict) -> Any:
+        """(k d + c ḋ)/m."""
+        w = self._w(p)
+        return (w * w * s["flex_deflection_m"]
+                + 2 * p["flex_damping_ratio"] * w * s["flex_deflection_rate_m_per_s"])
+
+    def state_rates(self, s: dict, p: dict) -> list[Any]:
+        return [s["flex_deflection_rate_m_per_s"], s["a"] - self._spring(s, p)]
+
+    def rod_force(self, s: dict, p: dict) -> Any:
+        return p["flex_load_mass_kg"] * (self._spring(s, p) - s["a"])
+
+    @staticmethod
+    def stiffness_N_per_m(p: dict) -> float:
+        """k = m ω² of a parameter set (N/m)."""
+        return float(p["flex_load_mass_kg"] * (2 * 3.141592653589793
+                                               * p["flex_frequency_hz"]) ** 2)
+
+    def stored_energy(self, s: dict, p: dict) -> Any:
+        # the model books ½ M v² for the whole rig: the load moves at v − ḋ, and
+        # the spring holds ½ k d²
+        m, w = p["flex_load_mass_kg"], self._w(p)
+        v, dd, d = s["v"], s["flex_deflection_rate_m_per_s"], s["flex_deflection_m"]
+        return 0.5 * m * ((v - dd) ** 2 - v ** 2 + (w * d) ** 2)
+
+    def dissipated_power(self, s: dict, p: dict) -> Any:
+        # only the damper dissipates; the model books the power of rod_force as
+        # dissipation, so that booking is taken back here
+        m, w = p["flex_load_mass_kg"], self._w(p)
+        dd = s["flex_deflection_rate_m_per_s"]
+        return 2 * p["flex_damping_ratio"] * w * m * dd ** 2 - self.rod_force(s, p) * s["v"]
+
+
 #: Registry of components by name (later effects register here too).
 COMPONENTS: dict[str, type[Component]] = {
     "backlash": Backlash, "compliance": Compliance, "asymmetric_friction": AsymmetricFriction,
     "cogging": Cogging, "voltage_drop": VoltageDrop, "winding_heating": WindingHeating,
-    "position_friction": PositionFriction, "magnetic_saturation": MagneticSaturation}
+    "position_friction": PositionFriction, "magnetic_saturation": MagneticSaturation,
+    "flexibility": Flexibility}
 
 
 def make_component(name: str, **kwargs: Any) -> Component:

@@ -51,8 +51,16 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
              "is already at its noise floor, the same test on the SSE of a channel that exceeds "
              "its noise expectation (a voltage-seen effect), the force error not growing by "
              "more than the data resolve (the floor's standard error e_n/√(2N), N held-out "
-             "force samples). An effect's size must be resolved "
-             "(the ≈95 % interval of one of its amplitudes excludes zero). Effects are added one "
+             "force samples). **Or, on its own evidence**: the same ΔBIC < 0 on both, the "
+             "held-out error not growing, and a median over contiguous blocks of the held-out "
+             "records (8 per test; documented disturbances masked) of the share of each block's "
+             "excess removed of at least the same "
+             f"{100 * MIN_EXCESS_REDUCTION:.0f} % — so that an effect another one dominates in a "
+             "few blocks is not vetoed by a share of the total. An effect's size must be resolved "
+             "(the ≈95 % interval of one of its amplitudes excludes zero; intervals are "
+             "Newey–West sandwich intervals, which respect the residual's autocorrelation). "
+             "A data-driven term is proposed only when the residual is not white (Ljung–Box). "
+             "Effects are added one "
              "at a time — the earning candidate with the lowest held-out ΔBIC — the rest "
              "re-ranked and refitted on top, until none earns; a round whose best candidate "
              "removes less than half of the excess re-identifies every candidate, and an effect "
@@ -85,13 +93,18 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
                  + ", ".join(f"{g} {100 * v:.0f} %" for g, v in t.group_shares.items()) + ".\n")
     L.append("### Where the baseline disagrees\n")
     L.append("| channel | rms / noise | structured | top coordinates (R² vs noise floor) | "
-             "harmonic share (floor) |\n|---|---|---|---|---|")
+             "harmonic share (floor) | frequency: spectral peak, power above |"
+             "\n|---|---|---|---|---|---|")
     for ch in res.loc_before.channels.values():
         top = ", ".join(f"{c.coordinate} {c.r2:.3f} ({c.floor:.4f})"
                         for c in ch.ranking()[:3] if c.structured) or "none beyond noise"
+        sp = getattr(ch, "spectrum", {}) or {}
+        freq = (f"{sp['peak_hz']:.0f} Hz ({100 * sp['peak_share']:.0f} % within ±10 %), "
+                f"{100 * sp['share_above_hz']:.0f} % above {sp['above_hz']:g} Hz" if sp else "—")
         L.append(f"| {ch.channel} | {ch.rms_normalised:.2f} | "
                  f"{100 * ch.structured_fraction:.0f} % | {top} | "
-                 f"{_fmt(100 * ch.harmonic_share, '.0f')} % ({_fmt(100 * ch.harmonic_floor, '.0f')} %) |")
+                 f"{_fmt(100 * ch.harmonic_share, '.0f')} % ({_fmt(100 * ch.harmonic_floor, '.0f')} %) "
+                 f"| {freq} |")
     if res.loc_after is not None:
         L.append("\nAfter adding the effect:\n")
         L.append("| channel | rms / noise | structured |\n|---|---|---|")
@@ -101,20 +114,27 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
     L.append(f"\n![residual maps]({fig_prefix}discrepancy_residual_maps.png)\n")
     L.append("### Ranking of the candidates\n")
     L.append("| round | effect | signature score | χ² | re-identified | ΔBIC fit | ΔBIC held-out | "
-             "error before (%) | error after (%) | earns |\n|---|---|---|---|---|---|---|---|---|---|")
+             "error before (%) | error after (%) | excess removed: total / median block | earns |"
+             "\n|---|---|---|---|---|---|---|---|---|---|---|")
     for c in res.candidates:
         k = c.round
         if not c.applicable:
-            L.append(f"| {k} | {c.effect} | n/a (rig without generator or taken) | | | | | | | |")
+            L.append(f"| {k} | {c.effect} | n/a (rig without generator or taken) | | | | | | | | |")
             continue
+        ex = (f"{_fmt(100 * c.excess_reduction, '.0f')} % / "
+              f"{_fmt(100 * c.block_reduction, '.0f')} %" if c.fitted else "")
+        by = f" ({c.earns_by})" if c.earns and c.earns_by else ""
         L.append(f"| {k} | {c.effect} | {_fmt(c.score, '.3g')} | {_fmt(c.chi2, '.3g')} | "
                  f"{'yes' if c.fitted else 'no'} | {_fmt(c.delta_bic_fit, '.1f')} | "
                  f"{_fmt(c.delta_bic_heldout, '.1f')} | {_fmt(c.error_before, '.3f')} | "
-                 f"{_fmt(c.error_after, '.3f')} | {'**yes**' if c.earns else 'no'} |")
+                 f"{_fmt(c.error_after, '.3f')} | {ex} | {'**yes**' + by if c.earns else 'no'} |")
     L.append(f"\n![ranking]({fig_prefix}discrepancy_ranking.png)\n")
     w = res.winner
     if w is not None:
-        L.append(f"### Identified `{w.effect}` parameters (≈95 % Gauss–Newton intervals)\n")
+        info = (w.fit.covariance_info or {}) if w.fit is not None else {}
+        L.append(f"### Identified `{w.effect}` parameters (≈95 % Newey–West intervals"
+                 + (f"; N_eff {info['n_eff']:.0f} of {info['n']}, bandwidth "
+                    f"{info['bandwidth_samples']} samples" if info else "") + ")\n")
         L.append("| parameter | value | interval |\n|---|---|---|")
         for n, v in w.parameters.items():
             iv = w.intervals.get(n)
@@ -127,7 +147,49 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
     L.append(f"\n![per-test errors]({fig_prefix}discrepancy_per_test_errors.png)\n")
     L.append(f"Measured vs simulated, zoomed where the baseline misses most:\n\n"
              f"![zoom]({fig_prefix}discrepancy_zoom.png)\n")
+    L += _validation_markdown(res)
     return "\n".join(L)
+
+
+def _validation_markdown(res: DiscrepancyResult) -> list[str]:
+    """The benchmark's own metric on a validation record (EMPS): open-loop position
+    RMSE in mm beside the best published result, and the direction-dependent friction
+    with its intervals."""
+    v = res.validation
+    if not v:
+        return []
+    L = ["### The benchmark's own metric: open-loop position from the measured force\n",
+         "Position simulated from the measured force of the validation record (RK4, first "
+         "20 samples skipped), RMS error in mm as the nonlinear system identification "
+         "benchmark defines it.\n",
+         "| model | RMS position error (mm) | % of ‖q‖ |\n|---|---|---|",
+         f"| best published (black-box continuous-time subspace encoder, Beintema et al. 2023) | "
+         f"{v['best_published_mm']:.2f} | |"]
+    for label, key in (("published IDIM-LS reference parameters", "open_loop_reference_parameters"),
+                       ("our baseline (rigid, symmetric friction)", "open_loop_baseline"),
+                       (f"final model (`{res.effect}`)", "open_loop_final")):
+        o = v[key]
+        L.append(f"| {label} | {o['rms_mm']:.2f} | {o['percent_of_norm_q']:.2f} |")
+    for name, o in v.get("open_loop_per_effect", {}).items():
+        note = "" if o.get("simulated") else " (not in the open-loop port: baseline part only)"
+        L.append(f"| baseline refitted with `{name}`{note} | {o['rms_mm']:.2f} | "
+                 f"{o['percent_of_norm_q']:.2f} |")
+    dd = v.get("direction_dependent")
+    if dd:
+        def iv(k):
+            x = dd.get(k + "_ci95")
+            return f" [{x[0]:.1f}, {x[1]:.1f}]" if x else ""
+        L.append("")
+        L.append("Direction-dependent friction refitted on the estimation record (≈95 % "
+                 "Newey–West intervals): "
+                 f"F_v+ {dd['viscous_pos']:.1f}{iv('viscous_pos')}, "
+                 f"F_v− {dd['viscous_neg']:.1f}{iv('viscous_neg')} N s/m "
+                 f"(published {_EMPS_PUBLISHED['f_v_pos']} / {_EMPS_PUBLISHED['f_v_neg']}); "
+                 f"F_C+ {dd['coulomb_pos']:.2f}{iv('coulomb_pos')}, "
+                 f"F_C− {dd['coulomb_neg']:.2f}{iv('coulomb_neg')} N "
+                 f"(published {_EMPS_PUBLISHED['F_C_pos']} / {_EMPS_PUBLISHED['F_C_neg']}).")
+    L.append("")
+    return L
 
 
 def write_report(res: DiscrepancyResult, out_dir: str | Path) -> tuple[Path, Path]:

@@ -85,8 +85,11 @@ class Candidate:
     log_names: tuple[str, ...] = ()
     amplitudes: tuple[str, ...] = ()
     rigid_channels: tuple[int, ...] | None = None
+    without_generator_only: bool = False
 
     def applicable(self, rig: Rig) -> bool:
+        if self.without_generator_only and rig.has_generator:
+            return False  # a generator bench has its own elastic transmission (compliance)
         return rig.has_generator or not self.needs_generator
 
     def component(self, **kwargs):
@@ -161,6 +164,19 @@ CANDIDATES: dict[str, Candidate] = {
         starts=tuple({"position_friction_N": a} for a in (-5.0, 2.0, 8.0, 30.0)),
         amplitudes=("position_friction_N",),
         rigid_channels=(0,)),
+    "flexibility": Candidate(
+        "flexibility",
+        # the resonance starts at the fit residual's spectral peak (components_for);
+        # the probes and starts add the load mass and a few frequencies around it
+        probes=({"flex_load_mass_kg": 10.0, "flex_damping_ratio": 0.1},
+                {"flex_load_mass_kg": 10.0, "flex_damping_ratio": 0.5}),
+        starts=tuple({"flex_load_mass_kg": m, "flex_damping_ratio": z}
+                     for m in (2.0, 10.0, 30.0) for z in (0.05, 0.3)),
+        refine=tuple({"flex_frequency_hz": f} for f in (20.0, 50.0, 115.0, 200.0, 400.0)),
+        effect_fit="simulation", full_refit="simulation",
+        log_names=("flex_frequency_hz",),
+        amplitudes=("flex_load_mass_kg",), rigid_channels=(0,),
+        without_generator_only=True),
     "magnetic_saturation": Candidate(
         "magnetic_saturation",
         probes=({"saturation_per_A2": 0.05},),
@@ -249,6 +265,12 @@ def components_for(names: Sequence[str], prepared: Sequence[PreparedTest],
         if n == "cogging":
             out[n] = CANDIDATES[n].component(
                 periods_per_rev=best_rotor_period(prepared, preds, lead_m_per_rad=lead))
+        elif n == "flexibility":
+            from .localise import residual_spectrum
+            sp = residual_spectrum(prepared, [pt.y[0] - yp[0] for pt, yp in zip(prepared, preds)],
+                                   min_hz=5.0)
+            f0 = float(np.clip(sp.get("peak_hz", 100.0), 5.0, 1000.0)) if sp else 100.0
+            out[n] = CANDIDATES[n].component(frequency_hz=f0)
         elif n == "position_friction":
             win = stroke_window(prepared, preds)
             out[n] = (CANDIDATES[n].component(centre_m=win[0], width_m=win[1]) if win

@@ -27,7 +27,7 @@ from scipy import stats
 from ...physics.motion import SineMotion
 from .fit import PreparedTest
 
-__all__ = ["CoordinateStat", "ChannelMap", "Localisation", "localise", "reversal_times",
+__all__ = ["residual_spectrum", "CoordinateStat", "ChannelMap", "Localisation", "localise", "reversal_times",
            "COORDINATES", "stroke_window"]
 
 #: Coordinates a residual is mapped against (name → unit).
@@ -70,6 +70,7 @@ class ChannelMap:
     harmonic_share: float
     harmonic_floor: float
     per_test_rms: list[float]
+    spectrum: dict = field(default_factory=dict)  # frequency coordinate (residual_spectrum)
 
     def ranking(self) -> list[CoordinateStat]:
         """Coordinates by excess variance explained (R² − floor), best first."""
@@ -80,6 +81,7 @@ class ChannelMap:
                 "structured_fraction": self.structured_fraction,
                 "harmonic_share": self.harmonic_share, "harmonic_floor": self.harmonic_floor,
                 "per_test_rms_normalised": self.per_test_rms,
+                "frequency": self.spectrum,
                 "coordinates": {k: v.as_dict() for k, v in self.coordinates.items()}}
 
 
@@ -96,14 +98,57 @@ class Localisation:
             top = [c for c in ch.ranking() if c.structured][:3]
             where = ", ".join(f"{c.coordinate} (R² {c.r2:.2f} vs floor {c.floor:.3f})"
                               for c in top) or "nowhere beyond noise"
+            sp = ch.spectrum
+            freq = (f"; spectrum: peak {sp['peak_hz']:.0f} Hz, "
+                    f"{100 * sp['share_above_hz']:.0f} % of the power above "
+                    f"{sp['above_hz']:g} Hz" if sp else "")
             lines.append(f"{ch.channel}: rms {ch.rms_normalised:.2f}× noise, "
                          f"{100 * ch.structured_fraction:.0f} % structured; structured against "
                          f"{where}; harmonics {100 * ch.harmonic_share:.0f} % of power "
-                         f"(floor {100 * ch.harmonic_floor:.0f} %)")
+                         f"(floor {100 * ch.harmonic_floor:.0f} %){freq}")
         return "\n".join(lines)
 
     def as_dict(self) -> dict:
         return {k: v.as_dict() for k, v in self.channels.items()}
+
+
+def residual_spectrum(prepared: Sequence[PreparedTest], residuals: Sequence[np.ndarray],
+                      above_hz: float = 100.0, min_hz: float = 2.0) -> dict:
+    """The frequency coordinate of a residual: Welch spectra of every test
+    (segments of ≈ 2 s or the test, averaged with weights by length), the peak
+    above ``min_hz`` and the share of the power above ``above_hz`` (default 100 Hz;
+    capped below the Nyquist frequency).  A flexibility shows as a peak at its
+    resonance, a cogging at its rotor harmonic, noise as a flat spectrum.
+
+    Returns {"peak_hz", "peak_share" (power within ±10 % of the peak), "above_hz",
+    "share_above_hz", "frequency_hz" and "power" (the averaged spectrum)}; {}
+    when no test has enough samples."""
+    from scipy.signal import welch
+    acc, freq, wsum = None, None, 0.0
+    for pt, r in zip(prepared, residuals):
+        r = np.asarray(r, float)
+        if r.size < 64:
+            continue
+        fs = 1.0 / float(np.median(np.diff(pt.time_s)))
+        nper = int(min(r.size, 2 ** int(np.log2(max(64, 2 * fs)))))
+        f, P = welch(r - r.mean(), fs=fs, nperseg=nper)
+        if freq is None:
+            freq, acc = f, np.zeros_like(P)
+        if f.size != freq.size or not np.allclose(f, freq):
+            P = np.interp(freq, f, P, left=0.0, right=0.0)
+        acc += r.size * P
+        wsum += r.size
+    if freq is None or wsum == 0 or not np.any(acc):
+        return {}
+    P = acc / wsum
+    above = float(min(above_hz, 0.5 * freq[-1]))
+    band = freq >= min_hz
+    k = int(np.argmax(np.where(band, P, -np.inf)))
+    near = np.abs(freq - freq[k]) <= 0.1 * freq[k]
+    tot = float(P[band].sum())
+    return {"peak_hz": float(freq[k]), "peak_share": float(P[near & band].sum() / tot),
+            "above_hz": above, "share_above_hz": float(P[freq > above].sum() / tot),
+            "frequency_hz": freq.tolist(), "power": P.tolist()}
 
 
 def reversal_times(t: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -239,7 +284,8 @@ def localise(prepared: Sequence[PreparedTest], predictions: Sequence[np.ndarray]
         ms = float(np.mean(r_all ** 2))
         loc.channels[names[ch]] = ChannelMap(names[ch], math.sqrt(ms),
                                              max(0.0, 1 - 1 / ms) if ms > 0 else 0.0,
-                                             stats_, h, hf, per_test)
+                                             stats_, h, hf, per_test,
+                                             residual_spectrum(prepared, res))
     return loc
 
 

@@ -409,10 +409,23 @@ MIN_EXCESS_OVER_FLOOR = 0.3
 MIN_SSE_EXCESS = 0.25
 
 
+def floor_noise_std(y: np.ndarray) -> float:
+    """Noise level of a sampled signal from its *fourth* differences (median absolute
+    deviation; Δ⁴ of white noise of std σ has std √70 σ).  The second differences of
+    the fit's weights are biased high where the signal curves fast (a 3 Hz bench
+    test: 2.34 N for a true 2.0 N, so the noise floor sat above the true parameters'
+    error, 0.658 vs 0.588 %); the fourth differences cancel that curvature (2.07 N;
+    floor 0.596 % against 0.596 % from the true σ)."""
+    d4 = np.diff(np.asarray(y, dtype=float), 4)
+    mad = np.median(np.abs(d4 - np.median(d4)))
+    return float(max(1.4826 * mad / math.sqrt(70.0), 1e-12))
+
+
 def force_noise_floor_percent(prepared: Sequence[PreparedTest]) -> float:
     """Relative force error (%) that the measurement noise alone gives:
-    100 √(Σ σ_i² N_i) / ‖F‖ (σ_i the noise level estimated from test i)."""
-    num = sum(float(pt.sigma[0]) ** 2 * pt.n_resolved for pt in prepared)
+    100 √(Σ σ_i² N_i) / ‖F‖ over the resolved samples (σ_i the noise level of test i's
+    force from its fourth differences, :func:`floor_noise_std`)."""
+    num = sum(floor_noise_std(pt.y[0]) ** 2 * pt.n_resolved for pt in prepared)
     den = float(np.sum(np.concatenate([pt.y[0][pt.weight > 0] for pt in prepared]) ** 2))
     return 100.0 * math.sqrt(num / den) if den > 0 else 0.0
 

@@ -103,6 +103,9 @@ class CandidateResult:
     sse_heldout: float = math.nan
     sse_reduction: float | None = None
     sse_route: bool = False  # the other-channel (SSE) route was open (force at its floor)
+    block_reduction: float = math.nan  # median per-block excess reduction (own evidence)
+    blocks_judged: int = 0
+    earns_by: str = ""  # "total excess" | "own evidence" | ""
     resolved: bool = True
     earns: bool = False
     parameters: dict[str, float] = field(default_factory=dict)
@@ -119,6 +122,8 @@ class CandidateResult:
                 "delta_bic_fit": self.delta_bic_fit, "delta_bic_heldout": self.delta_bic_heldout,
                 "sse_excess_reduction": self.sse_reduction,
                 "sse_route_open": bool(self.sse_route),
+                "median_block_excess_reduction": self.block_reduction,
+                "blocks_judged": int(self.blocks_judged), "earns_by": self.earns_by,
                 "earns_its_parameters": bool(self.earns), "parameters": self.parameters,
                 "intervals_95": {k: list(v) if v else None for k, v in self.intervals.items()},
                 "ipopt_status": self.fit.message if self.fit else None,
@@ -224,7 +229,13 @@ class DiscrepancyResult:
                             "dBIC = N_eff ln(SSE_new/SSE_old) + k ln(N_eff) < 0 on the fit and "
                             "on the held-out tests; effects are added one at a time (lowest "
                             "held-out dBIC first) until none earns; the SSE alternative is "
-                            "judged per channel",
+                            "judged per channel, and only where the force error has no excess "
+                            "beyond noise; or on the effect's own evidence: dBIC < 0 on both, "
+                            "the held-out error not growing and the median over contiguous "
+                            "blocks of the held-out records (documented disturbances masked) "
+                            "of the excess removed at least min_excess_reduction; an "
+                            "effect's amplitude interval (Newey-West) must exclude zero; a "
+                            "data-driven term only when the residual is not white (Ljung-Box)",
                     "min_excess_reduction": MIN_EXCESS_REDUCTION,
                     "noise_floor_percent": self.noise_floor},
                 "term": self.term.as_dict() if self.term else None,

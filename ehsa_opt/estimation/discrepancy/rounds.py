@@ -17,12 +17,14 @@ from typing import Any
 
 from .candidates import CANDIDATES, components_for
 from .decide import channel_sse, channel_sse_excess_reduction, significant
+from .evidence import block_excess_reductions, own_evidence
 from .fit import Rig, force_relative_error_percent, predict
 from .refit import (
     _dbic,
     _force_error,
     _sse,
     can_earn,
+    MIN_EXCESS_REDUCTION,
     compatible,
     earns,
     effective_samples,
@@ -34,7 +36,8 @@ __all__: list[str] = []
 
 
 def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
-           n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say) -> None:
+           n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say,
+           cur_ev_pred=None, masks=None) -> None:
     """Fill ``c`` from one re-identification ``out`` (:func:`_fit_one`) and judge it by
     :func:`~.refit.earns` (force error, ΔBIC on the fit and held-out tests, SSE
     alternative per channel, :func:`~.decide.channel_sse_excess_reduction`)."""
@@ -64,10 +67,22 @@ def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
     # the SSE (other-channel) route is offered only where the force error has no excess
     # beyond noise left to remove (the stated rule); elsewhere the force decides
     c.sse_route = not can_earn(cur_err, floor, 0.0, 1.0)
-    c.earns = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
-                         c.sse_reduction if c.sse_route else None,
-                         n_force=sum(pt.y.shape[1] for pt in ev_pts))
-                   and c.resolved)
+    by_total = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
+                          c.sse_reduction if c.sse_route else None,
+                          n_force=sum(pt.y.shape[1] for pt in ev_pts)))
+    # the effect's own evidence: the same likelihood evidence, and its practical size
+    # judged per block of the held-out records (documented disturbances masked), so
+    # that an effect another one dominates in a few blocks is not vetoed
+    by_own = False
+    if cur_ev_pred is not None:
+        red = block_excess_reductions(ev_pts, cur_ev_pred, ev_pred,
+                                      masks if held_pts else None)
+        by_own, c.block_reduction, c.blocks_judged = own_evidence(red, MIN_EXCESS_REDUCTION)
+        by_own = (by_own and c.delta_bic_fit < 0 and c.delta_bic_heldout < 0
+                  and c.error_after <= cur_err)
+    c.earns_by = ("total excess" if by_total else "own evidence") if (by_total or by_own) \
+        else ""
+    c.earns = bool((by_total or by_own) and c.resolved)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
@@ -75,10 +90,12 @@ def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
                      for (n, v), iv in zip(c.parameters.items(), c.intervals.values()))
     sse_txt = f", SSE excess reduced {100 * c.sse_reduction:.0f} %" \
         if c.sse_reduction is not None else ""
+    blk = (f", median block excess reduced {100 * c.block_reduction:.0f} % over "
+           f"{c.blocks_judged} blocks" if math.isfinite(c.block_reduction) else "")
     say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
         f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
-        f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}; {res.seconds:.1f} s)"
-        f"{' EARNS' if c.earns else ''}; {pars}")
+        f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}{blk}; {res.seconds:.1f} s)"
+        f"{' EARNS (' + c.earns_by + ')' if c.earns else ''}; {pars}")
 
 
 def _on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd: int
@@ -103,6 +120,7 @@ def _on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd
     out = _fit_one((blocked.effect, comp, CANDIDATES[blocked.effect].starts, sub_pts, fit_pts,
                     held_pts, c.rig, dict(c.fit.parameters), max_iter))
     _judge(step, out, **{**judge, "sse_fit": sse_fit, "n_eff_fit": n_eff_fit,
+                         "cur_ev_pred": ev_pred,
                          "sse_held": _sse(held_pts, ph) if held_pts else math.nan,
                          "n_eff_held": effective_samples(held_pts, ph) if held_pts else math.nan,
                          "cur_err": c.error_after, "ch_sse0": ch_sse0, "ch_n": ch_n})

@@ -54,6 +54,7 @@ import numpy as np
 from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
 from .candidates import CANDIDATES, components_for, signature_scores
+from .evidence import WHITE_P, disturbance_masks, residual_is_white
 from .fit import (
     Rig,
     fit_group,
@@ -187,13 +188,22 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     for rnd in range(1, settings.max_effects + 1):
         comps = components_for(remaining, fit_pts, cur_fit, lead)
         sub_pred = [cur_fit[next(k for k, q in enumerate(fit_pts) if q is p)] for p in sub_pts]
-        scores = signature_scores(sub_pts, cur_rig, cur_params, sub_pred, remaining, comps)
+        flex = "flexibility" in remaining and not rig.has_generator
+        scores = signature_scores(sub_pts, cur_rig, cur_params, sub_pred,
+                                  [n for n in remaining if n != "flexibility"], comps)
+        flex_out = None
+        if "flexibility" in remaining:
+            flex_out = _flexibility_round(fit_pts, cur_fit, held_pts, cur_held, cur_rig,
+                                          cur_params, comps, scores) if flex else None
+            if flex_out is None:
+                scores["flexibility"] = {"score": math.nan, "chi2": math.nan, "columns": 0,
+                                         "applicable": False}
         order = sorted(remaining, key=lambda n: (not scores[n]["applicable"],
                                                  -np.nan_to_num(scores[n]["score"])))
         cands = {n: CandidateResult(n, scores[n]["applicable"], scores[n]["score"],
                                     scores[n]["chi2"], len(effects) + 1,
                                     error_before=cur_err) for n in order}
-        chosen = [n for n in order if scores[n]["applicable"]
+        chosen = [n for n in order if scores[n]["applicable"] and n != "flexibility"
                   and compatible(cur_rig, comps[n])][:settings.top]
         sse_fit, sse_held = _sse(fit_pts, cur_fit), (_sse(held_pts, cur_held) if held_pts
                                                       else math.nan)
@@ -215,9 +225,16 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
             notes.append(note)
             all_cands += [cands[n] for n in order]
             break
+        masks, mask_note = disturbance_masks(
+            held_pts, Path(str(getattr(data, "path", "") or ".")) / "validation"
+            if evaluation == "validation set" else None)
+        if mask_note and mask_note not in notes:
+            say(mask_note)
+            notes.append(mask_note)
         judge = dict(comps=comps, fit_pts=fit_pts, held_pts=held_pts, sse_fit=sse_fit,
                      sse_held=sse_held, n_eff_fit=n_eff_fit, n_eff_held=n_eff_held,
-                     cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say)
+                     cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say,
+                     cur_ev_pred=cur_held or cur_fit, masks=masks)
 
         def fit_and_judge(names: list[str]) -> None:
             args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts, cur_rig,
@@ -226,10 +243,19 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 _judge(cands[out[0]], out, **judge)
 
         fit_and_judge(chosen)
+        if flex_out is not None:  # judged by the same rule, fitted by variable projection
+            _judge(cands["flexibility"], flex_out, **judge)
+            cf = cands["flexibility"]
+            if cf.parameters:  # the stiffness k = m (2π f)² and its interval, for the report
+                w2 = (2 * math.pi * cf.parameters["flex_frequency_hz"]) ** 2
+                cf.parameters["flex_stiffness_N_per_m"] = cf.parameters["flex_load_mass_kg"] * w2
+                iv = cf.intervals.get("flex_load_mass_kg")
+                cf.intervals["flex_stiffness_N_per_m"] = (iv[0] * w2, iv[1] * w2) if iv else None
         earning = [c for c in cands.values() if c.earns]
         first = None
         if should_widen(earning, force_can_earn):
             more = [n for n in order if n not in chosen and scores[n]["applicable"]
+                    and n != "flexibility"
                     and compatible(cur_rig, comps[n])]
             if more:
                 best = max(earning, key=lambda c: c.excess_reduction)
@@ -335,17 +361,74 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     validation = None
     if evaluation == "validation set" and not rig.has_generator:
         from .openloop import validation_summary
+        from .openloop import BEST_PUBLISHED_MM, direction_dependent
+        fitted = {c.effect: c.fit.parameters for c in all_cands
+                  if c.fitted and c.fit is not None and c.fit.parameters and c.round == 1}
         validation = validation_summary(held_pts[0].test, base.parameters, cur_params, err0,
-                                        cur_err)
-        msg += (f"; open-loop position error on the validation record "
-                f"{validation['open_loop_final']['percent_of_norm_q']:.2f} % of |q| "
-                f"(reference parameters "
-                f"{validation['open_loop_reference_parameters']['percent_of_norm_q']:.2f} %)")
+                                        cur_err, fitted)
+        asym = [c for c in all_cands if c.effect == "asymmetric_friction" and c.fitted
+                and c.fit is not None and c.fit.parameters]
+        if asym:
+            validation["direction_dependent"] = direction_dependent(asym[-1].fit)
+        msg += (f"; open-loop position error on the validation record (the benchmark's "
+                f"metric) {validation['open_loop_final']['rms_mm']:.2f} mm "
+                f"(reference IDIM-LS parameters "
+                f"{validation['open_loop_reference_parameters']['rms_mm']:.2f} mm, best "
+                f"published {BEST_PUBLISHED_MM} mm)")
     return DiscrepancyResult(
         ok, msg, effect, err0, cur_err, evaluation, all_cands, base, rig, fit_pts, held_pts,
         base_fit_pred + base_held_pred, loc0, loc1, {"fit": n_eff_fit, "heldout": n_eff_held},
         time.perf_counter() - t_start, str(getattr(data, "path", "")), effects, steps, term,
         floor, validation, notes)
+
+
+def _flexibility_round(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_params, comps,
+                       scores) -> tuple | None:
+    """The flexibility of a rig without generator fitted by variable projection
+    (:mod:`.flexibility`), as the ``(name, FitOutcome, fit outputs, held-out outputs,
+    rig)`` a generic re-identification returns; its score (share of the fit residual
+    explained) set in ``scores``.  None when it cannot join the rig."""
+    from .fit import FitOutcome
+    from .flexibility import fit_flexibility
+    comp = comps["flexibility"]
+    if not compatible(cur_rig, comp):
+        return None
+    t0 = time.perf_counter()
+    out = fit_flexibility(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_params,
+                          start_hz=comp.frequency_hz)
+    r0 = sum(float(np.sum(((pt.y[0] - yp[0]) / pt.sigma[0]) ** 2))
+             for pt, yp in zip(fit_pts, cur_fit))
+    crig = cur_rig.with_components([*cur_rig.components, comp])
+    n_obs = sum(pt.y.shape[1] for pt in fit_pts)
+    if not out["parameters"]:
+        neg = out.get("best_negative") or {}
+        scores["flexibility"] = {"score": 0.0, "chi2": 0.0, "columns": 1, "applicable": True}
+        res = FitOutcome(False, "variable projection: every resonance asks for a negative load "
+                         f"mass (best {neg.get('flex_load_mass_kg', math.nan):.3g} kg at "
+                         f"{neg.get('flex_frequency_hz', math.nan):.3g} Hz): no flexibility",
+                         {}, [], math.inf, math.inf, n_obs, [], time.perf_counter() - t0)
+        return ("flexibility", res, [], [], crig)
+    r1 = sum(float(np.sum(((pt.y[0] - yp[0]) / pt.sigma[0]) ** 2))
+             for pt, yp in zip(fit_pts, out["fit_pred"]))
+    scores["flexibility"] = {"score": max(0.0, 1.0 - r1 / r0) if r0 > 0 else 0.0,
+                             "chi2": max(r0 - r1, 0.0), "columns": 1, "applicable": True}
+    fp = out["parameters"]
+    lo, hi = out["intervals"]["flex_load_mass_kg"]
+    sd = (hi - lo) / (2 * 1.96)
+    params = {**cur_params, **{k: fp[k] for k in ("flex_load_mass_kg", "flex_frequency_hz",
+                                                  "flex_damping_ratio")}}
+    note = (f"variable projection: resonance {fp['flex_frequency_hz']:.3g} Hz, damping ratio "
+            f"{fp['flex_damping_ratio']:.2g}, stiffness {fp['flex_stiffness_N_per_m']:.3g} N/m"
+            + ("; the unconstrained best asks for a negative load mass "
+               f"({out['best_negative']['flex_load_mass_kg']:.3g} kg at "
+               f"{out['best_negative']['flex_frequency_hz']:.3g} Hz)"
+               if out.get("negative_mass") else ""))
+    res = FitOutcome(True, note, params, ["flex_load_mass_kg"], r1 / n_obs, r1, n_obs,
+                     [{"flexibility": {k: v for k, v in out.items()
+                                       if k not in ("fit_pred", "eval_pred")}}],
+                     time.perf_counter() - t0, np.array([[sd * sd]]),
+                     out.get("covariance_info"))
+    return ("flexibility", res, out["fit_pred"], out["eval_pred"], crig)
 
 
 #: A catalogue effect that earns is still not named when the data-driven term leaves
@@ -358,7 +441,14 @@ TERM_PREFERENCE = 0.5
 
 
 def _term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> TermProposal:
-    """The data-driven term of the current residual, judged by the decision rule."""
+    """The data-driven term of the current residual, judged by the decision rule —
+    none when the residual of the fit tests is white (Ljung–Box, :mod:`.evidence`):
+    a term fitted to a white residual is fitted to noise."""
+    white, p = residual_is_white(fit_pts, fit_pred)
+    if white:
+        return TermProposal(True, f"the residual is white (Ljung-Box p = {p:.2g} > "
+                                  f"{WHITE_P:g} on every fit test): no term proposed",
+                            description="none (white residual)")
     term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead, seed=seed)
     if term.columns:
         d_b = _dbic(term.sse_after, term.sse_before, len(term.columns), n_eff)
