@@ -285,7 +285,26 @@ class RodLawFit:
                 "n_tests": self.n_tests,
                 "n_samples": self.n_samples, "n_effective": self.n_effective,
                 "bandwidths": self.bandwidths, "residual_rms_N": self.residual_rms_N,
-                "varied": self.varied}
+                "varied": self.varied, "parameters": dict(self.parameters),
+                "lead_m_per_rad": self.lead_m_per_rad,
+                "velocity_range_m_per_s": list(self.velocity_range_m_per_s),
+                "covariance": np.asarray(self.covariance).tolist(),
+                "covariance_iid": np.asarray(self.covariance_iid).tolist(),
+                "covariance_cluster": (None if self.covariance_cluster is None else
+                                       np.asarray(self.covariance_cluster).tolist())}
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> "RodLawFit":
+        """Inverse of :meth:`summary` (identification.json ``extrapolation_band.law``)."""
+        cl = d.get("covariance_cluster")
+        return cls({k: float(v) for k, v in d["parameters"].items()}, list(d["varied"]),
+                   np.asarray(d["covariance"], dtype=float),
+                   np.asarray(d["covariance_iid"], dtype=float), float(d["lead_m_per_rad"]),
+                   int(d["n_samples"]), float(d["n_effective"]), list(d.get("bandwidths", [])),
+                   float(d.get("residual_rms_N", math.nan)),
+                   tuple(d.get("velocity_range_m_per_s", (math.nan, math.nan))),
+                   None if cl is None else np.asarray(cl, dtype=float),
+                   int(d.get("n_tests", 1)))
 
 
 def _varied(params: Mapping[str, float], has_generator: bool) -> list[str]:
