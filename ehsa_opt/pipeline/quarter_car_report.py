@@ -26,6 +26,7 @@ from ..vehicle.studies import (
     stepped_sine_response,
 )
 from .base import Context, StepOutput
+from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
 
 __all__ = ["step_quarter_car_paths", "step_fig13", "step_fig14", "step_fig15_16", "step_fig21",
            "friction_inputs"]
@@ -204,20 +205,24 @@ def _road_step(ctx: Context, preset: str, fig: str, load: float) -> tuple[str, l
     preset = preset.replace(" ", "_").replace(".", "_")
     road = RoadParams(iso_class="C", speed_km_per_h=100.0,
                       length_m=300.0 if ctx.quick else 1000.0, seed=0)
+    v_id, v_src = identified_range(ctx)
     study = road_study(vehicle, ctx.harvester(load_ohm=load), fc, road,
-                       n_loads=12 if ctx.quick else 24, title=f"{fig}: {preset}")
+                       n_loads=12 if ctx.quick else 24, title=f"{fig}: {preset}",
+                       identified_range_m_per_s=v_id)
     rel = f"figures/{fig.lower().replace(' ', '')}_{preset}.png"
     plots.save(study.plot(), ctx.out_dir / rel)
     m = study.sim.metrics
     drops = study.power_drop_percent()
     rows = ["| friction | R_e (Ω) | slope (N s/m) | power (W) | change | efficiency | "
-            "comfort α | road holding |", "|---|---|---|---|---|---|---|---|"]
+            f"comfort α | road holding | {RANGE_HEADER} |",
+            "|---|---|---|---|---|---|---|---|---|"]
+    t_out, e_out = _range_fractions(m, study.cases, fc)
     for i, c in enumerate(study.cases):
         note = "" if study.reachable[i] else " (target not reachable)"
         rows.append(f"| {c} | {study.loads_ohm[i]:.3g}{note} | {study.slopes_Ns_per_m[i]:.0f} | "
                     f"{m['power_W'][i]:.1f} | {drops[c]:+.1f} % | "
                     f"{100 * m['efficiency'][i]:.1f} % | {m['comfort'][i]:.3f} | "
-                    f"{m['road_holding'][i]:.3f} |")
+                    f"{m['road_holding'][i]:.3f} | {range_cell(t_out[i], e_out[i])} |")
     rh = float(np.max(m["road_holding"]))
     warn = (f"\n\n**Warning:** road holding reaches {rh:.2f} > 1 — the tyre would leave the "
             "ground; the linear tyre model is invalid there (SPEC §4: the prototype's inertance "
@@ -232,10 +237,21 @@ def _road_step(ctx: Context, preset: str, fig: str, load: float) -> tuple[str, l
           "of the damping taken by friction sets the loss, and our friction is much smaller "
           "than the paper's (see Fig 14). As in the paper, comfort hardly changes at equal "
           "slopes (paper: average acceleration 3 m/s² in all three cases; ours "
-          + ", ".join(f"{v:.2f}" for v in m["comfort_weighted_rms_m_s2"]) + " m/s²)." + warn + f"\n\n![{fig}]({rel})\n")
+          + ", ".join(f"{v:.2f}" for v in m["comfort_weighted_rms_m_s2"]) + " m/s²)." + warn
+          + range_flag(t_out, e_out, v_id, v_src) + f"\n\n![{fig}]({rel})\n")
     res = {"loads_ohm": study.loads_ohm, "power_W": m["power_W"].tolist(),
+           "out_of_range_time_fraction": list(t_out),
+           "out_of_range_friction_energy_fraction": list(e_out),
            "power_change_percent": drops, "slopes": study.slopes_Ns_per_m.tolist()}
     return md, [rel], res
+
+
+def _range_fractions(m: dict, cases: list, fc: Any) -> tuple[list, list]:
+    """Per case the fractions above the identified range (energy None without friction)."""
+    t = [float(x) for x in m["out_of_range_time_fraction"]]
+    e = [None if fc.cases.get(c) is None else float(x)
+         for c, x in zip(cases, m["out_of_range_friction_energy_fraction"])]
+    return t, e
 
 
 def step_fig15_16(ctx: Context) -> StepOutput:
@@ -264,18 +280,22 @@ def step_fig21(ctx: Context) -> StepOutput:
                "R_e = 75 Ω) — the design step's optimum is not available")
     road = RoadParams(iso_class="C", speed_km_per_h=100.0,
                       length_m=300.0 if ctx.quick else 1000.0, seed=0)
-    study = road_study(ctx.vehicle()[0], h, fc, road, retune=False, title="Fig 21")
+    v_id, v_src = identified_range(ctx)
+    study = road_study(ctx.vehicle()[0], h, fc, road, retune=False, title="Fig 21",
+                       identified_range_m_per_s=v_id)
     rel = "figures/fig21_power_history.png"
     plots.save(study.plot_power(), ctx.out_dir / rel)
     m = study.sim.metrics
     paper = {"none": (174.9, 81.0, None), "min": (148.61, 67.58, 710.0),
              "max": (110.1, 49.64, 580.0)}
     rows = ["| friction | power (W) ours / paper | efficiency ours / paper | peak power (W) "
-            "ours / paper |", "|---|---|---|---|"]
+            f"ours / paper | {RANGE_HEADER} |", "|---|---|---|---|---|"]
+    t_out, e_out = _range_fractions(m, study.cases, fc)
     for i, c in enumerate(study.cases):
         pp, pe, pk = paper[c]
         rows.append(f"| {c} | {m['power_W'][i]:.1f} / {pp} | {100 * m['efficiency'][i]:.1f} % / "
-                    f"{pe} % | {m['peak_power_W'][i]:.0f} / {pk if pk else '–'} |")
+                    f"{pe} % | {m['peak_power_W'][i]:.0f} / {pk if pk else '–'} | "
+                    f"{range_cell(t_out[i], e_out[i])} |")
     md = (f"Design: {src}. Passenger car, class C at 100 km/h, {road.length_m:g} m. "
           f"Friction: {fc.source}.\n\n" + "\n".join(rows) +
           "\n\nThe paper's vehicle parameters and friction values are not in its text, so "
@@ -286,7 +306,7 @@ def step_fig21(ctx: Context) -> StepOutput:
              if (m["power_W"][0] > m["power_W"][1] > m["power_W"][2]
                  and m["efficiency"][0] > m["efficiency"][1] > m["efficiency"][2])
              else "The paper's ordering none > min > max friction is NOT reproduced here.")
-          + "\n\n"
+          + range_flag(t_out, e_out, v_id, v_src) + "\n\n"
           f"![Fig 21]({rel})\n")
     return StepOutput(md, [rel], {"power_W": m["power_W"].tolist(),
                                   "efficiency": m["efficiency"].tolist(),
