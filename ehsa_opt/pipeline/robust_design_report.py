@@ -170,7 +170,7 @@ def step_robust_design(ctx: Context) -> StepOutput:
     from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
     v_id, v_src = identified_range(ctx)
     cov_t, cov_e = [], []
-    price_lines[0] += f" {RANGE_HEADER}: frictionless opt. / friction-aware opt. (fast path) |"
+    price_lines[0] += f" {RANGE_HEADER}: frictionless opt.; friction-aware opt. (fast path) |"
     price_lines[1] += "---|"
     for j, name in enumerate(("min", "max")):
         cells = []
@@ -182,7 +182,7 @@ def step_robust_design(ctx: Context) -> StepOutput:
             cov_t.append(t)
             cov_e.append(e)
             cells.append(range_cell(t, e))
-        price_lines[2 + j] += " " + " / ".join(cells) + " |"
+        price_lines[2 + j] += " " + "; ".join(cells) + " |"
     price_flag = range_flag(cov_t, cov_e, v_id, v_src)
 
     # fast-path error table
