@@ -16,11 +16,14 @@ residuals: time-series residuals are strongly autocorrelated (a model error repe
 cycle, the noise is filtered), and i.i.d. samples would make the band several times too
 narrow (``tests/test_rod_law.py`` checks the coverage of both on an AR(1) regression).
 Tests are independent of each other.  B⁺ is the pseudo-inverse with the identifiability
-threshold: the nut/bearing split is not determined (SPEC §2), and any friction *at the
+threshold: the nut/bearing split is not determined by a rigid bench, and any friction *at the
 rod* has (almost) no component along it.
 
-The fitted law's 95 % band at a velocity v is F_rod(v; θ̂) ± 1.96 √(g(v)ᵀ Σ g(v)), g the
-gradient of F_rod(v) in θ: inside the data it is as narrow as the data make it, beyond the
+Beside it the cluster-robust sandwich (every test one cluster: valid for any correlation
+within a test, including a model error repeated in every cycle, which no bandwidth shorter
+than the test captures).  The fitted law's 95 % band at a velocity v is
+F_rod(v; θ̂) ± h(v), h the larger of 1.96 √(g(v)ᵀ Σ_NW g(v)) and t_{G−1} √(g(v)ᵀ Σ_cl g(v))
+(G tests, at least four for the cluster-robust one), g the gradient of F_rod(v) in θ: inside the data it is as narrow as the data make it, beyond the
 data it widens as the Fisher uncertainty of the law's high-velocity part (the viscous
 coefficient and the Coulomb level) does.
 """
