@@ -80,8 +80,9 @@ def friction_cases(identification: Mapping[str, Any] | None = None,
             if isinstance(values, Mapping):
                 return FrictionParams(**{k: float(values[k]) for k in FRICTION_NAMES})
             return FrictionParams.from_array(values)  # sequence in FRICTION_NAMES order
-        label = ("identified, data-supported: rod friction at/below and at/above the envelope "
-                 "of the per-test fits (ehsa_opt.estimation.bounds)"
+        label = ("identified, data-supported: ordered sets min <= best <= max at every "
+                 "velocity, enclosing the tests' envelope and beyond the bench the best law's "
+                 "95 % band (ehsa_opt.estimation.bounds)"
                  if method == "data" and "friction_method" in identification else
                  "identified, paper's method: per-parameter min/max over the bench tests")
         return FrictionCases({"none": None, "min": build(identification[lo]),
