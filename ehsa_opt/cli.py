@@ -171,12 +171,11 @@ def _design_figures(outcome: dict, out_dir: Path) -> list[Path]:
 
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
-    from .datasets.friction_source import identified_range_kw
     from .design.config import check_method, load_design_config
     from .design.optimize import check_out_dir, optimize
     from .design.sweep import executor
     from .utils.progress import progress_bar
-
+    from .vehicle.coverage import out_of_range_lines
     cfg = load_design_config(args.problem)
     method = check_method(args.method or cfg.method)
     frictions = None
@@ -198,8 +197,7 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                            stop_after=args.stop_after,
                            mapper=mapper if args.scheduler else None, progress=tick,
                            frictions=frictions, friction_mode=args.friction_mode,
-                           friction_labels=tuple(args.friction or ()),
-                           **identified_range_kw(args.friction, args.problem))
+                           friction_labels=tuple(args.friction or ()))
     _design_figures(outcome, out / "figures")
     d, o = outcome["design"], outcome["objectives"]
     m = outcome["metrics"]
@@ -216,10 +214,8 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
               f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
               f"{outcome.get('front_vs_goal_attainment')}")
-    if outcome.get("out_of_range"):
-        from .vehicle.coverage import out_of_range_lines
-        for line, to_err in out_of_range_lines(outcome["out_of_range"]):
-            print(line, file=sys.stderr if to_err else sys.stdout)
+    for line, to_err in out_of_range_lines(outcome.get("out_of_range")):
+        print(line, file=sys.stderr if to_err else sys.stdout)
     if "time_domain_check" in outcome:
         chk = outcome["time_domain_check"]
         print(f"time-domain check with friction ({chk['n_designs']} designs, "
@@ -235,7 +231,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     import time
 
     from . import plots
-    from .design.sweep import parse_sweep, rows_to_csv, run_sweep
+    from .design.sweep import out_of_range_warning, parse_sweep, rows_to_csv, run_sweep
     from .physics.params import load_toml
     from .plots.design import sweep_lines
     from .utils.io import atomic_write_text
@@ -265,7 +261,6 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                                                 "friction") if k in worst)
               + "): the tyre would leave the ground and the linear tyre model is invalid "
                 "there", file=sys.stderr)
-    from .design.sweep import out_of_range_warning
     if out_of_range_warning(rows, spec):
         print(f"warning: {out_of_range_warning(rows, spec)}", file=sys.stderr)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
@@ -286,7 +281,7 @@ def _friction_file(spec: str | None) -> str | None:
 # ------------------------------------------------------------------ identify
 def _cmd_identify(args: argparse.Namespace) -> int:
     from .datasets.bench_format import load_bench
-    from .estimation.bounds import identification_json
+    from .estimation.bounds import envelope_lines, identification_json
     from .estimation.identify import identify
     from .utils.io import atomic_write_json
     from .utils.progress import progress_bar
@@ -314,10 +309,14 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         p = rep.fits[0].parameters
         print(f"  M = {p['inertia_kg']:.2f} kg, F_v = {p['nut_viscous_Ns_per_m']:.1f} N s/m, "
               f"F_C = {p['nut_coulomb_N']:.2f} N, offset = {p['offset_N']:.2f} N")
-    from .estimation.bounds import envelope_lines
     for line in envelope_lines(doc, out / "identification.json"):
         print(line)
     return 0 if ok else 1
+def _cmd_plan_tests(args: argparse.Namespace) -> int:
+    from .design.test_plan import plan_from_files
+    plan, harv = plan_from_files(args.identification, args.vehicle, args.rig, n_tests=args.n)
+    print("\n".join(plan.lines() + plan.write(args.out, harv)))
+    return 0 if plan.success else 1
 # ------------------------------------------------------------------ discrepancy
 def _cmd_discrepancy(args: argparse.Namespace) -> int:
     from .estimation.discrepancy import DiscrepancySettings
@@ -354,30 +353,25 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     import warnings
 
     from .datasets.problem_file import load_problem
-    from .vehicle.simulate import RoadHoldingWarning, simulate_quarter_car
+    from .vehicle.coverage import coverage_rows, identified_range_for
+    from .vehicle.simulate import simulate_quarter_car
     prob = load_problem(args.problem)
     if args.friction:
         import dataclasses
 
         from .datasets.friction_source import load_friction
         prob = dataclasses.replace(prob, friction=load_friction(args.friction))
-    from .datasets.friction_source import identified_range_for
-    v_range, range_src = identified_range_for(args.friction or (), args.problem)
+    v_range = identified_range_for(args.friction or (), args.problem)[0]
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", RoadHoldingWarning)
+        warnings.simplefilter("always")
         sim = _in_file(args.problem, simulate_quarter_car, prob.vehicle, prob.harvester,
                        prob.friction, prob.road,
                        settle_s=prob.simulation.settle_s,
                        sample_rate_hz=prob.simulation.sample_rate_hz,
-                       base_dir=prob.base_dir, keep_series=False,
-                       identified_range_m_per_s=v_range)
+                       base_dir=prob.base_dir, keep_series=False, identified_range_m_per_s=v_range)
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
     m = dict(sim.metrics_of(0))
-    from .vehicle.coverage import coverage_rows, metrics_warning
-    m["identified_range_m_per_s"] = v_range
-    if metrics_warning(m, v_range):
-        print(f"warning: {metrics_warning(m, v_range)} [{range_src}]", file=sys.stderr)
     if not sim.success:
         raise ValueError(f"{args.problem}: simulation failed: {sim.message}")
     # load power R_e i² is instantaneous, so its peak gives the peak current and the peak
@@ -523,6 +517,12 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--lenient", action="store_true",
                    help="use data whose signals contradict bench.toml (warnings, not errors)")
     i.set_defaults(func=_cmd_identify)
+    pt = sub.add_parser("plan-tests", help="propose bench tests where the road puts the strokes")
+    for a, kw in (("identification", {"metavar": "ID.json"}), ("--vehicle", {"required": True}),
+                  ("--rig", {"required": True}), ("--n", {"type": _POSITIVE, "default": 3}),
+                  ("--out", {"default": "plan"})):
+        pt.add_argument(a, **kw)
+    pt.set_defaults(func=_cmd_plan_tests)
     d = sub.add_parser("discrepancy", help="find, name and add the missing effect in a model "
                                            "(localise residuals, rank candidates, re-identify)")
     d.add_argument("data_dir", metavar="DATA_DIR")

@@ -74,3 +74,21 @@ def test_simulate_reports_and_warns(tmp_path, capsys) -> None:
     assert main(["simulate", str(p)]) == 0
     cap = capsys.readouterr()
     assert "friction energy at |v| > identified" in cap.out and "10 % limit" not in cap.err
+
+
+def test_sweep_columns_and_warning(tmp_path, capsys) -> None:
+    p = tmp_path / "sw.toml"
+    p.write_text('preset = "passenger_car"\n[harvester]\nload_ohm = 47.0\n[road]\n'
+                 'iso_class = "C"\nlength_m = 60.0\nseed = 3\n[sweep]\n'
+                 'speed_km_per_h = [20.0, 100.0]\nfriction = ["none", "max"]\n')
+    assert main(["sweep", str(p), "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    rows = (tmp_path / "o" / "sweep.csv").read_text().splitlines()
+    head = rows[0].split(",")
+    i_t = head.index("out_of_range_time_fraction")
+    i_e = head.index("out_of_range_friction_energy_fraction")
+    vals = [r.split(",") for r in rows[1:]]
+    fast = [v for v in vals if v[head.index("speed_km_per_h")] == "100.0"]
+    assert all(float(v[i_t]) > 0.1 for v in fast)
+    assert [v[i_e] for v in vals if v[head.index("friction")] == "none"] == ["", ""]
+    assert "above the friction's identified range" in err and "speed_km_per_h = 100.0" in err

@@ -36,6 +36,7 @@ class FrictionSpeedTask:
     road: RoadParams
     settle_s: float = 2.0
     sample_rate_hz: float = 1000.0
+    identified_range_m_per_s: float | None = None
 
     def __call__(self) -> list[dict[str, Any]]:
         from ..vehicle.metrics import linear_metrics
@@ -44,7 +45,8 @@ class FrictionSpeedTask:
         fr = [f if f is not None else FrictionParams() for _, f in self.frictions]
         sim = simulate_quarter_car(self.vehicle, [self.harvester] * len(fr), fr, self.road,
                                    settle_s=self.settle_s, sample_rate_hz=self.sample_rate_hz,
-                                   keep_series=False, warn=False)
+                                   keep_series=False, warn=False,
+                                   identified_range_m_per_s=self.identified_range_m_per_s)
         if not sim.success:
             raise RuntimeError(f"friction on the optimum at {self.road.speed_km_per_h} km/h: "
                                f"{sim.message}")
@@ -71,6 +73,9 @@ class FrictionSpeedTask:
                                                   "peak_current_A", "voltage_rms_V",
                                                   "current_rms_A")},
                    "validity": [f.message for f in validity.flags[b]]}
+            for k in ("out_of_range_time_fraction", "out_of_range_friction_energy_fraction"):
+                if k in m:
+                    row[k] = float(m[k][b])
             if ref is not None:
                 row["comfort_change_pct"] = 100.0 * (1.0 - m["comfort"][b] / m["comfort"][ref])
                 row["road_holding_change_pct"] = 100.0 * (1.0 - m["road_holding"][b]
@@ -88,7 +93,9 @@ def _call(task: Any) -> Any:
 def friction_on_optimum(cfg: Any, design: Mapping[str, float],
                         friction_sets: Mapping[str, FrictionParams],
                         speeds_km_per_h: Sequence[float], *, road_length_m: float | None = None,
-                        jobs: int = 1, scheduler: Any = None) -> list[dict[str, Any]]:
+                        jobs: int = 1, scheduler: Any = None,
+                        identified_range_m_per_s: float | None = None
+                        ) -> list[dict[str, Any]]:
     """Rows (speed × {none, min, max, …}) of the optimum with friction.
 
     Parameters
@@ -103,6 +110,9 @@ def friction_on_optimum(cfg: Any, design: Mapping[str, float],
     speeds_km_per_h : sequence of float
     road_length_m : float, optional
         Default the problem file's ``[road] length_m``.
+    identified_range_m_per_s : float, optional
+        The friction's identified range: rows then hold ``out_of_range_time_fraction`` and
+        ``out_of_range_friction_energy_fraction`` (:mod:`ehsa_opt.vehicle.coverage`).
     """
     from .sweep import executor
 
@@ -119,7 +129,7 @@ def friction_on_optimum(cfg: Any, design: Mapping[str, float],
                                RoadParams(iso_class=cfg.road.iso_class, speed_km_per_h=float(v),
                                           length_m=length, seed=cfg.road.seed),
                                sim.settle_s if sim else 2.0,
-                               sim.sample_rate_hz if sim else 1000.0)
+                               sim.sample_rate_hz if sim else 1000.0, identified_range_m_per_s)
              for v in speeds_km_per_h]
     with executor(jobs, scheduler) as mapper:
         parts = mapper(_call, tasks)

@@ -124,7 +124,8 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
     so the front can be drawn against it and checked for dominance.  ``frictions`` /
     ``friction_mode``: see :func:`build_problem`; with friction the result is checked in
     the time domain (``check_time_domain``).  ``identified_range_m_per_s``: the friction's
-    identified range (default the embedded campaign's); ``result.json`` states the
+    identified range (default: that of the ``friction_labels`` files, of the problem file's
+    ``[friction] from``, else the embedded campaign's); ``result.json`` states the
     fractions of time and friction energy the chosen design spends above it
     (``out_of_range``, fast path).
     """
@@ -198,7 +199,8 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
         atomic_write_text(out / "pareto.csv", pr.to_csv_text())
         outcome.result = pr
     outcome["out_of_range"] = _out_of_range(cfg, ev, outcome["design"],
-                                            identified_range_m_per_s, identified_range_source)
+                                            identified_range_m_per_s, identified_range_source,
+                                            friction_labels)
     if check_time_domain and hasattr(ev, "frictions"):
         if method == "nsga2":
             designs = {k: np.asarray(v, float) for k, v in outcome.result.designs.items()}
@@ -220,13 +222,14 @@ def check_out_dir(out_dir: str | Path) -> Path:
 
 
 def _out_of_range(cfg: DesignConfig, ev: Any, design: Mapping[str, float],
-                  v_range: float | None, source: str) -> dict[str, Any]:
+                  v_range: float | None, source: str, labels: Sequence[str] = ()
+                  ) -> dict[str, Any]:
     """Fractions of time and friction energy the design spends above the identified
     range, per friction set (fast path: Gaussian stroke velocity)."""
-    from ..datasets.friction_source import RANGE_SOURCE_EMBEDDED, embedded_range_m_per_s
+    from ..datasets.friction_source import identified_range_for
     from ..vehicle.coverage import OUT_OF_RANGE_LIMIT, coverage_warning, design_coverage
     if v_range is None:
-        v_range, source = embedded_range_m_per_s(), RANGE_SOURCE_EMBEDDED
+        v_range, source = identified_range_for(labels, cfg.path)
     frs = list(getattr(ev, "frictions", ()) or ())
     dm = ev.design_mapping({k: np.array([float(v)]) for k, v in design.items()})
     cov = design_coverage(cfg.vehicle, cfg.road, dm, frs, v_range, base=cfg.harvester)

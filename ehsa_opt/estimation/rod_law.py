@@ -16,11 +16,14 @@ residuals: time-series residuals are strongly autocorrelated (a model error repe
 cycle, the noise is filtered), and i.i.d. samples would make the band several times too
 narrow (``tests/test_rod_law.py`` checks the coverage of both on an AR(1) regression).
 Tests are independent of each other.  B⁺ is the pseudo-inverse with the identifiability
-threshold: the nut/bearing split is not determined (SPEC §2), and any friction *at the
+threshold: the nut/bearing split is not determined by a rigid bench, and any friction *at the
 rod* has (almost) no component along it.
 
-The fitted law's 95 % band at a velocity v is F_rod(v; θ̂) ± 1.96 √(g(v)ᵀ Σ g(v)), g the
-gradient of F_rod(v) in θ: inside the data it is as narrow as the data make it, beyond the
+Beside it the cluster-robust sandwich (every test one cluster: valid for any correlation
+within a test, including a model error repeated in every cycle, which no bandwidth shorter
+than the test captures).  The fitted law's 95 % band at a velocity v is
+F_rod(v; θ̂) ± h(v), h the larger of 1.96 √(g(v)ᵀ Σ_NW g(v)) and t_{G−1} √(g(v)ᵀ Σ_cl g(v))
+(G tests, at least four for the cluster-robust one), g the gradient of F_rod(v) in θ: inside the data it is as narrow as the data make it, beyond the
 data it widens as the Fisher uncertainty of the law's high-velocity part (the viscous
 coefficient and the Coulomb level) does.
 """
@@ -285,7 +288,26 @@ class RodLawFit:
                 "n_tests": self.n_tests,
                 "n_samples": self.n_samples, "n_effective": self.n_effective,
                 "bandwidths": self.bandwidths, "residual_rms_N": self.residual_rms_N,
-                "varied": self.varied}
+                "varied": self.varied, "parameters": dict(self.parameters),
+                "lead_m_per_rad": self.lead_m_per_rad,
+                "velocity_range_m_per_s": list(self.velocity_range_m_per_s),
+                "covariance": np.asarray(self.covariance).tolist(),
+                "covariance_iid": np.asarray(self.covariance_iid).tolist(),
+                "covariance_cluster": (None if self.covariance_cluster is None else
+                                       np.asarray(self.covariance_cluster).tolist())}
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> "RodLawFit":
+        """Inverse of :meth:`summary` (identification.json ``extrapolation_band.law``)."""
+        cl = d.get("covariance_cluster")
+        return cls({k: float(v) for k, v in d["parameters"].items()}, list(d["varied"]),
+                   np.asarray(d["covariance"], dtype=float),
+                   np.asarray(d["covariance_iid"], dtype=float), float(d["lead_m_per_rad"]),
+                   int(d["n_samples"]), float(d["n_effective"]), list(d.get("bandwidths", [])),
+                   float(d.get("residual_rms_N", math.nan)),
+                   tuple(d.get("velocity_range_m_per_s", (math.nan, math.nan))),
+                   None if cl is None else np.asarray(cl, dtype=float),
+                   int(d.get("n_tests", 1)))
 
 
 def _varied(params: Mapping[str, float], has_generator: bool) -> list[str]:

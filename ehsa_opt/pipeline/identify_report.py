@@ -154,7 +154,8 @@ def step_identify_prototype(ctx):
     if fb is not None:
         # the §4 studies' friction cases: the data-supported sets (friction_min/max);
         # the paper's per-parameter sets under paper_friction_min/max
-        res.update({"friction_min": fb.sets["min"].as_dict(),
+        res.update({"identified_range_m_per_s": float(fb.data_range_m_per_s[1]),
+                    "friction_min": fb.sets["min"].as_dict(),
                     "friction_best": fb.sets["best"].as_dict(),
                     "friction_max": fb.sets["max"].as_dict(),
                     "friction_method": fb.method,
@@ -175,7 +176,9 @@ def _bounds_markdown(fb, truth: dict) -> list[str]:
     from ..estimation.bounds import PAPER_METHOD
     tp = _truth_params(truth)
     vmax = float(fb.velocity_m_per_s.max())
-    vs = [v for v in (0.02, 0.05, 0.1, 0.2, 0.3) if v <= vmax * (1 + 1e-9)]
+    v_hi = float(fb.data_range_m_per_s[1])
+    vs = [v for v in (0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0, 1.5, 2.0, 3.0)
+          if v <= vmax * (1 + 1e-9)]
     head = ("| velocity (m/s) | data: min set | data: lower envelope | data: best | "
             "data: upper envelope | data: max set | paper method: min | paper method: max |"
             + (" truth |" if tp else ""))
@@ -189,14 +192,42 @@ def _bounds_markdown(fb, truth: dict) -> list[str]:
            + fb.method.split("best = ")[-1] + ". The §4 studies below use these "
            "**data-supported** sets. Beside them the " + PAPER_METHOD + ". Rod friction (N):\n",
            head, "|" + "---|" * (head.count("|") - 1)]
+    def f1(x: float) -> str:
+        return "—" if not np.isfinite(x) else f"{x:.1f}"
     for v in vs:
         a = fb.at(v)
-        row = (f"| {v:g} | {a['min_N']:.1f} | {a['lower_N']:.1f} | {a['best_N']:.1f} | "
-               f"{a['upper_N']:.1f} | {a['max_N']:.1f} | {a.get('paper_min_N', float('nan')):.1f} | "
-               f"{a.get('paper_max_N', float('nan')):.1f} |")
+        lab = f"{v:g}" + (" (extrapolated)" if v > v_hi * (1 + 1e-9) else "")
+        row = (f"| {lab} | {f1(a['min_N'])} | {f1(a['lower_N'])} | {f1(a['best_N'])} | "
+               f"{f1(a['upper_N'])} | {f1(a['max_N'])} | {f1(a.get('paper_min_N', np.nan))} | "
+               f"{f1(a.get('paper_max_N', np.nan))} |")
         if tp:
             row += f" {float(rod_friction_N(v, tp, fb.lead_m_per_rad)):.1f} |"
         out.append(row)
+    law = fb.law or {}
+    hw1 = 0.5 * (fb.at(1.0)["max_N"] - fb.at(1.0)["min_N"]) if vmax >= 1.0 else float("nan")
+    out += ["", f"**Where the sets hold.** The bench campaign reaches {v_hi:.2f} m/s "
+            f"(`velocity_range` in the identification result: every test's peak and the "
+            f"campaign's); every vehicle table below states how much of its time and friction "
+            f"energy lies above it. Up to {v_hi:.2f} m/s the sets enclose the tests' envelope; "
+            f"above it they are **extrapolations** of the best law, with a band that widens as "
+            f"the uncertainty of the law's high-velocity part (viscous coefficient, Coulomb "
+            f"level) does: the best law's 95 % band from its sandwich covariance over "
+            f"{law.get('n_samples', 0)} friction samples of {law.get('n_tests', 0)} tests — "
+            f"effective sample size {law.get('n_effective', float('nan')):.0f} (Newey–West "
+            f"on the autocorrelated residuals), and the cluster-robust band (tests as "
+            f"clusters) where it is wider. **min ≤ best ≤ max at every velocity up to "
+            f"{vmax:g} m/s by construction** (the best set minus / plus non-negative amounts "
+            f"of its own Coulomb, Stribeck and viscous shapes). At 1 m/s the sets span "
+            f"±{hw1:.0f} N around the best law.\n",
+            "**What changed against the earlier sets, and why.** The earlier `min`/`max` sets "
+            "were fitted freely below / above the envelope *inside* the data only; nothing "
+            "held their shapes beyond it, and on this campaign they crossed at about 0.45 m/s "
+            "(at 1 m/s the `min` set gave 333 N and the `max` set 246 N, the truth 256 N: "
+            "`min` had a viscous coefficient of 268 N s/m, `max` 80). So every study that "
+            "reaches road velocities (Figs 15/16/20/21, Table 4, the robust design's worst "
+            "case) compared two sets in the wrong order there — 'min friction' gave *less* "
+            "power than 'max'. Now the order holds everywhere and the spread at road "
+            "velocities is the honest extrapolation band, not the accident of a free fit.\n"]
     out += ["", "Data-supported friction sets (SPEC §7 names; also `friction_sets` in "
             "`identify_prototype.json`, usable as `--friction identify_prototype.json:CASE`):\n",
             "| parameter | min | best | max | paper method: min | paper method: max |",

@@ -27,6 +27,7 @@ from ..vehicle.studies import (
     stepped_sine_response,
 )
 from .base import Context, StepOutput
+from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
 
 __all__ = ["step_quarter_car_paths", "step_fig13", "step_fig14", "step_fig15_16", "step_fig21",
            "friction_inputs", "road_study_conclusions", "COMFORT_SAME_PERCENT"]
@@ -258,33 +259,39 @@ def _road_step(ctx: Context, preset: str, fig: str, load: float) -> tuple[str, l
     preset = preset.replace(" ", "_").replace(".", "_")
     road = RoadParams(iso_class="C", speed_km_per_h=100.0,
                       length_m=300.0 if ctx.quick else 1000.0, seed=0)
+    v_id, v_src = identified_range(ctx)
     study = road_study(vehicle, ctx.harvester(load_ohm=load), fc, road,
-                       n_loads=12 if ctx.quick else 24, title=f"{fig}: {preset}")
+                       n_loads=12 if ctx.quick else 24, title=f"{fig}: {preset}",
+                       identified_range_m_per_s=v_id)
     rel = f"figures/{fig.lower().replace(' ', '')}_{preset}.png"
     plots.save(study.plot(), ctx.out_dir / rel)
     m = study.sim.metrics
     drops = study.power_drop_percent()
     validity = check_validity(m, stroke_limit_m=vehicle.stroke_limit_m)
     rows = ["| friction | R_e (Ω) | slope (N s/m) | power (W) | change | efficiency | "
-            "comfort α | road holding | peak stroke (mm) | validity |",
-            "|---|---|---|---|---|---|---|---|---|---|"]
+            f"comfort α | road holding | peak stroke (mm) | {RANGE_HEADER} | validity |",
+            "|---|---|---|---|---|---|---|---|---|---|---|"]
+    t_out, e_out = _range_fractions(m, study.cases, fc)
     for i, c in enumerate(study.cases):
         note = "" if study.reachable[i] else " (target not reachable)"
         rows.append(f"| {c} | {study.loads_ohm[i]:.3g}{note} | {study.slopes_Ns_per_m[i]:.0f} | "
                     f"{m['power_W'][i]:.1f} | {drops[c]:+.1f} % | "
                     f"{100 * m['efficiency'][i]:.1f} % | {m['comfort'][i]:.3f} | "
                     f"{m['road_holding'][i]:.3f} | {1e3 * m['peak_stroke_m'][i]:.0f} | "
-                    f"{validity.cell(i)} |")
+                    f"{range_cell(t_out[i], e_out[i])} | {validity.cell(i)} |")
     md = (f"{preset}, class C at 100 km/h, {road.length_m:g} m; the frictionless case uses "
           f"R_e = {load:g} Ω and each friction case is re-tuned (one batch of loads, "
           "interpolated) so that the three damping slopes (least squares of the non-inertial "
           f"damper force on stroke velocity) match. Friction: {fc.source}. Validity: road "
           f"holding ≤ 1 (tyre on the ground) and peak stroke ≤ {1e3 * vehicle.stroke_limit_m:g} "
           "mm (the vehicle's stroke limit).\n\n" + "\n".join(rows) + "\n\n"
-          + road_study_conclusions(study, validity) + f"\n\n![{fig}]({rel})\n")
+          + road_study_conclusions(study, validity)
+          + range_flag(t_out, e_out, v_id, v_src) + f"\n\n![{fig}]({rel})\n")
     res = {"loads_ohm": study.loads_ohm, "power_W": m["power_W"].tolist(),
            "power_change_percent": drops, "slopes": study.slopes_Ns_per_m.tolist(),
-           "validity": validity.as_list()}
+           "validity": validity.as_list(),
+           "out_of_range_time_fraction": list(t_out),
+           "out_of_range_friction_energy_fraction": list(e_out)}
     return md, [rel], res
 
 
@@ -328,6 +335,14 @@ def road_study_conclusions(study: Any, validity: Any) -> str:
     return " ".join(out)
 
 
+def _range_fractions(m: dict, cases: list, fc: Any) -> tuple[list, list]:
+    """Per case the fractions above the identified range (energy None without friction)."""
+    t = [float(x) for x in m["out_of_range_time_fraction"]]
+    e = [None if fc.cases.get(c) is None else float(x)
+         for c, x in zip(cases, m["out_of_range_friction_energy_fraction"])]
+    return t, e
+
+
 def step_fig15_16(ctx: Context) -> StepOutput:
     if (na := _not_applicable(ctx)) is not None:
         return na
@@ -354,7 +369,9 @@ def step_fig21(ctx: Context) -> StepOutput:
                "R_e = 75 Ω) — the design step's optimum is not available")
     road = RoadParams(iso_class="C", speed_km_per_h=100.0,
                       length_m=300.0 if ctx.quick else 1000.0, seed=0)
-    study = road_study(ctx.vehicle()[0], h, fc, road, retune=False, title="Fig 21")
+    v_id, v_src = identified_range(ctx)
+    study = road_study(ctx.vehicle()[0], h, fc, road, retune=False, title="Fig 21",
+                       identified_range_m_per_s=v_id)
     rel = "figures/fig21_power_history.png"
     plots.save(study.plot_power(), ctx.out_dir / rel)
     m = study.sim.metrics
@@ -362,12 +379,13 @@ def step_fig21(ctx: Context) -> StepOutput:
              "max": (110.1, 49.64, 580.0)}
     validity = check_validity(m, stroke_limit_m=ctx.vehicle()[0].stroke_limit_m)
     rows = ["| friction | power (W) ours / paper | efficiency ours / paper | peak power (W) "
-            "ours / paper | validity |", "|---|---|---|---|---|"]
+            f"ours / paper | {RANGE_HEADER} | validity |", "|---|---|---|---|---|---|"]
+    t_out, e_out = _range_fractions(m, study.cases, fc)
     for i, c in enumerate(study.cases):
         pp, pe, pk = paper[c]
         rows.append(f"| {c} | {m['power_W'][i]:.1f} / {pp} | {100 * m['efficiency'][i]:.1f} % / "
                     f"{pe} % | {m['peak_power_W'][i]:.0f} / {pk if pk else '–'} | "
-                    f"{validity.cell(i)} |")
+                    f"{range_cell(t_out[i], e_out[i])} | {validity.cell(i)} |")
     md = (f"Design: {src}. Passenger car, class C at 100 km/h, {road.length_m:g} m. "
           f"Friction: {fc.source}.\n\n" + "\n".join(rows) +
           "\n\nThe paper's vehicle parameters and friction values are not in its text, so "
@@ -380,7 +398,7 @@ def step_fig21(ctx: Context) -> StepOutput:
              if (m["power_W"][0] > m["power_W"][1] > m["power_W"][2]
                  and m["efficiency"][0] > m["efficiency"][1] > m["efficiency"][2])
              else "The paper's ordering none > min > max friction is NOT reproduced here.")
-          + "\n\n"
+          + range_flag(t_out, e_out, v_id, v_src) + "\n\n"
           f"![Fig 21]({rel})\n")
     return StepOutput(md, [rel], {"power_W": m["power_W"].tolist(),
                                   "efficiency": m["efficiency"].tolist(),

@@ -164,6 +164,27 @@ def step_robust_design(ctx: Context) -> StepOutput:
             f"{a[1]:.4f} ({100 * (a[1] / a[0] - 1):+.1f} %) | {rh[0]:.4f} / {rh[1]:.4f} "
             f"({100 * (rh[1] / rh[0] - 1):+.1f} %) |")
 
+    # how much of each optimum's friction is extrapolated (fast path, Gaussian stroke
+    # velocity), beside the price table
+    from ..vehicle.coverage import design_coverage
+    from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
+    v_id, v_src = identified_range(ctx)
+    cov_t, cov_e = [], []
+    price_lines[0] += f" {RANGE_HEADER}: frictionless opt.; friction-aware opt. (fast path) |"
+    price_lines[1] += "---|"
+    for j, name in enumerate(("min", "max")):
+        cells = []
+        for d in (ga_p.design, ga_r.design):
+            c = design_coverage(cfg.vehicle, road, robust.evaluator.design_mapping(
+                {k: np.array([v]) for k, v in d.items()}), [sets[name]], v_id,
+                base=cfg.harvester)
+            t, e = float(c["time_fraction"][0, 0]), float(c["energy_fraction"][0, 0])
+            cov_t.append(t)
+            cov_e.append(e)
+            cells.append(range_cell(t, e))
+        price_lines[2 + j] += " " + "; ".join(cells) + " |"
+    price_flag = range_flag(cov_t, cov_e, v_id, v_src)
+
     # fast-path error table
     cases = [RoadCase("C", 70.0, 21, 300.0)] if quick else [
         RoadCase("B", 30.0, 21), RoadCase("C", 70.0, 22), RoadCase("D", 130.0, 23)]
@@ -204,7 +225,8 @@ def step_robust_design(ctx: Context) -> StepOutput:
         f"![fronts]({figs[0]})\n\n"
         f"**The price of ignoring friction** (both optima re-simulated in the time domain with "
         f"friction, class {road.iso_class}, {road.speed_km_per_h:g} km/h, {length:g} m):\n\n"
-        + "\n".join(price_lines) + "\n\n"
+        + "\n".join(price_lines) + price_flag + " The worst case over min/max is a bound "
+        "only because the sets are ordered at every velocity (min ≤ best ≤ max).\n\n"
         f"**Fast path against the time domain** ({len(designs)} designs — prototype, paper "
         f"optimum, both optima — × none/min/max friction × "
         + ", ".join(f"{c.iso_class} {c.speed_km_per_h:g} km/h ({c.length:.0f} m)"

@@ -23,7 +23,11 @@ from typing import Any, Mapping
 import numpy as np
 from scipy import special
 
-from ..datasets.friction_source import RANGE_SOURCE_EMBEDDED, embedded_range_m_per_s
+from ..datasets.friction_source import (  # noqa: F401  (re-exported for the CLI)
+    RANGE_SOURCE_EMBEDDED,
+    embedded_range_m_per_s,
+    identified_range_for,
+)
 from ..physics.friction import rod_friction_N
 
 __all__ = ["OUT_OF_RANGE_LIMIT", "embedded_range_m_per_s", "gaussian_coverage",
@@ -167,11 +171,14 @@ def design_coverage(vehicle: Any, road: Any, design: Mapping[str, Any], friction
     return {"time_fraction": np.array(times), "energy_fraction": np.array(energies)}
 
 
-def metrics_warning(m: Mapping[str, Any], v_max_m_per_s: float) -> str | None:
-    """:func:`coverage_warning` of a simulation's metrics (``out_of_range_*`` keys)."""
+def metrics_warning(m: dict, v_max_m_per_s: float, source: str = "") -> str | None:
+    """:func:`coverage_warning` of a simulation's metrics (``out_of_range_*`` keys), with
+    where the range comes from; records the range in ``m["identified_range_m_per_s"]``."""
+    m["identified_range_m_per_s"] = float(v_max_m_per_s)
     e = m.get("out_of_range_friction_energy_fraction")
-    return coverage_warning({"time_fraction": m["out_of_range_time_fraction"],
-                             "energy_fraction": np.nan if e is None else e}, v_max_m_per_s)
+    w = coverage_warning({"time_fraction": m["out_of_range_time_fraction"],
+                          "energy_fraction": np.nan if e is None else e}, v_max_m_per_s)
+    return None if w is None else (w + (f" [{source}]" if source else ""))
 
 
 def coverage_rows(m: Mapping[str, Any], v_max_m_per_s: float) -> list[tuple[str, Any]]:
@@ -182,8 +189,10 @@ def coverage_rows(m: Mapping[str, Any], v_max_m_per_s: float) -> list[tuple[str,
             ("friction energy at |v| > identified (%)", None if e is None else 100.0 * e)]
 
 
-def out_of_range_lines(oor: Mapping[str, Any]) -> list[tuple[str, bool]]:
+def out_of_range_lines(oor: Mapping[str, Any] | None) -> list[tuple[str, bool]]:
     """Printed lines (text, to stderr) of an optimisation's ``out_of_range`` block."""
+    if not oor:
+        return []
     e = [x for x in oor["energy_fraction"] if x is not None]
     out = [(f"stroke velocity above the identified {oor['identified_range_m_per_s']:.3g} m/s: "
             f"{100 * max(oor['time_fraction']):.1f} % of the time"

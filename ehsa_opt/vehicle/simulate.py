@@ -61,8 +61,13 @@ from .metrics import G, dimensionless_power
 from .resources import check_simulation_resources
 from .road import RoadProfile, dissipation_bound_W, road_profile
 
-__all__ = ["RoadHoldingWarning", "QuarterCarSimulation", "simulate_quarter_car",
+__all__ = ["RoadHoldingWarning", "FrictionRangeWarning", "QuarterCarSimulation", "simulate_quarter_car",
            "simulate_batch", "compiled_step", "batch_graph_cache_info"]
+
+
+class FrictionRangeWarning(UserWarning):
+    """More than the limit of the time or of the friction's dissipated energy lies above
+    the friction's identified range (:mod:`ehsa_opt.vehicle.coverage`)."""
 
 
 class RoadHoldingWarning(UserWarning):
@@ -457,7 +462,8 @@ def simulate_quarter_car(vehicle: VehicleParams,
     identified_range_m_per_s : float, optional
         The friction's identified range (peak stroke velocity of the bench campaign):
         the metrics then hold ``out_of_range_time_fraction`` and
-        ``out_of_range_friction_energy_fraction`` (:mod:`ehsa_opt.vehicle.coverage`).
+        ``out_of_range_friction_energy_fraction`` (:mod:`ehsa_opt.vehicle.coverage`), and
+        (``warn``) a :class:`FrictionRangeWarning` is emitted above the limit.
 
     Returns
     -------
@@ -545,6 +551,15 @@ def simulate_quarter_car(vehicle: VehicleParams,
             warnings.warn(f"design {b}: road holding {metrics['road_holding'][b]:.2f} > 1: the "
                           "tyre would leave the ground; the linear tyre model is invalid there",
                           RoadHoldingWarning, stacklevel=2)
+        if identified_range_m_per_s is not None:
+            from .coverage import coverage_warning
+            for b in range(len(hs)):
+                w = coverage_warning({"time_fraction": metrics["out_of_range_time_fraction"][b],
+                                      "energy_fraction": metrics[
+                                          "out_of_range_friction_energy_fraction"][b]},
+                                     identified_range_m_per_s)
+                if w:
+                    warnings.warn(f"design {b}: {w}", FrictionRangeWarning, stacklevel=2)
     n_keep = x0_keep.size
     return QuarterCarSimulation(
         success=finite, message=msg, metrics=metrics, time_s=np.arange(n_keep) * h + h,

@@ -82,8 +82,9 @@ def friction_cases(identification: Mapping[str, Any] | None = None,
             if isinstance(values, Mapping):
                 return FrictionParams(**{k: float(values[k]) for k in FRICTION_NAMES})
             return FrictionParams.from_array(values)  # sequence in FRICTION_NAMES order
-        label = ("identified, data-supported: rod friction at/below and at/above the envelope "
-                 "of the per-test fits (ehsa_opt.estimation.bounds)"
+        label = ("identified, data-supported: ordered sets min <= best <= max at every "
+                 "velocity, enclosing the tests' envelope and beyond the bench the best law's "
+                 "95 % band (ehsa_opt.estimation.bounds)"
                  if method == "data" and "friction_method" in identification else
                  "identified, paper's method: per-parameter min/max over the bench tests")
         return FrictionCases({"none": None, "min": build(identification[lo]),
@@ -396,8 +397,11 @@ class RoadStudy:
 def road_study(vehicle: VehicleParams, harvester: HarvesterParams, frictions: FrictionCases,
                road: RoadParams, *, retune: bool = True, n_loads: int = 24,
                max_load_factor: float = 200.0, settle_s: float = 2.0,
-               sample_rate_hz: float = 1000.0, title: str = "") -> RoadStudy:
+               sample_rate_hz: float = 1000.0, title: str = "",
+               identified_range_m_per_s: float | None = None) -> RoadStudy:
     """Simulate each friction case on ``road``; optionally re-tune R_e per case.
+    ``identified_range_m_per_s``: the final simulation's metrics then hold the fractions
+    above the friction's identified range (:mod:`ehsa_opt.vehicle.coverage`).
 
     Re-tuning (paper Figs 15/16): the frictionless case keeps ``harvester.load_ohm``
     and sets the target damping slope (:func:`equivalent_damping_slope`); each
@@ -442,7 +446,8 @@ def road_study(vehicle: VehicleParams, harvester: HarvesterParams, frictions: Fr
     hs = [harvester.replace(load_ohm=loads[c]) for c in cases]
     fr = [frictions.cases[c] or FrictionParams() for c in cases]
     sim = simulate_quarter_car(vehicle, hs, fr, road, settle_s=settle_s,
-                               sample_rate_hz=sample_rate_hz, warn=False, keep_series=True)
+                               sample_rate_hz=sample_rate_hz, warn=False, keep_series=True,
+                               identified_range_m_per_s=identified_range_m_per_s)
     slopes = equivalent_damping_slope(sim)
     # PSDs: road (spatial, Welch) and stroke velocity (temporal, Welch)
     v = road.speed_m_per_s

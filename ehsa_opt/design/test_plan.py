@@ -1,0 +1,432 @@
+"""Plan the bench tests the road needs: optimal design of experiments for the friction.
+
+The friction sets are identified up to the bench campaign's peak velocity; a vehicle on a
+road puts its strokes elsewhere (a passenger car on class C at 100 km/h: σ_v ≈ 0.5 m/s).
+:func:`plan_tests` proposes the next bench tests — sines (frequency, amplitude, load) or
+constant-velocity triangle strokes — within the rig's limits, chosen to shrink the
+uncertainty of the rod friction *where the road puts the strokes*:
+
+* the current uncertainty is the best law's sandwich covariance Σ₀ from
+  ``identification.json`` (:mod:`ehsa_opt.estimation.rod_law`); its information is Σ₀⁺;
+* a candidate test adds the Fisher information of its friction samples,
+  I_c = (n_c / τ) mean_t g(v_t) g(v_t)ᵀ / σ², with g the gradient of F_rod(v) in the
+  friction parameters at the best law, σ the residual level and τ = n / n_eff the
+  autocorrelation inflation of the campaign's residuals (on a rigid bench the force
+  samples carry the friction at the prescribed velocity; the load only sets the force
+  and power the rig must deliver);
+* the road's stroke velocity is Gaussian with the σ_v of the vehicle's design on its
+  road (friction-aware fast path, :func:`ehsa_opt.vehicle.equivalent.friction_metrics`)
+  and W = E_road[g gᵀ]; the **A-optimal** criterion (road-weighted, also called
+  I-optimal) is tr(W Σ) = E_road[Var F_rod(v)], the **D-optimal** one −log det of the
+  information on its identifiable subspace;
+* tests are chosen greedily, one at a time, each the candidate that improves the
+  criterion most given those already chosen.
+
+Pyomo.DoE reports the same kind of thing for a model and a candidate set: the Fisher
+information of the chosen experiments and the A-, D-, E-optimality values; here the
+model is the friction regression and the report is the predicted band.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from ..estimation.rod_law import RodLawFit, Z95, rod_gradient
+from ..physics.harvester import equivalent_damping_Ns_per_m, equivalent_mass_kg
+from ..physics.params import HarvesterParams, ParameterError, load_toml, nearest_name
+
+__all__ = ["RigLimits", "load_rig", "Candidate", "candidate_tests", "TestPlan", "plan_tests",
+           "road_velocity_sigma", "plan_from_files"]
+
+_KINDS = ("sine", "triangle")
+
+
+@dataclass(frozen=True)
+class RigLimits:
+    """What the bench can do (the ``[rig]`` table of a rig file).
+
+    Attributes
+    ----------
+    stroke_m : float
+        Usable stroke, peak to peak (a sine's amplitude ≤ stroke/2).
+    peak_velocity_m_per_s : float
+        Largest actuator velocity.
+    force_N : float
+        Largest actuator force (the damper's peak force must stay below).
+    actuator_power_W : float
+        Largest peak mechanical power F·v.
+    loads_ohm : tuple of float
+        Load resistors available.
+    sample_rate_hz, cycles : float
+        Recording of a planned test.
+    reversal_s : float
+        Time a triangle stroke takes to reverse (its acceleration is v / reversal_s).
+    min_frequency_hz, max_frequency_hz : float
+        Sine frequencies the controller runs.
+    """
+
+    stroke_m: float = 0.1
+    peak_velocity_m_per_s: float = 1.0
+    force_N: float = 10_000.0
+    actuator_power_W: float = 5_000.0
+    loads_ohm: tuple[float, ...] = (15.0, 47.0, 109.0)
+    sample_rate_hz: float = 1000.0
+    cycles: float = 2.0
+    reversal_s: float = 0.05
+    min_frequency_hz: float = 0.1
+    max_frequency_hz: float = 20.0
+
+    def __post_init__(self) -> None:
+        for name in ("stroke_m", "peak_velocity_m_per_s", "force_N", "actuator_power_W",
+                     "sample_rate_hz", "cycles", "reversal_s", "min_frequency_hz",
+                     "max_frequency_hz"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (
+                    math.isfinite(v) and v > 0):
+                raise ParameterError(f"[rig] {name} = {v!r}: give a positive number (e.g. "
+                                     f"{getattr(RigLimits, name)!r})")
+        if self.stroke_m > 2.0:
+            raise ParameterError(f"[rig] stroke_m = {self.stroke_m:g} m: strokes are metres "
+                                 f"(e.g. 0.1 for ±50 mm); did you give millimetres?")
+        if self.max_frequency_hz <= self.min_frequency_hz:
+            raise ParameterError("[rig] max_frequency_hz must be above min_frequency_hz")
+        loads = tuple(self.loads_ohm)
+        if not loads or any(isinstance(r, bool) or not isinstance(r, (int, float))
+                            or not (math.isfinite(r) and r > 0) for r in loads):
+            raise ParameterError(f"[rig] loads_ohm = {self.loads_ohm!r}: give a list of "
+                                 f"positive resistances in ohm, e.g. [15.0, 47.0, 109.0]")
+
+
+def load_rig(path: str | Path) -> RigLimits:
+    """A rig file's ``[rig]`` table (unknown keys and bad values refused with the fix)."""
+    doc = load_toml(path)
+    tab = doc.get("rig")
+    if not isinstance(tab, Mapping):
+        raise ParameterError(f"{path}: no [rig] table; add one, e.g.\n[rig]\nstroke_m = 0.1\n"
+                             f"peak_velocity_m_per_s = 1.0\nforce_N = 10000.0\n"
+                             f"actuator_power_W = 5000.0\nloads_ohm = [15.0, 47.0, 109.0]")
+    valid = [f for f in RigLimits.__dataclass_fields__]
+    for k in tab:
+        if k not in valid:
+            near = nearest_name(k, valid)
+            raise ParameterError(f"{path}: [rig] unknown key '{k}'"
+                                 + (f"; did you mean '{near}'?" if near else "")
+                                 + f" (valid: {', '.join(valid)})")
+    vals = dict(tab)
+    if "loads_ohm" in vals:
+        if not isinstance(vals["loads_ohm"], list):
+            raise ParameterError(f"{path}: [rig] loads_ohm must be a list, e.g. [15.0, 47.0]")
+        vals["loads_ohm"] = tuple(vals["loads_ohm"])
+    try:
+        return RigLimits(**vals)
+    except ParameterError as exc:
+        raise ParameterError(f"{path}: {exc}") from None
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate bench test."""
+
+    kind: str
+    amplitude_m: float
+    load_ohm: float
+    frequency_hz: float | None = None
+    velocity_m_per_s: float | None = None   # triangle: the constant stroke velocity
+    peak_velocity_m_per_s: float = 0.0
+    peak_force_N: float = 0.0
+    peak_power_W: float = 0.0
+
+    @property
+    def file(self) -> str:
+        if self.kind == "sine":
+            return (f"plan_f{self.frequency_hz:.3g}Hz_A{1e3 * self.amplitude_m:.3g}mm_"
+                    f"Re{self.load_ohm:g}.csv")
+        return (f"plan_tri_v{self.velocity_m_per_s:.3g}_A{1e3 * self.amplitude_m:.3g}mm_"
+                f"Re{self.load_ohm:g}.csv")
+
+    def label(self) -> str:
+        if self.kind == "sine":
+            return (f"sine {self.frequency_hz:.3g} Hz x {1e3 * self.amplitude_m:.3g} mm, "
+                    f"R_e {self.load_ohm:g} ohm (peak {self.peak_velocity_m_per_s:.2f} m/s)")
+        return (f"triangle +-{self.velocity_m_per_s:.3g} m/s over +-{1e3 * self.amplitude_m:.3g}"
+                f" mm, R_e {self.load_ohm:g} ohm")
+
+    def velocity_samples(self, rig: RigLimits) -> np.ndarray:
+        """Stroke velocity at the recorded samples (m/s)."""
+        fs = rig.sample_rate_hz
+        if self.kind == "sine":
+            n = max(int(round(rig.cycles * fs / self.frequency_hz)), 8)
+            t = np.arange(n) / fs
+            return self.peak_velocity_m_per_s * np.cos(2 * math.pi * self.frequency_hz * t)
+        v, a = self.velocity_m_per_s, self.amplitude_m
+        ramp = max(int(round(rig.reversal_s * fs)), 1)
+        flat = max(int(round((2 * a / v - rig.reversal_s) * fs)), 1)
+        one = np.concatenate([np.full(flat, v), np.linspace(v, -v, ramp),
+                              np.full(flat, -v), np.linspace(-v, v, ramp)])
+        return np.tile(one, max(int(round(rig.cycles)), 1))
+
+
+def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
+                    kinds: Sequence[str] = _KINDS, n_freq: int = 24, n_amp: int = 6
+                    ) -> list[Candidate]:
+    """Sines (log-spaced frequencies × amplitudes up to half the stroke) and triangle
+    strokes (log-spaced velocities over the full stroke), at every load, that stay within
+    the rig's velocity, force and power (peak force ≈ m_eq a + c_eq(ω) v + F_rod(v),
+    each at its peak)."""
+    for k in kinds:
+        if k not in _KINDS:
+            raise ParameterError(f"plan-tests: unknown test kind '{k}' (valid: "
+                                 f"{', '.join(_KINDS)})")
+    meq = equivalent_mass_kg(harvester)
+    out = []
+    amps = np.linspace(0.1, 1.0, n_amp) * 0.5 * rig.stroke_m
+    for load in rig.loads_ohm:
+        h = harvester.replace(load_ohm=float(load))
+        if "sine" in kinds:
+            for f in np.geomspace(rig.min_frequency_hz, rig.max_frequency_hz, n_freq):
+                w = 2 * math.pi * f
+                ceq = float(equivalent_damping_Ns_per_m(h, w))
+                for a in amps:
+                    vp = w * a
+                    F = meq * w * w * a + ceq * vp + float(law.rod_N(vp))
+                    out.append(Candidate("sine", float(a), float(load), float(f), None,
+                                         float(vp), float(F), float(F * vp)))
+        if "triangle" in kinds:
+            ceq = float(equivalent_damping_Ns_per_m(h, 0.0))
+            a = 0.5 * rig.stroke_m
+            for v in np.geomspace(0.02, rig.peak_velocity_m_per_s, 12):
+                if 2 * a / v <= 2 * rig.reversal_s:
+                    continue
+                F = meq * v / rig.reversal_s + ceq * v + float(law.rod_N(v))
+                out.append(Candidate("triangle", float(a), float(load), None, float(v),
+                                     float(v), float(F), float(F * v)))
+    return [c for c in out if c.peak_velocity_m_per_s <= rig.peak_velocity_m_per_s * (1 + 1e-9)
+            and c.peak_force_N <= rig.force_N and c.peak_power_W <= rig.actuator_power_W]
+
+
+def road_velocity_sigma(problem: Any, friction: Any) -> float:
+    """σ_v (m/s) of a quarter-car problem's design on its road with ``friction`` (fast
+    path)."""
+    from ..vehicle.equivalent import friction_metrics
+    m = friction_metrics(problem.vehicle, problem.road, None, friction, base=problem.harvester)
+    return float(np.asarray(m["stroke_velocity_rms_m_s"]).ravel()[0])
+
+
+@dataclass
+class TestPlan:
+    """Result of :func:`plan_tests` (``success`` / ``message`` as scipy's results)."""
+
+    success: bool
+    message: str
+    proposed: list[Candidate]
+    criterion: str
+    sigma_v_m_per_s: float
+    velocities_m_per_s: list[float]
+    band_before_N: list[float]
+    band_after_N: list[float]
+    road_band_before_N: float
+    road_band_after_N: float
+    steps: list[dict] = field(default_factory=list)
+    n_candidates: int = 0
+    rig: RigLimits = field(default_factory=RigLimits)
+    identified_range_m_per_s: float = math.nan
+
+    def lines(self) -> list[str]:
+        """The printed report."""
+        out = [f"{self.message}",
+               f"road: stroke velocity sigma {self.sigma_v_m_per_s:.3f} m/s (Gaussian); "
+               f"identified up to {self.identified_range_m_per_s:.3g} m/s; "
+               f"{self.n_candidates} candidate tests within the rig's limits; "
+               f"{self.criterion}-optimal greedy choice:"]
+        for k, (c, st) in enumerate(zip(self.proposed, self.steps), 1):
+            out.append(f"  {k}. {c.label()}: peak force {c.peak_force_N:.0f} N, power "
+                       f"{c.peak_power_W:.0f} W -> road-weighted band +-{st['road_band_N']:.1f} N")
+        out.append("predicted 95 % band of the rod friction (+- N), before -> after:")
+        for v, b, a in zip(self.velocities_m_per_s, self.band_before_N, self.band_after_N):
+            out.append(f"  at {v:4.2f} m/s: {b:7.1f} -> {a:7.1f}")
+        out.append(f"  road-weighted (rms over the road's velocities): "
+                   f"{self.road_band_before_N:.1f} -> {self.road_band_after_N:.1f}")
+        return out
+
+    def bench_toml(self, harvester: Mapping[str, Any] | None = None) -> str:
+        """A ``bench.toml`` skeleton of the proposed tests (record them into the named CSVs,
+        header ``time_s,displacement_m,force_N,voltage_V``)."""
+        lines = ["# Bench tests proposed by `ehsa-opt plan-tests`: record each into the named",
+                 "# CSV (time_s,displacement_m,force_N,voltage_V), then identify this",
+                 "# directory together with the earlier campaign.", ""]
+        if harvester:
+            lines.append("[harvester]")
+            lines += [f"{k} = {float(v)!r}" for k, v in harvester.items()]
+            lines.append("")
+        for c in self.proposed:
+            lines.append("[[test]]")
+            lines.append(f'file = "{c.file}"')
+            if c.kind == "sine":
+                lines += [f"frequency_hz = {c.frequency_hz:.4g}",
+                          f"amplitude_m = {c.amplitude_m:.4g}"]
+            else:
+                lines += ['excitation = "recorded"',
+                          f"# constant-velocity triangle strokes: +-{c.velocity_m_per_s:.4g} "
+                          f"m/s over +-{c.amplitude_m:.4g} m, {self.rig.cycles:g} cycles"]
+            lines += [f"load_ohm = {c.load_ohm:g}", ""]
+        return "\n".join(lines)
+
+    def write(self, out_dir: str | Path, harvester: Mapping[str, Any] | None = None
+              ) -> list[str]:
+        """Write ``bench.toml`` (the skeleton) and ``plan.json`` atomically into ``out_dir``
+        (nothing when no test was proposed); returns the lines that say so."""
+        from ..utils.io import atomic_write_json, atomic_write_text
+        if not self.success:
+            return []
+        out = Path(out_dir)
+        atomic_write_text(out / "bench.toml", self.bench_toml(harvester))
+        atomic_write_json(out / "plan.json", self.to_json())
+        return [f"wrote {out / 'bench.toml'} (skeleton for the rig operator) and "
+                f"{out / 'plan.json'}"]
+
+    def to_json(self) -> dict:
+        return {"success": self.success, "message": self.message, "criterion": self.criterion,
+                "sigma_v_m_per_s": self.sigma_v_m_per_s,
+                "identified_range_m_per_s": self.identified_range_m_per_s,
+                "proposed": [dict(asdict(c), file=c.file) for c in self.proposed],
+                "steps": self.steps, "n_candidates": self.n_candidates,
+                "velocities_m_per_s": self.velocities_m_per_s,
+                "band_before_N": self.band_before_N, "band_after_N": self.band_after_N,
+                "road_band_before_N": self.road_band_before_N,
+                "road_band_after_N": self.road_band_after_N, "rig": asdict(self.rig)}
+
+
+def _pinv(A: np.ndarray, rcond: float = 1e-9) -> np.ndarray:
+    ev, V = np.linalg.eigh(0.5 * (A + A.T))
+    keep = ev > rcond * max(float(ev.max()), 1e-300)
+    return (V[:, keep] / ev[keep]) @ V[:, keep].T
+
+
+def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
+               sigma_v_m_per_s: float, *, n_tests: int = 3, criterion: str = "A",
+               kinds: Sequence[str] = _KINDS,
+               velocities_m_per_s: Sequence[float] = (0.5, 1.0, 1.5)) -> TestPlan:
+    """Greedy optimal design of ``n_tests`` bench tests (see the module docstring).
+
+    Parameters
+    ----------
+    law : RodLawFit
+        The best law and its covariance (``identification.json``).
+    rig : RigLimits
+    harvester : HarvesterParams
+        The bench's harvester (force and power of a candidate).
+    sigma_v_m_per_s : float
+        The road's stroke-velocity σ (:func:`road_velocity_sigma`).
+    criterion : {"A", "D"}
+        Road-weighted A-optimal (default) or D-optimal.
+    """
+    if criterion not in ("A", "D"):
+        raise ParameterError(f"plan-tests: criterion must be 'A' or 'D', got {criterion!r}")
+    if not (isinstance(n_tests, int) and n_tests >= 1):
+        raise ParameterError(f"plan-tests: the number of tests must be >= 1, got {n_tests!r}")
+    cands = candidate_tests(rig, harvester, law, kinds)
+    if not cands:
+        return TestPlan(False, "no candidate test fits the rig's limits: raise "
+                        "peak_velocity_m_per_s, force_N or actuator_power_W in [rig]", [],
+                        criterion, sigma_v_m_per_s, list(velocities_m_per_s), [], [],
+                        math.nan, math.nan, [], 0, rig, law.velocity_range_m_per_s[1])
+    names, p, lead = law.varied, law.parameters, law.lead_m_per_rad
+    tau = law.n_samples / max(law.n_effective, 1.0)
+    s2 = max(law.residual_rms_N, 1e-9) ** 2 * tau
+    # road weight: |v| half-normal, Gauss-Legendre on [0, 5 sigma]
+    x, wq = np.polynomial.legendre.leggauss(64)
+    vr = 2.5 * sigma_v_m_per_s * (x + 1.0)
+    wr = wq * 2.5 * sigma_v_m_per_s * 2.0 * np.exp(-0.5 * (vr / sigma_v_m_per_s) ** 2) / (
+        sigma_v_m_per_s * math.sqrt(2 * math.pi))
+    Graw = rod_gradient(vr, p, names, lead)
+    Wraw = (Graw * wr[:, None]).T @ Graw
+    # the band the identification reports is the larger of Newey-West and cluster-robust;
+    # where the cluster-robust one is larger (an error shared by the cycles of a test), a
+    # new test is worth less than its samples say by the same factor kappa
+    cov0, kappa = law.covariance, 1.0
+    if law.covariance_cluster is not None:
+        a_nw = float(np.trace(Wraw @ law.covariance))
+        a_cl = float(np.trace(Wraw @ law.covariance_cluster))
+        if a_cl > a_nw > 0:
+            cov0, kappa = law.covariance_cluster, a_nw / a_cl
+    # scaled coordinates: the covariance's own standard deviations
+    d = np.sqrt(np.maximum(np.diag(cov0), 1e-300))
+    J0 = _pinv(cov0 / np.outer(d, d))
+    s2 = s2 / kappa
+    Gr = Graw * d
+    W = (Gr * wr[:, None]).T @ Gr
+    infos = []
+    for c in cands:
+        v = c.velocity_samples(rig)
+        # the information is n × the mean of g gᵀ over the samples: 400 evenly spaced ones
+        # give the mean of these smooth periodic records to well below a per cent
+        sub = v[np.unique(np.linspace(0, v.size - 1, min(v.size, 400)).astype(int))]
+        G = rod_gradient(sub, p, names, lead) * d
+        infos.append(v.size * (G.T @ G) / sub.size / s2)
+
+    def score(J: np.ndarray) -> float:
+        if criterion == "A":
+            return float(np.trace(W @ _pinv(J)))
+        ev = np.linalg.eigvalsh(0.5 * (J + J.T))
+        ev = ev[ev > 1e-9 * ev.max()]
+        return -float(np.sum(np.log(ev)))
+
+    def road_band(J: np.ndarray) -> float:
+        return float(Z95 * math.sqrt(max(np.trace(W @ _pinv(J)), 0.0)))
+
+    J = J0.copy()
+    chosen, steps = [], []
+    for _ in range(min(n_tests, len(cands))):
+        # distinct tests (a repeat is a new realisation of the same test; give the
+        # operator different ones)
+        k = int(np.argmin([score(J + I) if c not in chosen else np.inf
+                           for c, I in zip(cands, infos)]))
+        J = J + infos[k]
+        chosen.append(cands[k])
+        steps.append({"file": cands[k].file, "criterion": score(J), "road_band_N": road_band(J)})
+    Gv = rod_gradient(np.asarray(velocities_m_per_s, dtype=float), p, names, lead) * d
+
+    def band(Jm: np.ndarray) -> list[float]:
+        C = _pinv(Jm)
+        return [float(Z95 * math.sqrt(max(g @ C @ g, 0.0))) for g in Gv]
+    msg = (f"{len(chosen)} test(s) proposed; predicted road-weighted band "
+           f"+-{road_band(J0):.1f} -> +-{road_band(J):.1f} N"
+           + (f" (cluster-robust covariance, new information x{kappa:.2f})"
+              if kappa < 1.0 else ""))
+    return TestPlan(True, msg, chosen, criterion, float(sigma_v_m_per_s),
+                    [float(v) for v in velocities_m_per_s], band(J0), band(J), road_band(J0),
+                    road_band(J), steps, len(cands), rig, float(law.velocity_range_m_per_s[1]))
+
+
+def plan_from_files(ident_path: str | Path, vehicle_path: str | Path, rig_path: str | Path,
+                    *, n_tests: int = 3, criterion: str = "A",
+                    kinds: Sequence[str] = _KINDS) -> tuple[TestPlan, dict]:
+    """:func:`plan_tests` from an ``identification.json``, a quarter-car problem file and a
+    rig file.  Returns the plan and the bench's ``[harvester]`` table (for the skeleton)."""
+    from ..datasets.friction_source import load_friction_sets
+    from ..datasets.problem_file import load_problem
+    ident_path = Path(ident_path)
+    rig = load_rig(rig_path)
+    prob = load_problem(vehicle_path)
+    sets = load_friction_sets(ident_path)
+    doc = json.loads(ident_path.read_text(encoding="utf-8"))
+    law_doc = ((doc.get("friction_envelope") or {}).get("extrapolation_band") or {}).get("law")
+    if not isinstance(law_doc, Mapping) or "covariance" not in law_doc:
+        raise ParameterError(f"{ident_path}: no friction_envelope.extrapolation_band.law "
+                             f"(written by an older ehsa_opt); re-run `ehsa-opt identify`")
+    law = RodLawFit.from_json(law_doc)
+    harv_tab: dict = {}
+    bench = Path(str(doc.get("data_dir", ""))) / "bench.toml"
+    if bench.is_file():
+        harv_tab = dict(load_toml(bench).get("harvester") or {})
+    harvester = HarvesterParams(**harv_tab) if harv_tab else HarvesterParams()
+    sigma = road_velocity_sigma(prob, sets["best"])
+    return plan_tests(law, rig, harvester, sigma, n_tests=n_tests, criterion=criterion,
+                      kinds=kinds), harv_tab
+

@@ -1,0 +1,104 @@
+"""Bench tests planned for the road (design/test_plan.py, `ehsa-opt plan-tests`)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ehsa_opt.cli import main
+from ehsa_opt.design.test_plan import RigLimits, candidate_tests, load_rig, plan_tests
+from ehsa_opt.estimation.rod_law import FrictionSamples, rod_law_fit
+from ehsa_opt.physics.friction import rod_friction_N
+from ehsa_opt.physics.params import FrictionParams, HarvesterParams, ParameterError
+
+TRUTH = FrictionParams(60.0, 40.0, 0.01, 150.0, 0.02, 0.015, 1.0, 3e-5)
+LEAD = 5e-3 / (2 * math.pi)
+
+
+@pytest.fixture(scope="module")
+def law():
+    """A law fitted on five slow sines (peak <= 0.33 m/s) with AR(1) noise."""
+    rng = np.random.default_rng(2)
+    vs, ys = [], []
+    for f in (0.5, 1.0, 2.0, 3.0, 3.5):
+        t = np.arange(0, 2 / f, 1e-3)
+        v = 2 * math.pi * f * 0.015 * np.cos(2 * math.pi * f * t)
+        e = np.zeros(v.size)
+        for k in range(1, v.size):
+            e[k] = 0.8 * e[k - 1] + rng.normal(0, 2.0)
+        vs.append(v)
+        ys.append(np.asarray(rod_friction_N(v, TRUTH, LEAD)) + e)
+    return rod_law_fit(FrictionSamples(list("abcde"), vs, ys), TRUTH.as_dict(), LEAD)
+
+
+def test_rig_file_is_validated_with_the_fix(tmp_path) -> None:
+    p = tmp_path / "rig.toml"
+    p.write_text("[rig]\nstroke_m = 0.1\npeak_velocity = 1.0\n")
+    with pytest.raises(ParameterError, match="did you mean 'peak_velocity_m_per_s'"):
+        load_rig(p)
+    p.write_text("[rig]\nstroke_m = 100\n")
+    with pytest.raises(ParameterError, match="millimetres"):
+        load_rig(p)
+    p.write_text("[rig]\nforce_N = -5\n")
+    with pytest.raises(ParameterError, match="force_N"):
+        load_rig(p)
+    p.write_text("[bench]\n")
+    with pytest.raises(ParameterError, match=r"no \[rig\] table"):
+        load_rig(p)
+    p.write_text("[rig]\nloads_ohm = [10.0, 33.0]\nforce_N = 4000.0\n")
+    assert load_rig(p).loads_ohm == (10.0, 33.0)
+
+
+def test_candidates_respect_the_limits(law) -> None:
+    rig = RigLimits(stroke_m=0.08, peak_velocity_m_per_s=0.8, force_N=3000.0,
+                    actuator_power_W=1500.0)
+    cands = candidate_tests(rig, HarvesterParams(), law)
+    assert cands and {c.kind for c in cands} == {"sine", "triangle"}
+    for c in cands:
+        assert c.peak_velocity_m_per_s <= 0.8 + 1e-9 and c.peak_force_N <= 3000.0
+        assert c.peak_power_W <= 1500.0 and c.amplitude_m <= 0.04 + 1e-12
+    with pytest.raises(ParameterError, match="unknown test kind"):
+        candidate_tests(rig, HarvesterParams(), law, kinds=("square",))
+
+
+def test_planned_tests_reach_the_road_and_shrink_the_band(law) -> None:
+    rig = RigLimits(peak_velocity_m_per_s=1.5)
+    plan = plan_tests(law, rig, HarvesterParams(), 0.5, n_tests=3, kinds=("sine",))
+    assert plan.success and len({c.file for c in plan.proposed}) == 3
+    # the road is at sigma 0.5 m/s, the data end at 0.33: a proposed test goes beyond
+    assert max(c.peak_velocity_m_per_s for c in plan.proposed) > 0.6
+    assert plan.band_after_N[1] < 0.5 * plan.band_before_N[1]
+    assert plan.road_band_after_N < plan.road_band_before_N
+    # a slow road needs no fast test: the choice follows the road
+    slow = plan_tests(law, rig, HarvesterParams(), 0.05, n_tests=1, kinds=("sine",))
+    assert slow.proposed[0].peak_velocity_m_per_s < plan.proposed[0].peak_velocity_m_per_s
+    text = plan.bench_toml({"lead_mm_per_rev": 5.0})
+    assert text.count("[[test]]") == 3 and "[harvester]" in text
+    tri = plan_tests(law, rig, HarvesterParams(), 0.5, n_tests=1, kinds=("triangle",))
+    assert 'excitation = "recorded"' in tri.bench_toml()
+    d = plan_tests(law, rig, HarvesterParams(), 0.5, n_tests=2, criterion="D")
+    assert d.success and d.criterion == "D"
+
+
+def test_cli_plan_tests_writes_the_skeleton(law, tmp_path, capsys) -> None:
+    ident = tmp_path / "identification.json"
+    sets = {c: TRUTH.as_dict() for c in ("min", "best", "max")}
+    ident.write_text(json.dumps({"data_dir": str(tmp_path / "none"), "friction_sets": sets,
+                                 "friction_envelope": {"extrapolation_band": {
+                                     "law": law.summary()}}}))
+    rig = tmp_path / "rig.toml"
+    rig.write_text("[rig]\nstroke_m = 0.1\npeak_velocity_m_per_s = 1.5\n")
+    out = tmp_path / "plan"
+    assert main(["plan-tests", str(ident), "--vehicle", "quarter_car_class_c", "--rig",
+                 str(rig), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "before -> after" in text and "at 1.00 m/s" in text
+    assert (out / "bench.toml").read_text().count("[[test]]") == 3
+    assert json.loads((out / "plan.json").read_text())["success"] is True
+    rig.write_text("[rig]\nstroke = 0.1\n")
+    assert main(["plan-tests", str(ident), "--vehicle", "quarter_car_class_c", "--rig",
+                 str(rig), "--out", str(tmp_path / "p2")]) == 2
+    assert "unknown key 'stroke'" in capsys.readouterr().err
