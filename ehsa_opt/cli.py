@@ -220,11 +220,28 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
               f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
               f"{outcome.get('front_vs_goal_attainment')}")
+    if outcome.get("motor"):
+        mb = outcome["motor"]
+        print(f"motor: {mb.get('label', mb.get('chosen', mb['model']))}"
+              + (f"; constraints at the result: " + ", ".join(
+                  f"{k} {v:+.3f}" for k, v in outcome["constraints"].items())
+                 + f" (active: {', '.join(outcome['active_constraints']) or 'none'})"
+                 if outcome.get("constraints") else ""))
+    for row in outcome.get("catalogue", []):
+        print(f"  {row['motor']}: {'feasible' if row['feasible'] else 'INFEASIBLE'}"
+              + (f", gamma {row['gamma']:+.4f}" if row.get("gamma") is not None else "")
+              + (f", active {', '.join(row['active_constraints'])}"
+                 if row["active_constraints"] else ""))
     if "time_domain_check" in outcome:
         chk = outcome["time_domain_check"]
-        print(f"time-domain check with friction ({chk['n_designs']} designs, "
-              f"{chk['road']['length_m']:g} m road): worst |error| of the fast path "
+        lim = chk.get("rated_limits")
+        print(f"time-domain check{' with friction' if outcome.get('friction') else ''} "
+              f"({chk['n_designs']} designs, {chk['road']['length_m']:g} m road): worst "
+              f"|error| of the {'fast' if outcome.get('friction') else 'frequency'} path "
               + ", ".join(f"{k} {100 * v:.2f} %" for k, v in chk["worst_abs_rel_error"].items())
+              + ("" if not lim else "; rated limits in the time domain, worst value/limit - 1: "
+                 + ", ".join(f"{k} {v:+.4f}" for k, v in
+                             lim["time_domain_worst_constraint"].items()))
               + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")
     print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
                                             else ""))
