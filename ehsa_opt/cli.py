@@ -178,7 +178,7 @@ def _design_figures(outcome: dict, out_dir: Path) -> list[Path]:
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
     from .design.config import check_method, load_design_config
-    from .design.optimize import check_out_dir, optimize
+    from .design.optimize import check_out_dir, motor_summary, optimize, time_domain_summary
     from .design.sweep import executor
     from .utils.progress import progress_bar
 
@@ -220,29 +220,11 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
               f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
               f"{outcome.get('front_vs_goal_attainment')}")
-    if outcome.get("motor"):
-        mb = outcome["motor"]
-        print(f"motor: {mb.get('label', mb.get('chosen', mb['model']))}"
-              + (f"; constraints at the result: " + ", ".join(
-                  f"{k} {v:+.3f}" for k, v in outcome["constraints"].items())
-                 + f" (active: {', '.join(outcome['active_constraints']) or 'none'})"
-                 if outcome.get("constraints") else ""))
-    for row in outcome.get("catalogue", []):
-        print(f"  {row['motor']}: {'feasible' if row['feasible'] else 'INFEASIBLE'}"
-              + (f", gamma {row['gamma']:+.4f}" if row.get("gamma") is not None else "")
-              + (f", active {', '.join(row['active_constraints'])}"
-                 if row["active_constraints"] else ""))
+    for line in motor_summary(outcome):
+        print(line)
     if "time_domain_check" in outcome:
         chk = outcome["time_domain_check"]
-        lim = chk.get("rated_limits")
-        print(f"time-domain check{' with friction' if outcome.get('friction') else ''} "
-              f"({chk['n_designs']} designs, {chk['road']['length_m']:g} m road): worst "
-              f"|error| of the {'fast' if outcome.get('friction') else 'frequency'} path "
-              + ", ".join(f"{k} {100 * v:.2f} %" for k, v in chk["worst_abs_rel_error"].items())
-              + ("" if not lim else "; rated limits in the time domain, worst value/limit - 1: "
-                 + ", ".join(f"{k} {v:+.4f}" for k, v in
-                             lim["time_domain_worst_constraint"].items()))
-              + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")
+        print(time_domain_summary(outcome))
     print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
                                             else ""))
     return 0 if outcome["success"] or args.stop_after else 1

@@ -32,7 +32,7 @@ from .problem import OBJECTIVE_NAMES, DesignProblem, QuarterCarObjectives
 
 __all__ = ["build_problem", "config_frictions", "front_check", "goals_and_weights", "optimize",
            "OptimizeOutcome", "objectives_at", "design_record", "constraint_record",
-           "harvesters_of"]
+           "harvesters_of", "motor_summary", "time_domain_summary"]
 
 
 def config_frictions(cfg: DesignConfig) -> tuple[FrictionParams, ...]:
@@ -439,3 +439,36 @@ def _time_domain_limits(cfg: DesignConfig, ev: Any, hs: Sequence[Any],
             "measured_peak_stroke_m": float(np.max(m["peak_stroke_m"])),
             "within_5pct": bool(all(v <= 0.05 for v in worst_td.values())
                                 and all(v <= 0.05 for v in diff.values()))}
+
+
+def motor_summary(outcome: Mapping[str, Any]) -> list[str]:
+    """Lines on the motor model, constraint values and active constraints (CLI)."""
+    lines = []
+    if outcome.get("motor"):
+        mb = outcome["motor"]
+        lines.append(f"motor: {mb.get('label', mb.get('chosen', mb['model']))}"
+                     + ("; constraints at the result: " + ", ".join(
+                         f"{k} {v:+.3f}" for k, v in outcome["constraints"].items())
+                        + f" (active: {', '.join(outcome['active_constraints']) or 'none'})"
+                        if outcome.get("constraints") else ""))
+    for row in outcome.get("catalogue", []):
+        lines.append(f"  {row['motor']}: {'feasible' if row['feasible'] else 'INFEASIBLE'}"
+                     + (f", gamma {row['gamma']:+.4f}" if row.get("gamma") is not None else "")
+                     + (f", at or beyond the limit: {', '.join(row['active_constraints'])}"
+                        if row["active_constraints"] else ""))
+    return lines
+
+
+def time_domain_summary(outcome: Mapping[str, Any]) -> str:
+    """One line on the time-domain re-simulation of the result (CLI)."""
+    chk = outcome["time_domain_check"]
+    lim = chk.get("rated_limits")
+    fr = bool(outcome.get("friction"))
+    return (f"time-domain check{' with friction' if fr else ''} ({chk['n_designs']} designs, "
+            f"{chk['road']['length_m']:g} m road): worst |error| of the "
+            f"{'fast' if fr else 'frequency'} path "
+            + ", ".join(f"{k} {100 * v:.2f} %" for k, v in chk["worst_abs_rel_error"].items())
+            + ("" if not lim else "; rated limits in the time domain, worst value/limit - 1: "
+               + ", ".join(f"{k} {v:+.4f}" for k, v in
+                           lim["time_domain_worst_constraint"].items()))
+            + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")
