@@ -150,6 +150,7 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
     table = [{"motor": m.name, "source": m.source, "success": bool(r["success"]),
               "feasible": bool(r.get("feasible", False)),
               "gamma": r.get("gamma"), "design": r["design"], "objectives": r["objectives"],
+              "metrics": r["metrics"],
               "active_constraints": r.get("active_constraints", []),
               "constraints": r.get("constraints", {})} for m, r in results]
     feasible = [i for i, row in enumerate(table) if row["feasible"]]
