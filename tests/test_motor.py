@@ -156,3 +156,25 @@ def test_catalogue_motor_sets_the_harvester():
     out = ev({"total_inertia_gcm2": np.array([50.0, 400.0]),
               "lead_mm_per_rev": np.array([10.0, 10.0]), "load_ohm": np.array([5.0, 5.0])})
     assert out["constraint_motor_inertia"] == pytest.approx([1.0, -0.75])
+
+
+def test_reproduce_data_designs_from_the_users_harvester(tmp_path):
+    """bench.toml's R_i = 2.4 Ω (and L_i, J_m) start the design space, not Table 1's."""
+    from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
+    from ehsa_opt.pipeline.base import Context
+    from ehsa_opt.pipeline.design_report import _cfg
+    user = HarvesterParams(internal_resistance_ohm=2.4, inductance_H=0.9e-3,
+                           motor_inertia_gcm2=90.0)
+    d = write_synthetic(tmp_path / "d", SyntheticSpec(frequencies_hz=(1.0,), loads_ohm=(47.0,),
+                                                      seed=3, harvester=user))
+    ctx = Context(tmp_path / "out", True, 1, data_dir=d)
+    for model in ("paper", "scaling"):
+        cfg = _cfg(ctx, model)
+        h = cfg.harvester
+        assert (h.internal_resistance_ohm, h.inductance_H, h.motor_inertia_gcm2) == (
+            2.4, 0.9e-3, 90.0)
+        out = build_problem(cfg).evaluate_design(
+            {k: np.array([v]) for k, v in cfg.prototype_design.items()})
+        # frictionless efficiency = R_e / (R_e + R_i) with the user's R_i
+        assert out["efficiency"][0] == pytest.approx(47.0 / (47.0 + 2.4), rel=2e-3)
+        assert cfg.motor().reference.internal_resistance_ohm == 2.4
