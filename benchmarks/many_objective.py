@@ -22,7 +22,8 @@ Metrics, on objectives normalised by the prototype's (F / F(prototype)):
         non-dominated union of long runs (NSGA-II and NSGA-III, --ref-evals each,
         seeds 100/101) and of every run of the benchmark (so no algorithm is measured
         against a front it could not reach).
-Printed: median [min–max] over seeds per case and algorithm, and the wall time.
+Printed: median [min–max] over seeds per case and algorithm (no timings: this compares
+quality at equal evaluations, and the machine is shared).
 
 Run from the repository root:  python benchmarks/many_objective.py [--seeds 5] [--quick]
 """
@@ -153,10 +154,9 @@ def main() -> int:
         ref_front = allF[non_dominated(allF)]
         ref_front = ref_front[np.all(ref_front < REF, axis=1)]
         print(f"reference front: {ref_front.shape[0]} points (long runs {args.ref_evals} "
-              f"evaluations each + every benchmark run; {time.perf_counter() - t0:.0f} s), "
-              f"HV {hypervolume(ref_front, REF):.4g}")
+              f"evaluations each + every benchmark run), HV {hypervolume(ref_front, REF):.4g}")
         print(f"{'algorithm':10s} | {'HV front':24s} | {'HV archive':24s} | "
-              f"{'IGD front':26s} | evals | s/run")
+              f"{'IGD front':26s} | evals")
         for name, runs in results.items():
             hv_f = [hypervolume(f, REF) if f.size else 0.0 for f, _, _ in runs]
             hv_a = [hypervolume(e[non_dominated(e)], REF) if e.size else 0.0
@@ -165,7 +165,7 @@ def main() -> int:
                   for f, _, _ in runs]
             ne = sorted({n for _, _, n in runs})
             print(f"{name:10s} | {summary(hv_f):24s} | {summary(hv_a):24s} | "
-                  f"{summary(ig):26s} | {ne} | {t_alg[name] / args.seeds:.1f}")
+                  f"{summary(ig):26s} | {ne}")
     return 0
 
 
