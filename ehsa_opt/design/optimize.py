@@ -255,10 +255,16 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
         outputs = objectives_at(problem, d)
         outcome.update(design_record(d, outputs))
         outcome.update(constraint_record(problem, outputs))
+        front_out = problem.evaluate_design(pr.designs)
         if problem.constraint_names:
-            G = np.column_stack([np.asarray(problem.evaluate_design(pr.designs)[
-                f"constraint_{c}"], float) for c in problem.constraint_names])
+            G = np.column_stack([np.asarray(front_out[f"constraint_{c}"], float)
+                                 for c in problem.constraint_names])
             outcome["n_feasible_front"] = int(np.sum(np.all(G <= 1e-9, axis=1)))
+        from ..vehicle.validity import check_validity
+        validity = check_validity(front_out, stroke_limit_m=cfg.vehicle.stroke_limit_m,
+                                  design=pr.designs)
+        outcome["front_validity"] = validity.as_list()  # per pareto.csv row
+        outcome["n_front_valid"] = int(np.sum(validity.valid))
         outcome.update({"success": pr.success, "message": pr.message, "pick": pr.pick,
                         "n_front": int(pr.F.shape[0]),
                         "hypervolume": {"normalisation": "F / F(prototype)",
