@@ -94,7 +94,7 @@ def step_paper_invariants(ctx: Context) -> StepOutput:
             f"of Table 1 (friction only adds) | {inv['short_circuit_electrical_Ns_per_m']:.0f} "
             f"N s/m | {'yes' if sc_min >= inv['short_circuit_electrical_Ns_per_m'] else 'NO'} |"]
     md = (
-        "Invariants of the frictionless linear quarter car (SPEC §4): the damper absorbs "
+        "Invariants of the frictionless linear quarter car: the damper absorbs "
         "P_diss = π² k1 G_d(n0) n0² V whatever the design, so P/η is design-invariant and "
         "∝ V; with friction P/η is still the damper's absorbed power. The paper's numbers "
         "against them (pure arithmetic on its published values):\n\n" + "\n".join(rows) +
