@@ -178,3 +178,17 @@ def test_reproduce_data_designs_from_the_users_harvester(tmp_path):
         # frictionless efficiency = R_e / (R_e + R_i) with the user's R_i
         assert out["efficiency"][0] == pytest.approx(47.0 / (47.0 + 2.4), rel=2e-3)
         assert cfg.motor().reference.internal_resistance_ohm == 2.4
+
+
+def test_catalogue_nsga2_front_keeps_feasible_points_only(tmp_path):
+    from ehsa_opt.cli import main
+    text = (ROOT / "problems" / "catalogue_design.toml").read_text()
+    prob = tmp_path / "p.toml"
+    prob.write_text(text.replace("length_m = 1000.0", "length_m = 300.0"))
+    assert main(["optimize", str(prob), "--method", "nsga2", "--pop", "12", "--gens", "4",
+                 "--out", str(tmp_path / "o")]) == 0
+    res = json.loads((tmp_path / "o" / "result.json").read_text())
+    infeasible = {r["motor"] for r in res["catalogue"] if not r["feasible"]}
+    assert infeasible and any(name.startswith("Faulhaber") for name in infeasible)
+    rows = (tmp_path / "o" / "pareto.csv").read_text().splitlines()[1:]
+    assert rows and all(not any(name in r for name in infeasible) for r in rows)

@@ -173,12 +173,26 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
                                        if not feasible else
                                        f"{len(feasible)} of {len(table)} motors feasible")})
     if method == "nsga2":
-        csv_rows, header = [], None
-        for (m, r), k in zip(results, range(len(results))):
-            text = (out / f"motor_{k}" / "pareto.csv").read_text().splitlines()
-            header = header or ("motor," + text[0])
-            csv_rows += [f'"{m.name}",' + line for line in text[1:]]
-        atomic_write_text(out / "pareto.csv", "\n".join([header or "motor"] + csv_rows) + "\n")
+        # the catalogue's front: feasible points of every motor, non-dominated across motors
+        from .pareto import non_dominated
+        pts = []
+        for m, r in results:
+            pr = r.result
+            ok = np.ones(pr.F.shape[0], bool)
+            if r.get("feasible_front") is not None:
+                ok = np.asarray(r["feasible_front"], bool)
+            for i in np.flatnonzero(ok):
+                pts.append((m.name, {k: float(v[i]) for k, v in pr.designs.items()}, pr.F[i]))
+        keep = (np.flatnonzero(non_dominated(np.array([p[2] for p in pts]))) if pts
+                else np.zeros(0, int))
+        names = list(pts[0][1]) if pts else []
+        lines = [",".join(["motor"] + names + list(OBJECTIVE_NAMES))]
+        lines += [",".join([f'"{pts[i][0]}"'] + [repr(pts[i][1][n]) for n in names]
+                           + [repr(float(v)) for v in pts[i][2]]) for i in keep]
+        outcome["n_front"] = len(lines) - 1
+        outcome["front_note"] = ("feasible points of every motor, non-dominated across motors"
+                                 if pts else "no motor has a feasible design")
+        atomic_write_text(out / "pareto.csv", "\n".join(lines) + "\n")
     atomic_write_json(out / "result.json", dict(outcome), indent=2)
     return outcome
 
@@ -260,6 +274,7 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
             G = np.column_stack([np.asarray(front_out[f"constraint_{c}"], float)
                                  for c in problem.constraint_names])
             outcome["n_feasible_front"] = int(np.sum(np.all(G <= 1e-9, axis=1)))
+            outcome["feasible_front"] = np.all(G <= 1e-9, axis=1).tolist()
         from ..vehicle.validity import check_validity
         validity = check_validity(front_out, stroke_limit_m=cfg.vehicle.stroke_limit_m,
                                   design=pr.designs)
