@@ -180,6 +180,7 @@ def test_reproduce_data_designs_from_the_users_harvester(tmp_path):
         assert cfg.motor().reference.internal_resistance_ohm == 2.4
 
 
+@pytest.mark.slow
 def test_catalogue_nsga2_front_keeps_feasible_points_only(tmp_path):
     from ehsa_opt.cli import main
     text = (ROOT / "problems" / "catalogue_design.toml").read_text()
