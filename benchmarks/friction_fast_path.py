@@ -323,7 +323,8 @@ def random_box(n: int, quick: bool = False, seed: int = 2029) -> None:
                 ce = h.equivalent_damping_Ns_per_m(0.0)
                 rows.append({"design": i, "road": f"{case.iso_class} {case.speed_km_per_h:g}",
                              "scale": scales[lev], "c_e": ce, "settled": none_err <= 0.02,
-                             "none_err": none_err, **err})
+                             "none_err": none_err,
+                             "correction": float(r["sticking_correction"][2 * q + 1]), **err})
         print(f"  road {case.iso_class} {case.speed_km_per_h:5.0f} km/h: {idx.size} designs "
               f"({time.perf_counter() - t0:.0f} s so far)", flush=True)
     settled_rows = [r for r in rows if r["settled"]]
@@ -364,6 +365,14 @@ def random_box(n: int, quick: bool = False, seed: int = 2029) -> None:
         print(f"validated region ({title}: every pair within 5 % on all four metrics): "
               + ("; ".join(f"c_e {lo:g}-{hi:g} N s/m at friction x{sc:g}"
                            for lo, hi, sc in region) or "none"))
+        print(f"by the fast path's own indicator, the sticking correction c_gauss/c_f - 1 "
+              f"({title}; pairs, worst |error| over the four metrics, share within 5 %):")
+        for lo, hi in ((-np.inf, 0.01), (0.01, 0.02), (0.02, 0.05), (0.05, 0.1), (0.1, np.inf)):
+            sub = [r for r in pool if lo <= r["correction"] < hi]
+            if sub:
+                print(f"  {max(lo, 0) * 100:5.1f} to {hi * 100:5.1f} %: {len(sub):4d} pairs, "
+                      f"{100 * max(worst(r) for r in sub):6.2f} %, "
+                      f"{100 * np.mean([worst(r) <= 0.05 for r in sub]):5.1f} %")
 
 
 if __name__ == "__main__":
