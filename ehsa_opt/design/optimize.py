@@ -275,9 +275,14 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
                                  for c in problem.constraint_names])
             outcome["n_feasible_front"] = int(np.sum(np.all(G <= 1e-9, axis=1)))
             outcome["feasible_front"] = np.all(G <= 1e-9, axis=1).tolist()
-        from ..vehicle.validity import check_validity
+        from ..vehicle.validity import FAST_PATH_REGION, check_validity
+        region, design = None, dict(pr.designs)
+        if hasattr(ev, "frictions"):  # the fast path: its validated region
+            region = FAST_PATH_REGION
+            design["electrical_damping_Ns_per_m"] = np.array(
+                [h.equivalent_damping_Ns_per_m(0.0) for h in harvesters_of(ev, pr.designs)])
         validity = check_validity(front_out, stroke_limit_m=cfg.vehicle.stroke_limit_m,
-                                  design=pr.designs)
+                                  design=design, fast_path_region=region)
         outcome["front_validity"] = validity.as_list()  # per pareto.csv row
         outcome["n_front_valid"] = int(np.sum(validity.valid))
         outcome.update({"success": pr.success, "message": pr.message, "pick": pr.pick,

@@ -32,7 +32,8 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["GAUSSIAN_PEAK_FACTOR", "FAST_PATH_MAX_CORRECTION", "ValidityFlag", "Validity", "VALIDITY_CHECKS",
+__all__ = ["GAUSSIAN_PEAK_FACTOR", "FAST_PATH_MAX_CORRECTION", "FAST_PATH_REGION",
+           "ValidityFlag", "Validity", "VALIDITY_CHECKS",
            "register_check", "check_validity"]
 
 #: Largest sticking correction c_gauss/c_f − 1 of the friction-aware fast path inside its
@@ -40,6 +41,15 @@ __all__ = ["GAUSSIAN_PEAK_FACTOR", "FAST_PATH_MAX_CORRECTION", "ValidityFlag", "
 #: every metric is within 2.6 % of the time domain below 2 %, and the pairs above it carry
 #: the largest errors (benchmarks/friction_fast_path.py, also its ``--random`` mode).
 FAST_PATH_MAX_CORRECTION = 0.02
+
+#: Validated region of the friction-aware fast path over the whole design box
+#: (``benchmarks/friction_fast_path.py --random 500``: 500 random designs × one friction
+#: level ×0.5–×4 × 8 held-out roads): with the design's electrical damping
+#: c_e = K_t K_e/(r² (R_e + R_i)) ≥ 100 N s/m and friction up to ×2 the data's every pair
+#: is within 5 % on all four metrics; below 30 N s/m errors reach 82 % (lightly damped
+#: designs that stick).  Checked as ``fast_path_region`` on ``electrical_damping_Ns_per_m``.
+FAST_PATH_REGION: dict[str, tuple[float, float]] = {
+    "electrical_damping_Ns_per_m": (100.0, float("inf"))}
 
 #: Peak / rms of a Gaussian response used where only the rms is known: 3.5 σ is
 #: exceeded 0.05 % of the time (the 2000 m class C records of the prototype show
