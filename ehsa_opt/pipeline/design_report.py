@@ -76,6 +76,13 @@ def _not_applicable(ctx: Context) -> StepOutput | None:
                       "start from in these data.\n", [], {"applicable": False})
 
 
+def _validity_cell(cfg: Any, outputs: dict) -> str:
+    """Validity of a frequency-path design result (road holding, stroke)."""
+    from ..vehicle.validity import check_validity
+    m = {k: outputs[k] for k in ("road_holding", "stroke_rms_m") if k in outputs}
+    return check_validity(m, stroke_limit_m=cfg.vehicle.stroke_limit_m).cell(0)
+
+
 def step_goal_attainment(ctx: Context) -> StepOutput:
     """Goal attainment on the paper's problem; results carry ``design`` and
     ``optimum_harvester`` (HarvesterParams fields, read by the Fig 21 step)."""
@@ -143,6 +150,9 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         f"| W_k rms acceleration (m/s²) | {pm['comfort_weighted_rms_m_s2']:.3f} | "
         f"{om['comfort_weighted_rms_m_s2']:.3f} | {pd_out['comfort_weighted_rms_m_s2']:.3f} | – |",
         f"| attainment factor γ | 0 (goals) | **{ga.gamma:+.4f}** | {gamma_paper:+.4f} | – |",
+        "| validity (tyre on the ground, 3.5 × rms stroke within the limit) | "
+        + " | ".join(_validity_cell(cfg, o) for o in
+                     ({**proto, **pm}, {**out["objectives"], **om}, pd_out)) + " | – |",
     ]
     binding = [k for k, g, w in zip(OBJECTIVE_NAMES, ga.goals, ga.weights)
                if w > 0 and abs((ga.objectives[k] - g) / w - ga.gamma) < 1e-5]
