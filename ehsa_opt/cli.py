@@ -172,7 +172,7 @@ def _design_figures(outcome: dict, out_dir: Path) -> list[Path]:
 
 def _cmd_optimize(args: argparse.Namespace) -> int:
     from .design.config import check_method, load_design_config
-    from .design.optimize import check_out_dir, optimize
+    from .design.optimize import check_out_dir, motor_summary, optimize, time_domain_summary
     from .design.sweep import executor
     from .utils.progress import progress_bar
     from .vehicle.coverage import out_of_range_lines
@@ -214,14 +214,13 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
         print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
               f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
               f"{outcome.get('front_vs_goal_attainment')}")
+    for line in motor_summary(outcome):
+        print(line)
     for line, to_err in out_of_range_lines(outcome.get("out_of_range")):
         print(line, file=sys.stderr if to_err else sys.stdout)
     if "time_domain_check" in outcome:
         chk = outcome["time_domain_check"]
-        print(f"time-domain check with friction ({chk['n_designs']} designs, "
-              f"{chk['road']['length_m']:g} m road): worst |error| of the fast path "
-              + ", ".join(f"{k} {100 * v:.2f} %" for k, v in chk["worst_abs_rel_error"].items())
-              + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")
+        print(time_domain_summary(outcome))
     print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
                                             else ""))
     return 0 if outcome["success"] or args.stop_after else 1

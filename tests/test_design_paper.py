@@ -22,7 +22,9 @@ DESIGN_KEYS = ["total_inertia_gcm2", "lead_mm_per_rev", "speed_constant_rpm_per_
 
 @pytest.fixture(scope="module")
 def paper():
-    cfg = load_design_config(PAPER)
+    import dataclasses
+    # the paper's own design space: R_i, L_i fixed for every k_n, no rated limits
+    cfg = dataclasses.replace(load_design_config(PAPER), motor_model="paper")
     problem = build_problem(cfg)
     goals, weights, proto = goals_and_weights(cfg, problem)
     return cfg, problem, goals, weights, proto

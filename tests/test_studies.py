@@ -150,3 +150,20 @@ def test_validity_stroke_limit_fast_path_region_and_joined_flags():
     assert j.codes(0) == ["friction_range"] and j.codes(1) == ["tyre_lift"]
     with pytest.raises(ValueError, match="road_holding"):
         check_validity({"power_W": [1.0]})
+
+
+def test_validity_flags_the_fast_path_beyond_its_indicator():
+    from ehsa_opt.vehicle.equivalent import friction_metrics
+    from ehsa_opt.vehicle.fast_path_check import scaled_friction
+    from ehsa_opt.vehicle.validity import FAST_PATH_MAX_CORRECTION, check_validity
+    data = friction_cases(None).cases["max"]
+    # class C at 100 km/h with half the data's friction: the strut hardly sticks;
+    # class B at 30 km/h with 4x: it sticks for long stretches (correction ~5-8 %)
+    for road, scale, flagged in ((RoadParams("C", 100.0), 0.5, False),
+                                 (RoadParams("B", 30.0), 4.0, True)):
+        m = friction_metrics(VehicleParams(), road, {"load_ohm": np.array([5.0, 47.0])},
+                             scaled_friction(data, scale))
+        corr = m["friction_damping_gaussian_Ns_per_m"] / m["friction_damping_Ns_per_m"] - 1
+        assert np.all((corr > FAST_PATH_MAX_CORRECTION) == flagged)
+        v = check_validity(m)
+        assert all(("fast_path_indicator" in v.codes(k)) == flagged for k in range(2))

@@ -103,8 +103,11 @@ def capture(algorithm: Any, history: list[dict], archive: np.ndarray, fingerprin
         "pop_F": np.asarray(pop.get("F"), dtype=float).reshape(n, -1),
         "pop_G": np.asarray(pop.get("G"), dtype=float).reshape(n, -1),
         "pop_H": np.asarray(pop.get("H"), dtype=float).reshape(n, -1),
-        "pop_rank": np.asarray(pop.get("rank"), dtype=np.int64).reshape(n),
-        "pop_crowding": np.asarray(pop.get("crowding"), dtype=float).reshape(n),
+        # infeasible members (constrained problems) have no rank / crowding: -1 / nan
+        "pop_rank": np.array([-1 if r is None else r for r in pop.get("rank")],
+                             dtype=np.int64).reshape(n),
+        "pop_crowding": np.array([np.nan if c is None else c for c in pop.get("crowding")],
+                                 dtype=float).reshape(n),
         "pop_n_gen": np.asarray(pop.get("n_gen"), dtype=np.int64).reshape(n),
         "pop_n_iter": np.asarray(pop.get("n_iter"), dtype=np.int64).reshape(n),
         "archive_F": np.asarray(archive, dtype=float),
@@ -128,8 +131,8 @@ def restore(state: NSGA2State, problem: Any, n_gen: int) -> Any:
     for ind, rank, crowd, gen, it in zip(pop, a["pop_rank"], a["pop_crowding"],
                                          a["pop_n_gen"], a["pop_n_iter"]):
         ind.evaluated.update(("F", "G", "H"))
-        ind.set("rank", int(rank))
-        ind.set("crowding", np.float64(crowd))
+        ind.set("rank", None if rank < 0 else int(rank))
+        ind.set("crowding", None if np.isnan(crowd) else np.float64(crowd))
         ind.set("n_gen", int(gen))
         ind.set("n_iter", int(it))
     algorithm.pop = pop

@@ -63,7 +63,7 @@ METHODS: tuple[str, ...] = ("goal-attainment", "nsga2")
 #: Physical tables, parsed by :func:`ehsa_opt.datasets.problem_file.problem_from_mapping`.
 _PHYSICAL = ("preset", "vehicle", "harvester", "friction", "road", "simulation")
 _TOP = _PHYSICAL + ("design", "goals", "goal_attainment", "nsga2", "sweep", "title",
-                    "description")
+                    "description", "motor")
 
 
 def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
@@ -158,6 +158,52 @@ class DesignConfig:
     raw: Mapping[str, Any] = field(default_factory=dict)
     n_freq: int = 1024
     physical: Any = None  #: the :class:`ehsa_opt.datasets.problem_file.QuarterCarProblem` of the file
+    #: generator model of the design space: "scaling" (default: the [harvester]'s frame
+    #: rewound, R_i, L_i ∝ K_e², with rated limits), "paper" (R_i, L_i fixed, no limits:
+    #: the paper's assumption) or "catalogue" (one run per motor of ``catalogue``)
+    motor_model: str = "scaling"
+    motor_rating: Any = None  #: RatedLimits of the scaling frame (None: the default)
+    catalogue: str | None = None
+
+    def motor(self) -> Any:
+        """The motor model object at the current [harvester] (None for a catalogue:
+        see :meth:`catalogue_motors`)."""
+        from ..physics.motor import FixedWindingMotor, ScalingMotor
+        if self.motor_model == "scaling":
+            return ScalingMotor(self.harvester, self.motor_rating or self.prototype_rating())
+        if self.motor_model == "paper":
+            return FixedWindingMotor(self.harvester)
+        return None
+
+    def prototype_rating(self) -> Any:
+        """Ratings of the scaling frame when ``[motor]`` gives none **(assumption)**: what
+        the prototype itself asks of its motor on the design road (rms current, peak
+        voltage as 3.5 × rms), so no design may ask more of the user's motor than the
+        prototype does (the prototype is feasible).  No power rating: without friction
+        the mean electrical power (load + winding) is the road's dissipation bound for
+        every design, so a power limit at the prototype's value would pin every design
+        to it."""
+        import numpy as np
+
+        from ..physics.motor import RatedLimits, ScalingMotor
+        from ..vehicle.validity import GAUSSIAN_PEAK_FACTOR
+        from .problem import QuarterCarObjectives
+        ev = QuarterCarObjectives(self.vehicle, self.road, self.harvester,
+                                  (("n_freq", self.n_freq),),
+                                  ScalingMotor(self.harvester, RatedLimits()))
+        m = ev({k: np.array([v]) for k, v in self.prototype_design.items()})
+        slack = 1.0 + 1e-6  # the prototype inside its own limits despite round-off
+        return RatedLimits(slack * GAUSSIAN_PEAK_FACTOR * float(m["voltage_rms_V"][0]),
+                           slack * float(m["current_rms_A"][0]), None)
+
+    def catalogue_motors(self) -> list:
+        from ..physics.motor import load_catalogue
+        return load_catalogue(self.catalogue or "dc_generators")
+
+    @property
+    def stroke_limit_m(self) -> float | None:
+        """The stroke constraint (the vehicle's limit); none in the paper's problem."""
+        return None if self.motor_model == "paper" else self.vehicle.stroke_limit_m
 
     @property
     def prototype_design(self) -> dict[str, float]:
@@ -228,10 +274,47 @@ def parse_design_config(doc: Mapping[str, Any], path: str = "problem") -> Design
         pick_weights=None if pw is None else tuple(_float(v, f"{path} [nsga2] pick_weights")
                                                    for v in pw),
         hv_reference=_float(nt.get("hv_reference", 2.0), f"{path} [nsga2] hv_reference"))
+    model, rating, catalogue = _parse_motor(doc.get("motor", {}), path, space)
     return DesignConfig(path=path, vehicle=vehicle, vehicle_name=vname, road=road,
                         harvester=harvester, space=space, method=method,
                         goals=GoalSpec(rel, goals, weights), goal_attainment=gas, nsga2=ns,
-                        raw=doc, n_freq=n_freq, physical=phys)
+                        raw=doc, n_freq=n_freq, physical=phys, motor_model=model,
+                        motor_rating=rating, catalogue=catalogue)
+
+
+def _parse_motor(mt: Mapping[str, Any], path: str, space: DesignSpace
+                 ) -> tuple[str, Any, str | None]:
+    """The ``[motor]`` table: model, the scaling frame's ratings, the catalogue file."""
+    from ..physics.motor import MOTOR_MODELS, RatedLimits, catalogue_path
+    where = f"{path} [motor]"
+    _check_keys(mt, ("model", "catalogue", "rated_voltage_V", "rated_current_A",
+                     "rated_power_W"), where)
+    model = str(mt.get("model", "catalogue" if "catalogue" in mt else "scaling"))
+    if model not in MOTOR_MODELS:
+        near = nearest_name(model, MOTOR_MODELS)
+        raise ParameterError(f"{where} model: unknown '{model}'"
+                             + (f"; did you mean '{near}'?" if near else "")
+                             + f" (valid: {', '.join(MOTOR_MODELS)})")
+    ratings = {k: _float(mt[k], f"{where} {k}") for k in ("rated_voltage_V", "rated_current_A",
+                                                          "rated_power_W") if k in mt}
+    if ratings and model != "scaling":
+        raise ParameterError(f"{where}: rated_* values set the scaling frame's ratings; a "
+                             f"'{model}' model takes none (catalogue motors carry their own)")
+    rating = RatedLimits(ratings.get("rated_voltage_V"), ratings.get("rated_current_A"),
+                         ratings.get("rated_power_W")) if ratings else None
+    catalogue = None
+    if model == "catalogue":
+        name = str(mt.get("catalogue", "dc_generators"))
+        base = Path(path).parent if path else Path(".")
+        cand = base / name if name.endswith(".toml") and not Path(name).is_absolute() else name
+        catalogue = str(catalogue_path(cand))
+        if "speed_constant_rpm_per_V" in space.names:
+            raise ParameterError(f"{path} [design.bounds]: a catalogue motor fixes k_n; remove "
+                                 "speed_constant_rpm_per_V from the box with [motor] model = "
+                                 "'catalogue'")
+    elif "catalogue" in mt:
+        raise ParameterError(f"{where}: 'catalogue' needs model = 'catalogue'")
+    return model, rating, catalogue
 
 
 def load_design_config(path: str | Path) -> DesignConfig:

@@ -96,7 +96,7 @@ def _fd_objectives(problem: DesignProblem, u: np.ndarray, h: float
     dn = np.repeat(u[None, :], n, axis=0) - h * np.eye(n)
     up = np.clip(up, 0.0, 1.0)
     dn = np.clip(dn, 0.0, 1.0)
-    F = problem.objectives_unit(np.vstack([u[None, :], up, dn]))
+    F = problem.evaluate_unit(np.vstack([u[None, :], up, dn]))  # objectives, constraints
     f0, fu, fd = F[0], F[1:n + 1], F[n + 1:]
     step = np.diag(up) - np.diag(dn)
     J = ((fu - fd) / step[:, None]).T
@@ -166,6 +166,13 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
     if n_starts < 1:
         raise ParameterError(f"{where}: n_starts must be >= 1, got {n_starts}")
     scale = np.maximum(np.maximum(np.abs(g), w), 1e-12)
+    # the problem's constraints (rated limits, stroke; normalised, ≤ 0 feasible) join as
+    # hard goals: goal 0, weight 0 (fgoalattain's hard constraints)
+    n_obj, n_con = len(names), len(getattr(problem, "constraint_names", ()))
+    g = np.concatenate([g, np.zeros(n_con)])
+    w = np.concatenate([w, np.zeros(n_con)])
+    scale = np.concatenate([scale, np.ones(n_con)])
+    obj = slice(0, n_obj)
     n = problem.space.n
     rng = np.random.default_rng(seed)
     u_start = (problem.space.to_unit(start) if start is not None
@@ -221,8 +228,8 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
 
         cap = g + w * gstar + 1e-9 * scale
         hist2: list[tuple[np.ndarray, float]] = []
-        res2 = minimize(lambda u: float(np.sum((fj2(u)[0] - g) / scale)), best["u"],
-                        jac=lambda u: np.sum(fj2(u)[1] / scale[:, None], axis=0),
+        res2 = minimize(lambda u: float(np.sum(((fj2(u)[0] - g) / scale)[obj])), best["u"],
+                        jac=lambda u: np.sum((fj2(u)[1] / scale[:, None])[obj], axis=0),
                         method="SLSQP", bounds=[(0.0, 1.0)] * n,
                         constraints=[{"type": "ineq", "fun": lambda u: (cap - fj2(u)[0]) / scale,
                                       "jac": lambda u: -fj2(u)[1] / scale[:, None]}],
@@ -230,8 +237,8 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
                         options={"maxiter": max_iter, "ftol": tol})
         u2 = np.clip(res2.x, 0.0, 1.0)
         F2 = fj2(u2)[0]
-        if np.all(F2 <= cap + 1e-8 * scale) and float(np.sum((F2 - g) / scale)) <= float(
-                np.sum((fj2(best["u"])[0] - g) / scale)):
+        if np.all(F2 <= cap + 1e-8 * scale) and float(np.sum(((F2 - g) / scale)[obj])) <= float(
+                np.sum(((fj2(best["u"])[0] - g) / scale)[obj])):
             refined = {"u": u2, "status": int(res2.status), "message": str(res2.message),
                        "nit": int(res2.nit), "history": hist2}
             best = {**best, "u": u2,
@@ -257,7 +264,7 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
                "feasible": r["feasible"]} for r in runs]
     return GoalAttainmentResult(
         success=success, message=msg, gamma=float(best["gamma"]), design=d,
-        objectives=objectives, goals=g, weights=w, objective_names=tuple(names),
+        objectives=objectives, goals=g[obj], weights=w[obj], objective_names=tuple(names),
         history=history, starts=starts,
         stats={"nfev": sum(f.nfev for f in runs_fj), "seconds": time.perf_counter() - t0, "n_starts": len(runs),
                "chosen_start": best_k,

@@ -100,7 +100,8 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
               stop_after: int | None = None, hv_scale: Sequence[float] | None = None,
               hv_reference: Sequence[float] | None = None, pick: str = "knee",
               pick_weights: Sequence[float] | None = None,
-              progress: Callable[[int, int], None] | None = None) -> ParetoResult:
+              progress: Callable[[int, int], None] | None = None,
+              initial: Any = None) -> ParetoResult:
     """Seeded NSGA-II on ``problem`` with per-generation hypervolume and checkpoints.
 
     Parameters
@@ -123,6 +124,14 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
     pick : str
         'knee', 'compromise' or 'preference' (see :func:`pick_preferred`), made
         among the front points inside the hypervolume box (all if none is).
+    initial : array (k, n_var), optional
+        Unit-cube points put in the first population (e.g. the prototype, feasible by
+        construction when the limits are its own demands); the rest is drawn uniformly
+        with ``seed``.
+
+    With constraints (``problem.constraint_names``) pymoo ranks feasibility first; the
+    archive keeps feasible designs only, and a run that found none says so
+    (``success`` False).
     """
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.termination import get_termination
@@ -165,7 +174,13 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
         algorithm = restore(state, problem, n_gen)
         ck = Path(checkpoint) if checkpoint is not None else rdir
     else:
-        algorithm = NSGA2(pop_size=pop_size, seed=seed, eliminate_duplicates=True)
+        kw: dict[str, Any] = {}
+        if initial is not None:
+            first = np.atleast_2d(np.asarray(initial, dtype=float))[:pop_size]
+            rest = np.random.default_rng(seed).random((pop_size - first.shape[0],
+                                                       problem.n_var))
+            kw["sampling"] = np.clip(np.vstack([first, rest]), 0.0, 1.0)
+        algorithm = NSGA2(pop_size=pop_size, seed=seed, eliminate_duplicates=True, **kw)
         algorithm.setup(problem, termination=("n_gen", n_gen), verbose=False)
         history = []
         archive = np.zeros((0, m))
@@ -181,7 +196,10 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
         if infills is not None:
             algorithm.evaluator.eval(algorithm.problem, infills, algorithm=algorithm)
             algorithm.advance(infills=infills)
-            archive, changed = update_archive(archive, infills.get("F"))
+            F_new = infills.get("F")
+            if problem.n_ieq_constr:  # the archive holds feasible designs only
+                F_new = F_new[np.all(infills.get("G") <= 0.0, axis=1)]
+            archive, changed = update_archive(archive, F_new)
         else:
             algorithm.advance()
         _, F = _front(algorithm)
@@ -208,8 +226,14 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
     idx = int(cand[pick_preferred(F[cand] / scale, pick, pick_weights)])
     msg = (f"stopped after {len(history)} of {n_gen} generations (resume with --resume)"
            if interrupted else f"{len(history)} generations, {F.shape[0]} non-dominated designs")
+    feasible = True
+    if problem.n_ieq_constr:
+        feasible = bool(np.all(algorithm.opt.get("feas")))
+        if not feasible:
+            msg += ("; NO design within the constraints was found (the front shows the "
+                    "least infeasible)")
     return ParetoResult(
-        success=not interrupted, message=msg, X=X, designs=problem.space.from_unit(X), F=F,
+        success=not interrupted and feasible, message=msg, X=X, designs=problem.space.from_unit(X), F=F,
         objective_names=problem.objective_names, preferred=idx, pick=pick, history=history,
         hv_scale=scale, hv_reference=ref,
         stats={"n_eval": int(algorithm.evaluator.n_eval), "seconds": time.perf_counter() - t0,

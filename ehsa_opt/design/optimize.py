@@ -17,6 +17,7 @@ result.json and ``front_check.csv`` (fast-path vs time-domain objectives).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
@@ -29,8 +30,9 @@ from .goal import GoalAttainmentResult, solve_goal_attainment
 from .nsga2 import ParetoResult, run_nsga2
 from .problem import OBJECTIVE_NAMES, DesignProblem, QuarterCarObjectives
 
-__all__ = ["build_problem", "config_frictions", "front_check", "goals_and_weights", "optimize", "OptimizeOutcome",
-           "objectives_at", "design_record"]
+__all__ = ["build_problem", "config_frictions", "front_check", "goals_and_weights", "optimize",
+           "OptimizeOutcome", "objectives_at", "design_record", "constraint_record",
+           "harvesters_of", "motor_summary", "time_domain_summary"]
 
 
 def config_frictions(cfg: DesignConfig) -> tuple[FrictionParams, ...]:
@@ -41,23 +43,27 @@ def config_frictions(cfg: DesignConfig) -> tuple[FrictionParams, ...]:
 
 def build_problem(cfg: DesignConfig, mapper: Any = None,
                   frictions: Sequence[FrictionParams] | None = None,
-                  friction_mode: str | None = None) -> DesignProblem:
+                  friction_mode: str | None = None, motor: Any = None) -> DesignProblem:
     """The pymoo design problem of a config: the frictionless exact linear path, or
     with ``frictions`` (default: the file's ``[friction]``) the friction-aware fast
-    path combined by ``friction_mode`` (``at`` for one set, else ``worst`` by default)."""
+    path combined by ``friction_mode`` (``at`` for one set, else ``worst`` by default).
+    ``motor``: the generator model (default the config's, :meth:`DesignConfig.motor`;
+    a catalogue motor for one run of a catalogue study)."""
     frictions = tuple(config_frictions(cfg) if frictions is None else frictions)
     if frictions:
         from .robust import FrictionObjectives
         mode = friction_mode or ("at" if len(frictions) == 1 else "worst")
         ev: Any = FrictionObjectives(cfg.vehicle, cfg.road, cfg.harvester,
-                                     (("n_freq", cfg.n_freq),), frictions=frictions,
+                                     (("n_freq", cfg.n_freq),), motor if motor is not None
+                                     else cfg.motor(), None, frictions=frictions,
                                      mode=mode)
     else:
         if friction_mode not in (None, "at"):
             raise ParameterError(f"--friction-mode {friction_mode} needs friction sets: give "
                                  "--friction FILE:CASE (repeatable) or a [friction] table")
         ev = QuarterCarObjectives(cfg.vehicle, cfg.road, cfg.harvester,
-                                  (("n_freq", cfg.n_freq),))
+                                  (("n_freq", cfg.n_freq),), motor if motor is not None
+                                  else cfg.motor(), cfg.stroke_limit_m)
     problem = DesignProblem(cfg.space, ev)
     problem.mapper = mapper
     return problem
@@ -122,13 +128,95 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
 
     For NSGA-II the goal-attainment point is computed too (``with_goal_attainment``)
     so the front can be drawn against it and checked for dominance.  ``frictions`` /
-    ``friction_mode``: see :func:`build_problem`; with friction the result is checked in
-    the time domain (``check_time_domain``).  ``identified_range_m_per_s``: the friction's
-    identified range (default: that of the ``friction_labels`` files, of the problem file's
-    ``[friction] from``, else the embedded campaign's); ``result.json`` states the
-    fractions of time and friction energy the chosen design spends above it
-    (``out_of_range``, fast path).
+    ``friction_mode``: see :func:`build_problem`; the result is re-simulated in the time
+    domain (``check_time_domain``) with friction, and without friction whenever the
+    problem has rated-limit constraints.  With a motor catalogue (``[motor] model =
+    "catalogue"``) the study runs once per motor (``out_dir/motor_<k>/``) and
+    result.json holds the best motor's result and a ``catalogue`` table of all.
+    ``identified_range_m_per_s``: the friction's identified range (default: that of the
+    ``friction_labels`` files, of the problem file's ``[friction] from``, else the
+    embedded campaign's); ``result.json`` states the fractions of time and friction
+    energy the chosen design spends above it (``out_of_range``, fast path).
     """
+    kw = dict(pop=pop, gens=gens, seed=seed, checkpoint=checkpoint, resume=resume,
+              stop_after=stop_after, mapper=mapper, with_goal_attainment=with_goal_attainment,
+              progress=progress, frictions=frictions, friction_mode=friction_mode,
+              friction_labels=friction_labels, check_time_domain=check_time_domain,
+              identified_range_m_per_s=identified_range_m_per_s,
+              identified_range_source=identified_range_source)
+    if cfg.motor_model != "catalogue":
+        return _optimize_one(cfg, method, out_dir=out_dir, **kw)
+    from ..utils.io import atomic_write_json, atomic_write_text
+    if checkpoint is not None or resume is not None:
+        raise ParameterError("--checkpoint/--resume: not available with a motor catalogue "
+                             "(one run per motor); run one motor's problem instead")
+    out = Path(out_dir)
+    results = []
+    for k, motor in enumerate(cfg.catalogue_motors()):
+        res = _optimize_one(cfg, method, out_dir=out / f"motor_{k}", motor=motor, **kw)
+        results.append((motor, res))
+    table = [{"motor": m.name, "source": m.source, "success": bool(r["success"]),
+              "feasible": bool(r.get("feasible", False)),
+              "gamma": r.get("gamma"), "design": r["design"], "objectives": r["objectives"],
+              "metrics": r["metrics"],
+              "active_constraints": r.get("active_constraints", []),
+              "constraints": r.get("constraints", {})} for m, r in results]
+    feasible = [i for i, row in enumerate(table) if row["feasible"]]
+    method = check_method(method or cfg.method)
+    if method == "goal-attainment":
+        pool = feasible or list(range(len(table)))
+        best = min(pool, key=lambda i: (table[i]["gamma"] if table[i]["gamma"] is not None
+                                        else math.inf))
+    else:
+        best = max(feasible or list(range(len(table))),
+                   key=lambda i: results[i][1].get("n_feasible_front", 0))
+    outcome = OptimizeOutcome(results[best][1])
+    outcome.result = results[best][1].result
+    outcome.goal_attainment = results[best][1].goal_attainment
+    outcome.update({"motor": {"model": "catalogue", "catalogue": cfg.catalogue,
+                              "chosen": table[best]["motor"],
+                              "source": table[best]["source"]},
+                    "catalogue": table,
+                    "catalogue_note": ("no motor of the catalogue has a feasible design"
+                                       if not feasible else
+                                       f"{len(feasible)} of {len(table)} motors feasible")})
+    if method == "nsga2":
+        # the catalogue's front: feasible points of every motor, non-dominated across motors
+        from .pareto import non_dominated
+        pts = []
+        for m, r in results:
+            pr = r.result
+            ok = np.ones(pr.F.shape[0], bool)
+            if r.get("feasible_front") is not None:
+                ok = np.asarray(r["feasible_front"], bool)
+            for i in np.flatnonzero(ok):
+                pts.append((m.name, {k: float(v[i]) for k, v in pr.designs.items()}, pr.F[i]))
+        keep = (np.flatnonzero(non_dominated(np.array([p[2] for p in pts]))) if pts
+                else np.zeros(0, int))
+        names = list(pts[0][1]) if pts else []
+        lines = [",".join(["motor"] + names + list(OBJECTIVE_NAMES))]
+        lines += [",".join([f'"{pts[i][0]}"'] + [repr(pts[i][1][n]) for n in names]
+                           + [repr(float(v)) for v in pts[i][2]]) for i in keep]
+        outcome["n_front"] = len(lines) - 1
+        outcome["front_note"] = ("feasible points of every motor, non-dominated across motors"
+                                 if pts else "no motor has a feasible design")
+        atomic_write_text(out / "pareto.csv", "\n".join(lines) + "\n")
+    atomic_write_json(out / "result.json", dict(outcome), indent=2)
+    return outcome
+
+
+def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Path,
+                  pop: int | None = None, gens: int | None = None, seed: int | None = None,
+                  checkpoint: str | Path | None = None, resume: str | Path | None = None,
+                  stop_after: int | None = None, mapper: Any = None,
+                  with_goal_attainment: bool = True,
+                  progress: Callable[[int, int], None] | None = None,
+                  frictions: Sequence[FrictionParams] | None = None,
+                  friction_mode: str | None = None, friction_labels: Sequence[str] = (),
+                  check_time_domain: bool = True, motor: Any = None,
+                  identified_range_m_per_s: float | None = None,
+                  identified_range_source: str = "") -> OptimizeOutcome:
+    """One design study (one motor model) of :func:`optimize`."""
     from ..utils.io import atomic_write_json, atomic_write_text
 
     method = check_method(method or cfg.method)
@@ -142,9 +230,11 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
     out = Path(out_dir)
     if resume is not None:
         load_state(resume)  # a bad checkpoint is refused before any work
-    problem = build_problem(cfg, mapper, frictions, friction_mode)
+    problem = build_problem(cfg, mapper, frictions, friction_mode, motor)
     ev = problem.evaluator
-    goals, weights, proto = goals_and_weights(cfg, problem)
+    # goals: the prototype's own objectives (its own motor), whatever motor is designed
+    goals, weights, proto = goals_and_weights(
+        cfg, problem if motor is None else build_problem(cfg, None, frictions, friction_mode))
     ga_settings = cfg.goal_attainment
     outcome = OptimizeOutcome()
     outcome.update({"problem_file": cfg.path, "method": method,
@@ -152,6 +242,7 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
                                                           "speed_km_per_h": cfg.road.speed_km_per_h},
                     "box": cfg.space.as_dict(),
                     "friction": _friction_block(ev, friction_labels),
+                    "motor": _motor_block(ev, cfg),
                     "prototype": design_record(cfg.prototype_design, proto)})
     ga = None
     if method == "goal-attainment" or with_goal_attainment:
@@ -170,6 +261,7 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
         assert ga is not None
         outcome.update(design_record(ga.design, ga.objectives))
         outcome.update({"success": ga.success, "message": ga.message, "gamma": ga.gamma})
+        outcome.update(constraint_record(problem, ga.objectives))
         outcome.result = ga
     else:
         ns = cfg.nsga2
@@ -179,11 +271,30 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
                        seed=ns.seed if seed is None else seed, checkpoint=checkpoint,
                        resume=resume, stop_after=stop_after, hv_scale=F_proto,
                        hv_reference=ref, pick=ns.pick, pick_weights=ns.pick_weights,
-                       progress=progress)
+                       progress=progress,
+                       initial=(problem.space.to_unit(cfg.prototype_design)[None, :]
+                                if problem.constraint_names and motor is None else None))
         i = pr.preferred
         d = {k: float(v[i]) for k, v in pr.designs.items()}
         outputs = objectives_at(problem, d)
         outcome.update(design_record(d, outputs))
+        outcome.update(constraint_record(problem, outputs))
+        front_out = problem.evaluate_design(pr.designs)
+        if problem.constraint_names:
+            G = np.column_stack([np.asarray(front_out[f"constraint_{c}"], float)
+                                 for c in problem.constraint_names])
+            outcome["n_feasible_front"] = int(np.sum(np.all(G <= 1e-9, axis=1)))
+            outcome["feasible_front"] = np.all(G <= 1e-9, axis=1).tolist()
+        from ..vehicle.validity import FAST_PATH_REGION, check_validity
+        region, design = None, dict(pr.designs)
+        if hasattr(ev, "frictions"):  # the fast path: its validated region
+            region = FAST_PATH_REGION
+            design["electrical_damping_Ns_per_m"] = np.array(
+                [h.equivalent_damping_Ns_per_m(0.0) for h in harvesters_of(ev, pr.designs)])
+        validity = check_validity(front_out, stroke_limit_m=cfg.vehicle.stroke_limit_m,
+                                  design=design, fast_path_region=region)
+        outcome["front_validity"] = validity.as_list()  # per pareto.csv row
+        outcome["n_front_valid"] = int(np.sum(validity.valid))
         outcome.update({"success": pr.success, "message": pr.message, "pick": pr.pick,
                         "n_front": int(pr.F.shape[0]),
                         "hypervolume": {"normalisation": "F / F(prototype)",
@@ -201,7 +312,7 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
     outcome["out_of_range"] = _out_of_range(cfg, ev, outcome["design"],
                                             identified_range_m_per_s, identified_range_source,
                                             friction_labels)
-    if check_time_domain and hasattr(ev, "frictions"):
+    if check_time_domain and (hasattr(ev, "frictions") or problem.constraint_names):
         if method == "nsga2":
             designs = {k: np.asarray(v, float) for k, v in outcome.result.designs.items()}
         else:
@@ -256,17 +367,19 @@ def front_check(cfg: DesignConfig, ev: Any, designs: Mapping[str, np.ndarray]
     """Re-simulate designs in the time domain with the evaluator's friction and mode;
     relative errors of the fast path's objectives.  Returns the summary and a CSV."""
     from .robust import time_domain_objectives
-    from .sweep import harvesters_from
 
     sim = getattr(cfg.physical, "simulation", None)
     kw = {}
     if sim is not None:
         kw = {k: getattr(sim, k) for k in ("settle_s", "sample_rate_hz") if hasattr(sim, k)}
     fast = ev(designs)
-    td = time_domain_objectives(cfg.vehicle, cfg.road, harvesters_from(cfg.harvester, designs),
-                                ev.frictions, ev.mode, **kw)
+    hs = harvesters_of(ev, designs)
+    frictions = getattr(ev, "frictions", (None,))
+    td = time_domain_objectives(cfg.vehicle, cfg.road, hs, frictions,
+                                getattr(ev, "mode", "at"), **kw)
     err = {k: np.asarray(fast[k], float) / np.asarray(td[k], float) - 1.0
            for k in OBJECTIVE_NAMES}
+    limits = _time_domain_limits(cfg, ev, hs, fast, **kw) if ev.constraint_names else {}
     worst = {k: float(np.max(np.abs(v))) for k, v in err.items()}
     names = list(designs)
     lines = [",".join(names + [f"{k}_fast" for k in OBJECTIVE_NAMES]
@@ -285,4 +398,138 @@ def front_check(cfg: DesignConfig, ev: Any, designs: Mapping[str, np.ndarray]
                "worst_abs_rel_error": worst,
                "median_abs_rel_error": {k: float(np.median(np.abs(v))) for k, v in err.items()},
                "within_5pct": bool(max(worst.values()) <= 0.05)}
+    if limits:
+        summary["rated_limits"] = limits
+        summary["within_5pct"] = bool(summary["within_5pct"] and limits["within_5pct"])
     return summary, "\n".join(lines) + "\n"
+
+
+def harvesters_of(ev: Any, designs: Mapping[str, np.ndarray]) -> list[Any]:
+    """One :class:`~ehsa_opt.physics.params.HarvesterParams` per design, with the
+    evaluator's motor model (the winding R_i, L_i at the design's K_e; a catalogue
+    motor's constants and rotor inertia)."""
+    from .sweep import harvesters_from
+    hs = harvesters_from(ev.base, designs)
+    motor = getattr(ev, "motor", None)
+    if motor is None:
+        return hs
+    n = len(hs)
+    mapping = ev.design_mapping(designs)
+    ri = np.broadcast_to(np.asarray(mapping["internal_resistance_ohm"], float), (n,))
+    li = np.broadcast_to(np.asarray(mapping["inductance_H"], float), (n,))
+    out = []
+    for k, h in enumerate(hs):
+        h = h.replace(internal_resistance_ohm=float(ri[k]), inductance_H=float(li[k]))
+        if getattr(motor, "kind", None) == "catalogue":
+            jt = h.total_inertia_gcm2
+            h = motor.harvester(h).replace(
+                screw_inertia_gcm2=max(jt - motor.motor_inertia_gcm2, 0.0))
+        out.append(h)
+    return out
+
+
+def constraint_record(problem: DesignProblem, outputs: Mapping[str, float],
+                      active_tol: float = 1e-3) -> dict[str, Any]:
+    """Constraint values (value / limit − 1, ≤ 0 feasible) at a design, which are active
+    (within ``active_tol`` of their limit) and whether all hold."""
+    names = problem.constraint_names
+    if not names:
+        return {}
+    vals = {c: float(outputs[f"constraint_{c}"]) for c in names}
+    return {"constraints": vals,
+            "active_constraints": [c for c, v in vals.items() if v > -active_tol],
+            "feasible": bool(all(v <= 1e-6 for v in vals.values()))}
+
+
+def _motor_block(ev: Any, cfg: DesignConfig) -> dict[str, Any] | None:
+    motor = getattr(ev, "motor", None)
+    if motor is None:
+        return None
+    block = {"model": motor.kind, "label": motor.label,
+             "rating": motor.rating.as_dict(),
+             "stroke_limit_m": getattr(ev, "stroke_limit_m", None),
+             "constraints": list(getattr(ev, "constraint_names", ()))}
+    if motor.kind == "catalogue":
+        block.update({"name": motor.name, "source": motor.source,
+                      "speed_constant_rpm_per_V": motor.speed_constant_rpm_per_V})
+    elif motor.kind == "scaling" and cfg.motor_rating is None:
+        block["rating_source"] = ("assumption: the prototype's own demand on the design road "
+                                  "(no [motor] ratings given)")
+    return block
+
+
+def _time_domain_limits(cfg: DesignConfig, ev: Any, hs: Sequence[Any],
+                        fast: Mapping[str, np.ndarray], *, settle_s: float = 2.0,
+                        sample_rate_hz: float = 1000.0) -> dict[str, Any]:
+    """The rated-limit constraints re-evaluated from a frictionless time-domain simulation
+    of the same designs (rms current, 3.5 × rms voltage and stroke, as in the design), and
+    the measured peaks.  ``within_5pct``: every constraint holds in the time domain within
+    5 % of its limit and its value agrees with the frequency path's within 5 % of the
+    limit."""
+    import warnings
+
+    from ..vehicle.simulate import RoadHoldingWarning, simulate_quarter_car
+    from ..vehicle.validity import GAUSSIAN_PEAK_FACTOR
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RoadHoldingWarning)
+        sim = simulate_quarter_car(cfg.vehicle, list(hs), None, cfg.road, settle_s=settle_s,
+                                   sample_rate_hz=sample_rate_hz, keep_series=False)
+    m = sim.metrics
+    ri = np.array([h.internal_resistance_ohm for h in hs])
+    td = {}
+    for c in ev.constraint_names:
+        if c == "rated_current":
+            td[c] = m["current_rms_A"] / np.asarray(fast["rated_current_A"], float) - 1.0
+        elif c == "rated_voltage":
+            td[c] = (GAUSSIAN_PEAK_FACTOR * m["voltage_rms_V"]
+                     / np.asarray(fast["rated_voltage_V"], float) - 1.0)
+        elif c == "rated_power":
+            td[c] = ((m["power_W"] + ri * m["current_rms_A"] ** 2)
+                     / np.asarray(fast["rated_power_W"], float) - 1.0)
+        elif c == "stroke":
+            td[c] = GAUSSIAN_PEAK_FACTOR * m["stroke_rms_m"] / ev.stroke_limit_m - 1.0
+        else:  # geometric (motor inertia): no dynamics
+            td[c] = np.asarray(fast[f"constraint_{c}"], float)
+    worst_td = {c: float(np.max(v)) for c, v in td.items()}
+    diff = {c: float(np.max(np.abs(v - np.asarray(fast[f"constraint_{c}"], float))))
+            for c, v in td.items()}
+    return {"time_domain_worst_constraint": worst_td,
+            "frequency_vs_time_worst_difference": diff,
+            "measured_peak_voltage_V": float(np.max(m["peak_voltage_V"])),
+            "measured_peak_current_A": float(np.max(m["peak_current_A"])),
+            "measured_peak_stroke_m": float(np.max(m["peak_stroke_m"])),
+            "within_5pct": bool(all(v <= 0.05 for v in worst_td.values())
+                                and all(v <= 0.05 for v in diff.values()))}
+
+
+def motor_summary(outcome: Mapping[str, Any]) -> list[str]:
+    """Lines on the motor model, constraint values and active constraints (CLI)."""
+    lines = []
+    if outcome.get("motor"):
+        mb = outcome["motor"]
+        lines.append(f"motor: {mb.get('label', mb.get('chosen', mb['model']))}"
+                     + ("; constraints at the result: " + ", ".join(
+                         f"{k} {v:+.3f}" for k, v in outcome["constraints"].items())
+                        + f" (active: {', '.join(outcome['active_constraints']) or 'none'})"
+                        if outcome.get("constraints") else ""))
+    for row in outcome.get("catalogue", []):
+        lines.append(f"  {row['motor']}: {'feasible' if row['feasible'] else 'INFEASIBLE'}"
+                     + (f", gamma {row['gamma']:+.4f}" if row.get("gamma") is not None else "")
+                     + (f", at or beyond the limit: {', '.join(row['active_constraints'])}"
+                        if row["active_constraints"] else ""))
+    return lines
+
+
+def time_domain_summary(outcome: Mapping[str, Any]) -> str:
+    """One line on the time-domain re-simulation of the result (CLI)."""
+    chk = outcome["time_domain_check"]
+    lim = chk.get("rated_limits")
+    fr = bool(outcome.get("friction"))
+    return (f"time-domain check{' with friction' if fr else ''} ({chk['n_designs']} designs, "
+            f"{chk['road']['length_m']:g} m road): worst |error| of the "
+            f"{'fast' if fr else 'frequency'} path "
+            + ", ".join(f"{k} {100 * v:.2f} %" for k, v in chk["worst_abs_rel_error"].items())
+            + ("" if not lim else "; rated limits in the time domain, worst value/limit - 1: "
+               + ", ".join(f"{k} {v:+.4f}" for k, v in
+                           lim["time_domain_worst_constraint"].items()))
+            + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")

@@ -184,13 +184,44 @@ class QuarterCarObjectives:
     road: RoadParams
     base: HarvesterParams = field(default_factory=HarvesterParams)
     metric_options: tuple[tuple[str, Any], ...] = ()
+    motor: Any = None
+    stroke_limit_m: float | None = None
 
     objective_names = OBJECTIVE_NAMES
 
+    @property
+    def constraint_names(self) -> tuple[str, ...]:
+        """Inequality constraints (value ≤ 0 feasible, each normalised by its limit):
+        the motor's rated limits that it states, the stroke, and a catalogue motor's
+        rotor inertia within J_t."""
+        out = []
+        rating = getattr(self.motor, "rating", None)
+        if rating is not None:
+            for name, key in (("rated_current", "current_A"), ("rated_voltage", "voltage_V"),
+                              ("rated_power", "power_W")):
+                if getattr(rating, key) is not None:
+                    out.append(name)
+        if self.stroke_limit_m is not None:
+            out.append("stroke")
+        if getattr(self.motor, "kind", None) == "catalogue":
+            out.append("motor_inertia")
+        return tuple(out)
+
+    def _voltage_constant(self, design: Mapping[str, Any]) -> np.ndarray:
+        if getattr(self.motor, "kind", None) == "catalogue":
+            return np.asarray(self.motor.voltage_constant_Vs_per_rad, dtype=float)
+        if "speed_constant_rpm_per_V" in design:
+            return 60.0 / (2.0 * math.pi * np.asarray(design["speed_constant_rpm_per_V"],
+                                                      dtype=float))
+        if "voltage_constant_Vs_per_rad" in design:
+            return np.asarray(design["voltage_constant_Vs_per_rad"], dtype=float)
+        return np.asarray(self.base.voltage_constant_Vs_per_rad, dtype=float)
+
     def design_mapping(self, design: Mapping[str, Any]) -> dict[str, Any]:
-        """The ``linear_metrics`` design mapping: base fields + design variables."""
-        fixed = {"internal_resistance_ohm": self.base.internal_resistance_ohm,
-                 "inductance_H": self.base.inductance_H}
+        """The ``linear_metrics`` design mapping: base fields + design variables, with the
+        motor model's winding (R_i, L_i) at the design's voltage constant."""
+        fixed: dict[str, Any] = {"internal_resistance_ohm": self.base.internal_resistance_ohm,
+                                 "inductance_H": self.base.inductance_H}
         if "total_inertia_gcm2" not in design:
             fixed["total_inertia_gcm2"] = self.base.total_inertia_gcm2
         if "speed_constant_rpm_per_V" not in design and "voltage_constant_Vs_per_rad" not in design:
@@ -200,32 +231,82 @@ class QuarterCarObjectives:
             if key not in design:
                 fixed[key] = getattr(self.base, key)
         fixed.update({k: np.asarray(v, dtype=float) for k, v in design.items()})
+        if self.motor is not None:
+            ke = self._voltage_constant(design)
+            if getattr(self.motor, "kind", None) == "catalogue":
+                fixed.pop("speed_constant_rpm_per_V", None)
+                fixed["voltage_constant_Vs_per_rad"] = ke
+                fixed["torque_constant_Nm_per_A"] = ke
+            w = self.motor.winding(ke)
+            fixed["internal_resistance_ohm"] = w["internal_resistance_ohm"]
+            fixed["inductance_H"] = w["inductance_H"]
         return fixed
 
     def __call__(self, design: Mapping[str, Any]) -> dict[str, np.ndarray]:
         from ..vehicle.metrics import linear_metrics
-        m = linear_metrics(self.vehicle, self.road, self.design_mapping(design),
-                           **dict(self.metric_options))
+        mapping = self.design_mapping(design)
+        m = linear_metrics(self.vehicle, self.road, mapping, **dict(self.metric_options))
         out = {"comfort": m["comfort"], "road_holding": m["road_holding"],
                "inverse_power": 1.0 / m["power_dimensionless"],
                "inverse_efficiency": 1.0 / m["efficiency"]}
         for key in ("comfort_weighted_rms_m_s2", "power_W", "efficiency", "power_dimensionless",
-                    "dissipated_power_W", "dissipation_bound_W"):
+                    "dissipated_power_W", "dissipation_bound_W", "current_rms_A",
+                    "voltage_rms_V", "stroke_rms_m"):
             if key in m:
                 out[key] = m[key]
+        out.update(self.constraints(mapping, m))
+        return out
+
+    def constraints(self, mapping: Mapping[str, Any], m: Mapping[str, np.ndarray]
+                    ) -> dict[str, np.ndarray]:
+        """``constraint_<name>`` = value / limit − 1 (≤ 0 feasible) and the winding used."""
+        from ..vehicle.validity import GAUSSIAN_PEAK_FACTOR
+        names = self.constraint_names
+        if not names and self.motor is None:
+            return {}
+        shape = np.shape(m["comfort"])
+        ri = np.broadcast_to(np.asarray(mapping["internal_resistance_ohm"], float), shape)
+        out = {"internal_resistance_ohm": ri}
+        w = self.motor.winding(self._voltage_constant(mapping)) if self.motor is not None \
+            else {}
+        lim = {k: np.broadcast_to(np.asarray(v, float), shape) for k, v in w.items()
+               if k.startswith("rated_")}
+        if "rated_current" in names:
+            out["constraint_rated_current"] = m["current_rms_A"] / lim["rated_current_A"] - 1.0
+        if "rated_voltage" in names:
+            out["constraint_rated_voltage"] = (GAUSSIAN_PEAK_FACTOR * m["voltage_rms_V"]
+                                               / lim["rated_voltage_V"] - 1.0)
+        if "rated_power" in names:
+            p_el = m["power_W"] + ri * m["current_rms_A"] ** 2
+            out["constraint_rated_power"] = p_el / lim["rated_power_W"] - 1.0
+        if "stroke" in names:
+            out["constraint_stroke"] = (GAUSSIAN_PEAK_FACTOR * m["stroke_rms_m"]
+                                        / self.stroke_limit_m - 1.0)
+        if "motor_inertia" in names:
+            jt = np.broadcast_to(np.asarray(mapping.get("total_inertia_gcm2",
+                                                        self.base.total_inertia_gcm2), float),
+                                 shape)
+            out["constraint_motor_inertia"] = self.motor.motor_inertia_gcm2 / jt - 1.0
+        for k in ("rated_current_A", "rated_voltage_V", "rated_power_W"):
+            if k in lim:
+                out[k] = lim[k]
         return out
 
     def fingerprint(self) -> dict[str, Any]:
         from dataclasses import asdict
-        return {"kind": "quarter_car_linear", "vehicle": asdict(self.vehicle),
-                "road": asdict(self.road), "base": asdict(self.base),
-                "options": dict(self.metric_options)}
+        fp = {"kind": "quarter_car_linear", "vehicle": asdict(self.vehicle),
+              "road": asdict(self.road), "base": asdict(self.base),
+              "options": dict(self.metric_options)}
+        if self.motor is not None or self.stroke_limit_m is not None:
+            fp["motor"] = None if self.motor is None else self.motor.fingerprint()
+            fp["stroke_limit_m"] = self.stroke_limit_m
+        return fp
 
 
 # --------------------------------------------------------------------------- pymoo problem
 @dataclass(frozen=True)
 class _ObjectiveChunk:
-    """Picklable task: objective matrix of a block of unit-cube points."""
+    """Picklable task: objective (and constraint) matrix of a block of unit-cube points."""
 
     space: DesignSpace
     evaluator: Any
@@ -260,11 +341,14 @@ class DesignProblem(Problem):
         self.space = space
         self.evaluator = evaluator
         self.objective_names = tuple(evaluator.objective_names)
+        #: inequality constraints (≤ 0 feasible) the evaluator returns as
+        #: ``constraint_<name>``; pymoo ranks feasibility first
+        self.constraint_names = tuple(getattr(evaluator, "constraint_names", ()))
         #: optional ``mapper(fn, list_of_chunks) -> list`` (local pool or Dask, see
         #: :mod:`ehsa_opt.design.sweep`) to spread a population over workers; not pickled
         self.mapper: Any = None
-        super().__init__(n_var=space.n, n_obj=len(self.objective_names), xl=0.0, xu=1.0,
-                         vtype=float)
+        super().__init__(n_var=space.n, n_obj=len(self.objective_names),
+                         n_ieq_constr=len(self.constraint_names), xl=0.0, xu=1.0, vtype=float)
 
     def evaluate_design(self, design: Mapping[str, Any]) -> dict[str, np.ndarray]:
         """All evaluator outputs (objectives and extras) of physical designs."""
@@ -272,12 +356,17 @@ class DesignProblem(Problem):
 
     def objectives_unit(self, U: Any) -> np.ndarray:
         """Objective matrix (n, n_obj) of unit-cube points ``U`` (n, n_var)."""
+        return self.evaluate_unit(U)[:, :len(self.objective_names)]
+
+    def evaluate_unit(self, U: Any) -> np.ndarray:
+        """Objectives then constraints, (n, n_obj + n_constr), of unit-cube points."""
         U = np.atleast_2d(np.asarray(U, dtype=float))
         # fixed blocks of CHUNK designs, locally and on a mapper alike: vectorised
         # evaluators may round differently with the batch size, and the blocks make
         # local and distributed runs bit-identical
         blocks = np.array_split(U, max(1, -(-U.shape[0] // self.CHUNK)))
-        task = _ObjectiveChunk(self.space, self.evaluator, self.objective_names)
+        task = _ObjectiveChunk(self.space, self.evaluator, self.objective_names
+                               + tuple(f"constraint_{c}" for c in self.constraint_names))
         if self.mapper is not None and len(blocks) > 1:
             return np.vstack(self.mapper(task, blocks))
         return np.vstack([task(b) for b in blocks])
@@ -288,9 +377,13 @@ class DesignProblem(Problem):
         return state
 
     def _evaluate(self, X: np.ndarray, out: dict, *args: Any, **kwargs: Any) -> None:
-        F = self.objectives_unit(X)
+        FG = self.evaluate_unit(X)
         # a non-finite objective (numerically broken design) must not poison sorting
-        out["F"] = np.where(np.isfinite(F), F, 1e30)
+        FG = np.where(np.isfinite(FG), FG, 1e30)
+        n_obj = len(self.objective_names)
+        out["F"] = FG[:, :n_obj]
+        if self.constraint_names:
+            out["G"] = FG[:, n_obj:]
 
     def fingerprint(self) -> str:
         """Hash of the box and the evaluator settings (guards resumes)."""

@@ -112,6 +112,12 @@ class FrictionObjectives(QuarterCarObjectives):
             raise ParameterError(f"--friction-mode at needs exactly one friction set, got "
                                  f"{len(self.frictions)}; use worst or mean for several")
 
+    @property
+    def constraint_names(self) -> tuple[str, ...]:
+        """No rated-limit constraints on the friction-aware path (its rms currents and
+        voltages are not evaluated); the motor model still sets the winding."""
+        return ()
+
     def per_set(self, design: Mapping[str, Any]) -> list[dict[str, np.ndarray]]:
         """Objectives and extras at each friction set."""
         from ..vehicle.equivalent import friction_metrics

@@ -48,8 +48,12 @@ def design_inputs(ctx: Context) -> Any:
     return [text, ctx.inputs()] if (ctx.custom_data or ctx.vehicle_file) else text
 
 
-def _cfg(ctx: Context | None = None) -> Any:
-    """The paper's design problem; with ``reproduce --vehicle`` its vehicle replaced."""
+def _cfg(ctx: Context | None = None, motor_model: str = "paper") -> Any:
+    """The paper's design problem; with ``reproduce --vehicle`` its vehicle replaced, with
+    ``reproduce --data`` the user's harvester (bench.toml: winding, inductance, inertia,
+    constants) as the start of the design space.  ``motor_model``: "paper" (R_i, L_i
+    fixed: the paper's design space, used by the reproduction steps) or "scaling" (the
+    product's default: the user's frame rewound, with rated limits)."""
     import dataclasses
 
     from ..design.config import load_design_config
@@ -59,7 +63,9 @@ def _cfg(ctx: Context | None = None) -> Any:
     if ctx is not None and ctx.vehicle_file is not None:
         vehicle, name = ctx.vehicle()
         cfg = dataclasses.replace(cfg, vehicle=vehicle, vehicle_name=name)
-    return cfg
+    if ctx is not None and ctx.custom_data and ctx.has_generator:
+        cfg = dataclasses.replace(cfg, harvester=ctx.harvester(load_ohm=cfg.harvester.load_ohm))
+    return dataclasses.replace(cfg, motor_model=motor_model)
 
 
 def _not_applicable(ctx: Context) -> StepOutput | None:
@@ -68,6 +74,13 @@ def _not_applicable(ctx: Context) -> StepOutput | None:
     return StepOutput("Not applicable: the bench rig has no generator, so the design of a "
                       "harvester (inertia, lead, generator constant, load) has nothing to "
                       "start from in these data.\n", [], {"applicable": False})
+
+
+def _validity_cell(cfg: Any, outputs: dict) -> str:
+    """Validity of a frequency-path design result (road holding, stroke)."""
+    from ..vehicle.validity import check_validity
+    m = {k: outputs[k] for k in ("road_holding", "stroke_rms_m") if k in outputs}
+    return check_validity(m, stroke_limit_m=cfg.vehicle.stroke_limit_m).cell(0)
 
 
 def step_goal_attainment(ctx: Context) -> StepOutput:
@@ -137,10 +150,16 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         f"| W_k rms acceleration (m/s²) | {pm['comfort_weighted_rms_m_s2']:.3f} | "
         f"{om['comfort_weighted_rms_m_s2']:.3f} | {pd_out['comfort_weighted_rms_m_s2']:.3f} | – |",
         f"| attainment factor γ | 0 (goals) | **{ga.gamma:+.4f}** | {gamma_paper:+.4f} | – |",
+        "| validity (tyre on the ground, 3.5 × rms stroke within the limit) | "
+        + " | ".join(_validity_cell(cfg, o) for o in
+                     ({**proto, **pm}, {**out["objectives"], **om}, pd_out)) + " | – |",
     ]
     binding = [k for k, g, w in zip(OBJECTIVE_NAMES, ga.goals, ga.weights)
                if w > 0 and abs((ga.objectives[k] - g) / w - ga.gamma) < 1e-5]
     md = (
+        f"In the paper's design space (R_i = {cfg.harvester.internal_resistance_ohm:g} Ω and "
+        f"L_i fixed for every k_n, no rated limits; the product's default motor model is in "
+        f"the next section). "
         f"Goal attainment (`fgoalattain` semantics: min γ s.t. F_i − w_i γ ≤ goal_i, SLSQP "
         f"with vectorised finite-difference gradients, {ga.stats['n_starts']} starts) on "
         f"`problems/paper_design.toml`: {cfg.vehicle_name} quarter car, class "

@@ -123,7 +123,8 @@ def step_fig13(ctx: Context) -> StepOutput:
         np.linspace(6.5, 10.0, 5 if ctx.quick else 9),
         _exact_peaks(ctx.vehicle()[0], ctx.harvester(), loads)]), 4))
     study = stepped_sine_response(ctx.vehicle()[0], ctx.harvester(), fc, loads,
-                                  freqs, velocity_amplitude_m_per_s=v_road)
+                                  freqs, velocity_amplitude_m_per_s=v_road,
+                                  max_time_s=20.0 if ctx.quick else 60.0)
     rel = "figures/fig13_frequency_response.png"
     plots.save(study.plot(), ctx.out_dir / rel)
     i_none, i_max = study.cases.index("none"), study.cases.index("max")
@@ -181,7 +182,8 @@ def step_fig13(ctx: Context) -> StepOutput:
           "Steady state by construction: each point starts from the exact frictionless steady "
           "state and runs in windows of whole cycles (≥ 1 s) until the fundamental amplitudes "
           f"of x2 and V_g change by less than {100 * study.tolerance:g} % from one window to "
-          "the next. Check: without friction the simulation equals the exact linear response "
+          f"the next (at most {20 if ctx.quick else 60} s). Check: without friction the "
+          "simulation equals the exact linear response "
           f"within **{100 * study.frictionless_deviation():.2f} %** at every frequency and "
           "load (rows 'exact linear')." + unsettled + "\n\n" + "\n".join(rows) +
           "\n\nThe paper (text of its Fig 13): the generator voltage varies with the friction "

@@ -46,11 +46,17 @@ def _design_steps() -> list[Step]:
         step_goal_attainment,
         step_pareto,
     )
+    from .invariants_report import step_paper_invariants
+    from .motor_design_report import step_motor_design
     return [
         Step("design", "Optimal design by goal attainment (paper §4.2, Figs 17–19)",
              step_goal_attainment, design_inputs),
+        Step("design_motor", "Design with real motors: the scaling law, rated limits and a "
+             "catalogue, against the paper's fixed winding", step_motor_design, design_inputs),
         Step("design_pareto", "Pareto front of the design problem (NSGA-II)", step_pareto,
              design_inputs, depends=("design",)),
+        Step("paper_invariants", "The paper's numbers through the invariants (P/η, P ∝ V, "
+             "short-circuit damping)", step_paper_invariants, design_inputs),
         Step("design_friction", "Friction on the optimised design (paper Fig 20, Table 4)",
              step_friction_on_optimum, lambda ctx: [design_inputs(ctx), _qc_inputs(ctx)],
              depends=("design", "identification")),

@@ -70,6 +70,28 @@ def _road_convention(cfg: Any, sets: dict, paper: dict, table4: dict) -> tuple[s
     return "\n".join(lines), best
 
 
+def _convention_statement(cfg: Any, best_level: str) -> str:
+    """The road-class statement from the design- and friction-free invariant P/η, not
+    from powers that mix our friction with the paper's designs."""
+    from .design_report import PAPER_OPTIMUM, PAPER_TABLE4
+    from .invariants_report import paper_invariants
+    inv = paper_invariants(cfg.vehicle, cfg.road, cfg.harvester, PAPER_TABLE4, PAPER_OPTIMUM)
+    lv = inv["bound_by_level_W"]
+    pe = inv["p_over_eta_mean_W"]
+    where = ("between the class mean and the class upper limit" if lv["mean"] < pe < lv["upper"]
+             else "above the class upper limit" if pe >= lv["upper"] else "below the class mean")
+    return (f"These powers mix our friction with the paper's designs (the table's smaller "
+            f"log-error is under '{best_level}'), so they cannot decide the convention. The "
+            f"design- and friction-free invariant can: the paper's Table 4 gives P/η ≈ "
+            f"{pe:.0f} W at 100 km/h, i.e. k1·G_d(n0) = {inv['implied_k1_gd_ratio']:.2f} × "
+            f"ours — {where} (P_diss {lv['mean']:.0f} W / {lv['upper']:.0f} W with our tyre). "
+            + ("Neither convention reproduces the paper with our tyre stiffness; our default "
+               "stays the class mean (ISO 8608's geometric mean), and comparisons with the "
+               "paper are made through P/η (see the paper's numbers through the invariants)."
+               if lv["mean"] < pe < lv["upper"] else
+               f"Set `iso_class_level` in `[road]` to compare under the closer convention."))
+
+
 def _design_space(cfg: Any, sets: dict, ga_design: dict, speeds: tuple, n_lead: int,
                   n_load: int) -> list[dict]:
     """Optimum (lead, load) on a grid, J_t and k_n at the frictionless optimum: the
@@ -236,9 +258,7 @@ def step_robust_design(ctx: Context) -> StepOutput:
         + "\n".join(err_lines) + "\n\n"
         "**Road-class convention** (fast path; paper optimum at 100 km/h with no/min/max "
         "friction — our friction sets, not the paper's — and Fig 19's power):\n\n"
-        + conv_table + f"\n\nCloser to the paper: **{best_level}** (ISO 8608 class "
-        f"{'upper limit' if best_level == 'upper' else 'geometric mean'}); set "
-        f"`iso_class_level = \"{best_level}\"` in `[road]` to compare under it.\n\n"
+        + conv_table + "\n\n" + _convention_statement(cfg, best_level) + "\n\n"
         f"**Design space** — optimum lead and load (grid, J_t and k_n at the frictionless "
         f"optimum; min over the grid of the attainment factor against the prototype at the "
         f"same friction and speed):\n\n![design space]({figs[1]})\n\n"
