@@ -104,7 +104,8 @@ def test_split_holds_out_every_third_test():
 
 def test_backlash_hidden_is_named_and_the_gap_shrinks(backlash_dir, tmp_path):
     out = tmp_path / "out"
-    assert main(["discrepancy", str(backlash_dir), "--out", str(out)]) == 0
+    assert main(["discrepancy", str(backlash_dir), "--out", str(out),
+                 "--budget-s", "0"])  # correctness here; the budget has its own test == 0
     doc = json.loads((out / "discrepancy.json").read_text())
     assert doc["effect"] == "backlash"
     assert doc["evaluation"] == "held-out"
@@ -276,7 +277,9 @@ def test_sse_alternative_is_judged_per_channel():
     assert sse_can_earn(np.array([1.1, 1.3]) * n, n)
     # channel_sse: per channel, normalised by each test's sigma
     y = np.vstack([np.ones(50), 2 * np.ones(50)])
-    pt = NS(y=y, sigma=np.array([0.5, 2.0]))
+    sigma = np.array([0.5, 2.0])
+    pt = NS(y=y, sigma=sigma, weight=np.ones(y.shape[1]),
+            wnorm=np.ones(y.shape[1])[None, :] / sigma[:, None])
     off = np.array([[0.5], [2.0]])
     sse, cnt = channel_sse([pt, pt], [y - off, y + off])
     assert sse == pytest.approx([100.0, 100.0]) and list(cnt) == [100, 100]
