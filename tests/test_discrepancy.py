@@ -104,8 +104,9 @@ def test_split_holds_out_every_third_test():
 
 def test_backlash_hidden_is_named_and_the_gap_shrinks(backlash_dir, tmp_path):
     out = tmp_path / "out"
+    # correctness here, without a wall-time budget (the budget has its own test)
     assert main(["discrepancy", str(backlash_dir), "--out", str(out),
-                 "--budget-s", "0"])  # correctness here; the budget has its own test == 0
+                 "--budget-s", "0"]) == 0
     doc = json.loads((out / "discrepancy.json").read_text())
     assert doc["effect"] == "backlash"
     assert doc["evaluation"] == "held-out"
