@@ -1,8 +1,8 @@
-"""Friction bounds the bench data determine (issue 13): envelope of the identifiable rod
+"""Friction bounds the bench data determine: envelope of the identifiable rod
 friction and the ``min`` / ``best`` / ``max`` friction sets of every vehicle study.
 
 A rigid bench determines only the friction *at the rod*,
-F_rod(v) = F_ns(v) + T_b(v/r)/r (SPEC §2, identifiability), and only at the velocities a
+F_rod(v) = F_ns(v) + T_b(v/r)/r (the nut/bearing split is not identifiable), and only at the velocities a
 test actually reaches.  For every successful per-test fit the rod friction is evaluated on
 a velocity grid (from 10 % of the slowest test's peak velocity, where the Fisher analysis
 starts) up to the test's peak velocity; the **envelope** is the pointwise minimum and
@@ -55,6 +55,7 @@ from scipy import optimize, stats
 
 from ..physics.friction import bearing_friction_Nm, rod_friction_N, simscape_friction
 from ..physics.params import FRICTION_NAMES, FrictionParams
+from .test_velocity import test_peak_velocity_m_per_s, test_velocity_range_m_per_s
 
 __all__ = ["FrictionBounds", "friction_bounds", "paper_friction_sets", "velocity_grid",
            "test_peak_velocity_m_per_s", "test_velocity_range_m_per_s",
@@ -95,37 +96,6 @@ def velocity_grid(v_max_m_per_s: float, n: int = 48, v_min_m_per_s: float = 1e-3
     low = np.geomspace(v_min, min(0.02, v_max), 12)
     high = np.linspace(min(0.02, v_max), v_max, max(n - 12, 2))
     return np.unique(np.round(np.concatenate([low, high]), 12))
-
-
-def test_peak_velocity_m_per_s(test: Any) -> float:
-    """Peak rod velocity of a bench test: 2π f A for a sine test, else the 99th
-    percentile of |v| of a smoothing spline through the measured displacement."""
-    if getattr(test, "excitation", "sine") == "sine" and test.frequency_hz and test.amplitude_m:
-        return 2.0 * math.pi * float(test.frequency_hz) * float(test.amplitude_m)
-    from ..physics.motion import SampledMotion
-    t, x = np.asarray(test.time_s), np.asarray(test.displacement_m)
-    step = max(1, t.size // 2000)
-    motion = SampledMotion(t[::step], x[::step])
-    v = motion.evaluate(t[::step])[1]
-    return float(np.percentile(np.abs(v), 99.0))
-
-
-def test_velocity_range_m_per_s(test: Any, mass_kg: float | None = None
-                                ) -> tuple[float, float]:
-    """Rod speeds at which a test's data determine the friction, m/s: (0, peak) for a
-    sine test; for a recorded test the 1st–99th percentile of |v| over the samples the
-    fit used (outside the corner and dwell windows of
-    :func:`~ehsa_opt.estimation.identify_options.estimate_motion`) — a constant-velocity
-    stroke says nothing about the friction between its plateau speed and zero, which it
-    crosses only inside the reversal windows."""
-    if getattr(test, "excitation", "sine") == "sine" and test.frequency_hz and test.amplitude_m:
-        return 0.0, test_peak_velocity_m_per_s(test)
-    from .identify_options import estimate_motion
-    est = estimate_motion(test, None, mass_kg)
-    v = np.abs(est.motion.evaluate(test.time_s)[1])[est.resolved]
-    if v.size < 10:
-        return math.nan, math.nan  # nothing resolved: the test bounds nothing
-    return float(np.percentile(v, 1.0)), float(np.percentile(v, 99.0))
 
 
 def _friction(params: Mapping[str, float], has_generator: bool) -> FrictionParams:
@@ -601,7 +571,7 @@ def envelope_lines(doc: Mapping[str, Any], path: Any) -> list[str]:
     v = np.array(env["velocity_m_per_s"], dtype=float)
     hi = (env.get("identified_range_m_per_s") or [0.0, float(v.max())])[1]
     at = [x for x in (0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0, 3.0) if x <= v.max() + 1e-9]
-    out = [f"  rod friction (N) at " + ", ".join(f"{x:g}" for x in at) + " m/s "
+    out = ["  rod friction (N) at " + ", ".join(f"{x:g}" for x in at) + " m/s "
            f"(identified up to {hi:.3g} m/s; * = extrapolated):",
            "          " + "  ".join(f"{x:6g}{'*' if x > hi else ' '}" for x in at)]
     for case in ("min", "best", "max"):
