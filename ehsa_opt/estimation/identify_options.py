@@ -25,6 +25,9 @@ RECORDED_CUTOFF_FACTORS: tuple[float, ...] = (1.0, 1.5, 2.0, 3.0)
 CORNER_WINDOW_CYCLES: float = 0.5
 #: Threshold on the two-cut-off acceleration difference, in its noise standard deviations.
 CORNER_THRESHOLD_SIGMA: float = 6.0
+#: Samples left out at each end of a recorded test, in cycles of the sine cut-off
+#: (1 / 30 Hz: 33 ms).
+END_WINDOW_CYCLES: float = 1.0
 #: Recorded samples whose estimated speed is below this many of its noise standard
 #: deviations are "at rest" and stay out of objectives.
 DWELL_THRESHOLD_SIGMA: float = 3.0
@@ -212,6 +215,8 @@ def estimate_motion(test: BenchTest, options: IdentifyOptions | None = None,
       (and 1 % of the rms acceleration) are unresolved; around each such run (found at
       the sine cut-off f_0, its half-length h_0) the window c ± (h_0 f_0 / f_c +
       :data:`CORNER_WINDOW_CYCLES` / f_0) is left out;
+    * ends: :data:`END_WINDOW_CYCLES` / f_0 at each end of the record (one-sided
+      derivatives);
     * dwells: samples whose speed is below :data:`DWELL_THRESHOLD_SIGMA` of its noise
       (a rod at rest: the force there is whatever the stuck friction holds, which no
       function of the velocity gives).
@@ -264,6 +269,10 @@ def _recorded(test: BenchTest, fc0: float, mass_kg: float | None) -> MotionEstim
             c = 0.5 * (t[run[0]] + t[run[-1]])
             h = 0.5 * (t[run[-1]] - t[run[0]]) * fc0 / fc + CORNER_WINDOW_CYCLES / fc0
             resolved[(t >= c - h) & (t <= c + h)] = False
+    # the record's ends: one-sided, the spline's derivatives there are the least accurate
+    w_end = int(round(END_WINDOW_CYCLES / fc0 / dt))
+    resolved[:w_end] = False
+    resolved[max(n - w_end, 0):] = False
     motion = SampledMotion.with_cutoff(t, x, fc)
     if sx > 0:
         # at rest (a dwell) the speed is below its noise: the friction law's sign there is
