@@ -172,3 +172,13 @@ def test_clean_mixed_campaign_names_no_effect(mixed_campaign):
     res = run_discrepancy(mixed_campaign, DiscrepancySettings(top=2))
     assert res.effect == "none"
     assert res.error_after == res.error_before < 1.1 * res.noise_floor
+
+
+def test_a_record_that_is_all_reversal_is_refused_with_a_reason():
+    """±20 mm at 0.5 m/s: the windows around the reversals and ends cover the record."""
+    p = Protocol("triangle", 10.0, amplitude_m=0.02, velocity_m_per_s=0.5, corner_s=0.01)
+    t = generate_bench_tests(SyntheticSpec(harvester=OTHER, friction=FRICTION,
+                                           frequencies_hz=(), protocols=[p], seed=1))[0]
+    fit = fit_tests([t], OTHER, starts=1)
+    assert not fit.success and fit.status == "not_resolved"
+    assert t.file in fit.message and "slower reversals" in fit.message

@@ -15,7 +15,8 @@ from ..physics.params import FRICTION_RANGES
 from .collocation import node_indices
 
 __all__ = ["IdentifyOptions", "PARAMETER_BOUNDS", "START_RANGES", "test_motion",
-           "MotionEstimate", "estimate_motion", "RECORDED_CUTOFF_FACTORS", "CORNER_WINDOW_CYCLES"]
+           "MotionEstimate", "estimate_motion", "RECORDED_CUTOFF_FACTORS", "CORNER_WINDOW_CYCLES",
+           "MIN_RESOLVED_SAMPLES", "unresolved_tests"]
 
 #: Cut-offs tried for recorded (non-sine) tests, as multiples of the sine cut-off; the
 #: largest whose acceleration noise stays at half the force noise is kept.
@@ -280,6 +281,24 @@ def _recorded(test: BenchTest, fc0: float, mass_kg: float | None) -> MotionEstim
         s_v = float(np.std(SampledMotion.with_cutoff(t, e, fc).evaluate(t)[1]))
         resolved &= np.abs(motion.evaluate(t)[1]) > DWELL_THRESHOLD_SIGMA * s_v
     return MotionEstimate(motion, fc, resolved)
+
+
+#: Fewest samples outside the unresolved windows a recorded test must keep to be fitted.
+MIN_RESOLVED_SAMPLES = 20
+
+
+def unresolved_tests(tests: Any, options: IdentifyOptions | None,
+                     mass_kg: float | None) -> list[str]:
+    """Recorded tests keeping fewer than :data:`MIN_RESOLVED_SAMPLES` samples, described
+    (e.g. a fast stroke that is all reversal)."""
+    out = []
+    for t in tests:
+        if t.excitation == "sine":
+            continue
+        n = int(estimate_motion(t, options, mass_kg).resolved.sum())
+        if n < MIN_RESOLVED_SAMPLES:
+            out.append(f"{t.file} keeps {n} of {t.n_samples} samples (< {MIN_RESOLVED_SAMPLES})")
+    return out
 
 
 def test_motion(test: BenchTest, options: IdentifyOptions | None = None,
