@@ -74,7 +74,7 @@ def test_motion_derivatives_outside_corner_windows(kind, speed, corner, mass_kg)
     """Stated accuracy (1 kHz, 2 µm displacement noise, 2 N force noise): outside the
     unresolved windows the velocity is within 1 % of the peak speed and the acceleration
     within 0.25 m/s² (rms below 0.06 m/s²); at least a fifth of each record is kept
-    and smooth records (multisine, road) lose at most 2 %."""
+    and smooth records (multisine, road) lose at most 5 % (their ends)."""
     rng = np.random.default_rng(11)
     p = Protocol(kind, 10.0, amplitude_m=0.02 if kind in ("triangle", "trapezoid") else 0.015,
                  velocity_m_per_s=speed, corner_s=corner,
@@ -92,8 +92,8 @@ def test_motion_derivatives_outside_corner_windows(kind, speed, corner, mass_kg)
     assert np.max(np.abs(ue[2] - u[2])[k]) < 0.25
     assert np.sqrt(np.mean((ue[2] - u[2])[k] ** 2)) < 0.06
     assert est.resolved.mean() > 0.2
-    if kind in ("multisine", "road"):
-        assert est.resolved.mean() > 0.98
+    if kind in ("multisine", "road"):  # only the record's two 33 ms ends left out
+        assert est.resolved.mean() > 0.95
     else:  # the corners are found: the windows hold the large errors
         assert np.max(np.abs(ue[1] - u[1])[~est.resolved]) > 0.01 * vmax
 
@@ -113,9 +113,10 @@ def recorded_campaign(tmp_path_factory):
               Protocol("triangle", 33.0, amplitude_m=0.02, velocity_m_per_s=0.3,
                        corner_s=0.005),
               Protocol("trapezoid", 10.0, amplitude_m=0.02, velocity_m_per_s=0.1),
-              Protocol("multisine", 33.0, amplitude_m=0.015, frequency_hz=0.5),
+              Protocol("multisine", 33.0, amplitude_m=0.015, frequency_hz=0.5,
+                       duration_s=2.0),
               Protocol("road", 10.0, amplitude_m=0.015, components=12, seed=3,
-                       duration_s=4.0)]
+                       duration_s=2.5)]
     spec = SyntheticSpec(harvester=OTHER, friction=FRICTION, frequencies_hz=(),
                          protocols=protos, seed=5)
     out = write_synthetic(tmp_path_factory.mktemp("rec") / "bench", spec)
@@ -132,7 +133,8 @@ def test_generated_recorded_campaign_round_trips(recorded_campaign):
 
 def test_recorded_tests_identified_at_the_noise_floor(recorded_campaign):
     """Per-test fits of triangle, trapezoid, multisine and road tests: force error within
-    0.3 points of what the true parameters give, and both near the 2 N noise floor."""
+    0.3 points of what the true parameters give, and both near the 2 N noise floor (one
+    period of the multisine, 2.5 s of the road record: nothing periodic assumed)."""
     d = recorded_campaign
     m = d.harvester.equivalent_mass_kg()
     res = [estimate_motion(t, None, m).resolved for t in d.tests]
@@ -170,3 +172,13 @@ def test_clean_mixed_campaign_names_no_effect(mixed_campaign):
     res = run_discrepancy(mixed_campaign, DiscrepancySettings(top=2))
     assert res.effect == "none"
     assert res.error_after == res.error_before < 1.1 * res.noise_floor
+
+
+def test_a_record_that_is_all_reversal_is_refused_with_a_reason():
+    """±20 mm at 0.5 m/s: the windows around the reversals and ends cover the record."""
+    p = Protocol("triangle", 10.0, amplitude_m=0.02, velocity_m_per_s=0.5, corner_s=0.01)
+    t = generate_bench_tests(SyntheticSpec(harvester=OTHER, friction=FRICTION,
+                                           frequencies_hz=(), protocols=[p], seed=1))[0]
+    fit = fit_tests([t], OTHER, starts=1)
+    assert not fit.success and fit.status == "not_resolved"
+    assert t.file in fit.message and "slower reversals" in fit.message

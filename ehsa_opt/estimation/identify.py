@@ -80,8 +80,10 @@ from .identify_options import (
     PARAMETER_BOUNDS,
     START_RANGES,
     IdentifyOptions,
+    MIN_RESOLVED_SAMPLES,
     estimate_motion,
     test_motion,
+    unresolved_tests,
 )
 from .identify_result import (
     FitResult,
@@ -95,10 +97,8 @@ from .identify_result import (
 
 __all__ = ["IdentifyOptions", "FitResult", "Prediction", "IdentificationReport", "fit_tests",
            "simulate_tests", "eq5_delta", "force_relative_error_percent", "identify",
-           "PARAMETER_BOUNDS", "START_RANGES", "fisher_identifiability", "test_motion"]
-__all__ = ["IdentifyOptions", "FitResult", "Prediction", "IdentificationReport", "fit_tests",
-           "simulate_tests", "eq5_delta", "force_relative_error_percent", "identify",
-           "PARAMETER_BOUNDS", "START_RANGES", "fisher_identifiability"]
+           "PARAMETER_BOUNDS", "START_RANGES", "fisher_identifiability", "test_motion",
+           "MIN_RESOLVED_SAMPLES"]
 
 _BEARING = FRICTION_NAMES[4:]
 _TIES = {"nut_breakaway_N": "nut_coulomb_N", "bearing_breakaway_Nm": "bearing_coulomb_Nm"}
@@ -401,6 +401,14 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
     if clash:
         raise ValueError(f"fit_tests: {', '.join(clash)} both varied and fixed")
     t0 = time.perf_counter()
+    short = unresolved_tests(tests, options, _mass(model))
+    if short:
+        names = [n for n in model.param_names if n != "load_ohm"]
+        msg = ("no fit: " + "; ".join(short) + " — the motion's derivatives are not resolved "
+               "there (corners, dwells, ends); record longer strokes or slower reversals")
+        return FitResult(False, msg, "not_resolved", {n: math.nan for n in names}, None, None,
+                         None, [], [], {}, 0, list(varied), None, math.nan,
+                         time.perf_counter() - t0, "none")
     su = _setup(tests, model, has_generator, varied, fixed, options)
     rng = np.random.default_rng(seed)
     draws = [_draw_start(model, varied, rng, k) for k in range(starts)]
@@ -566,8 +574,10 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
         unknown = [f for f in hold_files if f not in {t.file for t in data.tests}]
         if unknown:
             raise ValueError(f"identify: holdout file(s) {', '.join(unknown)} not in the data")
-        train = [t for t in data.tests if t.file not in hold_files]
-        held = [t for t in data.tests if t.file in hold_files]
+        # a recorded test whose samples are all corners, dwells or ends says nothing
+        skip = {t.file for t, f in zip(data.tests, fits) if f.status == "not_resolved"}
+        train = [t for t in data.tests if t.file not in hold_files and t.file not in skip]
+        held = [t for t in data.tests if t.file in hold_files and t.file not in skip]
         if train:
             # the joint NLP holds every training test: fewer objective samples per test
             jopt = dataclasses.replace(options, max_samples=min(options.max_samples, 300),

@@ -15,7 +15,8 @@ from ..physics.params import FRICTION_RANGES
 from .collocation import node_indices
 
 __all__ = ["IdentifyOptions", "PARAMETER_BOUNDS", "START_RANGES", "test_motion",
-           "MotionEstimate", "estimate_motion", "RECORDED_CUTOFF_FACTORS", "CORNER_WINDOW_CYCLES"]
+           "MotionEstimate", "estimate_motion", "RECORDED_CUTOFF_FACTORS", "CORNER_WINDOW_CYCLES",
+           "MIN_RESOLVED_SAMPLES", "unresolved_tests"]
 
 #: Cut-offs tried for recorded (non-sine) tests, as multiples of the sine cut-off; the
 #: largest whose acceleration noise stays at half the force noise is kept.
@@ -25,6 +26,9 @@ RECORDED_CUTOFF_FACTORS: tuple[float, ...] = (1.0, 1.5, 2.0, 3.0)
 CORNER_WINDOW_CYCLES: float = 0.5
 #: Threshold on the two-cut-off acceleration difference, in its noise standard deviations.
 CORNER_THRESHOLD_SIGMA: float = 6.0
+#: Samples left out at each end of a recorded test, in cycles of the sine cut-off
+#: (1 / 30 Hz: 33 ms).
+END_WINDOW_CYCLES: float = 1.0
 #: Recorded samples whose estimated speed is below this many of its noise standard
 #: deviations are "at rest" and stay out of objectives.
 DWELL_THRESHOLD_SIGMA: float = 3.0
@@ -212,6 +216,8 @@ def estimate_motion(test: BenchTest, options: IdentifyOptions | None = None,
       (and 1 % of the rms acceleration) are unresolved; around each such run (found at
       the sine cut-off f_0, its half-length h_0) the window c ± (h_0 f_0 / f_c +
       :data:`CORNER_WINDOW_CYCLES` / f_0) is left out;
+    * ends: :data:`END_WINDOW_CYCLES` / f_0 at each end of the record (one-sided
+      derivatives);
     * dwells: samples whose speed is below :data:`DWELL_THRESHOLD_SIGMA` of its noise
       (a rod at rest: the force there is whatever the stuck friction holds, which no
       function of the velocity gives).
@@ -264,6 +270,10 @@ def _recorded(test: BenchTest, fc0: float, mass_kg: float | None) -> MotionEstim
             c = 0.5 * (t[run[0]] + t[run[-1]])
             h = 0.5 * (t[run[-1]] - t[run[0]]) * fc0 / fc + CORNER_WINDOW_CYCLES / fc0
             resolved[(t >= c - h) & (t <= c + h)] = False
+    # the record's ends: one-sided, the spline's derivatives there are the least accurate
+    w_end = int(round(END_WINDOW_CYCLES / fc0 / dt))
+    resolved[:w_end] = False
+    resolved[max(n - w_end, 0):] = False
     motion = SampledMotion.with_cutoff(t, x, fc)
     if sx > 0:
         # at rest (a dwell) the speed is below its noise: the friction law's sign there is
@@ -271,6 +281,24 @@ def _recorded(test: BenchTest, fc0: float, mass_kg: float | None) -> MotionEstim
         s_v = float(np.std(SampledMotion.with_cutoff(t, e, fc).evaluate(t)[1]))
         resolved &= np.abs(motion.evaluate(t)[1]) > DWELL_THRESHOLD_SIGMA * s_v
     return MotionEstimate(motion, fc, resolved)
+
+
+#: Fewest samples outside the unresolved windows a recorded test must keep to be fitted.
+MIN_RESOLVED_SAMPLES = 20
+
+
+def unresolved_tests(tests: Any, options: IdentifyOptions | None,
+                     mass_kg: float | None) -> list[str]:
+    """Recorded tests keeping fewer than :data:`MIN_RESOLVED_SAMPLES` samples, described
+    (e.g. a fast stroke that is all reversal)."""
+    out = []
+    for t in tests:
+        if t.excitation == "sine":
+            continue
+        n = int(estimate_motion(t, options, mass_kg).resolved.sum())
+        if n < MIN_RESOLVED_SAMPLES:
+            out.append(f"{t.file} keeps {n} of {t.n_samples} samples (< {MIN_RESOLVED_SAMPLES})")
+    return out
 
 
 def test_motion(test: BenchTest, options: IdentifyOptions | None = None,

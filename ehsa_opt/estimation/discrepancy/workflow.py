@@ -53,6 +53,7 @@ import numpy as np
 
 from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
+from ..identify_options import MIN_RESOLVED_SAMPLES
 from .candidates import CANDIDATES, components_for, signature_scores
 from .evidence import WHITE_P, disturbance_masks, residual_is_white
 from .fit import (
@@ -141,6 +142,15 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     mass = data.harvester.equivalent_mass_kg() if data.has_generator else None
     fit_pts = prepare_tests(fit_t, data.has_generator, mass_kg=mass)
     held_pts = prepare_tests(held_t, data.has_generator, mass_kg=mass) if held_t else []
+    # a recorded test whose samples are all corners, dwells or ends says nothing
+    bare = [pt.test.file for pt in fit_pts + held_pts if pt.n_resolved < MIN_RESOLVED_SAMPLES]
+    if bare:
+        note = (f"left out (fewer than {MIN_RESOLVED_SAMPLES} samples outside the windows "
+                f"where the motion's derivatives are not resolved): {', '.join(bare)}")
+        say(note)
+        notes.append(note)
+        fit_pts = [pt for pt in fit_pts if pt.test.file not in bare]
+        held_pts = [pt for pt in held_pts if pt.test.file not in bare]
     sub_pts = _spread(fit_pts, settings.max_fit_tests)
     say(f"{len(fit_pts)} fit tests ({len(sub_pts)} for candidate fits), "
         f"{len(held_pts)} {evaluation} tests")
