@@ -66,6 +66,34 @@ def _check_outputs(args: argparse.Namespace) -> None:
             _check_output_dir(value, option)
 
 
+#: Upper bounds of the size arguments (beyond them a run would not finish or not fit).
+_MAX_POP = 10_000
+_MAX_GENS = 100_000
+_MAX_STARTS = 1_000
+
+
+def _bounded(minimum: int, maximum: int, what: str) -> Callable[[str], int]:
+    """argparse type: an integer in [minimum, maximum]."""
+    base = _count(minimum)
+
+    def parse(text: str) -> int:
+        value = base(text)
+        if value > maximum:
+            raise argparse.ArgumentTypeError(f"{value} must be <= {maximum} ({what})")
+        return value
+    return parse
+
+
+def _cap_jobs(args: argparse.Namespace) -> None:
+    """``--jobs`` beyond the usable cores only slows the run down: capped, with a note."""
+    from .utils.limits import usable_cores
+    jobs = getattr(args, "jobs", None)
+    if isinstance(jobs, int) and jobs > usable_cores():
+        print(f"note: --jobs {jobs} capped to {usable_cores()} (the usable CPU cores)",
+              file=sys.stderr)
+        args.jobs = usable_cores()
+
+
 def _os_error_message(exc: OSError) -> str:
     """What went wrong with which file, and the fix."""
     name = exc.filename or "(file)"
@@ -470,9 +498,11 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("problem", metavar="PROBLEM.toml")
     o.add_argument("--method", default=None,
                    help="goal-attainment or nsga2 (default: [design] method of the file)")
-    o.add_argument("--pop", type=_POSITIVE, default=None,
+    o.add_argument("--pop", type=_bounded(1, _MAX_POP, "a larger front does not fit a run"),
+                   default=None,
                    help="NSGA-II population (default [nsga2])")
-    o.add_argument("--gens", type=_POSITIVE, default=None, help="NSGA-II generations (total)")
+    o.add_argument("--gens", type=_bounded(1, _MAX_GENS, "use --checkpoint and --resume"),
+                   default=None, help="NSGA-II generations (total)")
     o.add_argument("--seed", type=_NON_NEGATIVE, default=None, help="NSGA-II seed")
     o.add_argument("--checkpoint", default=None, metavar="DIR",
                    help="save the NSGA-II state after every generation (atomic)")
@@ -512,7 +542,8 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("data_dir", metavar="DATA_DIR")
     i.add_argument("--out", required=True, metavar="OUT_DIR",
                    help="output folder (identification.json and figures)")
-    i.add_argument("--starts", type=_POSITIVE, default=4,
+    i.add_argument("--starts", type=_bounded(1, _MAX_STARTS, "more starts find nothing new"),
+                   default=4,
                    help="multistart points per test (default 4)")
     i.add_argument("--jobs", type=_POSITIVE, default=1, help="parallel processes (default 1)")
     i.add_argument("--seed", type=_NON_NEGATIVE, default=0,
@@ -561,19 +592,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     die_with_parent()  # pool workers forked from here on die with this process
     try:
         _check_outputs(args)
-        out = getattr(args, "out", None)
-        if not out:
+        _cap_jobs(args)
+        folders = [getattr(args, a, None) for a in ("out", "checkpoint")]
+        if getattr(args, "resume", None) and not getattr(args, "checkpoint", None):
+            folders.append(args.resume)  # checkpoints go back into --resume
+        folders = [f for f in folders if isinstance(f, str) and f]
+        if not folders:
             return func(args)
+        import contextlib
+
         from .utils.lock import LOCK_NAME, output_lock
-        created = not Path(out).exists()
+        created = {f: not Path(f).exists() for f in folders}
         try:
-            with output_lock(out):  # one run per output folder
+            with contextlib.ExitStack() as stack:
+                for f in folders:  # one run per output and checkpoint folder
+                    stack.enter_context(output_lock(f))
                 return func(args)
         finally:  # a refused run leaves no empty folder behind
-            if created and Path(out).is_dir() and \
-                    [f.name for f in Path(out).iterdir()] == [LOCK_NAME]:
-                (Path(out) / LOCK_NAME).unlink(missing_ok=True)
-                Path(out).rmdir()
+            for f, new in created.items():
+                if new and Path(f).is_dir() and \
+                        [g.name for g in Path(f).iterdir()] == [LOCK_NAME]:
+                    (Path(f) / LOCK_NAME).unlink(missing_ok=True)
+                    Path(f).rmdir()
     except (BenchDataError, ParameterError, _UsageError, FileExistsError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -15,14 +15,21 @@ A problem file refers to it with ``[friction] from = "out/identification.json"``
 
 from __future__ import annotations
 
-import json
+import math
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..physics.params import FRICTION_NAMES, FrictionParams, ParameterError, from_mapping
+from ..physics.params import (
+    FRICTION_NAMES,
+    FrictionParams,
+    ParameterError,
+    check_keys,
+    from_mapping,
+)
+from ..utils.limits import parse_json
 
 __all__ = ["FRICTION_CASES", "parse_friction_spec", "load_friction_sets", "load_friction",
-           "friction_from_table"]
+           "friction_from_table", "friction_set"]
 
 #: The friction cases an identification result provides.
 FRICTION_CASES: tuple[str, ...] = ("min", "best", "max")
@@ -54,10 +61,13 @@ def load_friction_sets(path: str | Path) -> dict[str, FrictionParams]:
         raise ParameterError(f"{path}: identification result not found; make one with "
                              f"`ehsa-opt identify DATA_DIR --out DIR` (DIR/identification.json)")
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ParameterError(f"{path}: not a JSON identification result ({exc}); pass the "
-                             f"identification.json written by `ehsa-opt identify`") from None
+        doc = parse_json(path.read_bytes(), str(path), ParameterError)
+    except OSError as exc:
+        raise ParameterError(f"{path}: cannot be read ({exc.strerror}); check the path and "
+                             f"its permissions") from None
+    except ParameterError as exc:
+        raise ParameterError(f"{exc}; pass the identification.json written by "
+                             f"`ehsa-opt identify`") from None
     sets = doc.get("friction_sets") if isinstance(doc, Mapping) else None
     if not isinstance(sets, Mapping):
         raise ParameterError(f"{path}: no 'friction_sets' table (written by an older ehsa_opt "
@@ -67,9 +77,26 @@ def load_friction_sets(path: str | Path) -> dict[str, FrictionParams]:
         if not isinstance(sets.get(case), Mapping):
             raise ParameterError(f"{path}: friction_sets has no '{case}' case; re-run "
                                  f"`ehsa-opt identify`")
-        values = {k: v for k, v in sets[case].items() if k in FRICTION_NAMES}
-        out[case] = from_mapping(FrictionParams, values, f"{path} friction_sets.{case}")
+        out[case] = friction_set(sets[case], f"{path} friction_sets.{case}")
     return out
+
+
+def friction_set(values: Mapping[str, Any], where: str) -> FrictionParams:
+    """A received friction set, validated as data: every parameter by name (no default
+    fills a missing one, a misspelled name is refused with the nearest valid one), finite
+    numbers, physical (breakaway >= Coulomb >= 0, velocities > 0, viscous >= 0)."""
+    check_keys(values, FRICTION_NAMES, where)
+    missing = [n for n in FRICTION_NAMES if n not in values]
+    if missing:
+        raise ParameterError(f"{where}: missing {', '.join(missing)}; a friction set needs all "
+                             f"{len(FRICTION_NAMES)} parameters ({', '.join(FRICTION_NAMES)}) — "
+                             f"re-run `ehsa-opt identify` or complete the set")
+    for n in FRICTION_NAMES:
+        v = values[n]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ParameterError(f"{where}: {n} = {v!r} is not a finite number; re-run "
+                                 f"`ehsa-opt identify` or give a number")
+    return from_mapping(FrictionParams, values, where)
 
 
 def load_friction(spec: str | Path, case: str | None = None) -> FrictionParams:

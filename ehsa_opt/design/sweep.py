@@ -307,6 +307,7 @@ def run_sweep(spec: SweepSpec, jobs: int = 1, scheduler: Any = None,
     """Evaluate every case of ``spec``; rows in grid order (vehicle, class, speed,
     friction, then the design grid)."""
     tasks = spec.tasks()
+    jobs = max(1, min(jobs, len(tasks)))  # no idle workers: at most one per case
     with executor(jobs, scheduler) as mapper:
         parts = mapper(_call, tasks)
     if progress is not None:

@@ -535,7 +535,7 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
             if progress:
                 progress(len(fits))
     else:
-        with _pool(jobs) as ex:
+        with _pool(min(jobs, len(args))) as ex:
             for f in ex.map(_fit_one, args):
                 fits.append(f)
                 if progress:

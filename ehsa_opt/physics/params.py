@@ -445,9 +445,15 @@ def load_toml(path: str | Path) -> dict[str, Any]:
     path = Path(path)
     if not path.is_file():
         raise ParameterError(f"{path}: file not found")
+    from ..utils.limits import check_nesting, nesting_error
     try:
         with path.open("rb") as fh:
-            return tomllib.load(fh)
+            raw = fh.read()
+        if raw.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte-order mark (some editors add one)
+            raw = raw[3:]
+        return check_nesting(tomllib.loads(raw.decode("utf-8")), str(path), ParameterError)
+    except RecursionError:
+        raise nesting_error(str(path), ParameterError) from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML ({exc}); fix the syntax there") from None
     except UnicodeDecodeError as exc:
