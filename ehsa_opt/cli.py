@@ -296,6 +296,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
     print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
     return 0
+#: |energy residual| above which ``simulate`` fails (the balance closes to < 1 % when the
+#: time step resolves the vehicle's modes).
+_ENERGY_TOLERANCE = 0.05
+
+
 def _friction_file(spec: str | None) -> str | None:
     """``--friction FILE`` of sweep (a case suffix makes no sense: the sweep names cases)."""
     if spec is None:
@@ -360,6 +365,8 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
     from .estimation.discrepancy import DiscrepancySettings, run_discrepancy
     from .pipeline.discrepancy_report import write_report
 
+    from .datasets.embedded import load_truth
+    load_truth(args.data_dir)  # a truth.toml that cannot be used is refused before the work
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
                                    max_tests=args.max_tests)
     res = run_discrepancy(args.data_dir, settings, log=lambda m: print(m, flush=True))
@@ -416,6 +423,17 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     m = dict(sim.metrics_of(0))
     if not sim.success:
         raise ValueError(f"{args.problem}: simulation failed: {sim.message}")
+    residual = float(m.get("energy_residual", 0.0))
+    if not abs(residual) <= _ENERGY_TOLERANCE:
+        v = prob.vehicle
+        hop_hz = ((v.tyre_stiffness_N_per_m + v.suspension_stiffness_N_per_m)
+                  / v.unsprung_mass_kg) ** 0.5 / (2 * 3.141592653589793)
+        raise ValueError(
+            f"{args.problem}: the energy balance of the simulation does not close (residual "
+            f"{100 * residual:.3g} %, tolerance {100 * _ENERGY_TOLERANCE:g} %), so its metrics "
+            f"are not trustworthy; the vehicle's wheel-hop mode ({hop_hz:.3g} Hz) needs "
+            f"[simulation] sample_rate_hz of at least {20 * hop_hz:.3g} Hz (now "
+            f"{prob.simulation.sample_rate_hz:g}); check the [vehicle] masses and stiffnesses")
     # load power R_e i² is instantaneous, so its peak gives the peak current and the peak
     # terminal voltage i R_e exactly
     r_e = prob.harvester.load_ohm
@@ -434,7 +452,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         out["road"] = sim.road_source
         out["frictionless"] = prob.friction is None or prob.friction.is_frictionless
         out["wall_s"] = round(sim.stats["wall_s"], 4)
-        print(json.dumps(out))
+        from .utils.io import json_safe
+        print(json.dumps(json_safe(out), allow_nan=False))  # standard JSON: inf/NaN -> null
         return 0
     rows = [("comfort alpha (-)", m["comfort"]),
             ("W_k-weighted rms acceleration (m/s^2)", m["comfort_weighted_rms_m_s2"]),

@@ -125,7 +125,8 @@ def friction_from_table(table: Mapping[str, Any], where: str,
     if not isinstance(src, str) or not isinstance(case, str):
         raise ParameterError(f"{where}: 'from' and 'case' must be strings, e.g. from = "
                              f"\"out/identification.json\", case = \"max\"")
-    path = Path(src) if Path(src).is_absolute() else Path(base_dir) / src
+    from .problem_file import resolve_reference
+    path = resolve_reference(src, base_dir, f"{where} from")
     try:
         return load_friction(path, case)
     except ParameterError as exc:

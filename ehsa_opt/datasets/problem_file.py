@@ -39,7 +39,7 @@ from ..physics.params import (
 )
 
 __all__ = ["SimulationSettings", "QuarterCarProblem", "load_problem", "problem_from_mapping",
-           "resolve_problem_path"]
+           "resolve_problem_path", "resolve_reference"]
 
 _TOP_KEYS = ("preset", "vehicle", "harvester", "friction", "road", "simulation")
 
@@ -123,7 +123,19 @@ def problem_from_mapping(data: Mapping[str, Any], where: str = "problem",
     if "road" not in data:
         raise ParameterError(f"{where}: missing [road] table (iso_class, speed_km_per_h, "
                              "length_m, seed, or profile_csv)")
-    road = from_mapping(RoadParams, data["road"], f"{where} [road]")
+    road_doc = data["road"]
+    if isinstance(road_doc, Mapping) and "profile_csv" in road_doc:
+        synth = [k for k in ("iso_class", "length_m", "seed", "iso_class_level")
+                 if k in road_doc]
+        if synth:
+            raise ParameterError(f"{where} [road]: give either profile_csv (a measured road) or "
+                                 f"the synthesised road's {', '.join(synth)}, not both: the "
+                                 f"profile would replace the ISO class silently")
+        ref = road_doc["profile_csv"]
+        if isinstance(ref, str):
+            road_doc = {**road_doc, "profile_csv": str(resolve_reference(
+                ref, base_dir, f"{where} [road] profile_csv"))}
+    road = from_mapping(RoadParams, road_doc, f"{where} [road]")
     sim = data.get("simulation", {})
     if not isinstance(sim, Mapping):
         raise ParameterError(f"{where}: [simulation] must be a table")
@@ -138,6 +150,30 @@ def problem_from_mapping(data: Mapping[str, Any], where: str = "problem",
     except ParameterError as exc:
         raise ParameterError(f"{where}: {exc}") from None
     return QuarterCarProblem(vehicle, harvester, friction, road, settings, Path(base_dir))
+
+
+def resolve_reference(ref: str, base_dir: str | Path, where: str) -> Path:
+    """A path named inside a file, resolved against that file's folder ``base_dir`` and
+    confined: it must lead (after symlinks) into ``base_dir`` or the working directory.
+
+    Raises
+    ------
+    ParameterError
+        A control character in the name, or a path that leads elsewhere (absolute or
+        ``../..``), with the fix.
+    """
+    if not ref or not ref.isprintable():
+        raise ParameterError(f"{where}: {ref!r} is not a file name (empty or a control "
+                             f"character such as a NUL); give the path of the file")
+    p = Path(ref)
+    target = (p if p.is_absolute() else Path(base_dir) / p).resolve()
+    roots = [Path(base_dir).resolve(), Path.cwd().resolve()]
+    if not any(target.is_relative_to(r) for r in roots):
+        raise ParameterError(f"{where}: {ref!r} leads outside the problem file's folder "
+                             f"{roots[0]} and the working directory (to {target}); copy the "
+                             f"file next to the problem file (or below it) and give its "
+                             f"relative path")
+    return target
 
 
 def resolve_problem_path(path: str | Path) -> Path:
