@@ -261,14 +261,15 @@ def test_friction_sets_must_be_complete_and_physical(tmp_path, capsys, bad, patt
     assert rc == 2 and str(f) in err and re.search(pattern, err), err
 
 
-def test_friction_values_must_be_finite_numbers(tmp_path, capsys):
+@pytest.mark.parametrize("value,pattern", [("NaN", "NaN"), ("null", "nut_coulomb_N"),
+                                           ('"60"', "nut_coulomb_N")])
+def test_friction_values_must_be_finite_numbers(tmp_path, capsys, value, pattern):
     f = tmp_path / "identification.json"
     f.write_text('{"friction_sets": {"min": %s, "best": %s, "max": %s}}' % (
-        json.dumps(FULL), json.dumps(FULL),
-        json.dumps(FULL).replace("60.0", "NaN")))
+        json.dumps(FULL), json.dumps(FULL), json.dumps(FULL).replace("60.0", value)))
     rc, _, err = run(capsys, "simulate", ROOT / "problems/quarter_car_class_c.toml",
                      "--friction", f"{f}:max")
-    assert rc == 2 and "nut_coulomb_N" in err, err
+    assert rc == 2 and str(f) in err and pattern in err, err
 
 
 def _nsga2_checkpoint(tmp_path: Path, capsys) -> Path:

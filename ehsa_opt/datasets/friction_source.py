@@ -29,7 +29,8 @@ from ..physics.params import (
 from ..utils.limits import parse_json
 
 __all__ = ["FRICTION_CASES", "parse_friction_spec", "load_friction_sets", "load_friction",
-           "friction_from_table", "friction_set"]
+           "friction_from_table", "friction_set",
+           "resolve_reference"]
 
 #: The friction cases an identification result provides.
 FRICTION_CASES: tuple[str, ...] = ("min", "best", "max")
@@ -125,9 +126,32 @@ def friction_from_table(table: Mapping[str, Any], where: str,
     if not isinstance(src, str) or not isinstance(case, str):
         raise ParameterError(f"{where}: 'from' and 'case' must be strings, e.g. from = "
                              f"\"out/identification.json\", case = \"max\"")
-    from .problem_file import resolve_reference
     path = resolve_reference(src, base_dir, f"{where} from")
     try:
         return load_friction(path, case)
     except ParameterError as exc:
         raise ParameterError(f"{where}: {exc}") from None
+
+
+def resolve_reference(ref: str, base_dir: str | Path, where: str) -> Path:
+    """A path named inside a file, resolved against that file's folder ``base_dir`` and
+    confined: it must lead (after symlinks) into ``base_dir`` or the working directory.
+
+    Raises
+    ------
+    ParameterError
+        A control character in the name, or a path that leads elsewhere (absolute or
+        ``../..``), with the fix.
+    """
+    if not ref or not ref.isprintable():
+        raise ParameterError(f"{where}: {ref!r} is not a file name (empty or a control "
+                             f"character such as a NUL); give the path of the file")
+    p = Path(ref)
+    target = (p if p.is_absolute() else Path(base_dir) / p).resolve()
+    roots = [Path(base_dir).resolve(), Path.cwd().resolve()]
+    if not any(target.is_relative_to(r) for r in roots):
+        raise ParameterError(f"{where}: {ref!r} leads outside the problem file's folder "
+                             f"{roots[0]} and the working directory (to {target}); copy the "
+                             f"file next to the problem file (or below it) and give its "
+                             f"relative path")
+    return target

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .friction_source import friction_from_table
+from .friction_source import friction_from_table, resolve_reference
 from ..physics.params import (
     FrictionParams,
     HarvesterParams,
@@ -150,30 +150,6 @@ def problem_from_mapping(data: Mapping[str, Any], where: str = "problem",
     except ParameterError as exc:
         raise ParameterError(f"{where}: {exc}") from None
     return QuarterCarProblem(vehicle, harvester, friction, road, settings, Path(base_dir))
-
-
-def resolve_reference(ref: str, base_dir: str | Path, where: str) -> Path:
-    """A path named inside a file, resolved against that file's folder ``base_dir`` and
-    confined: it must lead (after symlinks) into ``base_dir`` or the working directory.
-
-    Raises
-    ------
-    ParameterError
-        A control character in the name, or a path that leads elsewhere (absolute or
-        ``../..``), with the fix.
-    """
-    if not ref or not ref.isprintable():
-        raise ParameterError(f"{where}: {ref!r} is not a file name (empty or a control "
-                             f"character such as a NUL); give the path of the file")
-    p = Path(ref)
-    target = (p if p.is_absolute() else Path(base_dir) / p).resolve()
-    roots = [Path(base_dir).resolve(), Path.cwd().resolve()]
-    if not any(target.is_relative_to(r) for r in roots):
-        raise ParameterError(f"{where}: {ref!r} leads outside the problem file's folder "
-                             f"{roots[0]} and the working directory (to {target}); copy the "
-                             f"file next to the problem file (or below it) and give its "
-                             f"relative path")
-    return target
 
 
 def resolve_problem_path(path: str | Path) -> Path:
