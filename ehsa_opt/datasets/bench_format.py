@@ -290,7 +290,7 @@ def _read_csv(path: Path, need_voltage: bool) -> dict[str, np.ndarray]:
         if len(set(header)) != len(header):
             raise BenchDataError(f"{name}: row 1 (header): duplicate column names {header}")
 
-    arr, header = read_number_table(path, len(required), check_header)
+    arr, header = read_number_table(path, 1, check_header)
     cols = {h: np.ascontiguousarray(arr[:, j]) for j, h in enumerate(header) if h in required}
     del arr
     t = cols["time_s"]

@@ -325,16 +325,20 @@ class FrictionParams:
 class VehicleParams:
     """Quarter car (SPEC §4): sprung mass m2, unsprung mass m1, k2, k1."""
 
-    sprung_mass_kg: float = _num(375.0, "kg", "sprung mass m2", ge=1.0, le=1e5,
-                                 hint="a quarter of a vehicle's body, in kg")
-    unsprung_mass_kg: float = _num(45.0, "kg", "unsprung mass m1", ge=0.1, le=1e4,
-                                   hint="wheel, hub and brake of one corner, in kg")
+    sprung_mass_kg: float = _num(375.0, "kg", "sprung mass m2", gt=0.0, le=1e5)
+    unsprung_mass_kg: float = _num(45.0, "kg", "unsprung mass m1", gt=0.0, le=1e4)
     suspension_stiffness_N_per_m: float = _num(22e3, "N/m", "suspension stiffness k2", gt=0.0,
                                                le=1e8)
     tyre_stiffness_N_per_m: float = _num(200e3, "N/m", "tyre stiffness k1", gt=0.0, le=1e9)
 
     def __post_init__(self) -> None:
         _validate_numbers(self, "vehicle")
+        for name, least, what in (("sprung_mass_kg", 1.0, "a quarter of a vehicle's body"),
+                                  ("unsprung_mass_kg", 0.1, "a wheel, hub and brake")):
+            if getattr(self, name) < least:
+                raise ParameterError(
+                    f"vehicle: '{name}' = {getattr(self, name):g} kg is implausible for "
+                    f"{what}; it must be >= {least:g} kg (masses are in kg)")
 
     @classmethod
     def preset(cls, name: str) -> "VehicleParams":
