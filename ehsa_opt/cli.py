@@ -518,6 +518,14 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _shorten(message: str) -> str:
+    """A message quoting a file's content stays readable: every run of more than 120
+    characters without a space (an over-long field or name) is cut to its first 60."""
+    import re
+    return re.sub(r"\S{121,}", lambda m: f"{m.group()[:60]}...({len(m.group())} characters)",
+                  message)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ehsa-opt`` console script."""
     parser = build_parser()
@@ -550,7 +558,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     (Path(f) / LOCK_NAME).unlink(missing_ok=True)
                     Path(f).rmdir()
     except (BenchDataError, ParameterError, _UsageError, FileExistsError, ValueError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {_shorten(str(exc))}", file=sys.stderr)
         return 2
     except OSError as exc:
         print(f"error: {_os_error_message(exc)}", file=sys.stderr)

@@ -60,9 +60,11 @@ def nearest_name(key: str, valid: list[str] | tuple[str, ...]) -> str | None:
 def unknown_name_message(key: str, valid: Any, where: str, what: str = "key") -> str:
     """``"{where}: unknown {what} '{key}'; did you mean '...'? (valid: ...)"``."""
     valid = tuple(valid)
-    near = nearest_name(key, valid)
+    key = str(key)
+    near = nearest_name(key, valid) if len(key) <= 200 else None
+    shown = repr(key[:60])[1:-1] + (f"... ({len(key)} characters)" if len(key) > 60 else "")
     hint = f"; did you mean '{near}'?" if near else ""
-    return f"{where}: unknown {what} '{key}'{hint} (valid: {', '.join(valid)})"
+    return f"{where}: unknown {what} '{shown}'{hint} (valid: {', '.join(valid)})"
 
 
 def check_keys(table: Any, valid: Any, where: str, error: type[Exception] | None = None) -> None:
