@@ -8,91 +8,28 @@ fix; nothing is written half-way.
 from __future__ import annotations
 
 import argparse
-import errno
 import json
-import os
 import sys
 from pathlib import Path
 from typing import Callable, Sequence
 
 from .datasets.bench_format import BenchDataError
 from .physics.params import ParameterError
+from .utils.cli_args import (  # argument types and up-front checks
+    NON_NEGATIVE as _NON_NEGATIVE,
+    POSITIVE as _POSITIVE,
+    UsageError as _UsageError,
+    bounded as _bounded,
+    cap_jobs as _cap_jobs,
+    check_outputs as _check_outputs,
+    non_negative_float as _NON_NEGATIVE_FLOAT,
+    os_error_message as _os_error_message,
+)
 
 __all__ = ["main", "build_parser"]
 
-
-class _UsageError(Exception):
-    """A CLI-level input error (printed without a traceback)."""
-
-
-def _count(minimum: int) -> Callable[[str], int]:
-    """argparse type: an integer >= ``minimum`` (0 or a negative is refused, never replaced)."""
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"'{text}' is not an integer") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"{value} must be >= {minimum}")
-        return value
-    return parse
-
-
-_POSITIVE, _NON_NEGATIVE = _count(1), _count(0)
-
-
-def _NON_NEGATIVE_FLOAT(text: str) -> float:
-    """argparse type: a finite number >= 0 (s)."""
-    value = float(text) if text.replace(".", "", 1).isdigit() else -1.0
-    if not 0.0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"'{text}' must be a finite number >= 0")
-    return value
-
-
-def _check_output_dir(path: str, option: str) -> None:
-    """Refuse an output folder that cannot be used, before any work is done."""
-    p = Path(path)
-    if p.exists() and not p.is_dir():
-        raise _UsageError(f"{option} {p}: exists and is not a directory; give a folder "
-                          f"(a new one is created)")
-    probe = p
-    while not probe.exists():
-        probe = probe.parent
-    if not probe.is_dir():
-        raise _UsageError(f"{option} {p}: {probe} is a file, so the folder cannot be created; "
-                          f"choose another path")
-    if not os.access(probe, os.W_OK | os.X_OK):
-        raise _UsageError(f"{option} {p}: {probe} is not writable; choose a folder you can "
-                          f"write to or fix its permissions")
-
-
-def _check_outputs(args: argparse.Namespace) -> None:
-    """``--out`` and ``--checkpoint`` are checked before any computation starts."""
-    for attr, option in (("out", "--out"), ("checkpoint", "--checkpoint")):
-        value = getattr(args, attr, None)
-        if isinstance(value, str) and value:
-            _check_output_dir(value, option)
-
-
-def _os_error_message(exc: OSError) -> str:
-    """What went wrong with which file, and the fix."""
-    name = exc.filename or "(file)"
-    if exc.filename2:
-        name = f"{name} -> {exc.filename2}"
-    code = exc.errno
-    if code in (errno.ENOSPC, getattr(errno, "EDQUOT", -1)):
-        fix = ("no space left on the device; free some space or choose --out on another disk, "
-               "then run the same command again (finished steps and checkpoints are kept)")
-    elif code in (errno.EACCES, errno.EPERM, errno.EROFS):
-        fix = (f"{exc.strerror or 'permission denied'}; choose a folder you can write to "
-               f"(--out) or fix its permissions")
-    elif code == errno.ENOENT:
-        fix = "not found; check the path"
-    elif code in (errno.EISDIR, errno.ENOTDIR):
-        fix = f"{exc.strerror}; a file and a folder have the same name — check the path"
-    else:
-        fix = f"{exc.strerror or exc}; check the path, its permissions and free space"
-    return f"{name}: {fix}"
+#: Upper bounds of the size arguments (beyond them a run would not finish or not fit).
+_MAX_POP, _MAX_GENS, _MAX_STARTS = 10_000, 100_000, 1_000
 
 
 # ------------------------------------------------------------------ bench
@@ -265,6 +202,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
     print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
     return 0
+#: |energy residual| above which ``simulate`` fails (the balance closes to < 1 % when the
+#: time step resolves the vehicle's modes).
+_ENERGY_TOLERANCE = 0.05
+
+
 def _friction_file(spec: str | None) -> str | None:
     """``--friction FILE`` of sweep (a case suffix makes no sense: the sweep names cases)."""
     if spec is None:
@@ -321,6 +263,8 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
     from .estimation.discrepancy import DiscrepancySettings
     from .pipeline.discrepancy_report import run_with_budget
 
+    from .datasets.embedded import load_truth
+    load_truth(args.data_dir)  # a truth.toml that cannot be used is refused before the work
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
                                    max_tests=args.max_tests)
     return run_with_budget(args.data_dir, args.out, settings, args.budget_s,
@@ -373,6 +317,17 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     m = dict(sim.metrics_of(0))
     if not sim.success:
         raise ValueError(f"{args.problem}: simulation failed: {sim.message}")
+    residual = float(m.get("energy_residual", 0.0))
+    if not abs(residual) <= _ENERGY_TOLERANCE:
+        v = prob.vehicle
+        hop_hz = ((v.tyre_stiffness_N_per_m + v.suspension_stiffness_N_per_m)
+                  / v.unsprung_mass_kg) ** 0.5 / (2 * 3.141592653589793)
+        raise ValueError(
+            f"{args.problem}: the energy balance of the simulation does not close (residual "
+            f"{100 * residual:.3g} %, tolerance {100 * _ENERGY_TOLERANCE:g} %), so its metrics "
+            f"are not trustworthy; the vehicle's wheel-hop mode ({hop_hz:.3g} Hz) needs "
+            f"[simulation] sample_rate_hz of at least {20 * hop_hz:.3g} Hz (now "
+            f"{prob.simulation.sample_rate_hz:g}); check the [vehicle] masses and stiffnesses")
     # load power R_e i² is instantaneous, so its peak gives the peak current and the peak
     # terminal voltage i R_e exactly
     r_e = prob.harvester.load_ohm
@@ -391,7 +346,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         out["road"] = sim.road_source
         out["frictionless"] = prob.friction is None or prob.friction.is_frictionless
         out["wall_s"] = round(sim.stats["wall_s"], 4)
-        print(json.dumps(out))
+        from .utils.io import json_safe
+        print(json.dumps(json_safe(out), allow_nan=False))  # standard JSON: inf/NaN -> null
         return 0
     rows = [("comfort alpha (-)", m["comfort"]),
             ("W_k-weighted rms acceleration (m/s^2)", m["comfort_weighted_rms_m_s2"]),
@@ -466,9 +422,11 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("problem", metavar="PROBLEM.toml")
     o.add_argument("--method", default=None,
                    help="goal-attainment or nsga2 (default: [design] method of the file)")
-    o.add_argument("--pop", type=_POSITIVE, default=None,
+    o.add_argument("--pop", type=_bounded(1, _MAX_POP, "a larger front does not fit a run"),
+                   default=None,
                    help="NSGA-II population (default [nsga2])")
-    o.add_argument("--gens", type=_POSITIVE, default=None, help="NSGA-II generations (total)")
+    o.add_argument("--gens", type=_bounded(1, _MAX_GENS, "use --checkpoint and --resume"),
+                   default=None, help="NSGA-II generations (total)")
     o.add_argument("--seed", type=_NON_NEGATIVE, default=None, help="NSGA-II seed")
     o.add_argument("--checkpoint", default=None, metavar="DIR",
                    help="save the NSGA-II state after every generation (atomic)")
@@ -508,7 +466,8 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("data_dir", metavar="DATA_DIR")
     i.add_argument("--out", required=True, metavar="OUT_DIR",
                    help="output folder (identification.json and figures)")
-    i.add_argument("--starts", type=_POSITIVE, default=4,
+    i.add_argument("--starts", type=_bounded(1, _MAX_STARTS, "more starts find nothing new"),
+                   default=4,
                    help="multistart points per test (default 4)")
     i.add_argument("--jobs", type=_POSITIVE, default=1, help="parallel processes (default 1)")
     i.add_argument("--seed", type=_NON_NEGATIVE, default=0,
@@ -557,6 +516,14 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _shorten(message: str) -> str:
+    """A message quoting a file's content stays readable: every run of more than 120
+    characters without a space (an over-long field or name) is cut to its first 60."""
+    import re
+    return re.sub(r"\S{121,}", lambda m: f"{m.group()[:60]}...({len(m.group())} characters)",
+                  message)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ehsa-opt`` console script."""
     parser = build_parser()
@@ -566,21 +533,30 @@ def main(argv: Sequence[str] | None = None) -> int:
     die_with_parent()  # pool workers forked from here on die with this process
     try:
         _check_outputs(args)
-        out = getattr(args, "out", None)
-        if not out:
+        _cap_jobs(args)
+        folders = [getattr(args, a, None) for a in ("out", "checkpoint")]
+        if getattr(args, "resume", None) and not getattr(args, "checkpoint", None):
+            folders.append(args.resume)  # checkpoints go back into --resume
+        folders = [f for f in folders if isinstance(f, str) and f]
+        if not folders:
             return func(args)
+        import contextlib
+
         from .utils.lock import LOCK_NAME, output_lock
-        created = not Path(out).exists()
+        created = {f: not Path(f).exists() for f in folders}
         try:
-            with output_lock(out):  # one run per output folder
+            with contextlib.ExitStack() as stack:
+                for f in folders:  # one run per output and checkpoint folder
+                    stack.enter_context(output_lock(f))
                 return func(args)
         finally:  # a refused run leaves no empty folder behind
-            if created and Path(out).is_dir() and \
-                    [f.name for f in Path(out).iterdir()] == [LOCK_NAME]:
-                (Path(out) / LOCK_NAME).unlink(missing_ok=True)
-                Path(out).rmdir()
+            for f, new in created.items():
+                if new and Path(f).is_dir() and \
+                        [g.name for g in Path(f).iterdir()] == [LOCK_NAME]:
+                    (Path(f) / LOCK_NAME).unlink(missing_ok=True)
+                    Path(f).rmdir()
     except (BenchDataError, ParameterError, _UsageError, FileExistsError, ValueError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {_shorten(str(exc))}", file=sys.stderr)
         return 2
     except OSError as exc:
         print(f"error: {_os_error_message(exc)}", file=sys.stderr)

@@ -21,8 +21,10 @@ SETS = {
 
 @pytest.fixture()
 def ident(tmp_path):
+    # identification.json carries complete sets (all eight parameters by name)
+    full = {c: FrictionParams(**v).as_dict() for c, v in SETS.items()}
     path = tmp_path / "identification.json"
-    path.write_text(json.dumps({"tests": [], "friction_sets": {**SETS, "method": "envelope"}}))
+    path.write_text(json.dumps({"tests": [], "friction_sets": {**full, "method": "envelope"}}))
     return path
 
 

@@ -51,7 +51,8 @@ from ..physics.params import (
 from .checks import check_test_signals
 
 __all__ = ["BenchDataError", "BenchDataWarning", "BenchTest", "BenchData", "load_bench",
-           "write_bench", "check_bench", "COLUMNS"]
+           "write_bench", "check_bench", "COLUMNS", "MARKER_NAME", "foreign_content",
+           "write_marker", "read_number_table"]
 
 #: Required CSV columns, in order; ``voltage_V`` only for rigs with a generator.
 COLUMNS = ("time_s", "displacement_m", "force_N", "voltage_V")
@@ -169,68 +170,86 @@ def _unknown_key(key: str, valid: Iterable[str], where: str) -> BenchDataError:
     return BenchDataError(unknown_name_message(key, valid, where))
 
 
+def _shown(value: str, limit: int = 40) -> str:
+    """A field for a message: at most ``limit`` characters, control characters escaped."""
+    text = value.strip()
+    text = text if len(text) <= limit else text[:limit] + f"... ({len(text)} characters)"
+    return repr(text)[1:-1]
+
+
 def _diagnose_rows(path: Path, header: list[str]) -> BenchDataError:
     """Stream the data rows to find the first bad one (nothing is kept in memory)."""
     name, ncol = path.name, len(header)
-    bad: BenchDataError | None = None
-    with path.open(encoding="utf-8", errors="replace", newline="") as fh:
+    bad: tuple[int, int] | None = None  # (row, fields) of a short/long row
+    with path.open(encoding="utf-8-sig", errors="replace", newline="") as fh:
         fh.readline()
         for k, ln in enumerate(fh, start=2):
             if bad is not None:
                 if ln.strip():  # a later non-blank row: the bad one was not the last
-                    return bad
+                    break
                 continue
             if not ln.strip():
                 continue
             parts = ln.rstrip("\r\n").split(",")
             if len(parts) != ncol:
-                bad = BenchDataError(
-                    f"{name}: last row {k} has {len(parts)} fields, expected {ncol} "
-                    f"({','.join(header)}); the file may be truncated — complete or delete "
-                    f"that row")
+                bad = (k, len(parts))
                 continue
             for j, v in enumerate(parts):
                 try:
                     float(v)
                 except ValueError:
                     return BenchDataError(f"{name}: row {k}, column '{header[j]}': "
-                                          f"'{v.strip()}' is not a number")
+                                          f"'{_shown(v)}' is not a number")
+        else:
+            if bad is not None:
+                return BenchDataError(
+                    f"{name}: last row {bad[0]} has {bad[1]} fields, expected {ncol} "
+                    f"({','.join(header)}); the file may be truncated — complete or delete "
+                    f"that row")
     if bad is not None:
-        return bad
+        return BenchDataError(f"{name}: row {bad[0]} has {bad[1]} fields, expected {ncol} "
+                              f"({','.join(header)}); repair or delete that row")
     return BenchDataError(f"{name}: could not be read as a CSV of numbers; check the "
                           f"delimiter (a comma) and the rows")
 
 
-def _read_csv(path: Path, need_voltage: bool) -> dict[str, np.ndarray]:
-    """Strictly read one test CSV; errors name the file and the row (1-based, header = 1).
+def read_number_table(path: Path, min_columns: int = 1,
+                      check_header: Any = None) -> tuple[np.ndarray, list[str]]:
+    """A CSV of numbers with one header row, strictly: (rows x columns array, header).
 
-    Valid files are parsed by :func:`numpy.loadtxt` straight into one float array
-    (memory ≈ the array, not a multiple of the file); only a bad file is scanned
-    a second time, line by line, to name its first bad row.
+    One error path for every numeric CSV we read: a :class:`BenchDataError` naming
+    the file and the row (1-based, header = 1) — a missing or empty file, another
+    delimiter than the comma (named), too few columns, a field that is not a number,
+    NaN/inf.  A UTF-8 byte-order mark is accepted.  ``check_header(header)`` may refuse
+    the header before the rows are parsed.  Valid files are parsed by
+    :func:`numpy.loadtxt` straight into one float array (memory ≈ the array); only a
+    bad file is scanned a second time, line by line, to name its first bad row.
     """
     name = path.name
     if not path.is_file():
-        raise BenchDataError(f"{name}: file listed in bench.toml does not exist "
-                             f"({path}); add it or remove its [[test]] entry")
-    required = list(COLUMNS[:4] if need_voltage else COLUMNS[:3])
-    with path.open(encoding="utf-8", errors="replace", newline="") as fh:
-        first = fh.readline()
+        raise BenchDataError(f"{name}: file not found ({path}); check the path")
+    with path.open(encoding="utf-8-sig", errors="replace", newline="") as fh:
+        first = fh.readline(1 << 16)
         if not first.strip():
-            raise BenchDataError(f"{name}: file is empty; it needs the header "
-                                 f"{','.join(required)} and data rows")
+            raise BenchDataError(f"{name}: file is empty; it needs a header row and data rows")
         header = [h.strip() for h in first.split(",")]
-        for col in required:
-            if col not in header:
-                near = nearest_name(col, header)
-                hint = f" (found '{near}': rename it to '{col}')" if near else ""
-                raise BenchDataError(f"{name}: row 1 (header): missing column '{col}'{hint}; "
-                                     f"the header must be {','.join(required)}")
-        for col in header:
-            if col not in COLUMNS:
-                raise BenchDataError(unknown_name_message(col, COLUMNS,
-                                                          f"{name}: row 1 (header)", "column"))
-        if len(set(header)) != len(header):
-            raise BenchDataError(f"{name}: row 1 (header): duplicate column names {header}")
+        if len(header) == 1:
+            for delim, what in ((";", "semicolon"), ("\t", "tab"), ("|", "vertical bar"),
+                                (" ", "space")):
+                if delim in first.strip():
+                    raise BenchDataError(
+                        f"{name}: row 1 (header) is separated by '{delim}' ({what}); the "
+                        f"format uses a comma (',') between columns and a point as the "
+                        f"decimal mark — re-export the file as comma-separated CSV")
+        if len(header) < min_columns:
+            raise BenchDataError(f"{name}: row 1 (header) has {len(header)} column(s), "
+                                 f"at least {min_columns} are needed")
+        if any(not h.isprintable() for h in header):
+            h = next(h for h in header if not h.isprintable())
+            raise BenchDataError(f"{name}: row 1 (header): column name '{_shown(h)}' holds a "
+                                 f"control character; rename the column")
+        if check_header is not None:
+            check_header(header)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # "input contained no data"
@@ -246,6 +265,32 @@ def _read_csv(path: Path, need_voltage: bool) -> dict[str, np.ndarray]:
         k, j = map(int, np.argwhere(bad)[0])
         raise BenchDataError(f"{name}: row {k + 2}, column '{header[j]}': value {arr[k, j]} is "
                              f"not finite (NaN/inf); remove or repair the sample")
+    return arr, header
+
+
+def _read_csv(path: Path, need_voltage: bool) -> dict[str, np.ndarray]:
+    """Strictly read one test CSV; errors name the file and the row (1-based, header = 1)."""
+    name = path.name
+    if not path.is_file():
+        raise BenchDataError(f"{name}: file listed in bench.toml does not exist "
+                             f"({path}); add it or remove its [[test]] entry")
+    required = list(COLUMNS[:4] if need_voltage else COLUMNS[:3])
+
+    def check_header(header: list[str]) -> None:
+        for col in required:
+            if col not in header:
+                near = nearest_name(col, header)
+                hint = f" (found '{near}': rename it to '{col}')" if near else ""
+                raise BenchDataError(f"{name}: row 1 (header): missing column '{col}'{hint}; "
+                                     f"the header must be {','.join(required)}")
+        for col in header:
+            if col not in COLUMNS:
+                raise BenchDataError(unknown_name_message(col, COLUMNS,
+                                                          f"{name}: row 1 (header)", "column"))
+        if len(set(header)) != len(header):
+            raise BenchDataError(f"{name}: row 1 (header): duplicate column names {header}")
+
+    arr, header = read_number_table(path, 1, check_header)
     cols = {h: np.ascontiguousarray(arr[:, j]) for j, h in enumerate(header) if h in required}
     del arr
     t = cols["time_s"]
@@ -340,6 +385,9 @@ def load_bench(path: str | Path, *, lenient: bool = False) -> BenchData:
         file = entry.get("file")
         if not isinstance(file, str) or not file:
             raise BenchDataError(f"{where}: missing 'file' (the CSV name)")
+        if not file.isprintable():
+            raise BenchDataError(f"{where}: 'file' = {file!r} holds a control character (a NUL "
+                                 f"or line break); give the plain CSV file name")
         where = f"bench.toml [[test]] #{n} ({file})"
         target = _resolve_inside(path, file, where)
         if target in seen:
@@ -404,6 +452,54 @@ def check_bench(path: str | Path, *, lenient: bool = False) -> str:
 
 
 # ------------------------------------------------------------------ writing
+#: Written last into every directory :func:`write_bench` makes: the names it wrote, so
+#: ``--overwrite`` replaces only a directory ehsa-opt wrote and nobody has added to.
+MARKER_NAME = ".ehsa_opt_bench.json"
+_MARKER_FORMAT = "ehsa_opt bench directory"
+
+
+def write_marker(d: Path) -> None:
+    import json
+    names = sorted(f.name for f in d.iterdir())
+    (d / MARKER_NAME).write_text(json.dumps({"format": _MARKER_FORMAT, "files": names}),
+                                 encoding="utf-8")
+
+
+def foreign_content(d: Path, depth: int = 0) -> str | None:
+    """Why ``--overwrite`` may not replace directory ``d`` (None: ehsa-opt wrote all of it).
+
+    ``d`` must hold the marker :func:`write_bench` writes, and nothing else than the names
+    listed there (a sub-directory listed must itself be such a directory). Symlinks are
+    never followed.
+    """
+    import json
+
+    from ..utils.limits import parse_json
+    marker = d / MARKER_NAME
+    if marker.is_symlink() or not marker.is_file():
+        return (f"was not written by ehsa-opt (no {MARKER_NAME}); it may hold your own "
+                f"files, so it is never replaced or deleted")
+    try:
+        doc = parse_json(marker.read_bytes()[:1 << 20], str(marker))
+        listed = set(doc["files"]) if doc.get("format") == _MARKER_FORMAT else None
+    except (ValueError, KeyError, TypeError, AttributeError, OSError, json.JSONDecodeError):
+        listed = None
+    if listed is None:
+        return f"has an unreadable {MARKER_NAME}, so it is never replaced or deleted"
+    added = []
+    for f in sorted(d.iterdir(), key=lambda f: f.name):
+        if f.name == MARKER_NAME:
+            continue
+        if f.name not in listed or f.is_symlink():
+            added.append(f.name)
+        elif f.is_dir() and (depth > 4 or foreign_content(f, depth + 1)):
+            added.append(f.name + "/")
+    if added:
+        return (f"holds files ehsa-opt did not write ({', '.join(added[:5])}"
+                + (", ..." if len(added) > 5 else "") + "), so it is never replaced or deleted")
+    return None
+
+
 def _harvester_table(h: HarvesterParams) -> dict[str, float]:
     default = HarvesterParams()
     return {k: getattr(h, k) for k in default.__dataclass_fields__
@@ -442,9 +538,20 @@ def write_bench(path: str | Path, tests: list[BenchTest], *,
         Replace an existing non-empty directory.
     """
     path = Path(path)
-    if path.exists() and any(path.iterdir()) and not overwrite:
-        raise FileExistsError(f"{path}: directory exists and is not empty; choose a new "
-                              f"directory or pass overwrite=True (--overwrite)")
+    if path.is_symlink() or (path.exists() and not path.is_dir()):
+        raise FileExistsError(f"{path}: exists and is not a directory (or is a symlink); "
+                              f"choose a new directory")
+    if path.exists() and any(path.iterdir()):
+        problem = foreign_content(path)
+        if problem:
+            raise FileExistsError(f"{path}: directory exists, is not empty and {problem}; "
+                                  f"nothing was "
+                                  f"changed. Choose a new directory (or empty this one "
+                                  f"yourself)")
+        if not overwrite:
+            raise FileExistsError(f"{path}: directory exists and is not empty (bench data "
+                                  f"written by ehsa-opt); choose a new directory or pass overwrite=True "
+                                  f"(--overwrite) to replace it")
     if not tests:
         raise ValueError("write_bench: no tests to write")
     doc: dict[str, Any] = {}
@@ -473,6 +580,7 @@ def write_bench(path: str | Path, tests: list[BenchTest], *,
             (tmp / t.file).write_text(_csv_text(t), encoding="utf-8")
         for name, content in (extra_files or {}).items():
             (tmp / name).write_text(content, encoding="utf-8")
+        write_marker(tmp)
         if path.exists():
             old = path.with_name(f".{path.name}.old-{os.getpid()}")
             os.replace(path, old)

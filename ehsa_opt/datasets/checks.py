@@ -211,8 +211,13 @@ def check_test_signals(test, harvester: HarvesterParams, *, has_generator: bool,
     if V is not None and test.load_ohm is not None and math.isfinite(test.load_ohm):
         re, ri = test.load_ohm, harvester.internal_resistance_ohm
         pred = harvester.voltage_constant_Vs_per_rad * (v / r) * re / (re + ri)
-        gain = float(pred @ V) / float(pred @ pred)
-        if abs(gain - 1.0) > tol["voltage_gain"]:
+        norm = float(pred @ pred)
+        gain = float(pred @ V) / norm if norm > 0 and math.isfinite(norm) else math.nan
+        if not math.isfinite(gain):
+            out.append(f"{name}: load_ohm = {re:g} in {key} makes the voltage that the motion "
+                       f"implies (K_e·ω·R_e/(R_e+R_i)) vanish or overflow, while column "
+                       f"'voltage_V' is measured; check 'load_ohm' (in ohm)")
+        elif abs(gain - 1.0) > tol["voltage_gain"]:
             hint = ("is voltage in mV? Convert it to volts" if gain > 100 else
                     "is voltage in kV? Convert it to volts" if 0 < gain < 0.01 else
                     f"check 'load_ohm' in {key}, the [harvester] constants (K_e, R_i, lead) "

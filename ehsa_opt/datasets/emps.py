@@ -29,10 +29,28 @@ CITATION = ("A. Janot, M. Gautier, M. Brunot, 'Data Set and Reference Models of 
             "2019 Workshop on Nonlinear System Identification Benchmarks, Eindhoven.")
 
 
-def _read(path: Path) -> tuple[list[str], np.ndarray]:
-    with path.open() as fh:
-        header = fh.readline().strip().split(",")
-    return header, np.loadtxt(path, delimiter=",", skiprows=1)
+def _read(path: Path, columns: tuple[str, ...], min_columns: int) -> np.ndarray:
+    """A raw EMPS CSV, validated before anything is written: the header, at least
+    ``len(columns)`` numeric columns, enough rows, finite values, increasing time."""
+    from .bench_format import BenchDataError, read_number_table
+    where = str(path)
+    arr, header = read_number_table(path, min_columns=min_columns)
+    if header[:len(columns)] != list(columns):
+        raise BenchDataError(f"{where}: row 1 (header): expected the columns "
+                             f"{','.join(columns)}, found {','.join(header)}; give the raw EMPS "
+                             f"file")
+    if arr.shape[0] < 5:
+        raise BenchDataError(f"{where}: only {arr.shape[0]} data rows; at least 5 are needed")
+    dt = np.diff(arr[:, 0])
+    if np.any(dt <= 0):
+        k = int(np.argmax(dt <= 0))
+        raise BenchDataError(f"{where}: row {k + 3}: time_s = {arr[k + 1, 0]:g} does not "
+                             f"increase (previous row {arr[k, 0]:g}); time must be strictly "
+                             f"increasing")
+    return arr
+
+
+_EST_COLUMNS = ("time_s", "position_m", "reference_position_m", "control_voltage_V")
 
 
 def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = False) -> Path:
@@ -43,11 +61,13 @@ def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = 
     0/5 square wave that the benchmark calls ``pulses_N``; at each edge the recorded force
     steps by g_tau x 5 V, so it is 5 V added to the controller output, already contained
     in the force — a marker of the pulse edges, not a missing force).
+    Both sources are validated (header, columns, rows, finite values, increasing time)
+    before anything is written.
     """
+    from .bench_format import write_marker
     src = Path(source_dir)
-    h, est = _read(src / "emps_estimation.csv")
-    if h[:4] != ["time_s", "position_m", "reference_position_m", "control_voltage_V"]:
-        raise ValueError(f"{src / 'emps_estimation.csv'}: unexpected header {h}")
+    est = _read(src / "emps_estimation.csv", _EST_COLUMNS, 4)
+    val = _read(src / "emps_validation_pulses.csv", _EST_COLUMNS, 5)  # + the pulse force
     rig = {"name": "EMPS", "has_generator": False,
            "description": "Electro-Mechanical Positioning System (Maxon DC motor + Star ball "
                           "screw + load), 1 kHz; force = g_tau * controller voltage, g_tau = "
@@ -56,7 +76,6 @@ def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = 
                      load_ohm=None, excitation="recorded", time_s=est[:, 0],
                      displacement_m=est[:, 1], force_N=GAIN_N_PER_V * est[:, 3],
                      description="estimation trajectory (position-controlled, ~25 s)")
-    hv, val = _read(src / "emps_validation_pulses.csv")
     vtest = BenchTest(file="emps_validation_pulses.csv", frequency_hz=None, amplitude_m=None,
                       load_ohm=None, excitation="recorded", time_s=val[:, 0],
                       displacement_m=val[:, 1], force_N=GAIN_N_PER_V * val[:, 3],
@@ -67,9 +86,11 @@ def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = 
     pulses = "time_s,pulse_V\n" + "\n".join(
         f"{t:.9g},{f:.9g}" for t, f in zip(val[:, 0], val[:, 4]))
     out = Path(out_dir)
-    readme = (out / "README.md").read_text() if (out / "README.md").exists() else ""
+    readme = (out / "README.md").read_text() \
+        if (out / "README.md").is_file() and not (out / "README.md").is_symlink() else ""
     write_bench(out, [test], rig=rig, overwrite=overwrite,
                 extra_files={"README.md": readme} if readme else None)
     write_bench(out / "validation", [vtest], rig=rig, overwrite=True,
                 extra_files={"pulses.csv": pulses + "\n"})
+    write_marker(out)  # the validation folder is ours too
     return out

@@ -15,15 +15,23 @@ A problem file refers to it with ``[friction] from = "out/identification.json"``
 
 from __future__ import annotations
 
-import json
+import math
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..physics.params import FRICTION_NAMES, FrictionParams, ParameterError, from_mapping
+from ..physics.params import (
+    FRICTION_NAMES,
+    FrictionParams,
+    ParameterError,
+    check_keys,
+    from_mapping,
+)
+from ..utils.limits import parse_json
 
 __all__ = ["FRICTION_CASES", "parse_friction_spec", "load_friction_sets", "load_friction",
-           "friction_from_table", "load_velocity_range", "identified_range_for", "embedded_range_m_per_s",
-           "RANGE_SOURCE_EMBEDDED", "identified_range_kw"]
+           "friction_from_table", "load_velocity_range", "identified_range_for",
+           "embedded_range_m_per_s", "RANGE_SOURCE_EMBEDDED", "identified_range_kw",
+           "friction_set", "resolve_reference"]
 
 #: The friction cases an identification result provides.
 FRICTION_CASES: tuple[str, ...] = ("min", "best", "max")
@@ -55,10 +63,13 @@ def load_friction_sets(path: str | Path) -> dict[str, FrictionParams]:
         raise ParameterError(f"{path}: identification result not found; make one with "
                              f"`ehsa-opt identify DATA_DIR --out DIR` (DIR/identification.json)")
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ParameterError(f"{path}: not a JSON identification result ({exc}); pass the "
-                             f"identification.json written by `ehsa-opt identify`") from None
+        doc = parse_json(path.read_bytes(), str(path), ParameterError)
+    except OSError as exc:
+        raise ParameterError(f"{path}: cannot be read ({exc.strerror}); check the path and "
+                             f"its permissions") from None
+    except ParameterError as exc:
+        raise ParameterError(f"{exc}; pass the identification.json written by "
+                             f"`ehsa-opt identify`") from None
     sets = doc.get("friction_sets") if isinstance(doc, Mapping) else None
     if not isinstance(sets, Mapping):
         raise ParameterError(f"{path}: no 'friction_sets' table (written by an older ehsa_opt "
@@ -68,9 +79,26 @@ def load_friction_sets(path: str | Path) -> dict[str, FrictionParams]:
         if not isinstance(sets.get(case), Mapping):
             raise ParameterError(f"{path}: friction_sets has no '{case}' case; re-run "
                                  f"`ehsa-opt identify`")
-        values = {k: v for k, v in sets[case].items() if k in FRICTION_NAMES}
-        out[case] = from_mapping(FrictionParams, values, f"{path} friction_sets.{case}")
+        out[case] = friction_set(sets[case], f"{path} friction_sets.{case}")
     return out
+
+
+def friction_set(values: Mapping[str, Any], where: str) -> FrictionParams:
+    """A received friction set, validated as data: every parameter by name (no default
+    fills a missing one, a misspelled name is refused with the nearest valid one), finite
+    numbers, physical (breakaway >= Coulomb >= 0, velocities > 0, viscous >= 0)."""
+    check_keys(values, FRICTION_NAMES, where)
+    missing = [n for n in FRICTION_NAMES if n not in values]
+    if missing:
+        raise ParameterError(f"{where}: missing {', '.join(missing)}; a friction set needs all "
+                             f"{len(FRICTION_NAMES)} parameters ({', '.join(FRICTION_NAMES)}) — "
+                             f"re-run `ehsa-opt identify` or complete the set")
+    for n in FRICTION_NAMES:
+        v = values[n]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ParameterError(f"{where}: {n} = {v!r} is not a finite number; re-run "
+                                 f"`ehsa-opt identify` or give a number")
+    return from_mapping(FrictionParams, values, where)
 
 
 def load_friction(spec: str | Path, case: str | None = None) -> FrictionParams:
@@ -99,7 +127,7 @@ def friction_from_table(table: Mapping[str, Any], where: str,
     if not isinstance(src, str) or not isinstance(case, str):
         raise ParameterError(f"{where}: 'from' and 'case' must be strings, e.g. from = "
                              f"\"out/identification.json\", case = \"max\"")
-    path = Path(src) if Path(src).is_absolute() else Path(base_dir) / src
+    path = resolve_reference(src, base_dir, f"{where} from")
     try:
         return load_friction(path, case)
     except ParameterError as exc:
@@ -178,3 +206,27 @@ def identified_range_kw(friction_specs: Any, problem_path: str | Path) -> dict[s
     :func:`identified_range_for` (for ``optimize``)."""
     v, src = identified_range_for(friction_specs or (), problem_path)
     return {"identified_range_m_per_s": v, "identified_range_source": src}
+
+
+def resolve_reference(ref: str, base_dir: str | Path, where: str) -> Path:
+    """A path named inside a file, resolved against that file's folder ``base_dir`` and
+    confined: it must lead (after symlinks) into ``base_dir`` or the working directory.
+
+    Raises
+    ------
+    ParameterError
+        A control character in the name, or a path that leads elsewhere (absolute or
+        ``../..``), with the fix.
+    """
+    if not ref or not ref.isprintable():
+        raise ParameterError(f"{where}: {ref!r} is not a file name (empty or a control "
+                             f"character such as a NUL); give the path of the file")
+    p = Path(ref)
+    target = (p if p.is_absolute() else Path(base_dir) / p).resolve()
+    roots = [Path(base_dir).resolve(), Path.cwd().resolve()]
+    if not any(target.is_relative_to(r) for r in roots):
+        raise ParameterError(f"{where}: {ref!r} leads outside the problem file's folder "
+                             f"{roots[0]} and the working directory (to {target}); copy the "
+                             f"file next to the problem file (or below it) and give its "
+                             f"relative path")
+    return target

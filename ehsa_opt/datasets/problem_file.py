@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .friction_source import friction_from_table
+from .friction_source import friction_from_table, resolve_reference
 from ..physics.params import (
     FrictionParams,
     HarvesterParams,
@@ -39,7 +39,7 @@ from ..physics.params import (
 )
 
 __all__ = ["SimulationSettings", "QuarterCarProblem", "load_problem", "problem_from_mapping",
-           "resolve_problem_path"]
+           "resolve_problem_path", "resolve_reference"]
 
 _TOP_KEYS = ("preset", "vehicle", "harvester", "friction", "road", "simulation")
 
@@ -123,7 +123,19 @@ def problem_from_mapping(data: Mapping[str, Any], where: str = "problem",
     if "road" not in data:
         raise ParameterError(f"{where}: missing [road] table (iso_class, speed_km_per_h, "
                              "length_m, seed, or profile_csv)")
-    road = from_mapping(RoadParams, data["road"], f"{where} [road]")
+    road_doc = data["road"]
+    if isinstance(road_doc, Mapping) and "profile_csv" in road_doc:
+        synth = [k for k in ("iso_class", "length_m", "seed", "iso_class_level")
+                 if k in road_doc]
+        if synth:
+            raise ParameterError(f"{where} [road]: give either profile_csv (a measured road) or "
+                                 f"the synthesised road's {', '.join(synth)}, not both: the "
+                                 f"profile would replace the ISO class silently")
+        ref = road_doc["profile_csv"]
+        if isinstance(ref, str):
+            road_doc = {**road_doc, "profile_csv": str(resolve_reference(
+                ref, base_dir, f"{where} [road] profile_csv"))}
+    road = from_mapping(RoadParams, road_doc, f"{where} [road]")
     sim = data.get("simulation", {})
     if not isinstance(sim, Mapping):
         raise ParameterError(f"{where}: [simulation] must be a table")

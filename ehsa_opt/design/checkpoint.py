@@ -30,8 +30,10 @@ import numpy as np
 
 from ..physics.params import ParameterError
 from ..utils.io import atomic_write_bytes
+from ..utils.limits import parse_json
 
-__all__ = ["CHECKPOINT_FILE", "NSGA2State", "capture", "load_state", "restore", "save_state"]
+__all__ = ["CHECKPOINT_FILE", "MAX_CHECKPOINT_BYTES", "NSGA2State", "capture", "load_state",
+           "restore", "save_state", "verify_designs"]
 
 #: File name of the checkpoint inside the checkpoint directory.
 CHECKPOINT_FILE = "nsga2_checkpoint.npz"
@@ -187,13 +189,16 @@ def load_state(directory: str | Path) -> NSGA2State:
         raise ParameterError(f"--resume {d}: no checkpoint ({CHECKPOINT_FILE}) there; run "
                              f"with --checkpoint {d} first")
     try:
+        _check_declared_sizes(path)
         with np.load(path, allow_pickle=False) as z:
             names = set(z.files)
             missing = [k for k in ("header",) + _ARRAYS if k not in names]
             if missing:
                 raise _refuse(path, f"is not an NSGA-II checkpoint of ehsa_opt (no "
                                     f"{', '.join(missing)})")
-            header = json.loads(bytes(z["header"].astype(np.uint8)).decode())
+            header = parse_json(bytes(z["header"].astype(np.uint8)), "its header",
+                                lambda m: _refuse(path, f"has a bad header ({m})"),
+                                standard=False)
             arrays = {k: z[k] for k in _ARRAYS}
     except ParameterError:
         raise
@@ -220,10 +225,90 @@ def load_state(directory: str | Path) -> NSGA2State:
             seed=int(header["seed"]), n_iter=int(header["n_iter"]),
             n_eval=int(header["n_eval"]), rng_state=_rng_from_json(header["rng"]),
             history=list(header["history"]), arrays=arrays)
-    except (KeyError, TypeError, ValueError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise _refuse(path, f"has an incomplete header ({exc})") from None
+    _check_header(path, state)
     _check_arrays(path, state)
     return state
+
+
+#: Largest checkpoint content accepted (declared uncompressed bytes of all members).
+MAX_CHECKPOINT_BYTES = 2 * 2 ** 30
+
+
+def _check_declared_sizes(path: Path) -> None:
+    """Refuse, from the zip directory alone, members that would inflate far beyond the file
+    (a deflate bomb) or whose arrays declare more bytes than their member holds — before
+    any member is read.  ``np.savez`` stores members uncompressed, so an honest
+    checkpoint's content is about its file size."""
+    from numpy.lib import format as npy
+    size = path.stat().st_size
+    with zipfile.ZipFile(path) as zf:
+        infos = zf.infolist()
+        declared = sum(i.file_size for i in infos)
+        if declared > min(MAX_CHECKPOINT_BYTES, 4 * size + 2 ** 20):
+            raise _refuse(path, f"declares {declared / 2 ** 20:.3g} MiB of uncompressed content "
+                                f"in a {size / 2 ** 20:.3g} MiB file (a compressed archive, not a "
+                                f"checkpoint ehsa-opt writes)")
+        for info in infos:
+            with zf.open(info) as fh:
+                try:
+                    version = npy.read_magic(fh)
+                    shape, _, dtype = (npy.read_array_header_1_0(fh) if version == (1, 0)
+                                       else npy.read_array_header_2_0(fh))
+                except (ValueError, EOFError, SyntaxError, TypeError) as exc:
+                    raise _refuse(path, f"member {info.filename} is not a numpy array "
+                                        f"({exc})") from None
+                if dtype.hasobject:
+                    raise _refuse(path, f"member {info.filename} holds Python objects")
+                need = int(np.prod(shape, dtype=object)) * dtype.itemsize
+                if need > info.file_size:
+                    raise _refuse(path, f"member {info.filename} declares {need} bytes of "
+                                        f"array in {info.file_size} bytes")
+
+
+_HISTORY_KEYS = ("gen", "n_eval", "hv", "n_front", "hv_archive", "n_archive")
+
+
+def _check_header(path: Path, state: NSGA2State) -> None:
+    """History rows and the random generator's state, validated as data."""
+    for k, row in enumerate(state.history):
+        if not (isinstance(row, dict) and all(
+                isinstance(row.get(key), (int, float)) and not isinstance(row.get(key), bool)
+                for key in _HISTORY_KEYS)):
+            raise _refuse(path, f"has a malformed history (entry {k} is {str(row)[:60]!r}, "
+                                f"expected numbers {', '.join(_HISTORY_KEYS)})")
+    try:
+        want = type(np.random.default_rng(0).bit_generator).__name__  # pymoo's generator
+        if state.rng_state.get("bit_generator") != want:
+            raise ValueError(f"bit generator {state.rng_state.get('bit_generator')!r}, "
+                             f"expected {want!r}")
+        bg = getattr(np.random, want)()
+        bg.state = state.rng_state
+    except (AttributeError, TypeError, ValueError, KeyError, OverflowError) as exc:
+        raise _refuse(path, f"has a malformed rng state ({type(exc).__name__}: "
+                            f"{str(exc)[:80]})") from None
+
+
+def verify_designs(directory: str | Path, state: NSGA2State, problem: Any,
+                   n_check: int = 3) -> None:
+    """Re-evaluate a sample of the checkpoint's designs (first, middle, last) and refuse
+    the checkpoint when their objectives differ from the recorded ones: a file whose
+    designs or objectives were changed (and its digest recomputed) cannot steer a run."""
+    X, F = state.arrays["pop_X"], state.arrays["pop_F"]
+    idx = np.unique(np.linspace(0, X.shape[0] - 1, min(n_check, X.shape[0])).round()
+                    ).astype(int)
+    got = np.asarray(problem.evaluate(X[idx], return_values_of=["F"]), dtype=float)
+    want = F[idx]
+    scale = np.maximum(np.abs(want), 1e-12)
+    bad = ~(np.abs(got - want) <= 1e-6 * scale)
+    if bad.any():
+        k = int(idx[np.argwhere(bad)[0][0]])
+        raise _refuse(Path(directory) / CHECKPOINT_FILE,
+                      f"does not hold what it claims: design {k} re-evaluated gives objectives "
+                      f"{np.array2string(got[list(idx).index(k)], precision=4)}, the file "
+                      f"records {np.array2string(F[k], precision=4)} (altered, or made by "
+                      f"another version of the model)")
 
 
 def _check_arrays(path: Path, state: NSGA2State) -> None:

@@ -39,6 +39,7 @@ at 70 km/h here).  Example
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
@@ -70,16 +71,26 @@ def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], where: str) ->
     check_keys(table, valid, where)
 
 
-def _int(value: Any, where: str, minimum: int = 0) -> int:
+def _int(value: Any, where: str, minimum: int = 0, maximum: int | None = None) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise ParameterError(f"{where} must be an integer >= {minimum}, got {value!r}")
+    if maximum is not None and value > maximum:
+        raise ParameterError(f"{where} = {value} is too large: it must be <= {maximum}")
     return int(value)
 
 
 def _float(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(f"{where} must be a number, got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+            not math.isfinite(value):
+        raise ParameterError(f"{where} must be a finite number, got {value!r}")
     return float(value)
+
+
+#: Bounds of the size settings: beyond them a study would not finish or not fit in memory.
+MAX_N_FREQ = 65_536
+MAX_POP = 10_000
+MAX_GENS = 100_000
+MAX_STARTS = 1_000
 
 
 def check_method(method: str, where: str = "--method") -> str:
@@ -137,8 +148,10 @@ class NSGA2Settings:
                                           or len(self.pick_weights) != len(OBJECTIVE_NAMES)):
             raise ParameterError("[nsga2] pick = 'preference' needs pick_weights with "
                                  f"{len(OBJECTIVE_NAMES)} values ({', '.join(OBJECTIVE_NAMES)})")
-        if not self.hv_reference > 0:
-            raise ParameterError("[nsga2] hv_reference must be > 0")
+        if not (self.hv_reference > 0 and math.isfinite(self.hv_reference)):
+            raise ParameterError(f"[nsga2] hv_reference = {self.hv_reference!r} must be a "
+                                 f"finite number > 0 (in units of the prototype's objectives, "
+                                 f"e.g. 2.0)")
 
 
 @dataclass(frozen=True)
@@ -232,7 +245,7 @@ def parse_design_config(doc: Mapping[str, Any], path: str = "problem") -> Design
 
     dt = doc.get("design", {})
     _check_keys(dt, ("method", "bounds", "log_scaled", "n_freq"), f"{path} [design]")
-    n_freq = _int(dt.get("n_freq", 1024), f"{path} [design] n_freq", 16)
+    n_freq = _int(dt.get("n_freq", 1024), f"{path} [design] n_freq", 16, MAX_N_FREQ)
     method = check_method(str(dt.get("method", "goal-attainment")), f"{path} [design] method")
     bounds = dt.get("bounds", {
         "total_inertia_gcm2": [250.0, 10000.0], "lead_mm_per_rev": [5.0, 20.0],
@@ -258,7 +271,8 @@ def parse_design_config(doc: Mapping[str, Any], path: str = "problem") -> Design
     ga = doc.get("goal_attainment", {})
     _check_keys(ga, ("n_starts", "seed", "max_iter"), f"{path} [goal_attainment]")
     gas = GoalAttainmentSettings(
-        n_starts=_int(ga.get("n_starts", 6), f"{path} [goal_attainment] n_starts", 1),
+        n_starts=_int(ga.get("n_starts", 6), f"{path} [goal_attainment] n_starts", 1,
+                      MAX_STARTS),
         seed=_int(ga.get("seed", 0), f"{path} [goal_attainment] seed"),
         max_iter=_int(ga.get("max_iter", 300), f"{path} [goal_attainment] max_iter", 1))
 
@@ -267,8 +281,8 @@ def parse_design_config(doc: Mapping[str, Any], path: str = "problem") -> Design
                 f"{path} [nsga2]")
     pw = nt.get("pick_weights")
     ns = NSGA2Settings(
-        pop=_int(nt.get("pop", 40), f"{path} [nsga2] pop", 4),
-        gens=_int(nt.get("gens", 25), f"{path} [nsga2] gens", 1),
+        pop=_int(nt.get("pop", 40), f"{path} [nsga2] pop", 4, MAX_POP),
+        gens=_int(nt.get("gens", 25), f"{path} [nsga2] gens", 1, MAX_GENS),
         seed=_int(nt.get("seed", 1), f"{path} [nsga2] seed"),
         pick=str(nt.get("pick", "knee")),
         pick_weights=None if pw is None else tuple(_float(v, f"{path} [nsga2] pick_weights")

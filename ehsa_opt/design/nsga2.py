@@ -16,7 +16,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..physics.params import ParameterError
-from .checkpoint import capture, load_state, restore, save_state
+from .checkpoint import capture, load_state, restore, save_state, verify_designs
 from .pareto import hypervolume, non_dominated, pick_preferred, update_archive
 from .problem import DesignProblem
 
@@ -165,6 +165,7 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
             raise ParameterError(f"--resume {rdir}: the checkpoint's designs do not fit this "
                                  f"problem's {problem.n_var} variables and {m} objectives; "
                                  f"start a new run")
+        verify_designs(rdir, state, problem)  # a re-signed file cannot steer the run
         history = state.history
         archive = state.arrays["archive_F"]
         resumed_from = len(history)

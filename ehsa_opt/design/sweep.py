@@ -31,6 +31,7 @@ import dataclasses
 import itertools
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
@@ -321,6 +322,7 @@ def run_sweep(spec: SweepSpec, jobs: int = 1, scheduler: Any = None,
     """Evaluate every case of ``spec``; rows in grid order (vehicle, class, speed,
     friction, then the design grid)."""
     tasks = spec.tasks()
+    jobs = max(1, min(jobs, len(tasks)))  # no idle workers: at most one per case
     with executor(jobs, scheduler) as mapper:
         parts = mapper(_call, tasks)
     if progress is not None:
@@ -404,7 +406,7 @@ def parse_sweep(doc: Mapping[str, Any], path: str = "problem",
     phys_doc = {k: doc[k] for k in ("preset", "vehicle", "harvester", "friction", "road",
                                     "simulation") if k in doc}
     phys_doc.setdefault("road", {})
-    phys = problem_from_mapping(phys_doc, path)
+    phys = problem_from_mapping(phys_doc, path, Path(path).parent)
     base, road, sim = phys.harvester, phys.road, phys.simulation
     speeds = tuple(float(v) for v in _list(st, "speed_km_per_h", [road.speed_km_per_h], where))
     classes = tuple(str(c).upper() for c in _list(st, "iso_class", [road.iso_class], where))
@@ -414,15 +416,14 @@ def parse_sweep(doc: Mapping[str, Any], path: str = "problem",
     sets_doc = st.get("friction_sets", {})
     src = friction_from if friction_from is not None else st.get("friction_from")
     if src is not None:
-        from pathlib import Path
-
         from ..datasets.friction_source import load_friction_sets
         if not isinstance(src, str):
             raise ParameterError(f"{where} friction_from: give the path of an "
                                  f"identification.json as a string")
         p = Path(src)
-        if friction_from is None and not p.is_absolute():
-            p = Path(path).parent / p
+        if friction_from is None:  # named in the file: relative to it, confined
+            from ..datasets.problem_file import resolve_reference
+            p = resolve_reference(src, Path(path).parent, f"{where} friction_from")
         try:
             sets = dict(load_friction_sets(p))
         except ParameterError as exc:

@@ -488,10 +488,31 @@ def _finish(su: _Setup, records: list[dict], seconds: float,
 
 
 # ====================================================================== identify
+#: A test whose displacement spans less than this (m) did not move: nothing to identify.
+MIN_STROKE_M = 1e-5
+#: A fit whose force error (%) is at least this did not reach the data.
+MAX_FORCE_ERROR_PERCENT = 90.0
+
+
 def _fit_one(args: tuple) -> FitResult:
     test, harvester, has_gen, components, starts, seed, options, fixed = args
-    return fit_tests([test], harvester, has_generator=has_gen, components=components,
-                     starts=starts, seed=seed, jobs=1, options=options, fixed=fixed)
+    stroke = float(np.ptp(test.displacement_m))
+    fit = fit_tests([test], harvester, has_generator=has_gen, components=components,
+                    starts=starts, seed=seed, jobs=1, options=options, fixed=fixed)
+    # IPOPT may converge on data that carry no information; such a fit is a failure
+    # (and so stays out of the bounds and friction sets), --lenient or not
+    err = fit.force_relative_error_percent
+    if stroke < MIN_STROKE_M:
+        fit.success = False
+        fit.message = (f"the displacement is constant (range {stroke:.3g} m < "
+                       f"{MIN_STROKE_M:g} m): the rod did not move, so the test carries no "
+                       f"friction to identify; remove it or check the displacement column")
+    elif fit.success and (err is None or not err < MAX_FORCE_ERROR_PERCENT):
+        fit.success = False
+        fit.message = (f"the fit did not reach the data (force error {err} % >= "
+                       f"{MAX_FORCE_ERROR_PERCENT:g} %, IPOPT {fit.status}); check the test's "
+                       f"signals and units")
+    return fit
 
 
 def _default_holdout(data: BenchData) -> list[str]:
@@ -556,7 +577,7 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
             if progress:
                 progress(len(fits))
     else:
-        with _pool(jobs) as ex:
+        with _pool(min(jobs, len(args))) as ex:
             for f in ex.map(_fit_one, args):
                 fits.append(f)
                 if progress:

@@ -60,9 +60,11 @@ def nearest_name(key: str, valid: list[str] | tuple[str, ...]) -> str | None:
 def unknown_name_message(key: str, valid: Any, where: str, what: str = "key") -> str:
     """``"{where}: unknown {what} '{key}'; did you mean '...'? (valid: ...)"``."""
     valid = tuple(valid)
-    near = nearest_name(key, valid)
+    key = str(key)
+    near = nearest_name(key, valid) if len(key) <= 200 else None
+    shown = repr(key[:60])[1:-1] + (f"... ({len(key)} characters)" if len(key) > 60 else "")
     hint = f"; did you mean '{near}'?" if near else ""
-    return f"{where}: unknown {what} '{key}'{hint} (valid: {', '.join(valid)})"
+    return f"{where}: unknown {what} '{shown}'{hint} (valid: {', '.join(valid)})"
 
 
 def check_keys(table: Any, valid: Any, where: str, error: type[Exception] | None = None) -> None:
@@ -339,6 +341,12 @@ class VehicleParams:
 
     def __post_init__(self) -> None:
         _validate_numbers(self, "vehicle")
+        for name, least, what in (("sprung_mass_kg", 1.0, "a quarter of a vehicle's body"),
+                                  ("unsprung_mass_kg", 0.1, "a wheel, hub and brake")):
+            if getattr(self, name) < least:
+                raise ParameterError(
+                    f"vehicle: '{name}' = {getattr(self, name):g} kg is implausible for "
+                    f"{what}; it must be >= {least:g} kg (masses are in kg)")
 
     @classmethod
     def preset(cls, name: str) -> "VehicleParams":
@@ -451,9 +459,15 @@ def load_toml(path: str | Path) -> dict[str, Any]:
     path = Path(path)
     if not path.is_file():
         raise ParameterError(f"{path}: file not found")
+    from ..utils.limits import check_nesting, nesting_error
     try:
         with path.open("rb") as fh:
-            return tomllib.load(fh)
+            raw = fh.read()
+        if raw.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte-order mark (some editors add one)
+            raw = raw[3:]
+        return check_nesting(tomllib.loads(raw.decode("utf-8")), str(path), ParameterError)
+    except RecursionError:
+        raise nesting_error(str(path), ParameterError) from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML ({exc}); fix the syntax there") from None
     except UnicodeDecodeError as exc:

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 __all__ = ["Step", "StepOutput", "Context", "hash_json", "code_digest", "data_digest",
-           "markdown_tables", "FRICTION_BOUNDS"]
+           "markdown_tables", "FRICTION_BOUNDS", "dependency_versions", "NUMERICAL_DEPENDENCIES"]
 
 #: Values of :attr:`Context.friction_bounds` (``reproduce --friction-bounds``).
 FRICTION_BOUNDS = ("data", "paper")
@@ -163,11 +163,29 @@ def hash_json(obj: Any) -> str:
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
+#: Numerical dependencies whose versions key the step cache (a new scipy may move a result).
+NUMERICAL_DEPENDENCIES = ("numpy", "scipy", "casadi", "pymoo", "matplotlib")
+
+
+def dependency_versions() -> dict[str, str]:
+    """Versions of :data:`NUMERICAL_DEPENDENCIES` (from the imported modules)."""
+    import importlib
+    out = {}
+    for name in NUMERICAL_DEPENDENCIES:
+        try:
+            out[name] = str(getattr(importlib.import_module(name), "__version__", "unknown"))
+        except ImportError:
+            out[name] = "missing"
+    return out
+
+
 def code_digest() -> str:
-    """Hash of the package's Python sources: a changed model or study recomputes its steps
-    instead of serving a stale cached result."""
+    """Hash of the package's Python sources and of the versions of the numerical
+    dependencies: a changed model, study or library recomputes its steps instead of
+    serving a stale cached result."""
     root = Path(__file__).resolve().parent.parent  # the ehsa_opt package
     h = hashlib.sha256()
+    h.update(json.dumps(dependency_versions(), sort_keys=True).encode())
     for f in sorted(root.rglob("*.py")):
         h.update(str(f.relative_to(root)).encode())
         h.update(f.read_bytes())

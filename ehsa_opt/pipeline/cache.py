@@ -19,12 +19,15 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any, Callable
 
 from ..utils.io import atomic_write_text
+from ..utils.limits import parse_json
 
-__all__ = ["CACHE_FORMAT", "encode", "decode", "StepCache", "remove_stale_temp_files"]
+__all__ = ["CACHE_FORMAT", "encode", "decode", "StepCache", "remove_stale_temp_files",
+           "unsafe_markdown"]
 
 CACHE_FORMAT = "ehsa_opt-step-cache/1"
 
@@ -55,8 +58,43 @@ def encode(obj: Any) -> str:
 
 
 def decode(text: str) -> Any:
-    """Inverse of :func:`encode`."""
-    return json.loads(text, object_hook=_untag)
+    """Inverse of :func:`encode` (nesting limited, standard JSON only)."""
+    return parse_json(text, "cache entry", object_hook=_untag)
+
+
+_HTML = re.compile(r"<\s*[A-Za-z!/?]")
+_LINK = re.compile(r"\]\(\s*<?([^)>\s]*)")
+_LINK_DEF = re.compile(r"^\s{0,3}\[[^\]]+\]:", re.M)
+_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")
+
+
+def unsafe_markdown(markdown: Any, out_dir: Path) -> str | None:
+    """Why a section's Markdown may not reach the report (None: it may).
+
+    The report sections we write are text, pipe tables and images of our own figures.  A
+    cache entry is only checksummed (anyone who can write ``OUT/cache`` can re-sign it),
+    so its text is checked before it is used: no raw HTML (``<img``, ``<script``, ...),
+    no autolinks or link definitions, and every link or image target a relative path
+    to an existing file inside ``out_dir`` (no URL scheme, no ``..``, no absolute path).
+    """
+    if not isinstance(markdown, str):
+        return "its section text is not a string"
+    if not markdown.isprintable() and any(
+            not c.isprintable() and c not in "\n\t" for c in markdown):
+        return "its section text holds control characters"
+    m = _HTML.search(markdown)
+    if m:
+        return f"its section text holds HTML ({markdown[m.start():m.start() + 20]!r})"
+    if _LINK_DEF.search(markdown):
+        return "its section text holds a link definition"
+    root = Path(out_dir).resolve()
+    for target in _LINK.findall(markdown):
+        p = Path(target)
+        if (not target or _SCHEME.match(target) or p.is_absolute() or ".." in p.parts
+                or not (root / p).resolve().is_relative_to(root)
+                or not (root / p).is_file()):
+            return f"its section text links to {target[:60]!r} (not a file of this folder)"
+    return None
 
 
 def _sha256_file(path: Path) -> str:
@@ -73,11 +111,18 @@ def remove_stale_temp_files(out_dir: Path) -> list[Path]:
     Call it only while holding the folder's lock (no other writer is alive then).
     """
     out = Path(out_dir)
-    stale = [f for d in (out, out / "cache", out / "figures") if d.is_dir()
-             for f in d.glob(".*.tmp") if f.is_file()]
+    stale = [f for d in (out, out / "cache", out / "figures", out / "tables")
+             if d.is_dir() and (d == out or not d.is_symlink())  # never follow a symlink
+             for f in sorted(d.iterdir())
+             if _ATOMIC_TEMP.match(f.name) and not f.is_symlink() and f.is_file()]
     for f in stale:
         f.unlink(missing_ok=True)
     return stale
+
+
+#: ``.NAME.XXXXXXXX.tmp`` of :func:`~ehsa_opt.utils.io.atomic_write_text` (``mkstemp``: 8
+#: random characters) for the kinds of files a run writes; nothing else is touched.
+_ATOMIC_TEMP = re.compile(r"^\..+\.(md|json|png|csv|npz)\.[a-z0-9_]{8}\.tmp$")
 
 
 class StepCache:
@@ -107,7 +152,7 @@ class StepCache:
         why = None
         try:
             doc = decode(f.read_text(encoding="utf-8"))
-        except (ValueError, UnicodeDecodeError, OSError) as exc:
+        except (ValueError, UnicodeDecodeError, OSError, TypeError) as exc:
             doc, why = None, f"unreadable ({type(exc).__name__}: truncated or not JSON)"
         if doc is not None:
             if not isinstance(doc, dict) or doc.get("format") != CACHE_FORMAT:
@@ -126,6 +171,12 @@ class StepCache:
                         if not p.is_file() or _sha256_file(p) != want:
                             why = f"its figure {fig} is missing or changed"
                             break
+                    payload = doc.get("payload")
+                    if why is None and not (isinstance(payload, dict)
+                                            and isinstance(payload.get("results"), dict)):
+                        why = "it has no payload of results"
+                    elif why is None:
+                        why = unsafe_markdown(payload.get("markdown"), self.out)
         if why is not None:
             self.log(f"cache {f}: {why}; not used, the step is recomputed")
             return None

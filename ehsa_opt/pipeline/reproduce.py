@@ -144,7 +144,9 @@ def _write_tables(out: Path, key: str, markdown: str) -> list[Path]:
     paths = []
     for k, table in enumerate(markdown_tables(markdown), start=1):
         buf = io.StringIO()
-        csv.writer(buf, lineterminator="\n").writerows(table)
+        # a cell a spreadsheet would run as a formula is written as text
+        csv.writer(buf, lineterminator="\n").writerows(
+            [[f"'{c}" if c[:1] in ("=", "@") else c for c in row] for row in table])
         path = out / "tables" / f"{key}_{k}.csv"
         atomic_write_text(path, buf.getvalue())
         paths.append(path)
@@ -180,16 +182,16 @@ def _reproduce(out_dir: str | Path, quick: bool, jobs: int, steps: list[Step] | 
     log = log or tqdm.write  # prints above the progress bar
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    cache = StepCache(out, log)
-    for f in remove_stale_temp_files(out):  # we hold the lock: nobody else writes here
-        log(f"removed {f} (a partial write of an interrupted run)")
     ctx = Context(out, quick, jobs, data_dir=None if data_dir is None else Path(data_dir),
                   vehicle_file=None if vehicle is None else Path(vehicle),
                   friction_bounds=friction_bounds)
     if data_dir is not None:
-        ctx.bench()  # refuses bad data (file, row, fix) before any step runs
+        ctx.bench()  # refuses bad data (file, row, fix) before any step runs or file goes
     if vehicle is not None:
         ctx.vehicle()
+    cache = StepCache(out, log)
+    for f in remove_stale_temp_files(out):  # we hold the lock: nobody else writes here
+        log(f"removed {f} (a partial write of an interrupted run)")
     if steps is None:
         steps = [s for s in STEPS if not (ctx.custom_data and s.key in EMBEDDED_ONLY)]
     sections: list[str | None] = []

@@ -182,13 +182,22 @@ def load_profile_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     if not path.is_file():
         raise ParameterError(f"{path}: road profile CSV not found; check profile_csv (it is "
                              "relative to the problem file)")
+    from ..utils.limits import MAX_CSV_FIELD_CHARS
     try:
-        with path.open(newline="", encoding="utf-8") as fh:
+        with path.open(newline="", encoding="utf-8-sig") as fh:
             rows = list(csv.reader(fh))
     except UnicodeDecodeError as exc:
         raise ParameterError(f"{path}: byte {exc.start} is not UTF-8 ({exc.reason}); save the "
                              f"road profile as UTF-8 (plain ASCII numbers), e.g. iconv -f latin1 "
                              f"-t utf-8") from None
+    except csv.Error as exc:  # a field over the csv module's limit, a NUL, a bad quote
+        raise ParameterError(f"{path}: not a CSV of numbers ({exc}); write two columns "
+                             f"distance_m,elevation_m in metres") from None
+    for r, row in enumerate(rows, start=1):
+        long = next((c for c in row if len(c) > MAX_CSV_FIELD_CHARS), None)
+        if long is not None:
+            raise ParameterError(f"{path}: row {r}: a field of {len(long)} characters; write "
+                                 f"two numbers distance_m,elevation_m per row")
     if not rows:
         raise ParameterError(f"{path}: empty file; expected header 'distance_m,elevation_m'")
     header = [h.strip() for h in rows[0]]
@@ -239,6 +248,14 @@ def road_profile(road: RoadParams, sample_rate_hz: float = 1000.0,
     n_samples = int(math.floor(span / v * fs)) + 1
     if n_samples < 16:
         raise ParameterError(f"{path}: the profile ({span:g} m) is too short to simulate")
+    if float(np.ptp(elev)) == 0.0:
+        raise ParameterError(f"{path}: the profile is flat (every elevation_m is "
+                             f"{elev[0]:g} m): the car would not move; give a measured profile")
+    from .resources import check_simulation_resources
+    try:  # span x sample rate, checked before the resampled road is allocated
+        check_simulation_resources(None, fs, 0.0, 1, 1, duration_s=span / v)
+    except ParameterError as exc:
+        raise ParameterError(f"{path}: {exc}") from None
     t = np.arange(n_samples) / fs
     x0 = np.interp(dist[0] + v * t, dist, elev)
     return RoadProfile(t, x0 - x0.mean(), v, fs, str(path), None)
