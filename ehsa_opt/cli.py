@@ -156,7 +156,6 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
     for line, to_err in out_of_range_lines(outcome.get("out_of_range")):
         print(line, file=sys.stderr if to_err else sys.stdout)
     if "time_domain_check" in outcome:
-        chk = outcome["time_domain_check"]
         print(time_domain_summary(outcome))
     print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
                                             else ""))
@@ -292,7 +291,6 @@ def _in_file(path: str, func: Callable, *a, **kw):
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    import json
     import warnings
 
     from .datasets.problem_file import load_problem

@@ -2,7 +2,6 @@
 real second one; a white residual gives no data-driven term."""
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest

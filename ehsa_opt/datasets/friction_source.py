@@ -140,8 +140,8 @@ def load_velocity_range(path: str | Path) -> float | None:
     largest velocity), or None when the file has neither."""
     path = Path(path)
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        doc = parse_json(path.read_text(encoding="utf-8"), str(path))
+    except (OSError, UnicodeDecodeError, ValueError):
         return None
     if not isinstance(doc, Mapping):
         return None

@@ -89,7 +89,7 @@ def _convention_statement(cfg: Any, best_level: str) -> str:
                "stays the class mean (ISO 8608's geometric mean), and comparisons with the "
                "paper are made through P/η (see the paper's numbers through the invariants)."
                if lv["mean"] < pe < lv["upper"] else
-               f"Set `iso_class_level` in `[road]` to compare under the closer convention."))
+               "Set `iso_class_level` in `[road]` to compare under the closer convention."))
 
 
 def _design_space(cfg: Any, sets: dict, ga_design: dict, speeds: tuple, n_lead: int,
