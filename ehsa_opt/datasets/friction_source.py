@@ -195,8 +195,9 @@ def embedded_range_m_per_s() -> float:
     import math
 
     from ..physics.params import load_toml
-    from .embedded import embedded_data_dir
-    doc = load_toml(embedded_data_dir() / "bench.toml")
+    # the package's own data folder (not through .embedded, which imports this module)
+    doc = load_toml(Path(__file__).resolve().parent.parent / "data" / "bench_prototype"
+                    / "bench.toml")
     return max(2.0 * math.pi * float(t["frequency_hz"]) * float(t["amplitude_m"])
                for t in doc["test"] if "frequency_hz" in t and "amplitude_m" in t)
 
