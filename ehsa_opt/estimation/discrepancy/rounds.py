@@ -64,9 +64,13 @@ def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
     c.sse_reduction = channel_sse_excess_reduction(
         ch_sse0[ch], channel_sse(ev_pts, ev_pred)[0][ch], ch_n[ch])
     c.resolved = significant(c.intervals, CANDIDATES[name].amplitudes)
-    # the SSE (other-channel) route is offered only where the force error has no excess
-    # beyond noise left to remove (the stated rule); elsewhere the force decides
-    c.sse_route = not can_earn(cur_err, floor, 0.0, 1.0)
+    # the SSE (other-channel) route is for effects seen mainly in another channel: it is
+    # offered where the force error has no excess beyond noise left, or where another
+    # channel's excess over its noise expectation (SSE/N − 1) exceeds the force's;
+    # where the force's excess dominates (a gap at 11 %), the force decides
+    exc = [s0 / n0 - 1.0 if n0 > 0 else -math.inf for s0, n0 in zip(ch_sse0, ch_n)]
+    c.sse_route = (not can_earn(cur_err, floor, 0.0, 1.0)
+                   or (len(exc) > 1 and max(exc[1:]) > exc[0]))
     by_total = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
                           c.sse_reduction if c.sse_route else None,
                           n_force=sum(pt.y.shape[1] for pt in ev_pts)))
