@@ -135,9 +135,12 @@ def run_case(case: tuple, args) -> dict:
     else:  # cut or failed: what the log said was added
         added = [ln.split("added ", 1)[1].split(",")[0] for ln in run["log"].splitlines()
                  if ": added " in ln]
+        import re
+        r1 = re.search(r"^round 1 \(error ([0-9.]+) %, floor ([0-9.]+) %", run["log"], re.M)
         row.update(answer=("cut: " if run["cut"] else "failed: ") + (" + ".join(added) or "-"),
-                   named=added, steps=[], error_before=None, error_after=None,
-                   noise_floor=None, message=run["log"].strip().splitlines()[-1:] or [""])
+                   named=added, steps=[], error_before=float(r1.group(1)) if r1 else None,
+                   error_after=None, noise_floor=float(r1.group(2)) if r1 else None,
+                   message=run["log"].strip().splitlines()[-1:] or [""])
     row["right"], row["kind"] = judge(expected, row["named"], row["answer"])
     if row["cut"] or row["returncode"] not in (0, None):
         row["right"] = False
