@@ -62,7 +62,10 @@ def decode(text: str) -> Any:
     return parse_json(text, "cache entry", object_hook=_untag)
 
 
-_HTML = re.compile(r"<\s*[A-Za-z!/?]")
+#: Raw HTML as CommonMark recognises it (a complete tag, comment, declaration or
+#: processing instruction) and autolinks; a plain "x < y" is text.
+_HTML = re.compile(r"<\s*/?\s*[A-Za-z][A-Za-z0-9-]*(\s[^<>]*)?/?>|<!|<\?"
+                   r"|<[A-Za-z][A-Za-z0-9+.-]*:[^<>\s]*>")
 _LINK = re.compile(r"\]\(\s*<?([^)>\s]*)")
 _LINK_DEF = re.compile(r"^\s{0,3}\[[^\]]+\]:", re.M)
 _SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")
