@@ -129,9 +129,11 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
         construction when the limits are its own demands); the rest is drawn uniformly
         with ``seed``.
 
+    Notes
+    -----
     With constraints (``problem.constraint_names``) pymoo ranks feasibility first; the
-    archive keeps feasible designs only, and a run that found none says so
-    (``success`` False).
+    archive keeps feasible designs only, and a run that found none says so: its
+    ``success`` is False.
     """
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.termination import get_termination
