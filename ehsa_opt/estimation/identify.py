@@ -59,12 +59,10 @@ import numpy as np
 
 from ..datasets.bench_format import BenchData, BenchTest, load_bench
 from ..physics.bench_model import BenchModel
-from ..physics.bench_sim import simulate_bench
 from ..physics.components import Component
 from ..physics.motion import SampledMotion
 from ..physics.params import (
     FRICTION_NAMES,
-    FrictionParams,
     HarvesterParams,
 )
 from . import core
@@ -77,10 +75,10 @@ from .collocation import (
 )
 from .identifiability import fisher_identifiability
 from .identify_options import (
+    MIN_RESOLVED_SAMPLES,
     PARAMETER_BOUNDS,
     START_RANGES,
     IdentifyOptions,
-    MIN_RESOLVED_SAMPLES,
     estimate_motion,
     test_motion,
     unresolved_tests,
@@ -94,6 +92,7 @@ from .identify_result import (
     summarise_identifiability,
     test_errors,
 )
+from .test_simulation import model_defaults, model_mass, outputs_on_grid, simulate_tests
 
 __all__ = ["IdentifyOptions", "FitResult", "Prediction", "IdentificationReport", "fit_tests",
            "simulate_tests", "eq5_delta", "force_relative_error_percent", "identify",
@@ -102,20 +101,6 @@ __all__ = ["IdentifyOptions", "FitResult", "Prediction", "IdentificationReport",
 
 _BEARING = FRICTION_NAMES[4:]
 _TIES = {"nut_breakaway_N": "nut_coulomb_N", "bearing_breakaway_Nm": "bearing_coulomb_Nm"}
-
-
-def _defaults(model: BenchModel) -> dict[str, float]:
-    d = FrictionParams().as_dict()
-    if not model.generator:
-        d.update({"inertia_kg": 0.0, "offset_N": 0.0})
-    d.update({q.name: q.default for q in model.param_specs.values()})
-    return d
-
-
-def _mass(model: BenchModel) -> float | None:
-    """Rod-equivalent inertia (kg) that turns acceleration noise into force noise (None
-    without generator: the inertia is fitted)."""
-    return model.harvester.equivalent_mass_kg() if model.generator else None
 
 
 def _bounds(model: BenchModel, name: str) -> tuple[float, float, float]:
@@ -148,53 +133,6 @@ def _draw_start(model: BenchModel, varied: Sequence[str], rng: np.random.Generat
         if brk in out and coul in out and out[brk] < out[coul]:
             out[brk], out[coul] = out[coul], out[brk]
     return out
-
-
-
-# ====================================================================== simulation
-def simulate_tests(tests: Sequence[BenchTest], harvester: HarvesterParams,
-                   parameters: Mapping[str, float], *, has_generator: bool = True,
-                   components: Sequence[Component] = (),
-                   options: IdentifyOptions | None = None,
-                   motions: Sequence[SampledMotion] | None = None) -> list[Prediction]:
-    """Simulate each test with given parameters on its own time grid.
-
-    The rod motion is the smoothing spline of the measured displacement
-    (:func:`test_motion`, or ``motions`` when given); missing parameters take
-    their defaults (frictionless, component defaults, M = F_0 = 0).  Without
-    components the current is integrated by the compiled Radau IIA stepper
-    (:func:`~.collocation.integrate_states`), with components by CVODES.
-    """
-    model = BenchModel(harvester, components, generator=has_generator)
-    base = _defaults(model)
-    unknown = [k for k in parameters if k not in base and k != "load_ohm"]
-    if unknown:
-        raise ValueError(f"simulate_tests: unknown parameter(s) {', '.join(unknown)} "
-                         f"(known: {', '.join(base)})")
-    base.update({k: float(v) for k, v in parameters.items() if k != "load_ohm"})
-    out = []
-    for k, test in enumerate(tests):
-        load = test.load_ohm if (test.load_ohm is not None and has_generator) else 1.0
-        p = np.array([load, *[base[n] for n in model.param_names[1:]]])
-        motion = motions[k] if motions is not None else test_motion(test, options,
-                                                                    _mass(model))
-        if model.n_states == 0:
-            uu = motion.evaluate(test.time_s)
-            y = np.array(model.outputs.map(test.n_samples)(np.zeros((0, test.n_samples)), uu, p))
-            F, V = y[0], y[1]
-        elif not components:
-            # rigid bench: only the winding current, a smooth state — the compiled
-            # fixed-step Radau IIA of the fit's rigid path (within 2e-5 of the peak of
-            # CVODES at rtol 1e-7 on the embedded tests, 30x faster: a spline motion
-            # makes every CVODES right-hand side evaluation costly)
-            F, V = _outputs_on_grid(model, motion, test.time_s, p)[:2]
-        else:
-            sim = simulate_bench(model, motion, p, test.time_s, rtol=1e-7, atol=1e-9)
-            F, V = sim.force_N, sim.voltage_V
-        out.append(Prediction(test.file, test.time_s, F,
-                              V if (has_generator and test.voltage_V is not None) else None))
-    return out
-
 
 
 
@@ -233,7 +171,7 @@ class _Setup:
 def _setup(tests: list[BenchTest], model: BenchModel, has_generator: bool, varied: list[str],
            fixed: Mapping[str, Any], options: IdentifyOptions) -> _Setup:
     names = list(model.param_names)
-    defaults = _defaults(model)
+    defaults = model_defaults(model)
     ties = tuple((n, v) for n, v in fixed.items() if isinstance(v, str))
     bnd = [_bounds(model, n) for n in varied]
     space = core.ParamSpace(tuple(names), tuple(varied), tuple(b[0] for b in bnd),
@@ -252,7 +190,7 @@ def _setup(tests: list[BenchTest], model: BenchModel, has_generator: bool, varie
         load = test.load_ohm if (test.load_ohm is not None and has_generator) else 1.0
         pb = np.array([load] + [float(fixed[n]) if (n in fixed and not isinstance(fixed[n], str))
                                 else defaults[n] for n in names[1:]])
-        est = estimate_motion(test, opt, _mass(model))
+        est = estimate_motion(test, opt, model_mass(model))
         motion = est.motion
         ntrim = int(round(opt.trim_fraction * test.n_samples))
         obs = np.arange(ntrim, test.n_samples - ntrim)
@@ -401,7 +339,7 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
     if clash:
         raise ValueError(f"fit_tests: {', '.join(clash)} both varied and fixed")
     t0 = time.perf_counter()
-    short = unresolved_tests(tests, options, _mass(model))
+    short = unresolved_tests(tests, options, model_mass(model))
     if short:
         names = [n for n in model.param_names if n != "load_ohm"]
         msg = ("no fit: " + "; ".join(short) + " — the motion's derivatives are not resolved "
@@ -427,15 +365,6 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
     return _finish(su, records, time.perf_counter() - t0, identifiability)
 
 
-def _outputs_on_grid(model: BenchModel, motion: Any, time_s: np.ndarray, p: np.ndarray,
-                     X: np.ndarray | None = None) -> np.ndarray:
-    """Model outputs (force, voltage, …) on ``time_s`` from the states ``X`` (default:
-    integrated once by the compiled Radau stepper — states no parameter drives)."""
-    if X is None:
-        X = integrate_states(model, motion, time_s, p)
-    return np.array(model.outputs.map(time_s.size)(X, motion.evaluate(time_s), p))
-
-
 def _predictions(su: _Setup, params: Mapping[str, float]) -> list[Prediction]:
     """Simulated signals on each test's full grid with the fitted parameters: the rigid
     path's states (or one compiled Radau integration when no state depends on the
@@ -449,7 +378,7 @@ def _predictions(su: _Setup, params: Mapping[str, float]) -> list[Prediction]:
     out = []
     for test, motion, pb, X in zip(su.tests, su.motions, su.pbases, su.full_states):
         p = np.array([pb[0]] + [params[n] for n in model.param_names[1:]])
-        y = _outputs_on_grid(model, motion, test.time_s, p, X if X is not None else
+        y = outputs_on_grid(model, motion, test.time_s, p, X if X is not None else
                              integrate_states(model, motion, test.time_s, pb))
         V = y[1] if (model.generator and test.voltage_V is not None) else None
         out.append(Prediction(test.file, test.time_s, y[0], V))
