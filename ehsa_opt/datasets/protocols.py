@@ -178,25 +178,19 @@ class Protocol:
         knots: list[float] = []
         acc: list[float] = []
         t = t0
+        plateau = 2 * self.amplitude_m / v0 - tc
         if self.kind == "triangle":
-            plateau = 2 * self.amplitude_m / v0 - tc
-            pattern = [(plateau / 2, 0.0)]
-            while t < t1 + self.cycle_s:
-                for dur, aa in pattern:
-                    knots.append(t)
-                    acc.append(aa)
-                    t += dur
-                pattern = [(2 * tc, -a), (plateau, 0.0), (2 * tc, a), (plateau, 0.0)]
+            cycle = [(2 * tc, -a), (plateau, 0.0), (2 * tc, a), (plateau, 0.0)]
         else:
-            plateau = 2 * self.amplitude_m / v0 - tc
-            pattern = [(plateau / 2, 0.0)]
-            while t < t1 + self.cycle_s:
-                for dur, aa in pattern:
-                    knots.append(t)
-                    acc.append(aa)
-                    t += dur
-                pattern = [(tc, -a), (self.hold_s, 0.0), (tc, -a), (plateau, 0.0),
-                           (tc, a), (self.hold_s, 0.0), (tc, a), (plateau, 0.0)]
+            cycle = [(tc, -a), (self.hold_s, 0.0), (tc, -a), (plateau, 0.0),
+                     (tc, a), (self.hold_s, 0.0), (tc, a), (plateau, 0.0)]
+        pattern = [(plateau / 2, 0.0)]
+        while t < t1 + self.cycle_s:
+            for dur, aa in pattern:
+                knots.append(t)
+                acc.append(aa)
+                t += dur
+            pattern = cycle
         knots.append(t)
         kn, ac = np.asarray(knots), np.asarray(acc)
         keep = np.diff(kn) > 0
