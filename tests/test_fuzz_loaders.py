@@ -31,7 +31,7 @@ from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
 ROOT = Path(__file__).resolve().parent.parent
 FAST = settings(max_examples=12, deadline=None, derandomize=True, database=None,
                 suppress_health_check=list(HealthCheck))
-LONG = settings(max_examples=200, deadline=None, database=None,
+LONG = settings(max_examples=40, deadline=None, derandomize=True, database=None,
                 suppress_health_check=list(HealthCheck))
 
 
