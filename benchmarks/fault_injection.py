@@ -125,7 +125,8 @@ def reproduce_point(work: Path, k: int, delay_s: float, base: dict[str, bytes]) 
 def optimize_point(work: Path, k: int, delay_s: float, base: dict[str, object]) -> tuple[bool, bool]:
     out, ck = work / f"opt_{k}", work / f"opt_{k}_ck"
     killed = kill_after(optimize_cmd(out, ck, resume=False), delay_s)
-    has_ck = ck.is_dir() and any(ck.iterdir())
+    # a checkpoint to resume from (the folder alone may hold only the run's lock file)
+    has_ck = (ck / "nsga2_checkpoint.npz").is_file()
     run(optimize_cmd(out, ck, resume=has_ck))
     return killed, optimize_outputs(out) == base
 
