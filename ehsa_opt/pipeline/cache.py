@@ -168,6 +168,10 @@ class StepCache:
                     why = f"it belongs to step '{doc.get('step')}'"
                 elif doc.get("hash") != key:
                     return None  # inputs or code changed: an ordinary recompute
+                elif not isinstance(doc.get("figures_sha256", {}), dict) or not all(
+                        isinstance(k, str) and isinstance(v, str)
+                        for k, v in doc.get("figures_sha256", {}).items()):
+                    why = "its figure digests are not a table of names and digests"
                 else:
                     for fig, want in doc.get("figures_sha256", {}).items():
                         p = self.out / fig
