@@ -86,7 +86,7 @@ def friction_samples(data: Any, parameters: Mapping[str, float] | None = None,
     tests : sequence of BenchTest, optional
         A subset (default every test).
     """
-    from .identify import simulate_tests
+    from .test_simulation import simulate_tests
     from .identify_options import IdentifyOptions, test_motion
     opt = options or IdentifyOptions.for_rig(data.has_generator)
     tests = list(tests if tests is not None else data.tests)
