@@ -112,6 +112,15 @@ class Rig:
                                                                  *NUT_NAMES]
 
 
+def parallel_filter(time_s: np.ndarray, y: np.ndarray, cutoff_hz: float) -> np.ndarray:
+    """``y`` through the zero-phase 4th-order Butterworth low-pass that
+    :class:`~ehsa_opt.physics.motion.FilteredMotion` applies to the displacement."""
+    from scipy.signal import butter, filtfilt
+    dt = float(np.median(np.diff(np.asarray(time_s, float))))
+    b, a = butter(4, min(2.0 * cutoff_hz * dt, 0.99))
+    return filtfilt(b, a, np.asarray(y, float))
+
+
 def noise_std(y: np.ndarray) -> float:
     """Noise level of a sampled signal from its second differences (robust, model-free).
 
@@ -191,6 +200,11 @@ def prepare_tests(tests: Sequence[BenchTest], has_generator: bool = True,
         ys = [t.force_N] + ([t.voltage_V] if has_generator and t.voltage_V is not None else [])
         y = np.vstack(ys)
         sig = np.array([noise_std(row) for row in y])
+        if isinstance(motion, FilteredMotion) and not has_generator:
+            # parallel filtering (the inverse-model practice the EMPS reference uses): the
+            # force through the motion's own zero-phase low-pass, so that model and
+            # measurement hold the same band; σ stays the raw force's noise level
+            y = np.vstack([parallel_filter(t.time_s, row, motion.cutoff_hz) for row in y])
         fixed = {"load_ohm": float(t.load_ohm)} if has_generator else dict(NO_GENERATOR_FIXED)
         out.append(PreparedTest(t, motion, t.time_s, u, y, sig, fixed, weight, mass_kg))
     return out

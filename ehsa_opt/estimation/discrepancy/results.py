@@ -54,7 +54,7 @@ class DiscrepancySettings:
         Run the data-driven term discovery on the final residual.
     """
 
-    candidates: tuple[str, ...] = (*CANDIDATES, "force_lag")
+    candidates: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag")
     top: int = 3
     max_effects: int = 3
     max_tests: int | None = None
@@ -66,7 +66,8 @@ class DiscrepancySettings:
     discover: bool = True
 
     def __post_init__(self) -> None:
-        unknown = [c for c in self.candidates if c not in CANDIDATES and c != "force_lag"]
+        unknown = [c for c in self.candidates if c not in CANDIDATES
+                   and c not in ("drive_lag", "force_lag")]
         if unknown:
             raise ValueError(f"DiscrepancySettings: unknown candidates {unknown} "
                              f"(known: {', '.join(CANDIDATES)})")

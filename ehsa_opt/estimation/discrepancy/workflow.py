@@ -172,6 +172,25 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     cur_rig, cur_params = rig, dict(base.parameters)
     cur_fit, cur_held = base_fit_pred, base_held_pred
     cur_err, effects, steps, all_cands = err0, [], [], []
+    held_raw = [pt.test for pt in held_pts]  # the recorded force (the open-loop metric's input)
+    if "drive_lag" in settings.candidates and not rig.has_generator:
+        from .drivelag import try_drive_lag
+        driven = try_drive_lag(fit_pts, held_pts, rig, base, cur_fit, cur_held, floor,
+                               n_eff_fit, n_eff_held, err0, settings, say)
+        if driven is not None:  # later effects are judged on the applied force
+            fit_pts, held_pts, base_d, cur_fit, cur_held, cur_err, fields, floor, dnotes = driven
+            all_cands.append(CandidateResult(**fields))
+            notes += dnotes
+            eval_pts = held_pts or fit_pts
+            cur_params = dict(base_d.parameters)
+            effects.append("drive_lag")
+            steps.append({"effect": "drive_lag", "error_after": fields["error_after"],
+                          "error_after_on_applied_force": cur_err,
+                          "excess_reduction": fields["excess_reduction"],
+                          "parameters": fields["parameters"]})
+            n_eff_fit = effective_samples(fit_pts, cur_fit)
+            n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
+            sub_pts = _spread(fit_pts, settings.max_fit_tests)
     if settings.discover and "force_lag" in settings.candidates:
         lagged = try_lag(fit_pts, held_pts, rig, base, cur_fit, cur_held, floor, n_eff_fit,
                           n_eff_held, err0, settings, say)
@@ -372,10 +391,13 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     if evaluation == "validation set" and not rig.has_generator:
         from .openloop import validation_summary
         from .openloop import BEST_PUBLISHED_MM, direction_dependent
-        fitted = {c.effect: c.fit.parameters for c in all_cands
+        # a named drive lag acts on the force of every model simulated after it
+        drive = next((dict(c.parameters) for c in all_cands
+                      if c.effect == "drive_lag" and c.earns), {})
+        fitted = {c.effect: {**drive, **c.fit.parameters} for c in all_cands
                   if c.fitted and c.fit is not None and c.fit.parameters and c.round == 1}
-        validation = validation_summary(held_pts[0].test, base.parameters, cur_params, err0,
-                                        cur_err, fitted)
+        validation = validation_summary(held_raw[0], base.parameters, {**cur_params, **drive},
+                                        err0, cur_err, fitted)
         asym = [c for c in all_cands if c.effect == "asymmetric_friction" and c.fitted
                 and c.fit is not None and c.fit.parameters]
         if asym:
