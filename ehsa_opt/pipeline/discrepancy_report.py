@@ -130,8 +130,11 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
                  f"{_fmt(c.delta_bic_heldout, '.1f')} | {_fmt(c.error_before, '.3f')} | "
                  f"{_fmt(c.error_after, '.3f')} | {ex} | {'**yes**' + by if c.earns else 'no'} |")
     L.append(f"\n![ranking]({fig_prefix}discrepancy_ranking.png)\n")
-    w = res.winner
-    if w is not None:
+    named = {}
+    for c in res.candidates:  # each named effect's record (the last, where it was added)
+        if c.earns and c.effect in res.effects:
+            named[c.effect] = c
+    for w in named.values():
         info = (w.fit.covariance_info or {}) if w.fit is not None else {}
         L.append(f"### Identified `{w.effect}` parameters (≈95 % Newey–West intervals"
                  + (f"; N_eff {info['n_eff']:.0f} of {info['n']}, bandwidth "

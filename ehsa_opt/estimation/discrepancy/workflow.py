@@ -191,6 +191,8 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
             n_eff_fit = effective_samples(fit_pts, cur_fit)
             n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
             sub_pts = _spread(fit_pts, settings.max_fit_tests)
+            base_fit_pred = predict(fit_pts, rig, base.parameters)  # on the applied force
+            base_held_pred = predict(held_pts, rig, base.parameters) if held_pts else []
     if settings.discover and "force_lag" in settings.candidates:
         lagged = try_lag(fit_pts, held_pts, rig, base, cur_fit, cur_held, floor, n_eff_fit,
                           n_eff_held, err0, settings, say)
@@ -280,6 +282,11 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 cf.parameters["flex_stiffness_N_per_m"] = cf.parameters["flex_load_mass_kg"] * w2
                 iv = cf.intervals.get("flex_load_mass_kg")
                 cf.intervals["flex_stiffness_N_per_m"] = (iv[0] * w2, iv[1] * w2) if iv else None
+            if not cf.earns:
+                note = _flexibility_refusal(cf, flex_out[1], rnd)
+                if note not in notes:
+                    say(note)
+                    notes.append(note)
         earning = [c for c in cands.values() if c.earns]
         first = None
         if should_widen(earning, force_can_earn):
@@ -394,8 +401,10 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         # a named drive lag acts on the force of every model simulated after it
         drive = next((dict(c.parameters) for c in all_cands
                       if c.effect == "drive_lag" and c.earns), {})
-        fitted = {c.effect: {**drive, **c.fit.parameters} for c in all_cands
-                  if c.fitted and c.fit is not None and c.fit.parameters and c.round == 1}
+        fitted: dict = {}  # each effect's first fit (on the model before the rounds)
+        for c in all_cands:
+            if c.fitted and c.fit is not None and c.fit.parameters:
+                fitted.setdefault(c.effect, {**drive, **c.fit.parameters})
         validation = validation_summary(held_raw[0], base.parameters, {**cur_params, **drive},
                                         err0, cur_err, fitted)
         asym = [c for c in all_cands if c.effect == "asymmetric_friction" and c.fitted
@@ -412,6 +421,25 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         base_fit_pred + base_held_pred, loc0, loc1, {"fit": n_eff_fit, "heldout": n_eff_held},
         time.perf_counter() - t_start, str(getattr(data, "path", "")), effects, steps, term,
         floor, validation, notes)
+
+
+def _flexibility_refusal(cand, fit, rnd: int) -> str:
+    """Why the two-mass flexibility is not named, in words."""
+    info = ((fit.starts or [{}])[0] or {}).get("flexibility", {}) if fit is not None else {}
+    neg = info.get("best_negative") or {}
+    p = cand.parameters
+    msg = (f"round {rnd}: the two-mass flexibility is not named — its physical best "
+           + (f"(load mass {p['flex_load_mass_kg']:.3g} kg ≥ 0 at {p['flex_frequency_hz']:.3g} "
+              f"Hz, stiffness {p.get('flex_stiffness_N_per_m', math.nan):.3g} N/m) takes "
+              f"the error {cand.error_before:.3f} -> {cand.error_after:.3f} %"
+              if p else "does not exist"))
+    if info.get("negative_mass") or (not p and neg):
+        msg += (f"; the unconstrained best asks for a negative load mass "
+                f"({neg.get('flex_load_mass_kg', math.nan):.3g} kg at "
+                f"{neg.get('flex_frequency_hz', math.nan):.3g} Hz): the recorded force leads the "
+                f"measured motion, whereas a load behind a spring, with the position measured "
+                f"on the driven side, makes it lag")
+    return msg
 
 
 def _flexibility_round(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_params, comps,
