@@ -178,6 +178,18 @@ def _validation_markdown(res: DiscrepancyResult) -> list[str]:
         note = "" if o.get("simulated") else " (not in the open-loop port: baseline part only)"
         L.append(f"| baseline refitted with `{name}`{note} | {o['rms_mm']:.2f} | "
                  f"{o['percent_of_norm_q']:.2f} |")
+    for row in v.get("output_error") or []:
+        ok = "" if row["success"] else " (refit did not converge)"
+        L.append(f"| `{row['model']}`, parameters refitted by output error on the estimation "
+                 f"record ({row['fit_rms_mm']:.2f} mm there){ok} | {row['rms_mm']:.2f} | "
+                 f"{row['percent_of_norm_q']:.2f} |")
+    if v.get("output_error"):
+        L.append("")
+        L.append("The output-error rows refit the open-loop port's inertia, viscous and Coulomb "
+                 "levels and offset (and the viscous asymmetry when the model has it; a drive "
+                 "lag held at its value) on the estimation record's *simulated* position — how "
+                 "the black-box results are trained —, started from the inverse-model values; "
+                 "the validation record is used once, to judge them.")
     dd = v.get("direction_dependent")
     if dd:
         def iv(k):

@@ -172,7 +172,8 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     cur_rig, cur_params = rig, dict(base.parameters)
     cur_fit, cur_held = base_fit_pred, base_held_pred
     cur_err, effects, steps, all_cands = err0, [], [], []
-    held_raw = [pt.test for pt in held_pts]  # the recorded force (the open-loop metric's input)
+    # the recorded force (the open-loop metric's input)
+    fit_raw, held_raw = [pt.test for pt in fit_pts], [pt.test for pt in held_pts]
     if "drive_lag" in settings.candidates and not rig.has_generator:
         from .drivelag import try_drive_lag
         driven = try_drive_lag(fit_pts, held_pts, rig, base, cur_fit, cur_held, floor,
@@ -193,7 +194,13 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
             sub_pts = _spread(fit_pts, settings.max_fit_tests)
             base_fit_pred = predict(fit_pts, rig, base.parameters)  # on the applied force
             base_held_pred = predict(held_pts, rig, base.parameters) if held_pts else []
-    if settings.discover and "force_lag" in settings.candidates:
+    if "drive_lag" in effects and "force_lag" in settings.candidates:
+        # a channel delay would describe the same lead of the recorded force again
+        note = ("force_lag not searched: the drive lag already describes the recorded "
+                "force's lead")
+        say(note)
+        notes.append(note)
+    elif settings.discover and "force_lag" in settings.candidates:
         lagged = try_lag(fit_pts, held_pts, rig, base, cur_fit, cur_held, floor, n_eff_fit,
                           n_eff_held, err0, settings, say)
         if lagged is not None:
@@ -407,6 +414,19 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 fitted.setdefault(c.effect, {**drive, **c.fit.parameters})
         validation = validation_summary(held_raw[0], base.parameters, {**cur_params, **drive},
                                         err0, cur_err, fitted)
+        # the metric after an output-error refit on the fit record, for the baseline and
+        # the model after each named effect (parameters started from the inverse model's)
+        from .outputerror import output_error_rows
+        named: dict = {}
+        for c in all_cands:
+            if c.earns and c.effect in effects and c.fit is not None and c.fit.parameters:
+                named[c.effect] = c
+        models = [("baseline", dict(base.parameters))]
+        for k, name in enumerate(effects):
+            if name in named:
+                models.append((" + ".join(effects[:k + 1]), {**drive, **named[name].fit.parameters}))
+        if len(fit_raw) == 1:
+            validation["output_error"] = output_error_rows(fit_raw[0], held_raw[0], models)
         asym = [c for c in all_cands if c.effect == "asymmetric_friction" and c.fitted
                 and c.fit is not None and c.fit.parameters]
         if asym:
@@ -416,6 +436,11 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 f"(reference IDIM-LS parameters "
                 f"{validation['open_loop_reference_parameters']['rms_mm']:.2f} mm, best "
                 f"published {BEST_PUBLISHED_MM} mm)")
+        oe = validation.get("output_error") or []
+        if oe:
+            msg += (f"; {oe[-1]['rms_mm']:.2f} mm with the parameters refitted by output error "
+                    f"on the fit record ({oe[-1]['model']}; the baseline so refitted "
+                    f"{oe[0]['rms_mm']:.2f} mm)")
     return DiscrepancyResult(
         ok, msg, effect, err0, cur_err, evaluation, all_cands, base, rig, fit_pts, held_pts,
         base_fit_pred + base_held_pred, loc0, loc1, {"fit": n_eff_fit, "heldout": n_eff_held},
