@@ -72,3 +72,20 @@ def test_a_generator_bench_gets_no_drive_lag():
     assert try_drive_lag([], [], rig, None, [], [], 0.0, 1.0, 1.0, 0.0, None, print) is None
     with pytest.raises(ValueError, match="without generator"):
         fit_drive_lag([], [], rig, {})
+
+
+def test_parallel_filtering_only_on_a_rig_without_generator():
+    """The force passes through the motion's own low-pass on a rig without generator
+    (the inverse-model practice); a generator bench's force is untouched."""
+    from ehsa_opt.estimation.discrepancy.fit import parallel_filter
+    t0 = load_bench(embedded_data_dir("emps")).tests[0]
+    test = replace(t0, time_s=t0.time_s[:3000], displacement_m=t0.displacement_m[:3000],
+                   force_N=t0.force_N[:3000])
+    pt = prepare_tests([test], False)[0]
+    assert np.allclose(pt.y[0], parallel_filter(test.time_s, test.force_N, pt.motion.cutoff_hz))
+    assert not np.allclose(pt.y[0], test.force_N)
+    # σ is the raw force's noise level, not the filtered one's
+    from ehsa_opt.estimation.discrepancy.fit import noise_std
+    assert pt.sigma[0] == pytest.approx(noise_std(test.force_N))
+    pg = prepare_tests([replace(test, load_ohm=10.0)], True, derivative_cutoff_hz=100.0)[0]
+    assert np.array_equal(pg.y[0], test.force_N)
