@@ -70,7 +70,7 @@ class DiscrepancySettings:
                    and c not in ("drive_lag", "force_lag")]
         if unknown:
             raise ValueError(f"DiscrepancySettings: unknown candidates {unknown} "
-                             f"(known: {', '.join(CANDIDATES)})")
+                             f"(known: {', '.join((*CANDIDATES, 'drive_lag', 'force_lag'))})")
         for name in ("top", "max_effects", "jobs"):
             v = getattr(self, name)
             if not (isinstance(v, int) and v >= 1):
