@@ -1,4 +1,4 @@
-"""Held-out confusion benchmark of the model-discrepancy workflow (issue 12).
+"""Held-out confusion benchmark of the model-discrepancy workflow.
 
 Two disjoint sets of synthetic cases:
 
@@ -15,7 +15,7 @@ Two disjoint sets of synthetic cases:
     effects outside the catalogue (force channel lag, rough spot over 6 mm of
     stroke, periodic lead error).
 
-Since issue 12's new members the rough spot is a catalogue case: its generator
+Since the catalogue holds ``position_friction`` the rough spot is a catalogue case: its generator
 (:class:`RoughSpot`) stays, and the case (label ``position_friction~rough_spot``)
 is right when ``position_friction`` is named.  Both sets also hold cases of the
 members ``position_friction`` and ``magnetic_saturation``.
@@ -111,7 +111,7 @@ CASES = {
                                                                "rough_centre_m": -0.005}},
          None, 1),
         ("none", {}, None, 3),
-        # added for issue 12's held-out failure modes (other magnitudes and seeds than
+        # added for the held-out failure modes (other magnitudes and seeds than
         # the held-out cases): a gap plus a cogging ranked below the transmission
         # candidates, and a strong heating (a second effect was named at the floor)
         ("backlash+cogging", {"backlash": {"backlash_gap_m": 8e-5},
@@ -123,7 +123,7 @@ CASES = {
         ("backlash+cogging", {"backlash": {"backlash_gap_m": 1.5e-4},
                               "cogging": {"cogging_cos_Nm": 0.015}}, ("cogging_periods", 18), 7),
         ("winding_heating", {"winding_heating": {"winding_heating_K_per_J": 8.0}}, None, 2),
-        # the members position_friction and magnetic_saturation (issue 12)
+        # the members position_friction and magnetic_saturation
         ("position_friction", {"position_friction": {
             "position_friction_N": 10.0, "position_friction_centre_m": 0.003,
             "position_friction_width_m": 0.008}}, None, 1),
@@ -173,7 +173,7 @@ CASES = {
          15),
         ("out:lead_error", {"bench_lead_error": {"lead_error_rel": 0.05}}, None, 16),
         ("none", {}, None, 17),
-        # chosen a priori with the members (issue 12): a small and a realistic size each
+        # chosen a priori with the members: a small and a realistic size each
         ("position_friction", {"position_friction": {
             "position_friction_N": 3.0, "position_friction_centre_m": 0.002,
             "position_friction_width_m": 0.006}}, None, 18),

@@ -202,7 +202,7 @@ def test_split_friction_keeps_the_rod_equivalent_friction():
         split_friction(p, 1.5, r)
 
 
-# ------------------------------------------------------------------ issue 12
+# ------------------------------------------------------------------ the decision rule
 def test_decision_rule_needs_a_gain_beyond_the_noise_floor():
     from ehsa_opt.estimation.discrepancy.evidence import earns, excess_reduction
     # 8.35 -> 8.33 % with a 1 % noise floor: 0.2 % of the excess, refused
@@ -490,8 +490,8 @@ def test_rotor_period_read_off_the_residual_spectrum():
 def test_rough_spot_is_named_position_friction_else_no_catalogue_name(tmp_path):
     """A rough spot (the benchmark's generator-only law) is named by the member
     ``position_friction`` with its window; without that member in the catalogue it is
-    answered 'none of the catalogue' with the stroke term.  Changed by issue 12's new
-    members: the case is the *tuning* set's rough spot (the held-out one, which this
+    answered 'none of the catalogue' with the stroke term.  Changed when
+    ``position_friction`` joined the catalogue: the case is the *tuning* set's rough spot (the held-out one, which this
     test used before, stays independent evidence)."""
     import importlib.util
     import sys

@@ -78,17 +78,21 @@ def effective_samples(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarr
 
 
 def normalised_sse(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> float:
+    """Noise-normalised SSE Σ ((y − ŷ)/σ)² over every test and channel (dimensionless)."""
     return float(sum(np.sum(((pt.y - yp) * pt.wnorm) ** 2)
                      for pt, yp in zip(prepared, preds)))
 
 
 def force_error_percent(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> float:
+    """Relative force error (%) of ``preds`` over the resolved samples of every test."""
     return force_relative_error_percent(
         np.concatenate([p[0][pt.weight > 0] for pt, p in zip(prepared, preds)]),
         np.concatenate([pt.y[0][pt.weight > 0] for pt in prepared]))
 
 
 def delta_bic(sse_new: float, sse_old: float, k: int, n_eff: float) -> float:
+    """ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff of ``k`` added parameters (< 0: the
+    larger model is preferred)."""
     return n_eff * math.log(max(sse_new, 1e-300) / sse_old) + k * math.log(max(n_eff, 2.0))
 
 
