@@ -46,7 +46,13 @@ from .evidence import (
     sse_can_earn,
 )
 from .fit import PreparedTest, Rig
-from .lookahead import confounded, confounded_first, fit_on_top, lookahead_winner, supported
+from .lookahead import (
+    confounded,
+    confounded_first,
+    fit_on_top,
+    lookahead_winner,
+    supported,
+)
 from .results import CandidateResult, DiscrepancySettings
 from .terms import TERM_PREFERENCE, propose_term
 
@@ -108,7 +114,7 @@ class SearchState:
     steps: list[dict] = field(default_factory=list)
     remaining: list[str] = field(default_factory=list)
 
-    def snapshot(self) -> "SearchState":
+    def snapshot(self) -> SearchState:
         """A copy that later rounds do not change."""
         return replace(self, effects=list(self.effects), steps=list(self.steps),
                        remaining=list(self.remaining))

@@ -48,9 +48,6 @@ round after round, then propose a data-driven term for what no catalogue effect 
 
 from __future__ import annotations
 
-
-from __future__ import annotations
-
 import math
 import time
 import warnings
@@ -65,7 +62,12 @@ from .candidates import CANDIDATES, try_lag
 from .evidence import effective_samples, force_error_percent, force_noise_floor_percent
 from .fit import FitOutcome, Rig, fit_group, linear_baseline, predict, prepare_tests
 from .localise import Localisation, localise
-from .results import NONE_OF_CATALOGUE, CandidateResult, DiscrepancyResult, DiscrepancySettings
+from .results import (
+    NONE_OF_CATALOGUE,
+    CandidateResult,
+    DiscrepancyResult,
+    DiscrepancySettings,
+)
 from .search import SearchState, SearchTests, run_rounds
 from .split import crop_test, load_split, spread
 from .terms import TermProposal, propose_term

@@ -16,7 +16,13 @@ from typing import Sequence
 
 import numpy as np
 
-from ..evidence import delta_bic, earns, excess_reduction, force_error_percent, normalised_sse
+from ..evidence import (
+    delta_bic,
+    earns,
+    excess_reduction,
+    force_error_percent,
+    normalised_sse,
+)
 from ..fit import PreparedTest, fit_group, predict, prepare_tests
 from ..terms import shift_lag
 
