@@ -51,9 +51,9 @@ def open_loop_position(time_s: np.ndarray, force_N: np.ndarray, q0_m: float,
                        params: Mapping[str, float]) -> np.ndarray:
     """Position simulated from the measured force (RK4, zero-order hold); with
     ``drive_lag_time_constant_s`` (and ``drive_delay_s``) in ``params`` the force is
-    first passed through the drive (:func:`~.drivelag.applied_force`)."""
+    first passed through the drive (:func:`~.candidates.drive_lag.applied_force`)."""
     if params.get("drive_lag_time_constant_s", 0.0) or params.get("drive_delay_s", 0.0):
-        from .drivelag import applied_force
+        from .candidates.drive_lag import applied_force
         force_N = applied_force(time_s, force_N, float(params.get("drive_lag_time_constant_s",
                                                                   0.0)),
                                 float(params.get("drive_delay_s", 0.0)))

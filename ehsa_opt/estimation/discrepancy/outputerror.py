@@ -10,7 +10,7 @@ error on the estimation record); it is judged once on the validation record.
 
 The simulation is the one of :func:`~.openloop.open_loop_position` (RK4 on the
 sample grid, the force held over each step, from rest at the measured initial
-position; a named drive lag passes the force through :func:`~.drivelag.applied_force`
+position; a named drive lag passes the force through :func:`~.candidates.drive_lag.applied_force`
 first), written as a CasADi map over the record so that the trajectory's Jacobian
 with respect to the parameters is exact (forward mode) and costs about one
 simulation per parameter.  The parameters are scaled by their starting values and
@@ -98,7 +98,7 @@ def output_error_refit(fit_test, params: Mapping[str, float], free: Sequence[str
     """
     from scipy.optimize import least_squares
 
-    from .drivelag import applied_force
+    from .candidates.drive_lag import applied_force
 
     unknown = [k for k in free if k not in OE_PARAMETERS]
     if unknown:
