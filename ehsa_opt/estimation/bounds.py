@@ -53,8 +53,10 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from scipy import optimize, stats
 
+from ..physics.base_parameters import Parameter, override
 from ..physics.friction import bearing_friction_Nm, rod_friction_N, simscape_friction
 from ..physics.params import FRICTION_NAMES, FrictionParams
+from .identify_options import IDENTIFY_PARAMETERS
 from .test_velocity import test_peak_velocity_m_per_s, test_velocity_range_m_per_s
 
 __all__ = ["FrictionBounds", "friction_bounds", "paper_friction_sets", "velocity_grid",
@@ -79,10 +81,24 @@ PAPER_METHOD = ("paper's method: per-parameter minimum/maximum over the per-test
 
 _NUT = FRICTION_NAMES[:4]
 _BEARING = FRICTION_NAMES[4:]
-#: Admissible ranges of the fitted nut parameters (as identification's bounds).
-_NUT_BOUNDS = {"nut_coulomb_N": (0.0, 1e4), "nut_excess_N": (0.0, 1e4),
-               "nut_breakaway_velocity_m_per_s": (1e-3, 5e-2),
-               "nut_viscous_Ns_per_m": (0.0, 1e5)}
+#: The envelope fit's nut parameters: a named override of the declared base parameters.
+#: The breakaway velocity keeps the identification's range; the levels are wider than the
+#: identification's nut bounds because the target is the rod friction (nut plus bearing
+#: torque over the lead) with its confidence half-width.
+ENVELOPE_PARAMETERS: dict[str, Parameter] = override(
+    "friction envelope",
+    "the target is the rod friction with its confidence half-width, which may exceed the "
+    "identification's nut bounds; the bounds only keep SLSQP finite",
+    {"nut_coulomb_N": (0.0, 1e4), "nut_viscous_Ns_per_m": (0.0, 1e5),
+     "nut_breakaway_velocity_m_per_s":
+         IDENTIFY_PARAMETERS["nut_breakaway_velocity_m_per_s"].bounds})
+#: Admissible ranges of the fitted nut parameters, in the fit's order; ``nut_excess_N`` is
+#: breakaway − Coulomb (>= 0 keeps the breakaway >= Coulomb order), bounded like the levels.
+_NUT_BOUNDS = {"nut_coulomb_N": ENVELOPE_PARAMETERS["nut_coulomb_N"].bounds,
+               "nut_excess_N": ENVELOPE_PARAMETERS["nut_coulomb_N"].bounds,
+               "nut_breakaway_velocity_m_per_s":
+                   ENVELOPE_PARAMETERS["nut_breakaway_velocity_m_per_s"].bounds,
+               "nut_viscous_Ns_per_m": ENVELOPE_PARAMETERS["nut_viscous_Ns_per_m"].bounds}
 
 
 def velocity_grid(v_max_m_per_s: float, n: int = 48, v_min_m_per_s: float = 1e-3
