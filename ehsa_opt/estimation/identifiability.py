@@ -51,6 +51,44 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
     """
     varied = list(varied)
     nv = len(varied)
+    scales = np.asarray(scales, float)
+    Jw, resid, sizes = _weighted_jacobian(dy, y, y_meas)
+    Fz = _marginal_information(Jw, nv, scales)
+    ev, directions = _directions(Fz, varied, rtol)
+    # intervals: the Newey-West sandwich (the residuals of a time series are
+    # autocorrelated: the independent-samples covariance pinv(Fz) is too narrow by
+    # about their correlation time), initial states profiled out
+    from .covariance import hac_covariance
+    colscale = np.concatenate([scales, np.ones(Jw.shape[1] - nv)])
+    hac = hac_covariance(Jw * colscale[None, :], np.concatenate(resid), groups=sizes,
+                         n_nuisance=Jw.shape[1] - nv, rcond=rtol)
+    cov = hac.cov * np.outer(scales, scales)
+    cov_iid = np.linalg.pinv(Fz, rcond=rtol) * np.outer(scales, scales)
+    params = dict(params)
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+    ci = {n: [params[n] - 1.96 * sd[j], params[n] + 1.96 * sd[j]] for j, n in enumerate(varied)}
+    combos = _combinations(params, varied, scales, cov, lead_m_per_rad, peak_velocity_m_per_s,
+                           velocities_m_per_s)
+    weak = [d for d in directions if not d["identifiable"]]
+    return {"method": method or ("Gauss-Newton Fisher information, states eliminated by collocation "
+                      "sensitivities, initial states marginalised; scaled coordinates"),
+            "parameters": varied, "relative_eigenvalues": [d["relative_eigenvalue"]
+                                                            for d in directions],
+            "directions": directions,
+            "non_identifiable": [d["main"] for d in weak],
+            "condition_number": float(ev[-1] / max(ev[0], 1e-300)), "threshold": rtol,
+            "parameter_ci95": ci, "combinations": combos,
+            "interval_method": hac.method, "effective_samples": hac.n_eff,
+            "samples": hac.n, "hac_bandwidth_samples": hac.bandwidth,
+            "parameter_ci95_iid": {n: [params[n] - 1.96 * float(np.sqrt(max(cov_iid[j, j], 0))),
+                                       params[n] + 1.96 * float(np.sqrt(max(cov_iid[j, j], 0)))]
+                                   for j, n in enumerate(varied)}}
+
+
+def _weighted_jacobian(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.ndarray]
+                       ) -> tuple[np.ndarray, list[np.ndarray], list[int]]:
+    """The Jacobian with every signal's rows divided by the noise level of its fit residual,
+    the weighted residuals per signal and their lengths."""
     rows, weights, pos, resid, sizes = [], [], 0, [], []
     for ym in y_meas:
         npts = ym.shape[1]
@@ -65,13 +103,23 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
             pos += npts
     rows_i = np.concatenate(rows)
     Wt = np.concatenate(weights)
-    Jw = dy[rows_i] * Wt[:, None]
+    return dy[rows_i] * Wt[:, None], resid, sizes
+
+
+def _marginal_information(Jw: np.ndarray, nv: int, scales: np.ndarray) -> np.ndarray:
+    """Fisher information of the first ``nv`` columns with the others (the initial states)
+    marginalised (Schur complement), in scaled coordinates z = p / scale."""
     Fall = Jw.T @ Jw
     Fpp, Fpx, Fxx = Fall[:nv, :nv], Fall[:nv, nv:], Fall[nv:, nv:]
     Fp = Fpp - Fpx @ np.linalg.pinv(Fxx) @ Fpx.T if Fxx.size else Fpp
     Fp = 0.5 * (Fp + Fp.T)
-    scales = np.asarray(scales, float)
-    Fz = Fp * np.outer(scales, scales)
+    return Fp * np.outer(scales, scales)
+
+
+def _directions(Fz: np.ndarray, varied: list[str], rtol: float
+                ) -> tuple[np.ndarray, list[dict]]:
+    """Eigenvalues (ascending) of the scaled information and its directions: relative
+    eigenvalue, vector, main components and whether the data determine it."""
     ev, V = np.linalg.eigh(Fz)
     order = np.argsort(ev)
     ev, V = ev[order], V[:, order]
@@ -85,27 +133,23 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
         V[:, weak_idx] = Vw
         rel[weak_idx] = np.einsum("ij,ik,kj->j", Vw, Fz, Vw) / max(ev[-1], 1e-300)
     directions = []
-    for k in range(nv):
+    for k in range(len(varied)):
         comp = {n: float(V[j, k]) for j, n in enumerate(varied)}
         main = {n: c for n, c in sorted(comp.items(), key=lambda kv: -abs(kv[1]))
                 if abs(c) > 0.1}
         directions.append({"relative_eigenvalue": float(max(rel[k], 0.0)), "vector": comp,
                            "main": main, "identifiable": bool(rel[k] >= rtol)})
-    # intervals: the Newey-West sandwich (the residuals of a time series are
-    # autocorrelated: the independent-samples covariance pinv(Fz) is too narrow by
-    # about their correlation time), initial states profiled out
-    from .covariance import hac_covariance
-    colscale = np.concatenate([scales, np.ones(Jw.shape[1] - nv)])
-    hac = hac_covariance(Jw * colscale[None, :], np.concatenate(resid), groups=sizes,
-                         n_nuisance=Jw.shape[1] - nv, rcond=rtol)
-    cov_z = hac.cov
-    cov = cov_z * np.outer(scales, scales)
-    cov_iid = np.linalg.pinv(Fz, rcond=rtol) * np.outer(scales, scales)
-    params = dict(params)
-    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
-    ci = {n: [params[n] - 1.96 * sd[j], params[n] + 1.96 * sd[j]] for j, n in enumerate(varied)}
+    return ev, directions
+
+
+def _combinations(params: dict, varied: list[str], scales: np.ndarray, cov: np.ndarray,
+                  lead_m_per_rad: float, peak_velocity_m_per_s: float,
+                  velocities_m_per_s: Sequence[float] | None) -> dict:
+    """Identifiable combinations (rod friction at given velocities, total viscous and
+    Coulomb, the rig terms) with their 95 % intervals by the delta method on ``cov``."""
     combos = {}
     r = lead_m_per_rad
+    nv = len(varied)
 
     def grad(fun: Callable[[dict], float]) -> tuple[float, np.ndarray]:
         base = fun(params)
@@ -138,21 +182,7 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
     for n in RIG_PARAM_NAMES:
         if n in varied:
             add(n, lambda q, n=n: q[n])
-    weak = [d for d in directions if not d["identifiable"]]
-    return {"method": method or ("Gauss-Newton Fisher information, states eliminated by collocation "
-                      "sensitivities, initial states marginalised; scaled coordinates"),
-            "parameters": varied, "relative_eigenvalues": [d["relative_eigenvalue"]
-                                                            for d in directions],
-            "directions": directions,
-            "non_identifiable": [d["main"] for d in weak],
-            "condition_number": float(ev[-1] / max(ev[0], 1e-300)), "threshold": rtol,
-            "parameter_ci95": ci, "combinations": combos,
-            "interval_method": hac.method, "effective_samples": hac.n_eff,
-            "samples": hac.n, "hac_bandwidth_samples": hac.bandwidth,
-            "parameter_ci95_iid": {n: [params[n] - 1.96 * float(np.sqrt(max(cov_iid[j, j], 0))),
-                                       params[n] + 1.96 * float(np.sqrt(max(cov_iid[j, j], 0)))]
-                                   for j, n in enumerate(varied)}}
-
+    return combos
 
 
 def _varimax(V: np.ndarray, iterations: int = 100, tol: float = 1e-10) -> np.ndarray:
