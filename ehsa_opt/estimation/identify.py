@@ -226,7 +226,7 @@ def _history(su: _Setup, nlp: core.NLP, p: np.ndarray, rows: list[np.ndarray],
     return {"objective": obj.tolist(),
             "rms_F": np.sqrt(J[:, isF].max(axis=1)).tolist(),
             "rms_V": (np.sqrt(J[:, ~isF].max(axis=1)).tolist() if (~isF).any() else None),
-            "parameters": {n: [q[n] for q in pars] for n in su.space.varied}}
+            "parameters": {n: [q[n] for q in pars] for n in su.space.free}}
 
 
 def _fisher(su: _Setup, nlp: core.NLP, p: np.ndarray, w: np.ndarray) -> dict:
@@ -238,7 +238,7 @@ def _fisher(su: _Setup, nlp: core.NLP, p: np.ndarray, w: np.ndarray) -> dict:
         method = ("Gauss-Newton Fisher information; states fixed by the prescribed motion "
                   "(rigid path: no state depends on a varied parameter); scaled coordinates")
     return fisher_identifiability(dy, y, su.y_meas, su.space.values_of(w, su.pbases[0]),
-                                  su.space.varied, su.space.scale,
+                                  su.space.free, su.space.scale,
                                   su.model.harvester.lead_m_per_rad, vmax,
                                   su.options.identifiable_rtol, method=method or "")
 
@@ -354,7 +354,7 @@ def _predictions(su: _Setup, params: Mapping[str, float]) -> list[Prediction]:
     parameters); CVODES otherwise."""
     model = su.model
     if su.path == "collocation" and states_depend_on(
-            model, list(su.space.varied) + [o for _, o in su.space.ties]):
+            model, list(su.space.free) + [o for _, o in su.space.ties]):
         return simulate_tests(su.tests, model.harvester, params,
                               has_generator=model.generator, components=model.components,
                               motions=su.motions)
@@ -380,7 +380,7 @@ def _finish(su: _Setup, records: list[dict], seconds: float,
         return FitResult(False, f"all {len(records)} IPOPT starts failed (statuses: "
                          f"{sorted({r['status'] for r in records})})", best["status"],
                          {n: math.nan for n in names}, None, None, None, [], starts_out,
-                         best["history"], best["iterations"], list(su.space.varied), None,
+                         best["history"], best["iterations"], list(su.space.free), None,
                          math.nan, seconds, su.path)
     best = min(ok, key=lambda r: r["objective"])
     params = {n: best["final"][n] for n in names}
@@ -395,7 +395,7 @@ def _finish(su: _Setup, records: list[dict], seconds: float,
     msg = (f"{len(ok)}/{len(records)} starts converged; best objective {best['objective']:.6g} "
            f"({best['status']}; {su.path} path)")
     return FitResult(True, msg, best["status"], params, dF, dV, rel, per, starts_out,
-                     best["history"], best["iterations"], list(su.space.varied), ident,
+                     best["history"], best["iterations"], list(su.space.free), ident,
                      best["objective"], seconds, su.path)
 
 
