@@ -1,4 +1,4 @@
-"""Friction identification from bench tests (paper §3, SPEC §2–3 and §9).
+"""Friction identification from bench tests (paper §2–3; also the real EMPS data).
 
 The bench model (:class:`~ehsa_opt.physics.bench_model.BenchModel`, any state vector,
 with or without transmission components) is discretised by **direct

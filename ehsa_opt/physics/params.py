@@ -269,7 +269,7 @@ def _declared(name: str, default: float) -> Any:
 
 @dataclass(frozen=True)
 class FrictionParams:
-    """Simscape friction of the nut–screw pair and the generator bearings (SPEC §2).
+    """Simscape friction of the nut–screw pair and the generator bearings.
 
     For a velocity u (m/s at the nut, rad/s at the bearings)::
 
