@@ -151,7 +151,7 @@ def _fit_one(a: tuple) -> tuple:
                                  shares=cand.shares, refine=cand.refine,
                                  full_refit="simulation" if on_sim else cand.full_refit,
                                  effect_fit="simulation" if on_sim else cand.effect_fit,
-                                 log_names=cand.log_names)
+                                 log_names=cand.log_names, impact_fit=cand.impact_fit)
     crig = rig.with_components([*rig.components, comp])
     if not res.parameters:
         return name, res, [], [], crig
