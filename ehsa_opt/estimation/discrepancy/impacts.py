@@ -379,7 +379,6 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     held-out tests.  The message states the features' objective and how reproducible
     the sample-wise response is (:func:`~.refit.reproducibility`)."""
     from .fit import FitOutcome
-    from .refit import _sse, reproducibility
     if not rig.has_generator or any(pt.y.shape[0] < 2 for pt in fit_pts):
         return None
     ratio = impact_energy_ratio(fit_pts, predict(fit_pts, rig, start))
@@ -388,9 +387,13 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     t0 = time.perf_counter()
     res = fit_impacts(fit_pts, crig, start, log=log)
     pf = predict(fit_pts, crig, res.parameters)
-    sse = _sse(fit_pts, pf)
+    sse = float(sum(np.sum(((pt.y - yp) * pt.wnorm) ** 2) for pt, yp in zip(fit_pts, pf)))
     n_obs = sum(pt.y.size for pt in fit_pts)
-    chaos = reproducibility(fit_pts, crig, res.parameters, pf)
+    # how far the sample-wise response depends on the integration error itself (the
+    # same measure as the sample-wise refit reports)
+    fine = predict(fit_pts, crig, res.parameters, rtol=1e-9)
+    d = np.concatenate([((ya - yb) * pt.wnorm).ravel() for pt, ya, yb in zip(fit_pts, pf, fine)])
+    chaos = float(np.sqrt(np.mean(d ** 2)))
     note = (f"the force's transient energy is {ratio:.3g} x the current model's (impacts): "
             f"{res.message}; sample-wise response reproducible to {chaos:.3g} noise std "
             f"between tolerances 1e-7 and 1e-9"
