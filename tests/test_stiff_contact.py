@@ -80,7 +80,7 @@ def test_a_soft_contact_keeps_the_sample_wise_fit():
     crig = Rig(spec.harvester, True, (make_component("backlash"),))
     start = {**make_component("backlash").defaults(), **spec.friction.as_dict()}
     assert impact_energy_ratio(pts, predict(pts, rig, start)) < IMPACT_ENERGY_RATIO
-    assert fit_candidate_on_impacts("backlash", pts, [], rig, crig, start) is None
+    assert fit_candidate_on_impacts("backlash", pts, [], rig, crig, start, None) is None
 
 
 @pytest.mark.slow

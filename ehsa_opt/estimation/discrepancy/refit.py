@@ -229,7 +229,7 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
     if impact_fit:
         from .impacts import fit_candidate_on_impacts
         routed = fit_candidate_on_impacts(name, fit_pts, held_pts, rig, crig,
-                                          {**defaults, **baseline})
+                                          {**defaults, **baseline}, split_friction)
         if routed is not None:
             return routed
     starts = [{**defaults, **baseline, **s} for s in starts] or [{**defaults, **baseline}]

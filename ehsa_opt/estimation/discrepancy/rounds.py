@@ -18,6 +18,7 @@ from typing import Any
 from .candidates import CANDIDATES, components_for
 from .decide import channel_sse, channel_sse_excess_reduction, significant
 from .evidence import block_excess_reductions, own_evidence
+from .impacts import impact_record, impact_verdict
 from .fit import Rig, force_relative_error_percent, predict
 from .refit import (
     _dbic,
@@ -87,6 +88,15 @@ def _judge(c: Any, out: tuple, *, comps, fit_pts, held_pts, sse_fit, sse_held,
     c.earns_by = ("total excess" if by_total else "own evidence") if (by_total or by_own) \
         else ""
     c.earns = bool((by_total or by_own) and c.resolved)
+    imp = impact_record(res)
+    if imp is not None and cur_ev_pred is not None:
+        # a rattling contact: judged on the features it was fitted on (.impacts)
+        imp.update(impact_verdict(ev_pts, cur_ev_pred, ev_pred, crig.harvester, k))
+        c.earns = bool(imp["earns"] and c.resolved)
+        c.earns_by = "transient energies and kinematic gaps" if c.earns else ""
+        c.delta_bic_heldout = min(c.delta_bic_heldout, imp["feature_delta_bic"])
+        say(f"{name}: held-out feature objective {imp['heldout_objective_before']:.3g} -> "
+            f"{imp['heldout_objective_after']:.3g}")
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
