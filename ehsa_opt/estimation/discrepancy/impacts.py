@@ -35,20 +35,23 @@ contact ringing.  Their physics:
   energies carry the damping, and the gap (how long the rotor coasts, how fast it
   arrives) sets u itself.
 
-The objective is the mean squared log-ratio of simulated to measured energies
-(each floored by its own noise spread, so an energy at the noise level counts as
-equal), over tests × channels × {e₁, e₂}: the forward simulation of the model at
-a parameter set is compared in these features, never sample by sample.  It is
-minimised over (gap, log k, log c) by Nelder–Mead from a small grid of contact
-stiffnesses and dampings at the screened gap, with a fixed budget of simulations
-(a stated stop, never an open-ended search).  On synthetic data (gap 0.3 mm,
-c = 8e3 N s/m, nine sine tests) the objective at the truth is 0.001–0.06 against
-≥ 0.2 a factor of 2 away in k or ±10 % in the gap; see docs/theory/discrepancy.md
-for the recovered values.
+A second feature pins the gap without a force model: the voltage gives the rotor speed,
+so the rotor's travel relative to the rod between the fast parts of consecutive strokes
+is the gap plus the contact deflection (:func:`kinematic_gap`); the same statistic is
+computed on the simulated voltage, so a rotor still bouncing on its face at mid-stroke
+is matched rather than mistaken for a smaller gap.
 
-The friction and any earlier effect stay at the start's values (the screened
-nut/bearing split): they are determined by the slow part of the signals, which
-the screen already matched.
+The objective (:func:`impact_objective`) is the mean squared standardised mismatch of
+these features between the forward simulation and the data — never sample by sample.
+:func:`fit_impacts` minimises it over (gap, log k, log c): a screen of the bearing share
+of the friction (a rigid baseline lumps it into the nut, but the bearing brakes the
+coasting rotor), a grid of stiffnesses 1e6–3e9 N/m in half decades (the aliasing makes
+the objective multimodal in k) and two dampings at the kinematic gap, then
+Nelder–Mead, within a fixed budget of simulations (a stated stop, never an open-ended
+search).  The workflow uses it for a backlash when the data's force transient energy
+exceeds the current model's by :data:`IMPACT_ENERGY_RATIO`
+(:func:`fit_candidate_on_impacts`) and judges that candidate on the held-out features
+(:func:`impact_verdict`).  Method and numbers: docs/theory/stiff_contacts.md.
 """
 
 from __future__ import annotations
