@@ -93,6 +93,7 @@ from .decide import (
 )
 from .lag import try_lag
 from .results import NONE_OF_CATALOGUE, CandidateResult, DiscrepancyResult, DiscrepancySettings
+from .impacts import impact_record
 from .rounds import _judge, _on_top, _run_fits
 from .terms import TermProposal, discover_term
 
@@ -341,6 +342,13 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
             joint = None
         say(f"round {rnd}: added {win.effect}, {evaluation} error {cur_err:.3f} %")
         if not remaining:
+            break
+        if impact_record(win.fit) is not None:
+            note = (f"round {rnd}: {win.effect} was fitted and judged on transient energies "
+                    f"and kinematic gaps (a rattling contact): the model's sample-wise "
+                    f"residual is not reproducible, so no further effect is searched on it")
+            say(note)
+            notes.append(note)
             break
     if joint is not None:  # the path was not completed: its first step is not named
         (cur_rig, cur_params, cur_fit, cur_held, n_eff_fit, n_eff_held, cur_err, effects,
