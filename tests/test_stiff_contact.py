@@ -96,3 +96,26 @@ def test_impact_aware_fit_recovers_a_stiff_contact(stiffness, gap):
     assert res.evaluations <= 48
     assert abs(res.parameters[GAP] / gap - 1) < 0.10, res.message
     assert abs(res.parameters[K] / stiffness - 1) < 0.30, res.message
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stiffness", [1e8, 1e9])
+def test_discrepancy_names_a_stiff_backlash(stiffness, tmp_path):
+    """The workflow on a nine-test campaign (1, 2, 3 Hz x 15, 47, 109 ohm) with a 0.3 mm
+    gap and a steel-like contact names backlash with the gap within 10 % and the contact
+    stiffness within 30 % (the contact is fitted and judged on impacts)."""
+    import json
+
+    from ehsa_opt.cli import main
+    data = tmp_path / "data"
+    assert main(["bench", "generate", str(data), "--effect", "backlash",
+                 "--effect-param", "backlash_gap_m=3e-4",
+                 "--effect-param", f"backlash_contact_stiffness_N_per_m={stiffness:g}",
+                 "--frequencies-hz", "1,2,3", "--loads-ohm", "15,47,109", "--seed", "1"]) == 0
+    out = tmp_path / "out"
+    main(["discrepancy", str(data), "--out", str(out)])
+    doc = json.loads((out / "discrepancy.json").read_text())
+    assert doc["effect"] == "backlash"
+    win = next(c for c in doc["candidates"] if c["effect"] == "backlash")
+    assert abs(win["parameters"][GAP] / 3e-4 - 1) < 0.10
+    assert abs(win["parameters"][K] / stiffness - 1) < 0.30
