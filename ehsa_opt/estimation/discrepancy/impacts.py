@@ -80,7 +80,7 @@ DAMPING = "backlash_contact_damping_Ns_per_m"
 #: Simulations of the fit tests one impact-aware fit may use (grid + Nelder–Mead).
 IMPACT_EVALUATIONS = 48
 #: ... and with a screen of friction shares (4 shares x 3 stiffnesses more).
-IMPACT_EVALUATIONS_WITH_SHARES = 60
+IMPACT_EVALUATIONS_WITH_SHARES = 72
 #: The data's sampled force transient energy must exceed the current model's by this
 #: factor for the impact-aware fit to be used: impacts the model has not (a 0.3 mm gap
 #: with a 1e8-1e9 N/m contact: 700-2200; the prototype's soft 0.1 mm / 5e6 N/m one: 2;
@@ -96,6 +96,8 @@ _GRID_LOG_C = (3.0, 4.0)
 IMPACT_SHARES = (0.15, 0.3, 0.45)
 #: Contact stiffnesses (log10 N/m) at which the friction shares are compared.
 _SHARE_GRID_LOG_K = (7.0, 8.0, 9.0)
+#: Nelder–Mead unit of the bearing share (then a fourth search direction).
+_SHARE_STEP = 0.05
 #: Nelder–Mead units: 10 % of the gap, a quarter decade of stiffness, 0.4 of damping.
 _STEP = (0.1, 0.25, 0.4)
 
@@ -286,9 +288,10 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         Simulations of the fit tests allowed (a grid of 16, the shares, then
         Nelder–Mead); the search stops there and says so.
     shares : sequence of float
-        Bearing shares of the start's rod-equivalent friction tried at the best grid
-        point (e.g. :data:`IMPACT_SHARES` when the start is a rigid baseline that lumped
-        all friction into the nut); the best is kept.
+        Bearing shares of the start's rod-equivalent friction screened first (with 0,
+        at 1e7, 1e8 and 1e9 N/m; e.g. :data:`IMPACT_SHARES` when the start is a rigid
+        baseline that lumped all friction into the nut); the share is then refined with
+        the contact parameters by Nelder–Mead (a fourth direction).
     split : callable
         ``split(parameters, share, lead_m_per_rad)`` moving that share of the friction to
         the bearing (:func:`~.refit.split_friction`); needed when ``shares`` is given.
@@ -323,60 +326,67 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         g_kin = float(start[GAP])
     history: list[dict] = []
     cache: dict[tuple, float] = {}
-    base = dict(start)
+    with_share = bool(shares)
+    if with_share and split is None:
+        raise ValueError("fit_impacts: shares need split (e.g. refit.split_friction)")
+    lo4 = np.append(lo, 0.0)
+    hi4 = np.append(hi, 0.9)
+
+    def friction(share: float) -> dict[str, float]:
+        return dict(start) if share <= 0.0 else split(dict(start), share, h.lead_m_per_rad)
 
     def cost(q: np.ndarray) -> float:
-        q = np.clip(np.asarray(q, dtype=float), lo, hi)
-        key = (id(base), *np.round(q, 12))
+        q = np.clip(np.asarray(q, dtype=float), lo4, hi4)
+        key = tuple(np.round(q, 12))
         if key in cache:
             return cache[key]
         if len(history) >= max_evaluations:
             raise _Budget
-        p = {**base, GAP: float(q[0]), STIFFNESS: float(10 ** q[1]),
+        p = {**friction(float(q[3])), GAP: float(q[0]), STIFFNESS: float(10 ** q[1]),
              DAMPING: float(10 ** q[2])}
         c = impact_objective(prepared, predict(prepared, rig, p), h, data)
         c = c if math.isfinite(c) else 1e6
         cache[key] = c
         history.append({GAP: p[GAP], STIFFNESS: p[STIFFNESS], DAMPING: p[DAMPING],
-                        "objective": c, "friction": base})
+                        "bearing_share": float(q[3]), "objective": c})
         return c
 
-    def grid_point(lk: float, lc: float) -> np.ndarray:
+    def grid_point(lk: float, lc: float, share: float) -> np.ndarray:
         # each stiffness with the gap its contact deflection leaves of the kinematic gap
-        return np.array([max(g_kin - 2.0 * f_push / 10 ** lk, 0.2 * g_kin), lk, lc])
+        return np.array([max(g_kin - 2.0 * f_push / 10 ** lk, 0.2 * g_kin), lk, lc, share])
 
     share_best = 0.0
-    if shares:
+    if with_share:
         # the friction split first, on a coarse grid (the impact speeds depend on it)
-        if split is None:
-            raise ValueError("fit_impacts: shares need split (e.g. refit.split_friction)")
-        scores = {}
-        for sh in (0.0, *shares):
-            base = dict(start) if sh == 0.0 else split(dict(start), float(sh), h.lead_m_per_rad)
-            scores[sh] = (min(cost(grid_point(lk, 4.0)) for lk in _SHARE_GRID_LOG_K), base)
-        share_best = min(scores, key=lambda k: scores[k][0])
-        base = scores[share_best][1]
-        say(f"impact-aware fit: bearing share of the friction {share_best:g}")
+        scores = {sh: min(cost(grid_point(lk, 4.0, sh)) for lk in _SHARE_GRID_LOG_K)
+                  for sh in (0.0, *shares)}
+        share_best = float(min(scores, key=scores.get))
+        say(f"impact-aware fit: bearing share of the friction {share_best:g} (screen)")
     for lk in _GRID_LOG_K:
         for lc in _GRID_LOG_C:
-            cost(grid_point(lk, lc))
-    best = min((r for r in history if r["friction"] is base), key=lambda r: r["objective"])
+            cost(grid_point(lk, lc, share_best))
+    best = min(history, key=lambda r: r["objective"])
     f_grid = best["objective"]
-    q_best = np.array([best[GAP], math.log10(best[STIFFNESS]), math.log10(best[DAMPING])])
+    q_best = np.array([best[GAP], math.log10(best[STIFFNESS]), math.log10(best[DAMPING]),
+                       best["bearing_share"]])
     say(f"impact-aware fit: kinematic gap {1e3 * g_kin:.4g} mm; grid best k "
         f"{best[STIFFNESS]:.3g} N/m, c {best[DAMPING]:.3g} N s/m (objective {f_grid:.3g})")
-    unit = np.array([_STEP[0] * best[GAP], _STEP[1], _STEP[2]])
+    unit = np.array([_STEP[0] * best[GAP], _STEP[1], _STEP[2], _SHARE_STEP])
+    dim = 4 if with_share else 3
     converged, stop = False, "stopped at the simulation budget"
     try:
-        res = minimize(lambda z: cost(q_best + z * unit), np.zeros(3), method="Nelder-Mead",
-                       options={"initial_simplex": np.vstack([np.zeros(3), np.eye(3)]),
+        res = minimize(lambda z: cost(q_best + np.append(z, np.zeros(4 - dim)) * unit),
+                       np.zeros(dim), method="Nelder-Mead",
+                       options={"initial_simplex": np.vstack([np.zeros(dim), np.eye(dim)]),
                                 "xatol": 0.05, "fatol": 1e-2, "maxfev": max_evaluations})
         converged = bool(res.success)
         stop = "converged" if converged else str(res.message)
     except _Budget:
         pass
-    best = min((r for r in history if r["friction"] is base), key=lambda r: r["objective"])
-    params = {**base, GAP: best[GAP], STIFFNESS: best[STIFFNESS], DAMPING: best[DAMPING]}
+    best = min(history, key=lambda r: r["objective"])
+    share_best = best["bearing_share"]
+    params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
+              DAMPING: best[DAMPING]}
     msg = (f"impact-aware fit ({stop}, {len(history)} simulations, bearing share of the "
            f"friction {share_best:g}): gap "
            f"{1e3 * best[GAP]:.4g} mm, contact stiffness {best[STIFFNESS]:.3g} N/m, damping "
@@ -384,8 +394,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
            f"{best['objective']:.3g}")
     say(msg)
     return ImpactFit(converged, msg, params, best["objective"], f_grid, len(history),
-                     time.perf_counter() - t0,
-                     [{k: v for k, v in r.items() if k != "friction"} for r in history])
+                     time.perf_counter() - t0, history)
 
 
 def _kinematic_start(prepared: Sequence[PreparedTest], data: _Data, harvester,
@@ -453,8 +462,9 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
 
 
 #: An impact-fitted contact earns when its held-out feature objective is at most this
-#: (its transient energies and kinematic gaps match within ~2 allowed spreads rms) ...
-IMPACT_EARN_OBJECTIVE = 4.0
+#: (its transient energies and kinematic gaps match within ~3 allowed spreads rms; the
+#: true parameters give 1.7 on the fit tests of a 1e9 N/m campaign) ...
+IMPACT_EARN_OBJECTIVE = 10.0
 #: ... and at most this share of the current model's (which misses the impacts by
 #: orders of magnitude in energy).
 IMPACT_EARN_SHARE = 0.1
