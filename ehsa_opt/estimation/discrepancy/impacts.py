@@ -8,7 +8,7 @@ generator the rotor rattles through the gap (a coefficient of restitution near
 0.9 at a damping ratio of 0.02–0.03), and *which* sample an impact lands on
 depends on the integration error itself: at the true parameters the simulated
 force moves by many noise levels between tolerances 1e-7 and 1e-9
-(:func:`~.refit.reproducibility`).  The sample-wise likelihood is then a rough,
+(:func:`~.candidate_fit.reproducibility`).  The sample-wise likelihood is then a rough,
 chaotic function of the contact parameters; its fits stall at their starts.
 
 What does not depend on the chaos.  The sampling clock is independent of the
@@ -68,7 +68,7 @@ from .fit import PreparedTest, Rig, predict
 
 __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective",
            "impact_energy_ratio", "fit_impacts", "fit_candidate_on_impacts", "IMPACT_SHARES", "impact_record",
-           "impact_verdict", "IMPACT_EARN_OBJECTIVE", "IMPACT_EARN_SHARE",
+           "impact_verdict", "judge_on_impacts", "IMPACT_EARN_OBJECTIVE", "IMPACT_EARN_SHARE",
            "IMPACT_EVALUATIONS_WITH_SHARES", 
            "IMPACT_EVALUATIONS", "IMPACT_ENERGY_RATIO", "GAP", "STIFFNESS",
            "DAMPING"]
@@ -294,7 +294,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         the contact parameters by Nelder–Mead (a fourth direction).
     split : callable
         ``split(parameters, share, lead_m_per_rad)`` moving that share of the friction to
-        the bearing (:func:`~.refit.split_friction`); needed when ``shares`` is given.
+        the bearing (:func:`~.candidate_fit.split_friction`); needed when ``shares`` is given.
     log : callable, optional
         Progress messages.
 
@@ -302,25 +302,11 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     -------
     ImpactFit
     """
-    n_grid = len(_GRID_LOG_K) * len(_GRID_LOG_C)
-    if max_evaluations < n_grid + 4:
-        raise ValueError(f"fit_impacts: max_evaluations must be >= {n_grid + 4}, "
-                         f"got {max_evaluations}")
-    specs = rig.model().param_specs
-    for n in (GAP, STIFFNESS, DAMPING):
-        if n not in specs:
-            raise ValueError(f"fit_impacts: the rig has no backlash ({n} is not a parameter)")
-    if not rig.has_generator or any(pt.y.shape[0] < 2 for pt in prepared):
-        raise ValueError("fit_impacts: needs the generator voltage of every test (the rotor "
-                         "speed); a rig without generator has no rotor to rattle")
+    lo, hi = _search_box(prepared, rig, max_evaluations)
     t0 = time.perf_counter()
     say = log or (lambda msg: None)
     h = rig.harvester
     data = _data_features(prepared, h)
-    lo = np.array([max(specs[GAP].lower, 1e-7), math.log10(specs[STIFFNESS].lower),
-                   math.log10(max(specs[DAMPING].lower, 1.0))])
-    hi = np.array([specs[GAP].upper, math.log10(specs[STIFFNESS].upper),
-                   math.log10(specs[DAMPING].upper)])
     g_kin, f_push = _kinematic_start(prepared, data, h, start)
     if not math.isfinite(g_kin):
         g_kin = float(start[GAP])
@@ -328,7 +314,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     cache: dict[tuple, float] = {}
     with_share = bool(shares)
     if with_share and split is None:
-        raise ValueError("fit_impacts: shares need split (e.g. refit.split_friction)")
+        raise ValueError("fit_impacts: shares need split (e.g. candidate_fit.split_friction)")
     lo4 = np.append(lo, 0.0)
     hi4 = np.append(hi, 0.9)
 
@@ -397,6 +383,27 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
                      time.perf_counter() - t0, history)
 
 
+def _search_box(prepared: Sequence[PreparedTest], rig: Rig, max_evaluations: int
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Checks of :func:`fit_impacts`' arguments; the bounds of (gap, log10 k, log10 c)."""
+    n_grid = len(_GRID_LOG_K) * len(_GRID_LOG_C)
+    if max_evaluations < n_grid + 4:
+        raise ValueError(f"fit_impacts: max_evaluations must be >= {n_grid + 4}, "
+                         f"got {max_evaluations}")
+    specs = rig.model().param_specs
+    for n in (GAP, STIFFNESS, DAMPING):
+        if n not in specs:
+            raise ValueError(f"fit_impacts: the rig has no backlash ({n} is not a parameter)")
+    if not rig.has_generator or any(pt.y.shape[0] < 2 for pt in prepared):
+        raise ValueError("fit_impacts: needs the generator voltage of every test (the rotor "
+                         "speed); a rig without generator has no rotor to rattle")
+    lo = np.array([max(specs[GAP].lower, 1e-7), math.log10(specs[STIFFNESS].lower),
+                   math.log10(max(specs[DAMPING].lower, 1.0))])
+    hi = np.array([specs[GAP].upper, math.log10(specs[STIFFNESS].upper),
+                   math.log10(specs[DAMPING].upper)])
+    return lo, hi
+
+
 def _kinematic_start(prepared: Sequence[PreparedTest], data: _Data, harvester,
                      start: Mapping[str, float]) -> tuple[float, float]:
     """The tests' mean kinematic gap (m) and mean contact force in the fast windows (N,
@@ -422,12 +429,12 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     """The candidate fit of a backlash by :func:`fit_impacts` when the data hold impacts
     the current model has not (:func:`impact_energy_ratio` of the current model ``rig``
     at ``start`` above :data:`IMPACT_ENERGY_RATIO`); None otherwise (the sample-wise fit
-    then applies).  Returns what :func:`~.refit.fit_candidate` returns: the name, a
+    then applies).  Returns what :func:`~.candidate_fit.fit_candidate` returns: the name, a
     :class:`~.fit.FitOutcome` (free: gap, stiffness, damping; friction and earlier
     effects at ``start``, its friction split by ``split`` at the best of
     :data:`IMPACT_SHARES`; no covariance) and the simulated outputs of the fit and
     held-out tests.  The message states the features' objective and how reproducible
-    the sample-wise response is (:func:`~.refit.reproducibility`)."""
+    the sample-wise response is (:func:`~.candidate_fit.reproducibility`)."""
     from .fit import FitOutcome
     if not rig.has_generator or any(pt.y.shape[0] < 2 for pt in fit_pts):
         return None
@@ -500,6 +507,24 @@ def impact_verdict(ev_pts: Sequence[PreparedTest], cur_pred: Sequence[np.ndarray
             if math.isfinite(after) and math.isfinite(before) else math.inf)
     return {"heldout_objective_before": before, "heldout_objective_after": after,
             "earns": bool(ok), "feature_delta_bic": dbic}
+
+
+def judge_on_impacts(c: Any, res: Any, ev_pts: Sequence[PreparedTest],
+                     cur_pred: Sequence[np.ndarray], cand_pred: Sequence[np.ndarray],
+                     crig: Rig, say: Callable[[str], None]) -> None:
+    """Judge the impact-fitted candidate ``c`` (a :class:`~.results.CandidateResult` whose
+    fit ``res`` came from :func:`fit_candidate_on_impacts`) by :func:`impact_verdict` on
+    the evaluation tests: its ``earns``, ``earns_by`` and held-out ΔBIC (the smaller of
+    the sample-wise and the feature one) are set; the verdict is kept in the fit's
+    impact record."""
+    rec = impact_record(res)
+    n_params = len(crig.components[-1].parameters) if crig.components else 3
+    rec.update(impact_verdict(ev_pts, cur_pred, cand_pred, crig.harvester, n_params))
+    c.earns = bool(rec["earns"] and c.resolved)
+    c.earns_by = "transient energies and kinematic gaps" if c.earns else ""
+    c.delta_bic_heldout = min(c.delta_bic_heldout, rec["feature_delta_bic"])
+    say(f"{c.effect}: held-out feature objective {rec['heldout_objective_before']:.3g} -> "
+        f"{rec['heldout_objective_after']:.3g}" + (" EARNS" if c.earns else ""))
 
 
 class _Budget(Exception):
