@@ -309,6 +309,10 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
     first = blocked = None
     if not should_widen(earning, can_earn(state.error, tests.floor, 0.0, 1.0)):
         return earning, first, blocked
+    if any(impact_record(c.fit) is not None for c in earning):
+        # a rattling contact earned on its impacts: the sample-wise share of the excess
+        # it removes measures the chaos, not what is left unexplained
+        return earning, first, blocked
     more = [n for n in order if n not in rk.chosen and rk.scores[n]["applicable"]
             and n != "flexibility" and compatible(state.rig, rk.comps[n])]
     if not more:
