@@ -19,7 +19,7 @@ Classes and functions
 DesignSpace, PAPER_BOX
     Named box with linear/log scaling (paper Table 3 by default).
 QuarterCarObjectives
-    [α, η_rh, 1/ρ_g, 1/η_g] of a design on a vehicle/road (SPEC §5).
+    [α, η_rh, 1/ρ_g, 1/η_g] of a design on a vehicle/road (paper Eqs 6–9).
 DesignProblem
     The pymoo problem.
 solve_goal_attainment, GoalAttainmentResult
@@ -156,7 +156,7 @@ class DesignSpace:
                 for n, lo, hi, lg in zip(self.names, self.lower, self.upper, self.log)}
 
 
-#: Paper Table 3 (R_e lower bound 1 Ω is our assumption, SPEC §6.2).
+#: Paper Table 3 (R_e lower bound 1 Ω is our assumption).
 PAPER_BOX = DesignSpace(
     DESIGN_VARIABLES, (250.0, 5.0, 29.8, 1.0), (10_000.0, 20.0, 11_900.0, 10_000.0),
     (True, False, True, True), "paper Table 3")

@@ -1,4 +1,4 @@
-"""Identifiability at an identification optimum (SPEC §9): the Gauss–Newton Fisher
+"""Identifiability at an identification optimum: the Gauss–Newton Fisher
 information of the varied parameters (states eliminated by the collocation
 sensitivities of :meth:`ehsa_opt.estimation.core.NLP.sensitivities`, initial states
 marginalised), its eigen-decomposition in scaled coordinates, and identifiable

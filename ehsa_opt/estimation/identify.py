@@ -1,4 +1,4 @@
-"""Friction identification from bench tests (paper §3, SPEC §2–3 and §9).
+"""Friction identification from bench tests (paper §2–3; also the real EMPS data).
 
 The bench model (:class:`~ehsa_opt.physics.bench_model.BenchModel`, any state vector,
 with or without transmission components) is discretised by **direct
@@ -31,7 +31,7 @@ and IPOPT solves the same epigraph problem in the parameters only; otherwise
 reused for every test of the same size.
 
 Multistart: ``starts`` initial points drawn uniformly (seeded) in the
-distributor ranges of SPEC §2 (components: in their ParamSpec bounds), run in
+friction distributor ranges (``physics.params``; components: in their ParamSpec bounds), run in
 parallel processes; the best successful start is kept, every start recorded.
 
 Identifiability: at the optimum the Gauss–Newton Fisher information of the

@@ -34,7 +34,7 @@ END_WINDOW_CYCLES: float = 1.0
 DWELL_THRESHOLD_SIGMA: float = 3.0
 
 #: Admissible bounds (lower, upper, scale) of the parameters during identification:
-#: the SPEC §2 distributor ranges' upper ends (lower ends 0 for levels and viscous terms,
+#: the friction distributor ranges' upper ends (lower ends 0 for levels and viscous terms,
 #: so "no friction" stays admissible; the distributor ranges for breakaway velocities).
 #: Without bounds the unmodelled backlash of the embedded data drives Stribeck bumps
 #: to 1000 N at 0.2 m/s, far outside any ball screw.
@@ -51,7 +51,7 @@ PARAMETER_BOUNDS: dict[str, tuple[float, float, float]] = {
     "offset_N": (-1e4, 1e4, 10.0),
 }
 
-#: Ranges the multistart draws from: SPEC §2 distributor ranges, plus the rig terms.
+#: Ranges the multistart draws from: the friction distributor ranges, plus the rig terms.
 START_RANGES: dict[str, tuple[float, float]] = {
     **FRICTION_RANGES, "inertia_kg": (10.0, 200.0), "offset_N": (-20.0, 20.0)}
 

@@ -1,6 +1,6 @@
 """Parameter sets as frozen dataclasses with units in their names.
 
-Every field name carries its unit (SPEC §7), every value is validated when the
+Every field name carries its unit, every value is validated when the
 object is built, and every error says what to change.  The TOML loaders accept
 exactly these names; an unknown key is refused with the nearest valid name.
 
@@ -11,9 +11,9 @@ HarvesterParams
     mechanical quantities of paper Eqs 1–3.
 FrictionParams
     The eight Simscape friction parameters of the nut–screw pair and the
-    generator bearings (SPEC §2).
+    generator bearings.
 VehicleParams
-    Quarter-car masses and stiffnesses, with the presets of SPEC §4.
+    Quarter-car masses and stiffnesses, with the vehicle presets (assumptions: the paper's vehicle values are not published).
 RoadParams
     An ISO 8608 road (class, speed, length, seed) or a measured profile CSV.
 """
@@ -253,7 +253,7 @@ FRICTION_NAMES: tuple[str, ...] = (
     "bearing_viscous_Nms_per_rad",
 )
 
-#: Distributor ranges for random initial points (SPEC §2, an assumption).
+#: Distributor ranges for random initial points (an assumption; the paper gives none).
 FRICTION_RANGES: dict[str, tuple[float, float]] = {
     "nut_breakaway_N": (10.0, 200.0),
     "nut_coulomb_N": (5.0, 150.0),
@@ -268,7 +268,7 @@ FRICTION_RANGES: dict[str, tuple[float, float]] = {
 
 @dataclass(frozen=True)
 class FrictionParams:
-    """Simscape friction of the nut–screw pair and the generator bearings (SPEC §2).
+    """Simscape friction of the nut–screw pair and the generator bearings.
 
     For a velocity u (m/s at the nut, rad/s at the bearings)::
 
@@ -440,7 +440,7 @@ def from_mapping(cls: type, mapping: Mapping[str, Any], where: str) -> Any:
     cls : type
         One of the parameter dataclasses.
     mapping : mapping
-        Keys exactly as the field names (SPEC §7).
+        Keys exactly as the field names.
     where : str
         Location used in error messages, e.g. ``"problem.toml [harvester]"``.
     """

@@ -193,7 +193,7 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         f"smallest lead: a lead of 7 mm/rev with R_e = 75 Ω (the paper's design, column 4) "
         f"improves comfort and road holding more but gives γ = {gamma_paper:+.4f} because "
         f"its power/efficiency is worse. Vehicle, road seed and R_e of the prototype are "
-        f"our assumptions (SPEC §4, §6), so absolute values differ from the paper's.\n\n"
+        f"our assumptions (the paper does not give them), so absolute values differ from the paper's.\n\n"
         + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
     from dataclasses import asdict
     h_opt = HarvesterParams.from_design(d["total_inertia_gcm2"], d["lead_mm_per_rev"],

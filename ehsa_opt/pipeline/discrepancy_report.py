@@ -20,7 +20,7 @@ from .base import Context, StepOutput
 __all__ = ["write_report", "write_partial_report", "run_with_budget", "report_markdown", "step_discrepancy",
            "truth_error"]
 
-#: Published EMPS figures (Janot et al. 2019, SPEC §9).
+#: Published EMPS figures (Janot et al. 2019).
 _EMPS_PUBLISHED = {"before": 4.08, "after": 3.11, "f_v_pos": 166.7, "f_v_neg": 240.4,
                    "F_C_pos": 20.14, "F_C_neg": 20.63}
 

@@ -1,4 +1,4 @@
-"""Reproduce-pipeline steps of the friction identification (paper §3, SPEC §9).
+"""Reproduce-pipeline steps of the friction identification (paper §3; the real EMPS data beside it).
 
 ``step_identify_prototype``: the paper's procedure on the embedded
 ``bench_prototype`` data (Table 2 bounds, Figs 8–12, identifiability, joint fit
@@ -61,7 +61,7 @@ def step_identify_prototype(ctx):
     ok = [f for f in rep.fits if f.success]
     lines = [f"Each of the {len(data)} test(s) identified separately by direct collocation "
              f"(Radau, degree {opts.degree}, ≤ {opts.max_intervals} intervals) and IPOPT, "
-             f"{starts} seeded starts each drawn in the SPEC §2 distributor ranges, "
+             f"{starts} seeded starts each drawn in the friction parameters' distributor ranges, "
              f"{len(ok)}/{len(data)} converged (wall times: the run log at the end). "
              f"The objective is the epigraph of max(δ_V, δ_F) with the smooth "
              f"squared errors, plus 0.1 × their mean; δ below are Eq 5 as printed.\n",
@@ -83,7 +83,7 @@ def step_identify_prototype(ctx):
     rel = [f.force_relative_error_percent for f in ok]
     dv_txt = f", δ_V {min(dV):.3f}–{max(dV):.3f}" if dV else " (no voltage)"
     hidden = ", ".join((load_truth(path) or {}).get("effects", {}))
-    tail = ("The data hide backlash (SPEC §8), which the rigid model cannot follow: the "
+    tail = ("The data hide backlash, which the rigid model cannot follow: the "
             "residual peaks after each reversal (Fig 11) are the paper's finding."
             if not ctx.custom_data else
             (f"Hidden effects in the data (truth.toml): {hidden}; the discrepancy step below "
@@ -228,7 +228,7 @@ def _bounds_markdown(fb, truth: dict) -> list[str]:
             "case) compared two sets in the wrong order there — 'min friction' gave *less* "
             "power than 'max'. Now the order holds everywhere and the spread at road "
             "velocities is the honest extrapolation band, not the accident of a free fit.\n"]
-    out += ["", "Data-supported friction sets (SPEC §7 names; also `friction_sets` in "
+    out += ["", "Data-supported friction sets (parameter names as in the design card; also `friction_sets` in "
             "`identify_prototype.json`, usable as `--friction identify_prototype.json:CASE`):\n",
             "| parameter | min | best | max | paper method: min | paper method: max |",
             "|---|---|---|---|---|---|"]
@@ -243,7 +243,7 @@ def _bounds_markdown(fb, truth: dict) -> list[str]:
 
 
 def step_identify_emps(ctx):
-    """EMPS identification beside the published reference (SPEC §9)."""
+    """EMPS identification beside the published reference (Janot et al. 2019)."""
     from ..datasets.bench_format import load_bench
     from ..datasets.embedded import embedded_data_dir
     from ..datasets.emps import EMPS_REFERENCE

@@ -94,7 +94,7 @@ def step_quarter_car_paths(ctx: Context) -> StepOutput:
     rel_sim = "figures/qc_overview.png"
     plots.save(fig, ctx.out_dir / rel_sim)
     md = (
-        "**ISO 2631-1 W_k** (exact product of the four filters, SPEC §5) against the standard's "
+        "**ISO 2631-1 W_k** (exact product of the four filters) against the standard's "
         f"table: max deviation {dev:.2f} % over 0.5–80 Hz.\n\n" + "\n".join(rows) + "\n\n"
         "Low-order state-space fits of |W_k| for time-domain filtering (stable, minimum-phase; "
         "metrics use the exact W_k):\n\n" + "\n".join(fit_rows) + f"\n\n![W_k]({rel_wk})\n\n"
@@ -102,7 +102,7 @@ def step_quarter_car_paths(ctx: Context) -> StepOutput:
         f"100 km/h, {length:g} m road (time domain: compiled batch; frequency domain: exact "
         f"Eqs 2–3 with the full electrical impedance on the ISO 8608 PSD). Largest relative "
         f"difference: **{100 * worst:.2f} %**. Dissipation bound π² k1 G_d(n0) n0² V = "
-        f"{float(freq['dissipation_bound_W'][0]):.1f} W (SPEC: 140 W).\n\n"
+        f"{float(freq['dissipation_bound_W'][0]):.1f} W (expected ≈ 140 W for this road and speed).\n\n"
         + "\n".join(cmp_rows) + f"\n\n![overview]({rel_sim})\n")
     return StepOutput(md, [rel_wk, rel_sim],
                       {"wk_max_dev_percent": dev, "paths_max_rel_diff": worst,

@@ -1,4 +1,4 @@
-"""Reproduce-pipeline step: design with friction in the loop (issue 14).
+"""Reproduce-pipeline step: design with friction in the loop.
 
 * the frictionless and the friction-aware (worst of the min/max friction sets)
   NSGA-II fronts, both evaluated with friction, on the same axes;

@@ -1,4 +1,4 @@
-"""Non-Gaussian friction damping by stochastic (energy-envelope) averaging (issue 14).
+"""Non-Gaussian friction damping by stochastic (energy-envelope) averaging.
 
 Why: the Gaussian equivalent linearisation (:mod:`ehsa_opt.vehicle.equivalent`)
 takes the stroke velocity v as Gaussian.  With a strong Coulomb friction the strut

@@ -1,4 +1,4 @@
-"""Friction-aware fast path: stochastic equivalent linearisation (SPEC §5, issue 14).
+"""Friction-aware fast path: stochastic equivalent linearisation (paper Eqs 6–9).
 
 Under the Gaussian road response the stroke velocity v is (nearly) zero-mean
 Gaussian with rms σ_v.  Statistical linearisation (Kazakov; Atalik & Utku 1976)

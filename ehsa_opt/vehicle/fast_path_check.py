@@ -1,6 +1,6 @@
 """Validation of the friction-aware fast path against the time-domain simulation.
 
-The set (issue 14): designs × friction sets × roads.  Each road case (class, speed,
+The set: designs × friction sets × roads.  Each road case (class, speed,
 seed) runs every design–friction pair in one batched time-domain call
 (:func:`~ehsa_opt.vehicle.simulate.simulate_quarter_car`, the reference) and in one
 vectorised fast-path call (:func:`~ehsa_opt.vehicle.equivalent.friction_metrics`);

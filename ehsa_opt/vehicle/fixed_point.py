@@ -1,4 +1,4 @@
-"""Per-design fixed point σ = σ_lin(c_f(σ)) by secants of a one-mode model (issue 14).
+"""Per-design fixed point σ = σ_lin(c_f(σ)) by secants of a one-mode model.
 
 Used by the friction-aware fast path (:mod:`ehsa_opt.vehicle.equivalent`) with its
 exact (residue) σ_lin, :mod:`ehsa_opt.vehicle.residues`.  Why a model: an exact

@@ -1,4 +1,4 @@
-"""Quarter-car metrics (SPEC §5) and their exact frequency-domain evaluation.
+"""Quarter-car metrics (paper Eqs 6–9) and their exact frequency-domain evaluation.
 
 Metrics (paper Eqs 6–9)::
 
@@ -8,7 +8,7 @@ Metrics (paper Eqs 6–9)::
     efficiency      η_g  = mean(V_g² / R_e) / mean(f_d v − reversible inertial power)
 
 :func:`linear_metrics` evaluates them exactly for the linear (frictionless)
-quarter car of SPEC §4 with the harvester's complex impedance (paper Eqs 1–3
+quarter car (paper §4) with the harvester's complex impedance (paper Eqs 1–3
 without the ω-freezing: Z(jω) = jω m_eq + K_t K_e / (r² (R + jω L_i))) on the
 ISO 8608 road PSD, vectorised over any number of designs at once.
 

@@ -1,4 +1,4 @@
-"""The friction's non-linear residual force under Gaussian closure (issue 14).
+"""The friction's non-linear residual force under Gaussian closure.
 
 Why: equivalent linearisation (:mod:`ehsa_opt.vehicle.equivalent`) keeps the part
 of the friction force F_f(v) that is correlated with the stroke velocity (c v) and
@@ -54,7 +54,7 @@ Checked: at class B, 30 km/h, friction × 2 (prototype, 2000 m) the closure adds
 −7.2 % → −5.1 %), σ_v 0.0675 → 0.0691 m/s (time domain 0.0697), power 2.209 →
 2.317 W (2.354 W), the friction's power c_f σ_v² + E[r v] 8.01 → 7.88 W (time domain
 E[F v] 7.90 W), and the total dissipation stays the linear system's (the
-dissipation bound of SPEC §4: the road's input power does not depend on an internal
+dissipation bound (``vehicle.road``): the road's input power does not depend on an internal
 force).  What it does not capture: the non-Gaussian part (long stick phases),
 ``benchmarks/friction_fast_path.py`` measures the rest.  Cost: about 40 % of the fast
 path's (4000 designs: ~0.025 s), in blocks of 512 designs that stay in cache.

@@ -1,4 +1,4 @@
-"""Exact band-limited variances of the linear quarter car by residues (issue 14).
+"""Exact band-limited variances of the linear quarter car by residues.
 
 Why: the friction-aware fast path (:mod:`ehsa_opt.vehicle.equivalent`) needs the
 stroke-velocity variance σ_v²(c) many times while it iterates on the friction's
@@ -6,7 +6,7 @@ equivalent damping c, then the metrics at the fixed point.  A quadrature over a
 few hundred frequencies per design costs far more than the 2-DOF system's five
 poles carry; this module integrates the rational spectra in closed form.
 
-Method.  With the harvester's impedance (SPEC §4, paper Eqs 1–3, as in
+Method.  With the harvester's impedance (paper Eqs 1–3, as in
 :func:`ehsa_opt.vehicle.metrics.linear_metrics`) and an extra viscous damping c
 between the masses, every output y (stroke velocity, sprung acceleration, tyre
 deflection, current) is y/V0 = H(s) = N(s)/Q(s) with the road velocity V0 as

@@ -1,4 +1,4 @@
-"""Time-domain simulation of the quarter car with harvester and friction (SPEC §4–5).
+"""Time-domain simulation of the quarter car with harvester and friction (paper §4, Eqs 6–9).
 
 Fast path: the step of :class:`~ehsa_opt.physics.quarter_car_model.QuarterCarModel`
 (trapezoidal mechanics + exact exponential electrical update + bracketed Newton
