@@ -117,7 +117,7 @@ def test_added_variances_match_a_frequency_grid():
 
 def test_residual_keeps_the_dissipation_and_lowers_the_friction_power():
     # an internal force does not change what the road puts in (the dissipation bound,
-    # the dissipation bound); the residual feeds the motion it drives: E[r v] < 0
+    # the road input power); the residual feeds the motion it drives: E[r v] < 0
     road = RoadParams("C", 50.0)
     design = {"load_ohm": np.array([10.0, 47.0, 300.0]),
               "lead_mm_per_rev": np.array([8.0, 12.0, 16.0])}
