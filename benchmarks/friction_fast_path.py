@@ -1,5 +1,5 @@
 """Benchmark: the friction-aware fast path (stochastic equivalent linearisation,
-``ehsa_opt.vehicle.equivalent``) against the exact time-domain simulation.
+``ehsa_opt.vehicle.fast_path.linearisation``) against the exact time-domain simulation.
 
 Validation set (issue 14):
   designs   prototype, paper optimum (§4.2), our optimum (goal attainment of
@@ -50,8 +50,8 @@ from ehsa_opt.design.goal import solve_goal_attainment  # noqa: E402
 from ehsa_opt.design.optimize import build_problem, goals_and_weights  # noqa: E402
 from ehsa_opt.design.problem import PAPER_BOX  # noqa: E402
 from ehsa_opt.physics.params import HarvesterParams  # noqa: E402
-from ehsa_opt.vehicle.equivalent import friction_metrics  # noqa: E402
-from ehsa_opt.vehicle.fast_path_check import (  # noqa: E402
+from ehsa_opt.vehicle.fast_path.linearisation import friction_metrics  # noqa: E402
+from ehsa_opt.vehicle.fast_path.validation import (  # noqa: E402
     CHECK_METRICS,
     MIN_RECORD_S,
     RoadCase,

@@ -8,7 +8,7 @@ import scipy.linalg as sl
 
 from ehsa_opt.vehicle.iso2631 import (ISO2631_WK_TABLE, wk_abs2, wk_exact, wk_exact_tf, wk_fit_error,
                               wk_state_space)
-from ehsa_opt.vehicle.metrics import METRIC_KEYS, linear_metrics
+from ehsa_opt.vehicle.frequency_path import METRIC_KEYS, linear_metrics
 from ehsa_opt.physics.params import HarvesterParams, ParameterError, RoadParams, VehicleParams
 from ehsa_opt.vehicle.road import dissipation_bound_W, road_psd_m3, road_velocity_psd
 

@@ -10,12 +10,12 @@ import pytest
 from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
 from ehsa_opt.physics.friction import rod_friction_N
 from ehsa_opt.physics.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams
-from ehsa_opt.vehicle.equivalent import friction_array, friction_metrics
-from ehsa_opt.vehicle.fast_path_check import scaled_friction
+from ehsa_opt.vehicle.fast_path.linearisation import friction_array, friction_metrics
+from ehsa_opt.vehicle.fast_path.validation import scaled_friction
 from ehsa_opt.vehicle.iso2631 import wk_abs2
-from ehsa_opt.vehicle.metrics import design_arrays
-from ehsa_opt.vehicle import equivalent as equivalent_module
-from ehsa_opt.vehicle.residual_force import (LagGrid, _power_laplace, hermite_coefficients,
+from ehsa_opt.vehicle.frequency_path import design_arrays
+from ehsa_opt.vehicle.fast_path import linearisation as equivalent_module
+from ehsa_opt.vehicle.fast_path.residual_force import (LagGrid, _power_laplace, hermite_coefficients,
                                              residual_autocovariance, residual_variances)
 from ehsa_opt.vehicle.road import ROAD_BAND_CYCLES_PER_M
 

@@ -359,7 +359,7 @@ def _friction_block(ev: Any, labels: Sequence[str]) -> dict[str, Any] | None:
     from dataclasses import asdict
     return {"mode": ev.mode, "labels": list(labels),
             "sets": [asdict(f) for f in ev.frictions],
-            "method": "stochastic equivalent linearisation (ehsa_opt.vehicle.equivalent)"}
+            "method": "stochastic equivalent linearisation (ehsa_opt.vehicle.fast_path.linearisation)"}
 
 
 def front_check(cfg: DesignConfig, ev: Any, designs: Mapping[str, np.ndarray]

@@ -11,7 +11,7 @@ J_t, k_n and R_e), so every optimiser sees well-scaled variables.
 The objectives come from an *evaluator*: a picklable callable mapping a dict of
 physical design arrays to a dict of objective arrays (and extra quantities for
 reporting).  :class:`QuarterCarObjectives` is the paper's one, built on the exact
-frequency-domain path of the frictionless quarter car (:func:`ehsa_opt.vehicle.metrics
+frequency-domain path of the frictionless quarter car (:func:`ehsa_opt.vehicle.frequency_path
 linear_metrics`); tests plug in analytic functions with known answers.
 
 Classes and functions
@@ -168,7 +168,7 @@ class QuarterCarObjectives:
     """Paper objectives [α, η_rh, 1/ρ_g, 1/η_g] of the frictionless quarter car.
 
     Evaluated exactly in the frequency domain by
-    :func:`ehsa_opt.vehicle.metrics.linear_metrics`, vectorised over designs.
+    :func:`ehsa_opt.vehicle.frequency_path.linear_metrics`, vectorised over designs.
 
     Attributes
     ----------
@@ -243,7 +243,7 @@ class QuarterCarObjectives:
         return fixed
 
     def __call__(self, design: Mapping[str, Any]) -> dict[str, np.ndarray]:
-        from ..vehicle.metrics import linear_metrics
+        from ..vehicle.frequency_path import linear_metrics
         mapping = self.design_mapping(design)
         m = linear_metrics(self.vehicle, self.road, mapping, **dict(self.metric_options))
         out = {"comfort": m["comfort"], "road_holding": m["road_holding"],

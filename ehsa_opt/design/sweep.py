@@ -175,7 +175,7 @@ class SweepTask:
         if self.friction is None:
             from .problem import QuarterCarObjectives
             ev = QuarterCarObjectives(self.vehicle, self.road, self.base)
-            from ..vehicle.metrics import linear_metrics
+            from ..vehicle.frequency_path import linear_metrics
             m = linear_metrics(self.vehicle, self.road, ev.design_mapping(d))
             if self.identified_range_m_per_s is not None:
                 from ..vehicle.coverage import gaussian_coverage

@@ -1,4 +1,58 @@
 """Estimation room: friction identification (paper §3, Eq 5 minimax), identifiability,
-and the model-discrepancy workflow. Imports physics, datasets and utils."""
+the data-supported friction bounds, the rod friction law and the model-discrepancy
+workflow (:mod:`.discrepancy`). Imports physics, datasets and utils.
 
-__all__: list[str] = []
+The names below are the room's public entry points; each is imported from its module on
+first use.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..utils.lazy import lazy_exports
+
+_EXPORTS = {
+    **dict.fromkeys(["fit_tests", "IdentifyOptions", "FitResult", "Prediction",
+                     "IdentificationReport", "PARAMETER_BOUNDS", "START_RANGES"], ".identify"),
+    **dict.fromkeys(["simulate_tests"], ".test_simulation"),
+    **dict.fromkeys(["fisher_identifiability"], ".identifiability"),
+    **dict.fromkeys(["FrictionBounds", "friction_bounds", "paper_friction_sets",
+                     "identification_json"], ".bounds"),
+    **dict.fromkeys(["FrictionSamples", "RodLawFit", "friction_samples", "rod_law_fit"],
+                    ".rod_law"),
+    **dict.fromkeys(["HAC", "hac_covariance", "effective_sample_size"], ".covariance"),
+    **dict.fromkeys(["run_discrepancy", "DiscrepancyResult", "DiscrepancySettings"],
+                    ".discrepancy"),
+}
+
+__all__ = ["fit_tests", "IdentifyOptions", "FitResult", "Prediction", "IdentificationReport",
+           "PARAMETER_BOUNDS", "START_RANGES", "simulate_tests", "fisher_identifiability",
+           "FrictionBounds", "friction_bounds", "paper_friction_sets", "identification_json",
+           "FrictionSamples", "RodLawFit", "friction_samples", "rod_law_fit", "HAC",
+           "hac_covariance", "effective_sample_size", "run_discrepancy", "DiscrepancyResult",
+           "DiscrepancySettings"]
+assert set(__all__) == set(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+
+if TYPE_CHECKING:  # the same names, for type checkers and editors
+    from .bounds import (
+        FrictionBounds,
+        friction_bounds,
+        identification_json,
+        paper_friction_sets,
+    )
+    from .covariance import HAC, effective_sample_size, hac_covariance
+    from .discrepancy import DiscrepancyResult, DiscrepancySettings, run_discrepancy
+    from .identifiability import fisher_identifiability
+    from .identify import (
+        PARAMETER_BOUNDS,
+        START_RANGES,
+        FitResult,
+        IdentificationReport,
+        IdentifyOptions,
+        Prediction,
+        fit_tests,
+    )
+    from .rod_law import FrictionSamples, RodLawFit, friction_samples, rod_law_fit
+    from .test_simulation import simulate_tests

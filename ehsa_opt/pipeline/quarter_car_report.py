@@ -14,10 +14,13 @@ import numpy as np
 from .. import plots
 from ..physics.params import HarvesterParams, RoadParams, VehicleParams
 from ..plots import quarter_car as qplots
+from ..vehicle.frequency_path import (
+    METRIC_KEYS,
+    linear_frequency_response,
+    linear_metrics,
+)
 from ..vehicle.iso2631 import ISO2631_WK_TABLE, wk_exact, wk_fit_error, wk_state_space
-from ..vehicle.metrics import METRIC_KEYS, linear_frequency_response, linear_metrics
 from ..vehicle.simulate import simulate_quarter_car
-from ..vehicle.validity import check_validity
 from ..vehicle.studies import (
     PAPER_FIG14_RANGES,
     force_velocity_loops,
@@ -26,6 +29,7 @@ from ..vehicle.studies import (
     road_study,
     stepped_sine_response,
 )
+from ..vehicle.validity import check_validity
 from .base import Context, StepOutput
 from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
 

@@ -1,5 +1,84 @@
-"""Vehicle room: ISO 8608 roads, ISO 2631 W_k weighting, the exact frequency path
-(:mod:`.metrics`), the compiled time-domain path (:mod:`.simulate`) and the paper's §4.1
-studies (:mod:`.studies`). Imports physics, datasets and utils."""
+"""Vehicle room: ISO 8608 roads (:mod:`.road`), ISO 2631 W_k weighting (:mod:`.iso2631`),
+the exact frequency-domain path (:mod:`.frequency_path`), the friction-aware fast path
+(:mod:`.fast_path`), the compiled time-domain path (:mod:`.simulate`), validity flags
+(:mod:`.validity`), friction coverage (:mod:`.coverage`) and the paper's §4.1 studies
+(:mod:`.studies`). Imports physics, datasets, estimation results and utils.
 
-__all__: list[str] = []
+The names below are the room's public entry points; each is imported from its module on
+first use.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..utils.lazy import lazy_exports
+
+_EXPORTS = {
+    **dict.fromkeys(["RoadProfile", "road_psd_m3", "road_velocity_psd", "dissipation_bound_W",
+                     "synthesize_road", "load_profile_csv", "road_profile"], ".road"),
+    **dict.fromkeys(["wk_exact", "wk_abs2", "wk_filter", "weighted_rms_fft"], ".iso2631"),
+    **dict.fromkeys(["METRIC_KEYS", "DESIGN_KEYS", "design_arrays", "linear_metrics",
+                     "linear_frequency_response"], ".frequency_path"),
+    **dict.fromkeys(["friction_metrics"], ".fast_path"),
+    **dict.fromkeys(["QuarterCarSimulation", "simulate_quarter_car", "simulate_batch",
+                     "RoadHoldingWarning", "FrictionRangeWarning"], ".simulate"),
+    **dict.fromkeys(["FrictionCases", "friction_cases", "FrequencyResponseStudy",
+                     "stepped_sine_response", "ForceVelocityStudy", "force_velocity_loops",
+                     "RoadStudy", "road_study"], ".studies"),
+    **dict.fromkeys(["Validity", "ValidityFlag", "check_validity"], ".validity"),
+    **dict.fromkeys(["design_coverage"], ".coverage"),
+    **dict.fromkeys(["SimulationEstimate", "estimate_simulation"], ".resources"),
+}
+
+__all__ = ["RoadProfile", "road_psd_m3", "road_velocity_psd", "dissipation_bound_W",
+           "synthesize_road", "load_profile_csv", "road_profile", "wk_exact", "wk_abs2",
+           "wk_filter", "weighted_rms_fft", "METRIC_KEYS", "DESIGN_KEYS", "design_arrays",
+           "linear_metrics", "linear_frequency_response", "friction_metrics",
+           "QuarterCarSimulation", "simulate_quarter_car", "simulate_batch",
+           "RoadHoldingWarning", "FrictionRangeWarning", "FrictionCases", "friction_cases",
+           "FrequencyResponseStudy", "stepped_sine_response", "ForceVelocityStudy",
+           "force_velocity_loops", "RoadStudy", "road_study", "Validity", "ValidityFlag",
+           "check_validity", "design_coverage", "SimulationEstimate", "estimate_simulation"]
+assert set(__all__) == set(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+
+if TYPE_CHECKING:  # the same names, for type checkers and editors
+    from .coverage import design_coverage
+    from .fast_path import friction_metrics
+    from .frequency_path import (
+        DESIGN_KEYS,
+        METRIC_KEYS,
+        design_arrays,
+        linear_frequency_response,
+        linear_metrics,
+    )
+    from .iso2631 import weighted_rms_fft, wk_abs2, wk_exact, wk_filter
+    from .resources import SimulationEstimate, estimate_simulation
+    from .road import (
+        RoadProfile,
+        dissipation_bound_W,
+        load_profile_csv,
+        road_profile,
+        road_psd_m3,
+        road_velocity_psd,
+        synthesize_road,
+    )
+    from .simulate import (
+        FrictionRangeWarning,
+        QuarterCarSimulation,
+        RoadHoldingWarning,
+        simulate_batch,
+        simulate_quarter_car,
+    )
+    from .studies import (
+        ForceVelocityStudy,
+        FrequencyResponseStudy,
+        FrictionCases,
+        RoadStudy,
+        force_velocity_loops,
+        friction_cases,
+        road_study,
+        stepped_sine_response,
+    )
+    from .validity import Validity, ValidityFlag, check_validity

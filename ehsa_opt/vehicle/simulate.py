@@ -58,8 +58,8 @@ from ..physics.quarter_car_model import (
     QuarterCarModel,
     param_vector,
 )
+from .frequency_path import G, dimensionless_power
 from .iso2631 import weighted_rms_fft
-from .metrics import G, dimensionless_power
 from .resources import check_simulation_resources
 from .road import RoadProfile, dissipation_bound_W, road_profile
 
@@ -319,7 +319,7 @@ class QuarterCarSimulation:
         All outputs finite.
     message : str
     metrics : dict of ndarray (B,)
-        The keys of :data:`~ehsa_opt.vehicle.metrics.METRIC_KEYS` plus ``energy_residual``
+        The keys of :data:`~ehsa_opt.vehicle.frequency_path.METRIC_KEYS` plus ``energy_residual``
         (relative closure of the energy balance), ``peak_power_W`` and the rms and peak
         of stroke, generator voltage and current (``stroke_rms_m``, ``peak_stroke_m``,
         ``voltage_rms_V``, ``peak_voltage_V``, ``current_rms_A``, ``peak_current_A``).

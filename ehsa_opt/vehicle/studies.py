@@ -27,14 +27,14 @@ from ..physics.bench_sim import simulate_bench
 from ..physics.motion import SineMotion
 from ..physics.params import (
     FRICTION_NAMES,
-    ParameterError,
     FrictionParams,
     HarvesterParams,
+    ParameterError,
     RoadParams,
     VehicleParams,
 )
 from ..physics.quarter_car_model import PARAM_NAMES, STATE_NAMES, param_vector
-from .metrics import linear_frequency_response
+from .frequency_path import linear_frequency_response
 from .road import road_psd_m3
 from .simulate import QuarterCarSimulation, simulate_batch, simulate_quarter_car
 
@@ -142,7 +142,7 @@ class FrequencyResponseStudy:
     amplitude_change : ndarray (C, L, F)
         That last relative change (the larger of x2 and V_g).
     linear_voltage_amplitude_V, linear_transmissibility : ndarray (L, F)
-        The exact frictionless responses (:func:`~ehsa_opt.vehicle.metrics.linear_frequency_response`),
+        The exact frictionless responses (:func:`~ehsa_opt.vehicle.frequency_path.linear_frequency_response`),
         the check of the simulation: the case "none" must match them.
     tolerance : float
         The settling tolerance on the window-to-window amplitude change.
@@ -211,7 +211,7 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
 
     Steady state by construction.  For each frequency one compiled batch simulates every
     (friction case, load) pair, starting from the *exact* frictionless steady state
-    (:func:`~ehsa_opt.vehicle.metrics.linear_frequency_response`; with friction this is
+    (:func:`~ehsa_opt.vehicle.frequency_path.linear_frequency_response`; with friction this is
     the best linear guess, and only the friction's correction is a transient).  The
     simulation runs in windows of whole cycles lasting at least ``window_min_s``, the
     fundamental amplitudes of x2 and V_g are measured in each window (least squares), and

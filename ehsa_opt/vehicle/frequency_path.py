@@ -278,12 +278,12 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
     friction_damping_Ns_per_m : array_like, optional
         Extra viscous damping c_f between the masses (N s/m), broadcast with the
         design: the equivalent damping of the friction
-        (:mod:`ehsa_opt.vehicle.equivalent`).  It joins the damper's force, so
+        (:mod:`ehsa_opt.vehicle.fast_path.linearisation`).  It joins the damper's force, so
         ``dissipated_power_W`` includes c_f σ_v² and ``efficiency`` is the
         generator's share; default 0 (frictionless).
     friction_damping_solver : callable, optional
         ``solver(index, sigma_v_of) -> c_f`` for amplitude-dependent damping
-        (:func:`ehsa_opt.vehicle.equivalent.friction_metrics`): called once per
+        (:func:`ehsa_opt.vehicle.fast_path.friction_metrics`): called once per
         block of designs with their flat ``index`` and a cheap function
         ``sigma_v_of(c_f, rows)`` giving σ_v of the block's ``rows`` for damping
         ``c_f`` on the block's prepared grid (only |det|² depends on c_f); returns
