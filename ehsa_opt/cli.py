@@ -78,41 +78,11 @@ def _cmd_bench_convert_emps(args: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------ design
-def _design_figures(outcome: dict, out_dir: Path) -> list[Path]:
-    """Figures of an optimize run (goal-attainment history, front)."""
-    from . import plots
-    from .plots import design as pd
-
-    figs = []
-    ga = getattr(outcome, "goal_attainment", None)
-    if ga is not None:
-        for which, name in (("design", "ga_design_history.png"),
-                            ("mass", "ga_equivalent_mass.png"),
-                            ("objectives", "ga_objective_history.png")):
-            figs.append(plots.save(pd.goal_attainment_history(ga, which), out_dir / name))
-    res = outcome.result
-    if outcome["method"] == "nsga2" and res is not None and len(res.F):
-        ga_pt = outcome.get("goal_attainment", {}).get("objectives")
-        proto = outcome["prototype"]["objectives"]
-        figs.append(plots.save(pd.pareto_projections(res, ga_pt, proto),
-                               out_dir / "pareto_projections.png"))
-        ga_full = None
-        if ga_pt is not None:
-            ga_full = {**outcome["goal_attainment"]["design"], **ga_pt}
-        figs.append(plots.save(pd.parallel_coordinates(res, ga_full),
-                               out_dir / "parallel_coordinates.png"))
-        figs.append(plots.save(pd.hypervolume_history({"NSGA-II": res.history},
-                                                      res.hv_reference),
-                               out_dir / "hypervolume.png"))
-    return figs
-
-
 def _cmd_optimize(args: argparse.Namespace) -> int:
     from .design.config import check_method, load_design_config
-    from .design.optimize import check_out_dir, motor_summary, optimize, time_domain_summary
+    from .design.optimize import check_out_dir, optimize
     from .design.sweep import executor
     from .utils.progress import progress_bar
-    from .vehicle.coverage import out_of_range_lines
     cfg = load_design_config(args.problem)
     method = check_method(args.method or cfg.method)
     frictions = None
@@ -135,31 +105,13 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                            mapper=mapper if args.scheduler else None, progress=tick,
                            frictions=frictions, friction_mode=args.friction_mode,
                            friction_labels=tuple(args.friction or ()))
-    _design_figures(outcome, out / "figures")
-    d, o = outcome["design"], outcome["objectives"]
-    m = outcome["metrics"]
-    print(f"{method}: {outcome['message']}")
-    print("design: " + ", ".join(f"{k} = {v:.4g}" for k, v in d.items()))
-    print("objectives: " + ", ".join(f"{k} = {v:.4g}" for k, v in o.items()))
-    if "power_W" in m:
-        print(f"power {m['power_W']:.1f} W, efficiency {100 * m['efficiency']:.1f} %, "
-              f"W_k rms {m.get('comfort_weighted_rms_m_s2', float('nan')):.3f} m/s^2")
-    if "gamma" in outcome:
-        print(f"attainment factor gamma = {outcome['gamma']:+.4f}")
-    if method == "nsga2":
-        hv = outcome["hypervolume"]["history"]
-        print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
-              f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
-              f"{outcome.get('front_vs_goal_attainment')}")
-    for line in motor_summary(outcome):
-        print(line)
-    for line, to_err in out_of_range_lines(outcome.get("out_of_range")):
-        print(line, file=sys.stderr if to_err else sys.stdout)
-    if "time_domain_check" in outcome:
-        print(time_domain_summary(outcome))
+    outcome.write_figures(out / "figures")
+    print(outcome.summary())
+    for line in outcome.warnings():
+        print(line, file=sys.stderr)
     print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
                                             else ""))
-    return 0 if outcome["success"] or args.stop_after else 1
+    return 0 if outcome.success or args.stop_after else 1
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:

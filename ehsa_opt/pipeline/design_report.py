@@ -86,24 +86,20 @@ def _validity_cell(cfg: Any, outputs: dict) -> str:
 def step_goal_attainment(ctx: Context) -> StepOutput:
     """Goal attainment on the paper's problem; results carry ``design`` and
     ``optimum_harvester`` (HarvesterParams fields, read by the Fig 21 step)."""
-    from .. import plots
     from ..design.optimize import build_problem, objectives_at, optimize
     from ..physics.params import HarvesterParams
-    from ..plots.design import goal_attainment_history
 
     if (na := _not_applicable(ctx)) is not None:
         return na
     cfg = _cfg(ctx)
-    out = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")
-    ga = out.goal_attainment
+    outcome = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")
+    ga = outcome.goal_attainment_result
     assert ga is not None
-    figs = []
-    for which, name in (("design", "fig17_design_history.png"),
-                        ("mass", "fig18_equivalent_mass.png"),
-                        ("objectives", "fig19_objective_history.png")):
-        rel = f"figures/{name}"
-        plots.save(goal_attainment_history(ga, which), ctx.out_dir / rel)
-        figs.append(rel)
+    names = {"ga_design": "fig17_design_history.png", "ga_mass": "fig18_equivalent_mass.png",
+             "ga_objectives": "fig19_objective_history.png"}
+    outcome.write_figures(ctx.out_dir / "figures", names)
+    figs = [f"figures/{name}" for name in names.values()]
+    out = outcome.record
     proto = out["prototype"]["objectives"]
     pm = out["prototype"]["metrics"]
     om = out["metrics"]
@@ -207,32 +203,24 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
 
 
 def step_pareto(ctx: Context) -> StepOutput:
-    from .. import plots
+    from ..design.nsga2 import ParetoResult
     from ..design.optimize import optimize
-    from ..plots.design import (
-        hypervolume_history,
-        parallel_coordinates,
-        pareto_projections,
-    )
 
     if (na := _not_applicable(ctx)) is not None:
         return na
     cfg = _cfg(ctx)
     # quick: a small run; full: larger than the file's 40 × 25 for a denser front
     pop, gens = (24, 12) if ctx.quick else (max(cfg.nsga2.pop, 100), max(cfg.nsga2.gens, 60))
-    out = optimize(cfg, "nsga2", out_dir=ctx.out_dir / "design_nsga2", pop=pop, gens=gens)
-    pr = out.result
+    outcome = optimize(cfg, "nsga2", out_dir=ctx.out_dir / "design_nsga2", pop=pop, gens=gens)
+    pr = outcome.result
+    assert isinstance(pr, ParetoResult)
+    out = outcome.record
     ga_obj = out["goal_attainment"]["objectives"]
-    ga_full = {**out["goal_attainment"]["design"], **ga_obj}
     proto = out["prototype"]["objectives"]
-    figs = []
-    for fig, name in ((pareto_projections(pr, ga_obj, proto), "pareto_projections.png"),
-                      (parallel_coordinates(pr, ga_full), "pareto_parallel.png"),
-                      (hypervolume_history({f"NSGA-II {pop}×{gens}": pr.history},
-                                           pr.hv_reference), "pareto_hypervolume.png")):
-        rel = f"figures/{name}"
-        plots.save(fig, ctx.out_dir / rel)
-        figs.append(rel)
+    names = {"pareto": "pareto_projections.png", "parallel": "pareto_parallel.png",
+             "hypervolume": "pareto_hypervolume.png"}
+    outcome.write_figures(ctx.out_dir / "figures", names, front_label=f"NSGA-II {pop}×{gens}")
+    figs = [f"figures/{name}" for name in names.values()]
     f_ga = np.array([ga_obj[k] for k in OBJECTIVE_NAMES])
     ratio = pr.F / f_ga
     n_dom = int(np.sum(np.all(ratio < 0.99, axis=1)))
@@ -308,7 +296,7 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
     ga = ctx.results.get("design", {}).get("design")  # the goal-attainment step
     if ga is None:
         from ..design.optimize import optimize
-        ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")["design"]
+        ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga").design
     sets, source = default_friction_sets(ctx.results.get("identification"),
                                            ctx.friction_bounds)
     speeds = (30.0, 70.0, 100.0, 130.0) if ctx.quick else (30.0, 50.0, 70.0, 90.0, 100.0,

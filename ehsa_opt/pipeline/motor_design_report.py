@@ -38,15 +38,16 @@ def step_motor_design(ctx: Context) -> StepOutput:
         cfg.goal_attainment, n_starts=n_starts))
     paper_cfg = dataclasses.replace(cfg, motor_model="paper")
     paper = optimize(paper_cfg, "goal-attainment", out_dir=ctx.out_dir / "design_motor" / "paper",
-                     check_time_domain=False)
-    ours = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_motor" / "scaling")
+                     check_time_domain=False).record
+    ours = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_motor" / "scaling").record
     scaling_problem = build_problem(cfg)
     paper_in_frame = objectives_at(scaling_problem, paper["design"])
     paper_obj = objectives_at(build_problem(paper_cfg), paper["design"])
     cat_cfg = dataclasses.replace(
         cfg, motor_model="catalogue", catalogue="dc_generators",
         space=_without(cfg.space, "speed_constant_rpm_per_V"))
-    cat = optimize(cat_cfg, "goal-attainment", out_dir=ctx.out_dir / "design_motor" / "catalogue")
+    cat = optimize(cat_cfg, "goal-attainment",
+                   out_dir=ctx.out_dir / "design_motor" / "catalogue").record
     rating = ours["motor"]["rating"]
     head = ("| design | J_t (g cm²) | lead (mm/rev) | k_n (rpm/V) | R_e (Ω) | R_i (Ω) | α | η_rh "
             "| power (W) | efficiency | rms current (A) | 3.5 × rms voltage (V) | limits |\n"
