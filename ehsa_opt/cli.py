@@ -184,7 +184,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         rep = identify(data, starts=args.starts, jobs=args.jobs, seed=args.seed,
                        progress=lambda k: bar.update(1))
     out.mkdir(parents=True, exist_ok=True)
-    rep.plot(out)
+    rep.write(out)
     doc = identification_json(rep)
     atomic_write_json(out / "identification.json", doc)
     ok = sum(f.success for f in rep.fits)

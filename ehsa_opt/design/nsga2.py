@@ -81,7 +81,9 @@ class ParetoResult:
         lines += [",".join(repr(r[c]) for c in cols) for r in rows]
         return "\n".join(lines) + "\n"
 
-    def plot(self, **kw: Any) -> Any:
+    def plot(self, ax: Any = None, **kw: Any) -> Any:
+        """The front's 2-D projections (several panels; ``ax`` not used; ``kw``: the
+        goal-attainment and prototype points); writes nothing."""
         from ..plots.design import pareto_projections
         return pareto_projections(self, **kw)
 

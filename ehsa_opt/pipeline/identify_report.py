@@ -44,7 +44,7 @@ def step_identify_prototype(ctx):
         opts = IdentifyOptions.for_rig(False)
     rep = identify(data, starts=starts, jobs=ctx.jobs, seed=0, options=opts)
     figdir = ctx.figure_dir / "identify_prototype"
-    figs = _rel(ctx, rep.plot(figdir))
+    figs = _rel(ctx, rep.write(figdir))
     try:
         fb = friction_bounds(rep)
     except ValueError:
@@ -254,7 +254,7 @@ def step_identify_emps(ctx):
     data = load_bench(embedded_data_dir("emps"))
     rep = identify(data, starts=2 if ctx.quick else 4, jobs=1, seed=0)
     f = rep.fits[0]
-    figs = _rel(ctx, rep.plot(ctx.figure_dir / "identify_emps"))
+    figs = _rel(ctx, rep.write(ctx.figure_dir / "identify_emps"))
     atomic_write_json(ctx.out_dir / "identify_emps.json", rep.to_json())
     if not f.success:
         return StepOutput(f"EMPS identification failed: {f.message}\n", figs, {"success": False})

@@ -94,7 +94,7 @@ def step_quarter_car_paths(ctx: Context) -> StepOutput:
             worst = max(worst, abs(a / b - 1))
             cells.append(f"{_fmt(a)} / {_fmt(b)}")
         cmp_rows.append(f"| {key} | " + " | ".join(cells) + " |")
-    fig = sim.plot(1)
+    fig = sim.plot(k=1)
     rel_sim = "figures/qc_overview.png"
     plots.save(fig, ctx.out_dir / rel_sim)
     md = (

@@ -355,8 +355,9 @@ class QuarterCarSimulation:
             out[key] = None if math.isnan(val) else val
         return out
 
-    def plot(self, k: int = 0) -> Any:
-        """Road, sprung displacement, power and force–velocity of design ``k``."""
+    def plot(self, ax: Any = None, k: int = 0) -> Any:
+        """Road, sprung displacement, power and force–velocity of design ``k`` (four
+        panels; ``ax`` not used); writes nothing."""
         missing = [n for n in ("x2_m", "load_power_W", "sprung_acc_m_s2",
                                "stroke_velocity_m_s", "damper_force_N") if n not in self.series]
         if missing:

@@ -177,7 +177,8 @@ class FrequencyResponseStudy:
         dx = np.abs(self.sprung_transmissibility[i] / self.linear_transmissibility - 1.0)
         return float(max(np.max(dv), np.max(dx)))
 
-    def plot(self) -> Any:
+    def plot(self, ax: Any = None) -> Any:
+        """Paper Fig 13 (two panels; ``ax`` not used); writes nothing."""
         from ..plots.quarter_car import fig13_frequency_response
         return fig13_frequency_response(self)
 
@@ -299,7 +300,8 @@ class ForceVelocityStudy:
     frequency_hz: float
     friction_source: str
 
-    def plot(self) -> Any:
+    def plot(self, ax: Any = None) -> Any:
+        """Paper Fig 14 (two panels; ``ax`` not used); writes nothing."""
         from ..plots.quarter_car import fig14_force_velocity
         return fig14_force_velocity(self)
 
@@ -385,13 +387,15 @@ class RoadStudy:
         ref = p[self.cases.index("none")]
         return {c: 100.0 * (p[i] / ref - 1.0) for i, c in enumerate(self.cases)}
 
-    def plot(self) -> Any:
+    def plot(self, ax: Any = None) -> Any:
+        """Paper Figs 15/16 (six panels; ``ax`` not used); writes nothing."""
         from ..plots.quarter_car import fig15_road_study
         return fig15_road_study(self)
 
-    def plot_power(self) -> Any:
+    def plot_power(self, ax: Any = None) -> Any:
+        """Paper Fig 21, into ``ax`` when given; writes nothing."""
         from ..plots.quarter_car import fig21_power_history
-        return fig21_power_history(self)
+        return fig21_power_history(self, ax=ax)
 
 
 def road_study(vehicle: VehicleParams, harvester: HarvesterParams, frictions: FrictionCases,
