@@ -177,7 +177,7 @@ class IdentificationReport:
         if not good:
             return {}
         k = good[len(good) // 2]  # representative test: the middle one of the matrix
-        sim = dict(has_generator=self.data.has_generator)
+        sim = {"has_generator": self.data.has_generator}
         pred = simulate_tests([self.data.tests[k]], self.data.harvester,
                               self.fits[k].parameters, **sim)[0]
         held = None
