@@ -168,6 +168,26 @@ class IdentificationReport:
                           "identifiable": self.identifiable, "joint_fit": joint,
                           "seconds": self.seconds})
 
+    def summary(self, json_path: str | Path = "identification.json") -> str:
+        """The lines ``ehsa-opt identify`` prints: tests converged, per-test Eq 5 δ and
+        force error (or why a test failed), the rig terms of a rig without generator."""
+        ok = sum(f.success for f in self.fits)
+        lines = [f"identified {ok}/{len(self.fits)} tests in {self.seconds:.1f} s "
+                 f"({self.starts} starts each); results in {json_path}"]
+        for t, f in zip(self.data.tests, self.fits):
+            if f.success:
+                dv = f"{f.delta_V:.4f}" if f.delta_V is not None else "—"
+                lines.append(f"  {t.file}: δ_F {f.delta_F:.4f}  δ_V {dv}  force error "
+                             f"{f.force_relative_error_percent:.2f} %  ({f.status})")
+            else:
+                lines.append(f"  {t.file}: FAILED ({f.message})")
+        if not self.data.has_generator and self.fits and self.fits[0].success:
+            p = self.fits[0].parameters
+            lines.append(f"  M = {p['inertia_kg']:.2f} kg, F_v = {p['nut_viscous_Ns_per_m']:.1f} "
+                         f"N s/m, F_C = {p['nut_coulomb_N']:.2f} N, offset = "
+                         f"{p['offset_N']:.2f} N")
+        return "\n".join(lines)
+
     def figures(self) -> dict[str, Figure]:
         """Figs 8–12, the identifiability picture and the joint fit on a held-out test,
         keyed by file name; the model's signals they show are simulated here."""
