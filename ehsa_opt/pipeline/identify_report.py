@@ -83,11 +83,12 @@ def step_identify_prototype(ctx):
     rel = [f.force_relative_error_percent for f in ok]
     dv_txt = f", δ_V {min(dV):.3f}–{max(dV):.3f}" if dV else " (no voltage)"
     hidden = ", ".join((load_truth(path) or {}).get("effects", {}))
-    tail = ("The data hide backlash, which the rigid model cannot follow: the "
-            "residual peaks after each reversal (Fig 11) are the paper's finding."
-            if not ctx.custom_data else
-            (f"Hidden effects in the data (truth.toml): {hidden}; the discrepancy step below "
-             "looks for them." if hidden else ""))
+    if "backlash" in hidden and not ctx.custom_data:
+        tail = ("The data hide backlash, which the rigid model cannot follow: the residual "
+                "peaks after each reversal (Fig 11) are the paper's finding.")
+    else:
+        tail = (f"Hidden effects in the data (truth.toml): {hidden}; the discrepancy step "
+                "below looks for them." if hidden else "")
     lines += ["", f"Eq 5 over the tests: δ_F {min(dF):.3f}–{max(dF):.3f}{dv_txt}; force "
               f"relative error {min(rel):.2f}–{max(rel):.2f} %. {tail}\n"]
     ident = rep.identifiable
@@ -246,7 +247,7 @@ def step_identify_emps(ctx):
     """EMPS identification beside the published reference (Janot et al. 2019)."""
     from ..datasets.bench_format import load_bench
     from ..datasets.embedded import embedded_data_dir
-    from ..datasets.emps import EMPS_REFERENCE
+    from .paper_reference import EMPS_REFERENCE
     from ..estimation.identify import force_relative_error_percent
     from ..utils.io import atomic_write_json
     from .base import StepOutput

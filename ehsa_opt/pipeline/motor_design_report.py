@@ -28,11 +28,11 @@ def _row(name: str, design: dict, obj: dict, extra: str) -> str:
 
 def step_motor_design(ctx: Context) -> StepOutput:
     from ..design.optimize import build_problem, objectives_at, optimize
-    from .design_report import _cfg, _not_applicable
+    from .design_problem import design_config, not_applicable
 
-    if (na := _not_applicable(ctx)) is not None:
+    if (na := not_applicable(ctx)) is not None:
         return na
-    cfg = _cfg(ctx, "scaling")
+    cfg = design_config(ctx, "scaling")
     n_starts = 3 if ctx.quick else cfg.goal_attainment.n_starts
     cfg = dataclasses.replace(cfg, goal_attainment=dataclasses.replace(
         cfg.goal_attainment, n_starts=n_starts))

@@ -40,8 +40,8 @@ def _qc_inputs(ctx: Context) -> Any:
 
 
 def _design_steps() -> list[Step]:
+    from .design_problem import design_inputs
     from .design_report import (
-        design_inputs,
         step_friction_on_optimum,
         step_goal_attainment,
         step_pareto,

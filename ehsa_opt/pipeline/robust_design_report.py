@@ -26,7 +26,7 @@ __all__ = ["step_robust_design", "robust_inputs"]
 
 
 def robust_inputs(ctx: Context) -> Any:
-    from .design_report import design_inputs
+    from .design_problem import design_inputs
     return [design_inputs(ctx), ctx.quick, ctx.results.get("identification", {}).get(
         "friction_max")]
 
@@ -73,7 +73,7 @@ def _road_convention(cfg: Any, sets: dict, paper: dict, table4: dict) -> tuple[s
 def _convention_statement(cfg: Any, best_level: str) -> str:
     """The road-class statement from the design- and friction-free invariant P/η, not
     from powers that mix our friction with the paper's designs."""
-    from .design_report import PAPER_OPTIMUM, PAPER_TABLE4
+    from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
     from .invariants_report import paper_invariants
     inv = paper_invariants(cfg.vehicle, cfg.road, cfg.harvester, PAPER_TABLE4, PAPER_OPTIMUM)
     lv = inv["bound_by_level_W"]
@@ -141,11 +141,12 @@ def step_robust_design(ctx: Context) -> StepOutput:
         check_case,
         summarise,
     )
-    from .design_report import PAPER_OPTIMUM, PAPER_TABLE4, _cfg
+    from .design_problem import design_config
+    from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
 
     t0 = time.perf_counter()
     quick = ctx.quick
-    cfg = _cfg()
+    cfg = design_config()
     cfg = dataclasses.replace(cfg, n_freq=128 if quick else 512)
     sets, source = default_friction_sets(ctx.results.get("identification"),
                                            ctx.friction_bounds)

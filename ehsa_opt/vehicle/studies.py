@@ -41,10 +41,8 @@ from .simulate import QuarterCarSimulation, simulate_batch, simulate_quarter_car
 __all__ = ["FrictionCases", "friction_cases", "paper_optimum_harvester",
            "FrequencyResponseStudy", "stepped_sine_response", "ForceVelocityStudy",
            "force_velocity_loops", "RoadStudy", "road_study", "equivalent_damping_slope",
-           "PAPER_FIG14_RANGES", "MIN_FRICTION_SCALE"]
+           "MIN_FRICTION_SCALE"]
 
-#: The paper's equivalent damping ranges of Fig 14 (min–max friction), N s/m.
-PAPER_FIG14_RANGES = {"open circuit": (293.0, 2306.0), "short circuit": (2862.0, 6208.0)}
 
 #: Scale of the "min" friction when identification results are absent.
 MIN_FRICTION_SCALE = 0.3
