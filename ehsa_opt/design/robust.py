@@ -26,13 +26,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..physics.params import (
-    FrictionParams,
-    HarvesterParams,
-    ParameterError,
-    RoadParams,
-    VehicleParams,
-)
+from ..physics.params import (FrictionParams, HarvesterParams, ParameterError, RoadParams,
+                              VehicleParams)
 from .problem import OBJECTIVE_NAMES, QuarterCarObjectives
 
 __all__ = ["FRICTION_MODES", "FrictionObjectives", "combine", "time_domain_objectives",

@@ -8,8 +8,6 @@ first use.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from ..utils.lazy import lazy_exports
 
 _EXPORTS = {
@@ -34,25 +32,3 @@ __all__ = ["fit_tests", "IdentifyOptions", "FitResult", "Prediction", "Identific
            "DiscrepancySettings"]
 assert set(__all__) == set(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
-
-if TYPE_CHECKING:  # the same names, for type checkers and editors
-    from .bounds import (
-        FrictionBounds,
-        friction_bounds,
-        identification_json,
-        paper_friction_sets,
-    )
-    from .covariance import HAC, effective_sample_size, hac_covariance
-    from .discrepancy import DiscrepancyResult, DiscrepancySettings, run_discrepancy
-    from .identifiability import fisher_identifiability
-    from .identify import (
-        PARAMETER_BOUNDS,
-        START_RANGES,
-        FitResult,
-        IdentificationReport,
-        IdentifyOptions,
-        Prediction,
-        fit_tests,
-    )
-    from .rod_law import FrictionSamples, RodLawFit, friction_samples, rod_law_fit
-    from .test_simulation import simulate_tests

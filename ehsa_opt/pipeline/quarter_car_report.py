@@ -14,30 +14,16 @@ import numpy as np
 from .. import plots
 from ..physics.params import HarvesterParams, RoadParams, VehicleParams
 from ..plots import quarter_car as qplots
-from ..vehicle.frequency_path import (
-    METRIC_KEYS,
-    linear_frequency_response,
-    linear_metrics,
-)
+from ..vehicle.frequency_path import (METRIC_KEYS, linear_frequency_response, linear_metrics)
 from ..vehicle.iso2631 import ISO2631_WK_TABLE, wk_exact, wk_fit_error, wk_state_space
 from ..vehicle.simulate import simulate_quarter_car
-from ..vehicle.studies import (
-    force_velocity_loops,
-    friction_cases,
-    paper_optimum_harvester,
-    road_study,
-    stepped_sine_response,
-)
+from ..vehicle.studies import (force_velocity_loops, friction_cases, paper_optimum_harvester,
+                               road_study, stepped_sine_response)
 from ..vehicle.validity import check_validity
 from .base import Context, StepOutput
 from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
-from .paper_reference import (
-    EXPECTED_DISSIPATION_BOUND_W,
-    PAPER_FIG14_RANGES,
-    PAPER_FIG21,
-    PAPER_OPTIMUM,
-    PAPER_ROAD_STUDY,
-)
+from .paper_reference import (EXPECTED_DISSIPATION_BOUND_W, PAPER_FIG14_RANGES, PAPER_FIG21,
+                              PAPER_OPTIMUM, PAPER_ROAD_STUDY)
 
 __all__ = ["step_quarter_car_paths", "step_fig13", "step_fig14", "step_fig15_16", "step_fig21",
            "friction_inputs", "road_study_conclusions", "COMFORT_SAME_PERCENT"]

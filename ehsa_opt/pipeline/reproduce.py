@@ -41,11 +41,7 @@ def _qc_inputs(ctx: Context) -> Any:
 
 def _design_steps() -> list[Step]:
     from .design_problem import design_inputs
-    from .design_report import (
-        step_friction_on_optimum,
-        step_goal_attainment,
-        step_pareto,
-    )
+    from .design_report import (step_friction_on_optimum, step_goal_attainment, step_pareto)
     from .invariants_report import step_paper_invariants
     from .motor_design_report import step_motor_design
     return [

@@ -135,12 +135,7 @@ def step_robust_design(ctx: Context) -> StepOutput:
     from ..design.robust import time_domain_objectives
     from ..design.sweep import default_friction_sets
     from ..plots.robust import fronts_with_friction, optimum_vs_friction_and_speed
-    from ..vehicle.fast_path.validation import (
-        CHECK_METRICS,
-        RoadCase,
-        check_case,
-        summarise,
-    )
+    from ..vehicle.fast_path.validation import (CHECK_METRICS, RoadCase, check_case, summarise)
     from .design_problem import design_config
     from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
 

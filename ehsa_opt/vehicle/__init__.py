@@ -10,8 +10,6 @@ first use.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from ..utils.lazy import lazy_exports
 
 _EXPORTS = {
@@ -42,43 +40,3 @@ __all__ = ["RoadProfile", "road_psd_m3", "road_velocity_psd", "dissipation_bound
            "check_validity", "design_coverage", "SimulationEstimate", "estimate_simulation"]
 assert set(__all__) == set(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
-
-if TYPE_CHECKING:  # the same names, for type checkers and editors
-    from .coverage import design_coverage
-    from .fast_path import friction_metrics
-    from .frequency_path import (
-        DESIGN_KEYS,
-        METRIC_KEYS,
-        design_arrays,
-        linear_frequency_response,
-        linear_metrics,
-    )
-    from .iso2631 import weighted_rms_fft, wk_abs2, wk_exact, wk_filter
-    from .resources import SimulationEstimate, estimate_simulation
-    from .road import (
-        RoadProfile,
-        dissipation_bound_W,
-        load_profile_csv,
-        road_profile,
-        road_psd_m3,
-        road_velocity_psd,
-        synthesize_road,
-    )
-    from .simulate import (
-        FrictionRangeWarning,
-        QuarterCarSimulation,
-        RoadHoldingWarning,
-        simulate_batch,
-        simulate_quarter_car,
-    )
-    from .studies import (
-        ForceVelocityStudy,
-        FrequencyResponseStudy,
-        FrictionCases,
-        RoadStudy,
-        force_velocity_loops,
-        friction_cases,
-        road_study,
-        stepped_sine_response,
-    )
-    from .validity import Validity, ValidityFlag, check_validity

@@ -25,14 +25,8 @@ from ..datasets.embedded import embedded_data_dir, load_truth
 from ..physics.bench_model import BenchModel
 from ..physics.bench_sim import simulate_bench
 from ..physics.motion import SineMotion
-from ..physics.params import (
-    FRICTION_NAMES,
-    FrictionParams,
-    HarvesterParams,
-    ParameterError,
-    RoadParams,
-    VehicleParams,
-)
+from ..physics.params import (FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError,
+                              RoadParams, VehicleParams)
 from ..physics.quarter_car_model import PARAM_NAMES, STATE_NAMES, param_vector
 from .frequency_path import linear_frequency_response
 from .road import road_psd_m3

@@ -22,12 +22,8 @@ works, part by part:
 """
 
 from .band_variances import QuarterCarPolynomials
-from .linearisation import (
-                            friction_array,
-                            friction_equivalent_damping_Ns_per_m,
-                            friction_metrics,
-                            law_equivalent_damping,
-)
+from .linearisation import (friction_array, friction_equivalent_damping_Ns_per_m, friction_metrics,
+                            law_equivalent_damping)
 from .residual_force import residual_variances
 from .sticking import averaged_damping
 

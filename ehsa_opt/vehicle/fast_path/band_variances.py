@@ -47,21 +47,8 @@ from typing import Mapping
 import numpy as np
 
 from ...physics.params import VehicleParams
-from .polynomials import (
-    WK_AT_POLES,
-    WK_DEN2,
-    WK_NUM2,
-    WK_POLES,
-    at_wk,
-    even_square,
-    padd,
-    pder,
-    peval,
-    peval_d,
-    pmul,
-    rmax,
-    rsum,
-)
+from .polynomials import (WK_AT_POLES, WK_DEN2, WK_NUM2, WK_POLES, at_wk, even_square, padd, pder,
+                          peval, peval_d, pmul, rmax, rsum)
 
 __all__ = ["QuarterCarPolynomials"]
 

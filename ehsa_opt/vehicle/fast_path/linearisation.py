@@ -73,14 +73,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
-from ...physics.params import (
-    FRICTION_NAMES,
-    FrictionParams,
-    HarvesterParams,
-    ParameterError,
-    RoadParams,
-    VehicleParams,
-)
+from ...physics.params import (FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError,
+                               RoadParams, VehicleParams)
 from ..frequency_path import G, design_arrays, dimensionless_power, linear_metrics
 from ..road import ROAD_BAND_CYCLES_PER_M, dissipation_bound_W, road_velocity_psd
 from .band_variances import QuarterCarPolynomials

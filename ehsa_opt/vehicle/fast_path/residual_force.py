@@ -69,18 +69,8 @@ from functools import cached_property
 import numpy as np
 
 from .band_variances import QuarterCarPolynomials
-from .polynomials import (
-    WK_AT_POLES,
-    WK_DEN2,
-    WK_NUM2,
-    WK_POLES,
-    at_wk,
-    even_square,
-    pder,
-    peval,
-    pmul,
-    rsum,
-)
+from .polynomials import (WK_AT_POLES, WK_DEN2, WK_NUM2, WK_POLES, at_wk, even_square, pder, peval,
+                          pmul, rsum)
 
 __all__ = ["residual_autocovariance", "residual_variances", "hermite_coefficients",
            "LagGrid", "DEFAULT_LAGS"]
