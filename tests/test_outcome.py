@@ -50,3 +50,27 @@ def test_summary_states_the_numbers_and_plot_needs_the_solver() -> None:
     assert "power 120.0 W, efficiency 66.0 %" in text
     with pytest.raises(ValueError, match="no solver results"):
         out.plot()
+
+
+def test_every_result_summarises_itself() -> None:
+    import numpy as np
+
+    from ehsa_opt.design.goal import GoalAttainmentResult
+    from ehsa_opt.design.nsga2 import ParetoResult
+    from ehsa_opt.estimation.identify_result import FitResult
+    names = ("comfort", "road_holding")
+    ga = GoalAttainmentResult(True, "ok", -0.25, {"load_ohm": 40.0},
+                              {"comfort": 0.5, "road_holding": 0.75}, np.ones(2), np.ones(2),
+                              names, [], [], {})
+    assert "gamma = -0.2500" in ga.summary() and "road_holding = 0.75" in ga.summary()
+    pr = ParetoResult(True, "done", np.zeros((2, 1)), {"load_ohm": np.array([10.0, 20.0])},
+                      np.array([[1.0, 2.0], [2.0, 1.0]]), names, 1, "knee",
+                      [{"n_eval": 40, "hv": 0.5}], np.ones(2), np.ones(2), {})
+    text = pr.summary()
+    assert "front: 2 designs, hypervolume 0.5 after 40" in text and "load_ohm = 20" in text
+    fit = FitResult(True, "ok", "Solve_Succeeded", {"nut_coulomb_N": 40.0}, 0.1, None, 2.5,
+                    [], [], {}, 12)
+    assert "δ_V —" in fit.summary() and "nut_coulomb_N = 40" in fit.summary()
+    failed = FitResult(False, "no start converged", "Infeasible", {}, None, None, None,
+                       [], [], {}, 0)
+    assert failed.summary() == "fit FAILED (Infeasible): no start converged"

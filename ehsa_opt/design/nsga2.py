@@ -73,6 +73,19 @@ class ParetoResult:
             out.append(row)
         return out
 
+    def summary(self) -> str:
+        """Status, front size, the preferred design and the last hypervolume."""
+        i = self.preferred
+        hv = self.history[-1] if self.history else {}
+        return "\n".join([
+            f"NSGA-II: {'converged' if self.success else 'FAILED'} ({self.message})",
+            f"front: {self.F.shape[0]} designs" + (f", hypervolume {hv['hv']:.4g} after "
+                                                   f"{hv['n_eval']} evaluations" if hv else ""),
+            f"preferred ({self.pick}): " + ", ".join(
+                f"{k} = {float(v[i]):.4g}" for k, v in self.designs.items()),
+            "objectives: " + ", ".join(f"{k} = {float(self.F[i, j]):.4g}"
+                                       for j, k in enumerate(self.objective_names))])
+
     def to_csv_text(self) -> str:
         """``pareto.csv`` text: one row per non-dominated design, full precision."""
         rows = self.rows()

@@ -96,6 +96,17 @@ class FitResult:
     def __getitem__(self, key: str) -> Any:  # OptimizeResult-like access
         return getattr(self, key)
 
+    def summary(self) -> str:
+        """Status, Eq 5 δ and force error, and the parameters found."""
+        if not self.success:
+            return f"fit FAILED ({self.status}): {self.message}"
+        dv = f"{self.delta_V:.4f}" if self.delta_V is not None else "—"
+        return "\n".join(
+            [f"fit converged ({self.status}, {self.nit} iterations, {self.path}): δ_F "
+             f"{self.delta_F:.4f}, δ_V {dv}, force error "
+             f"{self.force_relative_error_percent:.2f} %"]
+            + [f"  {k} = {v:.6g}" for k, v in self.parameters.items()])
+
     def plot(self, ax: Any = None, tests: Sequence[BenchTest] | None = None,
              harvester: Any = None, **kw: Any) -> list[Figure]:
         """Figures 8–9 (and 11 when ``tests`` and ``harvester`` are given: the first test
