@@ -8,7 +8,7 @@ Validation set (issue 14):
   friction  none and the embedded data's true friction × 0.5 / × 1 / × 2
             (min / best / max)                                              -> 4
   roads     ISO 8608 classes B–D at 30–130 km/h, seeded, each at least 400 m and
-            60 s long (``fast_path_check.MIN_RECORD_S``: with friction the time
+            60 s long (``fast_path.validation.MIN_RECORD_S``: with friction the time
             domain's own metrics scatter by ±4 % between seeds on a 13 s record).
 
 Nothing of the fast path is tuned on this set (no correction factor; its
