@@ -314,8 +314,10 @@ def truth_error(res: DiscrepancyResult, truth: dict | None) -> float | None:
     for measured data."""
     if not truth or "friction" not in truth:
         return None
-    from ..estimation.discrepancy.fit import predict
-    from ..estimation.discrepancy.refit import _force_error
+    import numpy as np
+
+    from ..estimation.discrepancy import predict
+    from ..estimation.identify_result import force_relative_error_percent
     from ..physics import make_component
     effects = truth.get("effects", {})
     comps = [make_component(n) for n in effects]
@@ -323,7 +325,11 @@ def truth_error(res: DiscrepancyResult, truth: dict | None) -> float | None:
     for c in comps:
         values.update({**c.defaults(), **effects[c.name]})
     rig = res.rig.with_components(comps)
-    return _force_error(res.eval_tests, predict(res.eval_tests, rig, values))
+    preds = predict(res.eval_tests, rig, values)
+    used = [pt.weight > 0 for pt in res.eval_tests]  # the samples the workflow scores
+    return force_relative_error_percent(
+        np.concatenate([p[0][w] for p, w in zip(preds, used)]),
+        np.concatenate([pt.y[0][w] for pt, w in zip(res.eval_tests, used)]))
 
 
 def step_discrepancy(ctx: Context) -> StepOutput:
