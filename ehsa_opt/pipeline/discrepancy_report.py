@@ -39,7 +39,7 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
              f"({len(res.fit_tests)} fit tests, {len(res.heldout_tests)} held-out)."
              + (f" The true parameters (truth.toml) simulate to {floor:.3f} % on the same "
                 f"tests." if floor is not None else "") + "\n")
-    from ..estimation.discrepancy.refit import MIN_EXCESS_REDUCTION
+    from ..estimation.discrepancy.evidence import MIN_EXCESS_REDUCTION
     L.append(f"Decision rule: an effect is named only if its refit removes at least "
              f"{100 * MIN_EXCESS_REDUCTION:.0f} % of the {res.evaluation} relative force error "
              f"*above the noise floor* ({_fmt(res.noise_floor, '.3f')} %: what the measurement "
@@ -314,10 +314,8 @@ def truth_error(res: DiscrepancyResult, truth: dict | None) -> float | None:
     for measured data."""
     if not truth or "friction" not in truth:
         return None
-    import numpy as np
-
-    from ..estimation.discrepancy import predict
-    from ..estimation.identify_result import force_relative_error_percent
+    from ..estimation.discrepancy.fit import predict
+    from ..estimation.discrepancy.evidence import force_error_percent
     from ..physics import make_component
     effects = truth.get("effects", {})
     comps = [make_component(n) for n in effects]
@@ -325,11 +323,7 @@ def truth_error(res: DiscrepancyResult, truth: dict | None) -> float | None:
     for c in comps:
         values.update({**c.defaults(), **effects[c.name]})
     rig = res.rig.with_components(comps)
-    preds = predict(res.eval_tests, rig, values)
-    used = [pt.weight > 0 for pt in res.eval_tests]  # the samples the workflow scores
-    return force_relative_error_percent(
-        np.concatenate([p[0][w] for p, w in zip(preds, used)]),
-        np.concatenate([pt.y[0][w] for pt, w in zip(res.eval_tests, used)]))
+    return force_error_percent(res.eval_tests, predict(res.eval_tests, rig, values))
 
 
 def step_discrepancy(ctx: Context) -> StepOutput:

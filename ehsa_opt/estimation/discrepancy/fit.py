@@ -46,7 +46,7 @@ from ..identify_result import force_relative_error_percent
 
 __all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
            "fit_group", "predict", "FilteredMotion", "force_relative_error_percent",
-           "linear_baseline", "BASE_SPECS"]
+           "linear_baseline", "param_scale", "BASE_SPECS"]
 
 NUT_NAMES = FRICTION_NAMES[:4]
 
@@ -55,8 +55,9 @@ NO_GENERATOR_FIXED: dict[str, float] = {
     "load_ohm": 1.0, "bearing_breakaway_Nm": 0.0, "bearing_coulomb_Nm": 0.0,
     "bearing_breakaway_velocity_rad_per_s": 1.0, "bearing_viscous_Nms_per_rad": 0.0}
 
-#: Bounds and typical scales of the base parameters (bounds wider than the SPEC §2
-#: distributor ranges, which are for drawing starts, not limits).
+#: Bounds and typical scales of the base parameters (bounds wider than the
+#: distributor ranges of :data:`~ehsa_opt.physics.params.FRICTION_RANGES`, which are for
+#: drawing starts, not limits).
 BASE_SPECS: dict[str, ParamSpec] = {
     "nut_breakaway_N": ParamSpec("nut_breakaway_N", "N", 50.0, 0.0, 2000.0),
     "nut_coulomb_N": ParamSpec("nut_coulomb_N", "N", 30.0, 0.0, 2000.0),
@@ -74,7 +75,9 @@ BASE_SPECS: dict[str, ParamSpec] = {
 }
 
 
-def _scale(spec: ParamSpec) -> float:
+def param_scale(spec: ParamSpec) -> float:
+    """Typical magnitude of a parameter (its default, else a twentieth of its bound):
+    the scale the decision variables are divided by."""
     if spec.default != 0.0:
         return abs(spec.default)
     return max(abs(spec.lower), abs(spec.upper)) / 20.0 or 1.0
@@ -203,7 +206,7 @@ def linear_baseline(prepared: Sequence[PreparedTest], rig: Rig,
     """Quick least-squares friction (rigid, quasi-static current): the force is linear
     in (F_C, F_brk − F_C, f_v[, M, offset]) for a fixed breakaway velocity, tried on
     a small grid.  Used as the IPOPT initial point; bearing friction starts at zero
-    (its split from the nut friction is not identifiable on a rigid bench, SPEC §2)."""
+    (its split from the nut friction is not identifiable on a rigid bench)."""
     h = rig.harvester
     r = h.lead_m_per_rad
     best: tuple[float, dict[str, float]] | None = None
@@ -359,7 +362,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     space = core.ParamSpace(tuple(model.param_names), tuple(free),
                             tuple(specs[n].lower for n in free),
                             tuple(specs[n].upper for n in free),
-                            tuple(_scale(specs[n]) for n in free), (), _ORDER)
+                            tuple(param_scale(specs[n]) for n in free), (), _ORDER)
 
     def default_of(n: str) -> float:
         return float(fixed.get(n, specs[n].default))
