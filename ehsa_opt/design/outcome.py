@@ -11,9 +11,10 @@ front) and ``goal_attainment_result`` the goal-attainment result whenever it was
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any
 
 from ..utils.io import atomic_write_text, json_safe
 from ..utils.limits import parse_json
@@ -23,7 +24,7 @@ from .nsga2 import ParetoResult
 if TYPE_CHECKING:  # plotting is imported only when a figure is drawn
     from matplotlib.figure import Figure
 
-__all__ = ["OptimizeOutcome", "motor_summary", "time_domain_summary", "DESIGN_FIGURES"]
+__all__ = ["DESIGN_FIGURES", "OptimizeOutcome", "motor_summary", "time_domain_summary"]
 
 #: The figures of an optimisation and their file names under ``write(out_dir)``.
 DESIGN_FIGURES: dict[str, str] = {

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Mapping, Sequence
+from typing import TYPE_CHECKING
+from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -18,9 +19,16 @@ if TYPE_CHECKING:  # types only: plotting draws results it is given, it runs not
     from ..estimation.identify_result import FitResult, IdentificationReport, Prediction
     from ..physics.params import FrictionParams
 
-__all__ = ["iterations_objective", "iterations_parameters", "objective_vs_parameter",
-           "bounds_figure", "identifiability_figure", "fit_result", "report_figures",
-           "friction_bounds"]
+__all__ = [
+    "bounds_figure",
+    "fit_result",
+    "friction_bounds",
+    "identifiability_figure",
+    "iterations_objective",
+    "iterations_parameters",
+    "objective_vs_parameter",
+    "report_figures",
+]
 
 
 def iterations_objective(result: FitResult, title: str = "", ax: Axes | None = None) -> Figure:

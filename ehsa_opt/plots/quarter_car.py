@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Mapping
+from typing import TYPE_CHECKING
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -15,8 +16,14 @@ if TYPE_CHECKING:
     from ..vehicle.simulate import QuarterCarSimulation
     from ..vehicle.studies import ForceVelocityStudy, FrequencyResponseStudy, RoadStudy
 
-__all__ = ["simulation_overview", "fig13_frequency_response", "fig14_force_velocity",
-           "fig15_road_study", "fig21_power_history", "wk_figure"]
+__all__ = [
+    "fig13_frequency_response",
+    "fig14_force_velocity",
+    "fig15_road_study",
+    "fig21_power_history",
+    "simulation_overview",
+    "wk_figure",
+]
 
 _CASE_COLOURS = {"none": "C0", "min": "C2", "max": "C3"}
 

@@ -8,7 +8,8 @@ pay for the compiled simulation, and a room's ``__init__`` never adds an import 
 from __future__ import annotations
 
 import importlib
-from typing import Any, Callable, Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 __all__ = ["lazy_exports"]
 

@@ -13,9 +13,10 @@ import dataclasses
 import json
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from ..datasets.friction_source import identified_range_for, load_friction
 from ..datasets.problem_file import QuarterCarProblem, load_problem
@@ -24,7 +25,7 @@ from ..utils.io import json_safe
 from .coverage import coverage_rows
 from .simulate import QuarterCarSimulation, simulate_quarter_car
 
-__all__ = ["ENERGY_TOLERANCE", "ProblemSimulation", "simulate_problem", "peak_electrical"]
+__all__ = ["ENERGY_TOLERANCE", "ProblemSimulation", "peak_electrical", "simulate_problem"]
 
 #: |energy residual| above which a simulation's metrics are refused (the balance closes
 #: to < 1 % when the time step resolves the vehicle's modes).
