@@ -24,30 +24,11 @@ _EXPORTS = {
                     ".discrepancy"),
 }
 
-__all__ = [
-    "HAC",
-    "PARAMETER_BOUNDS",
-    "START_RANGES",
-    "DiscrepancyResult",
-    "DiscrepancySettings",
-    "FitResult",
-    "FrictionBounds",
-    "FrictionSamples",
-    "IdentificationReport",
-    "IdentifyOptions",
-    "Prediction",
-    "RodLawFit",
-    "effective_sample_size",
-    "fisher_identifiability",
-    "fit_tests",
-    "friction_bounds",
-    "friction_samples",
-    "hac_covariance",
-    "identification_json",
-    "paper_friction_sets",
-    "rod_law_fit",
-    "run_discrepancy",
-    "simulate_tests",
-]
+__all__ = ["HAC", "PARAMETER_BOUNDS", "START_RANGES", "DiscrepancyResult", "DiscrepancySettings",
+           "FitResult", "FrictionBounds", "FrictionSamples", "IdentificationReport",
+           "IdentifyOptions", "Prediction", "RodLawFit", "effective_sample_size",
+           "fisher_identifiability", "fit_tests", "friction_bounds", "friction_samples",
+           "hac_covariance", "identification_json", "paper_friction_sets", "rod_law_fit",
+           "run_discrepancy", "simulate_tests"]
 assert set(__all__) == set(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

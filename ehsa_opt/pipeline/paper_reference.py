@@ -9,16 +9,9 @@ from __future__ import annotations
 
 from ..datasets.emps import EMPS_REFERENCE
 
-__all__ = [
-           "EMPS_PUBLISHED",
-           "EMPS_REFERENCE",
-           "EXPECTED_DISSIPATION_BOUND_W",
-           "PAPER_FIG14_RANGES",
-           "PAPER_FIG21",
-           "PAPER_OPTIMUM",
-           "PAPER_ROAD_STUDY",
-           "PAPER_TABLE4",
-]
+__all__ = ["EMPS_PUBLISHED", "EMPS_REFERENCE", "EXPECTED_DISSIPATION_BOUND_W",
+           "PAPER_FIG14_RANGES", "PAPER_FIG21", "PAPER_OPTIMUM", "PAPER_ROAD_STUDY",
+           "PAPER_TABLE4"]
 
 #: Paper §4.2 optimum and changes (text of §4.2 and Fig 19): design variables, comfort and
 #: road-holding improvements (%), power (W) and efficiency (%) prototype → optimum.

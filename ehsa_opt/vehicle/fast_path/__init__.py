@@ -27,12 +27,6 @@ from .linearisation import (friction_array, friction_equivalent_damping_Ns_per_m
 from .residual_force import residual_variances
 from .sticking import averaged_damping
 
-__all__ = [
-                            "QuarterCarPolynomials",
-                            "averaged_damping",
-                            "friction_array",
-                            "friction_equivalent_damping_Ns_per_m",
-                            "friction_metrics",
-                            "law_equivalent_damping",
-                            "residual_variances",
-]
+__all__ = ["QuarterCarPolynomials", "averaged_damping", "friction_array",
+           "friction_equivalent_damping_Ns_per_m", "friction_metrics", "law_equivalent_damping",
+           "residual_variances"]

@@ -13,28 +13,9 @@ import numpy as np
 
 from ..iso2631 import wk_exact_tf
 
-__all__ = [
-    "WK_AT_POLES",
-    "WK_DDEN",
-    "WK_DEN",
-    "WK_DEN2",
-    "WK_INV_DDEN",
-    "WK_INV_DEN_NEG",
-    "WK_NUM",
-    "WK_NUM2",
-    "WK_POLES",
-    "WK_VANDER",
-    "WK_VANDER_NEG",
-    "at_wk",
-    "even_square",
-    "padd",
-    "pder",
-    "peval",
-    "peval_d",
-    "pmul",
-    "rmax",
-    "rsum",
-]
+__all__ = ["WK_AT_POLES", "WK_DDEN", "WK_DEN", "WK_DEN2", "WK_INV_DDEN", "WK_INV_DEN_NEG",
+           "WK_NUM", "WK_NUM2", "WK_POLES", "WK_VANDER", "WK_VANDER_NEG", "at_wk", "even_square",
+           "padd", "pder", "peval", "peval_d", "pmul", "rmax", "rsum"]
 
 WK_NUM, WK_DEN = (np.asarray(a, float)[::-1].copy() for a in wk_exact_tf())  # ascending
 WK_POLES = np.roots(WK_DEN[::-1])
