@@ -147,8 +147,8 @@ class Backlash(Component):
     transmission = True
     parameters = (
         ParamSpec("backlash_gap_m", "m", 1e-4, 0.0, 2e-3, "total axial play b"),
-        ParamSpec("backlash_contact_stiffness_N_per_m", "N/m", 5e6, 1e4, 1e9,
-                  "contact stiffness k_c"),
+        ParamSpec("backlash_contact_stiffness_N_per_m", "N/m", 5e6, 1e4, 1e10,
+                  "contact stiffness k_c (steel on steel: 1e8-1e10)"),
         ParamSpec("backlash_contact_damping_Ns_per_m", "N s/m", 8e3, 0.0, 1e5,
                   "contact damping c_c"),
     )

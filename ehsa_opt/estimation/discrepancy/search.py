@@ -46,6 +46,7 @@ from .evidence import (
     sse_can_earn,
 )
 from .fit import PreparedTest, Rig
+from .impacts import impact_record
 from .lookahead import (
     confounded,
     confounded_first,
@@ -195,6 +196,13 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         win.earns = False
         return False, joint
     joint = add_winner(rnd, win, first, joint, tests, state, say)
+    if impact_record(win.fit) is not None and state.remaining:
+        note = (f"round {rnd}: {win.effect} was fitted and judged on transient energies and "
+                f"kinematic gaps (a rattling contact): the model's sample-wise residual is "
+                f"not reproducible, so no further effect is searched on it")
+        say(note)
+        notes.append(note)
+        return False, joint
     return bool(state.remaining), joint
 
 
@@ -300,6 +308,10 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
     earning = [c for c in cands.values() if c.earns]
     first = blocked = None
     if not should_widen(earning, can_earn(state.error, tests.floor, 0.0, 1.0)):
+        return earning, first, blocked
+    if any(impact_record(c.fit) is not None for c in earning):
+        # a rattling contact earned on its impacts: the sample-wise share of the excess
+        # it removes measures the chaos, not what is left unexplained
         return earning, first, blocked
     more = [n for n in order if n not in rk.chosen and rk.scores[n]["applicable"]
             and n != "flexibility" and compatible(state.rig, rk.comps[n])]
