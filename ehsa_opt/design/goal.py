@@ -82,9 +82,20 @@ class GoalAttainmentResult:
     stats: dict
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
-    def plot(self, **kw: Any) -> Any:
+    def summary(self) -> str:
+        """Status, attainment factor γ, the optimum and its objectives."""
+        return "\n".join([
+            f"goal attainment: {'converged' if self.success else 'FAILED'} ({self.message}); "
+            f"gamma = {self.gamma:+.4f}",
+            "design: " + ", ".join(f"{k} = {v:.4g}" for k, v in self.design.items()),
+            "objectives: " + ", ".join(f"{k} = {self.objectives[k]:.4g}"
+                                       for k in self.objective_names)])
+
+    def plot(self, ax: Any = None, which: str = "design") -> Any:
+        """Paper Fig 17 (``which="design"``), 18 (``"mass"``, into ``ax`` when given) or 19
+        (``"objectives"``); writes nothing."""
         from ..plots.design import goal_attainment_history
-        return goal_attainment_history(self, **kw)
+        return goal_attainment_history(self, which, ax=ax)
 
 
 def _fd_objectives(problem: DesignProblem, u: np.ndarray, h: float

@@ -73,6 +73,19 @@ class ParetoResult:
             out.append(row)
         return out
 
+    def summary(self) -> str:
+        """Status, front size, the preferred design and the last hypervolume."""
+        i = self.preferred
+        hv = self.history[-1] if self.history else {}
+        return "\n".join([
+            f"NSGA-II: {'converged' if self.success else 'FAILED'} ({self.message})",
+            f"front: {self.F.shape[0]} designs" + (f", hypervolume {hv['hv']:.4g} after "
+                                                   f"{hv['n_eval']} evaluations" if hv else ""),
+            f"preferred ({self.pick}): " + ", ".join(
+                f"{k} = {float(v[i]):.4g}" for k, v in self.designs.items()),
+            "objectives: " + ", ".join(f"{k} = {float(self.F[i, j]):.4g}"
+                                       for j, k in enumerate(self.objective_names))])
+
     def to_csv_text(self) -> str:
         """``pareto.csv`` text: one row per non-dominated design, full precision."""
         rows = self.rows()
@@ -81,7 +94,9 @@ class ParetoResult:
         lines += [",".join(repr(r[c]) for c in cols) for r in rows]
         return "\n".join(lines) + "\n"
 
-    def plot(self, **kw: Any) -> Any:
+    def plot(self, ax: Any = None, **kw: Any) -> Any:
+        """The front's 2-D projections (several panels; ``ax`` not used; ``kw``: the
+        goal-attainment and prototype points); writes nothing."""
         from ..plots.design import pareto_projections
         return pareto_projections(self, **kw)
 

@@ -211,8 +211,9 @@ class FrictionBounds:
         return {"friction_sets": sets, "friction_envelope": env,
                 "velocity_range": self.velocity_range_json()}
 
-    def plot(self, **kw: Any) -> Any:
-        """Envelope, sets and paper bounds against velocity (:mod:`ehsa_opt.plots.identify`)."""
+    def plot(self, ax: Any = None, **kw: Any) -> Any:
+        """Envelope, sets and paper bounds against velocity (two panels, ``ax`` not used;
+        :mod:`ehsa_opt.plots.identify`); writes nothing."""
         from ..plots import identify as P
         return P.friction_bounds(self, **kw)
 

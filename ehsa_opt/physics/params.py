@@ -1,6 +1,6 @@
 """Parameter sets as frozen dataclasses with units in their names.
 
-Every field name carries its unit (SPEC §7), every value is validated when the
+Every field name carries its unit, every value is validated when the
 object is built, and every error says what to change.  The TOML loaders accept
 exactly these names; an unknown key is refused with the nearest valid name.
 
@@ -11,9 +11,9 @@ HarvesterParams
     mechanical quantities of paper Eqs 1–3.
 FrictionParams
     The eight Simscape friction parameters of the nut–screw pair and the
-    generator bearings (SPEC §2).
+    generator bearings.
 VehicleParams
-    Quarter-car masses and stiffnesses, with the presets of SPEC §4.
+    Quarter-car masses and stiffnesses, with the vehicle presets (assumptions: the paper's vehicle values are not published).
 RoadParams
     An ISO 8608 road (class, speed, length, seed) or a measured profile CSV.
 """
@@ -437,7 +437,7 @@ def from_mapping(cls: type, mapping: Mapping[str, Any], where: str) -> Any:
     cls : type
         One of the parameter dataclasses.
     mapping : mapping
-        Keys exactly as the field names (SPEC §7).
+        Keys exactly as the field names.
     where : str
         Location used in error messages, e.g. ``"problem.toml [harvester]"``.
     """

@@ -16,13 +16,11 @@ from ..estimation.discrepancy import (
 )
 from ..utils.io import atomic_write_json, atomic_write_text
 from .base import Context, StepOutput
+from .paper_reference import EMPS_PUBLISHED, EMPS_REFERENCE
 
 __all__ = ["write_report", "write_partial_report", "run_with_budget", "report_markdown", "step_discrepancy",
            "truth_error"]
 
-#: Published EMPS figures (Janot et al. 2019).
-_EMPS_PUBLISHED = {"before": 4.08, "after": 3.11, "f_v_pos": 166.7, "f_v_neg": 240.4,
-                   "F_C_pos": 20.14, "F_C_neg": 20.63}
 
 
 def _fmt(v: Any, spec: str = ".4g") -> str:
@@ -200,10 +198,10 @@ def _validation_markdown(res: DiscrepancyResult) -> list[str]:
                  "Newey–West intervals): "
                  f"F_v+ {dd['viscous_pos']:.1f}{iv('viscous_pos')}, "
                  f"F_v− {dd['viscous_neg']:.1f}{iv('viscous_neg')} N s/m "
-                 f"(published {_EMPS_PUBLISHED['f_v_pos']} / {_EMPS_PUBLISHED['f_v_neg']}); "
+                 f"(published {EMPS_PUBLISHED['f_v_pos']} / {EMPS_PUBLISHED['f_v_neg']}); "
                  f"F_C+ {dd['coulomb_pos']:.2f}{iv('coulomb_pos')}, "
                  f"F_C− {dd['coulomb_neg']:.2f}{iv('coulomb_neg')} N "
-                 f"(published {_EMPS_PUBLISHED['F_C_pos']} / {_EMPS_PUBLISHED['F_C_neg']}).")
+                 f"(published {EMPS_PUBLISHED['F_C_pos']} / {EMPS_PUBLISHED['F_C_neg']}).")
     L.append("")
     return L
 
@@ -360,7 +358,6 @@ def step_discrepancy_emps(ctx: Context) -> StepOutput:
 
 def _run_sets(ctx: Context, runs: list[tuple[str, DiscrepancySettings]]) -> StepOutput:
     from ..datasets.embedded import embedded_data_dir
-    from ..datasets.emps import EMPS_REFERENCE
 
     md, figs, results = [], [], {}
     quick = ctx.quick

@@ -159,7 +159,7 @@ def _fast_path_region(metrics: Mapping[str, np.ndarray],
 def _fast_path_indicator(metrics: Mapping[str, np.ndarray],
                          ctx: Mapping[str, Any]) -> list[str | None]:
     """The fast path's own indicator: the sticking correction c_gauss/c_f − 1 of
-    :func:`~ehsa_opt.vehicle.equivalent.friction_metrics` beyond
+    :func:`~ehsa_opt.vehicle.fast_path.friction_metrics` beyond
     :data:`FAST_PATH_MAX_CORRECTION` (the strut sticks for long stretches, the
     Gaussian closure is no longer accurate)."""
     n = _n(metrics)
