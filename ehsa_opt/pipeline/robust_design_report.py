@@ -5,7 +5,7 @@
 * the frictionless and the friction-aware goal-attainment optima re-simulated in
   the time domain with each friction set: the price of ignoring friction;
 * the fast path's (stochastic equivalent linearisation) error table against the
-  time domain on a small validation set (the full set: ``benchmarks/friction_fast_path.py``);
+  time domain on a small validation set (the full set: ``validation/friction_fast_path.py``);
 * the road-class convention (ISO 8608 class mean or upper limit) closer to the
   paper's Table 4 and Fig 19;
 * optimum lead and load against friction level and speed.
@@ -255,7 +255,7 @@ def step_robust_design(ctx: Context) -> StepOutput:
         + ", ".join(f"{c.iso_class} {c.speed_km_per_h:g} km/h ({c.length:.0f} m)"
                     for c in cases)
         + f"; {rate:.0f} pairs; time domain {t_td:.1f} s, fast path {t_fp:.3f} s; the full "
-        f"validation set is `benchmarks/friction_fast_path.py`):\n\n"
+        f"validation set is `validation/friction_fast_path.py`):\n\n"
         + "\n".join(err_lines) + "\n\n"
         "**Road-class convention** (fast path; paper optimum at 100 km/h with no/min/max "
         "friction — our friction sets, not the paper's — and Fig 19's power):\n\n"

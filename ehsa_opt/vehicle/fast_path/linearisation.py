@@ -33,7 +33,7 @@ evaluated) and evaluates σ_lin exactly at its c_f, until |ln σ_lin(c_f(σ)) �
 rtol — typically 2 exact evaluations.  The Coulomb expectation is a univariate
 function of u_c/σ, tabulated once (cubic spline, relative error < 1e-10).  4000
 designs: about 0.1 s with the averaging correction (the time-domain path needs
-20–40 ms per design; ``benchmarks/friction_fast_path.py``).
+20–40 ms per design; ``validation/friction_fast_path.py``).
 
 ``method="quadrature"`` keeps the frequency grid of
 :func:`ehsa_opt.vehicle.frequency_path.linear_metrics`: a vectorised Illinois (regula
@@ -60,7 +60,7 @@ Gaussian closure (:mod:`ehsa_opt.vehicle.fast_path.residual_force`; ``residual=T
 
 Validity: the linearisation assumes a Gaussian v; where Coulomb friction makes
 the strut stick for long stretches (slow, smooth roads, high F_C) the true v is
-far from Gaussian and errors grow — ``benchmarks/friction_fast_path.py``
+far from Gaussian and errors grow — ``validation/friction_fast_path.py``
 measures them against :func:`ehsa_opt.vehicle.simulate.simulate_quarter_car`.
 """
 

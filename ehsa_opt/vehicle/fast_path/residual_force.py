@@ -56,7 +56,7 @@ Checked: at class B, 30 km/h, friction × 2 (prototype, 2000 m) the closure adds
 E[F v] 7.90 W), and the total dissipation stays the linear system's (the
 dissipation bound (``vehicle.road``): the road's input power does not depend on an internal
 force).  What it does not capture: the non-Gaussian part (long stick phases),
-``benchmarks/friction_fast_path.py`` measures the rest.  Cost: about 40 % of the fast
+``validation/friction_fast_path.py`` measures the rest.  Cost: about 40 % of the fast
 path's (4000 designs: ~0.025 s), in blocks of 512 designs that stay in cache.
 """
 

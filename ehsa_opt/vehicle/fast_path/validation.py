@@ -5,7 +5,7 @@ seed) runs every design–friction pair in one batched time-domain call
 (:func:`~ehsa_opt.vehicle.simulate.simulate_quarter_car`, the reference) and in one
 vectorised fast-path call (:func:`~ehsa_opt.vehicle.fast_path.friction_metrics`);
 the relative errors of comfort, road holding, power and efficiency are tabulated.
-Used by ``benchmarks/friction_fast_path.py`` and the robust-design report step.
+Used by ``validation/friction_fast_path.py`` and the robust-design report step.
 """
 
 from __future__ import annotations
