@@ -210,7 +210,7 @@ def write_report(res: DiscrepancyResult, out_dir: str | Path) -> tuple[Path, Pat
     """Write ``discrepancy.json``, ``report.md`` and ``figures/`` into ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    res.plot(out / "figures")
+    res.write(out / "figures")
     floor = _floor(res)
     js = out / "discrepancy.json"
     doc = json.loads(json.dumps({**res.as_dict(), "error_true_parameters": floor},

@@ -1,7 +1,8 @@
 """Results and settings of the model-discrepancy workflow: :class:`DiscrepancySettings`
 (validated at construction), :class:`CandidateResult` (one candidate's re-identification
 and its evidence) and :class:`DiscrepancyResult` (what :func:`~.workflow.run_discrepancy`
-returns; ``.plot()`` delegates to :mod:`ehsa_opt.plots.discrepancy`)."""
+returns; ``.plot()`` returns the figures and ``.write()`` writes them, both delegating to
+:mod:`ehsa_opt.plots.discrepancy`)."""
 
 from __future__ import annotations
 
@@ -249,8 +250,16 @@ class DiscrepancyResult:
                 "candidates": [c.as_dict() for c in self.candidates],
                 "seconds": self.seconds}
 
-    def plot(self, out_dir: str | Path) -> list[Path]:
-        """Write the report's figures into ``out_dir`` (delegates to plots.discrepancy)."""
+    def plot(self, ax=None) -> dict:
+        """The report's figures keyed by file name (residual maps, zoom, per-test errors,
+        ranking), writing nothing; multi-panel figures, so ``ax`` is accepted for the
+        common protocol and not used. Delegates to :mod:`ehsa_opt.plots.discrepancy`."""
+        from ...plots import discrepancy as pd
+        return pd.figures(self)
+
+    def write(self, out_dir: str | Path) -> list[Path]:
+        """Write the report's figures into ``out_dir`` as PNG files (atomically); returns
+        their paths."""
         from ...plots import discrepancy as pd
         return pd.all_figures(self, Path(out_dir))
 
