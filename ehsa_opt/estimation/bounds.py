@@ -13,11 +13,15 @@ fastest test the grid goes on to 3 m/s (:data:`V_MAX_M_PER_S`), the largest stro
 velocity the vehicle studies meet, where nothing was measured.
 
 The **band of the best law** (:mod:`ehsa_opt.estimation.rod_law`): the rod friction of
-the best set with the 95 % half-width of its sandwich covariance on every test's friction
-samples — the larger of Newey–West (autocorrelated residuals: the effective sample size,
-not the number of samples) and cluster-robust (tests as clusters: an error repeated in
-every cycle of a test).  It widens beyond the data as the uncertainty of the law's
-high-velocity part (viscous coefficient, Coulomb level) does.
+the best set ± the 95 % half-width of the sandwich covariance of the least-squares rod law
+on every test's friction samples (refitted from the best set: a sandwich is the variance
+of the estimator at its own root, where the scores sum to zero; evaluated at another
+point its "meat" holds the squared misfit of that point instead) — the larger of
+Newey–West (autocorrelated residuals: the effective sample size, not the number of
+samples) and cluster-robust (tests as clusters: an error repeated in every cycle of a
+test) — plus the distance between the best set and that least-squares law.  It widens
+beyond the data as the uncertainty of the law's high-velocity part (viscous coefficient,
+Coulomb level) does.
 
 Friction sets (admissible :class:`~ehsa_opt.physics.params.FrictionParams`):
 
@@ -518,9 +522,9 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
     # the best law's band over the whole grid: every successful test's samples
     if samples_all is None:
         samples_all = friction_samples(data, ref_params, tests=[t for t, _ in good])
-    law = rod_law_fit(samples_all, best.as_dict(), lead, has_generator=gen)
+    law = rod_law_fit(samples_all, best.as_dict(), lead, has_generator=gen, refit=True)
     rod_best = _rod(v, best, lead)
-    stat = law.half_width_N(v, level)
+    stat = law.half_width_N(v, level) + np.abs(rod_best - law.rod_N(v))
     # margins of the sets below / above the best set: inside the data the envelope of the
     # tests and the best law's band, whichever is wider; beyond it the band, plus the
     # envelope's excess over the band at the data's edge carried in proportion to the

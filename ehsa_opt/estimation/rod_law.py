@@ -56,11 +56,13 @@ _SCALE = {"nut_breakaway_N": 10.0, "nut_coulomb_N": 10.0,
 
 @dataclass
 class FrictionSamples:
-    """Per test: stroke velocity (m/s) and friction force at the rod (N), end-trimmed."""
+    """Per test: stroke velocity (m/s) and friction force at the rod (N), end-trimmed, and
+    (optional) the stroke acceleration (m/s²) on the same samples."""
 
     files: list[str]
     velocity_m_per_s: list[np.ndarray]
     friction_N: list[np.ndarray]
+    acceleration_m_per_s2: list[np.ndarray] | None = None
 
     def __len__(self) -> int:
         return len(self.files)
@@ -68,6 +70,13 @@ class FrictionSamples:
     def peak_velocity_m_per_s(self) -> np.ndarray:
         """99th percentile of |v| of every test."""
         return np.array([float(np.percentile(np.abs(v), 99.0)) for v in self.velocity_m_per_s])
+
+    def peak_acceleration_m_per_s2(self) -> np.ndarray:
+        """99th percentile of |a| of every test (NaN without accelerations)."""
+        if self.acceleration_m_per_s2 is None:
+            return np.full(len(self.files), np.nan)
+        return np.array([float(np.percentile(np.abs(a), 99.0))
+                         for a in self.acceleration_m_per_s2])
 
 
 def friction_samples(data: Any, parameters: Mapping[str, float] | None = None,
@@ -94,15 +103,16 @@ def friction_samples(data: Any, parameters: Mapping[str, float] | None = None,
              if k not in FRICTION_NAMES and k != "load_ohm" and v is not None}
     preds = simulate_tests(tests, data.harvester, other, has_generator=data.has_generator,
                            options=opt)
-    vs, ys = [], []
+    vs, ys, acc = [], [], []
     for test, pr in zip(tests, preds):
         n = test.n_samples
         k = int(round(opt.trim_fraction * n))
         keep = slice(k, n - k)
-        v = test_motion(test, opt).evaluate(test.time_s)[1]
+        _, v, a = test_motion(test, opt).evaluate(test.time_s)[:3]
         vs.append(np.asarray(v[keep], dtype=float))
+        acc.append(np.asarray(a[keep], dtype=float))
         ys.append(np.asarray(test.force_N[keep] - pr.force_N[keep], dtype=float))
-    return FrictionSamples([t.file for t in tests], vs, ys)
+    return FrictionSamples([t.file for t in tests], vs, ys, acc)
 
 
 def rod_gradient(v: np.ndarray, params: Mapping[str, float], names: Sequence[str],
@@ -231,6 +241,13 @@ class RodLawFit:
     residual_rms_N : float
     velocity_range_m_per_s : tuple
         Smallest and largest per-test 99th-percentile |v| of the samples.
+    covariance_cluster : ndarray or None
+        Cluster-robust covariance (tests as clusters; None with fewer than four tests).
+    n_tests : int
+    test_residual_rms_N, test_peak_acceleration_m_per_s2 : list of float
+        Per test: rms of its residuals and the 99th percentile of its |stroke
+        acceleration| (NaN when unknown) — how the model error grows with the test's
+        severity (a hidden backlash or compliance shows up at high accelerations).
     """
 
     parameters: dict[str, float]
@@ -245,6 +262,8 @@ class RodLawFit:
     velocity_range_m_per_s: tuple[float, float] = (math.nan, math.nan)
     covariance_cluster: np.ndarray | None = None
     n_tests: int = 1
+    test_residual_rms_N: list[float] = field(default_factory=list)
+    test_peak_acceleration_m_per_s2: list[float] = field(default_factory=list)
 
     def rod_N(self, v_m_per_s: Any) -> np.ndarray:
         """F_rod of the law at ``v_m_per_s``."""
@@ -291,6 +310,10 @@ class RodLawFit:
                 "varied": self.varied, "parameters": dict(self.parameters),
                 "lead_m_per_rad": self.lead_m_per_rad,
                 "velocity_range_m_per_s": list(self.velocity_range_m_per_s),
+                "test_residual_rms_N": [float(x) for x in self.test_residual_rms_N],
+                "test_peak_acceleration_m_per_s2": [
+                    None if not math.isfinite(x) else float(x)
+                    for x in self.test_peak_acceleration_m_per_s2],
                 "covariance": np.asarray(self.covariance).tolist(),
                 "covariance_iid": np.asarray(self.covariance_iid).tolist(),
                 "covariance_cluster": (None if self.covariance_cluster is None else
@@ -307,7 +330,10 @@ class RodLawFit:
                    float(d.get("residual_rms_N", math.nan)),
                    tuple(d.get("velocity_range_m_per_s", (math.nan, math.nan))),
                    None if cl is None else np.asarray(cl, dtype=float),
-                   int(d.get("n_tests", 1)))
+                   int(d.get("n_tests", 1)),
+                   [float(x) for x in d.get("test_residual_rms_N", [])],
+                   [math.nan if x is None else float(x)
+                    for x in d.get("test_peak_acceleration_m_per_s2", [])])
 
 
 def _varied(params: Mapping[str, float], has_generator: bool) -> list[str]:
@@ -373,4 +399,6 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
     peaks = samples.peak_velocity_m_per_s()
     return RodLawFit(p0, names, cov, cov_iid, lead, int(ecat.size), float(sum(neff)), Ls,
                      float(np.sqrt(np.mean(ecat ** 2))),
-                     (float(peaks.min()), float(peaks.max())), cov_cl, len(Js))
+                     (float(peaks.min()), float(peaks.max())), cov_cl, len(Js),
+                     [float(np.sqrt(np.mean(e ** 2))) for e in es],
+                     [float(x) for x in samples.peak_acceleration_m_per_s2()])
