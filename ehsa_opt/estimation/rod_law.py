@@ -155,16 +155,39 @@ def _pinv_scaled(B: np.ndarray, rcond: float) -> tuple[np.ndarray, int]:
 
 
 def cluster_covariance(J_blocks: Sequence[np.ndarray], e_blocks: Sequence[np.ndarray],
-                       rcond: float = 1e-6) -> np.ndarray:
+                       rcond: float = 1e-6, leverage: bool = True,
+                       max_leverage: float = 0.99) -> np.ndarray:
     """Cluster-robust sandwich with every block (test) one cluster: B⁺ M B⁺ with
-    M = G/(G−1) Σ_g (J_gᵀ e_g)(J_gᵀ e_g)ᵀ — valid for any correlation within a test,
-    including an error that repeats every cycle (a model error), which no bandwidth
-    shorter than the test captures."""
+    M = Σ_g J_gᵀ ẽ_g ẽ_gᵀ J_g — valid for any correlation within a test, including an
+    error that repeats every cycle (a model error), which no bandwidth shorter than the
+    test captures.
+
+    ``leverage`` (default): ẽ_g = (I − H_gg)^(−1/2) e_g with H_gg = J_g B⁺ J_gᵀ, the
+    bias-reduced (CR2, Bell and McCaffrey 2002) form.  The plain form (ẽ = e, scaled by
+    G/(G−1)) is biased low when a few tests own a direction of the parameters — the one
+    fast test that alone determines the viscous slope: the fit absorbs that test's error,
+    its residuals come out small, and the band beyond the slow tests is too narrow.
+    H_gg has rank ≤ p, so the correction is computed in p dimensions (thin SVD of J_g);
+    its eigenvalues are capped at ``max_leverage`` (a test that alone determines a
+    direction cannot show its own error at all: the cap keeps the band finite and wide).
+    """
     B = sum(J.T @ J for J in J_blocks)
-    M = sum(np.outer(J.T @ e, J.T @ e) for J, e in zip(J_blocks, e_blocks))
     G = len(J_blocks)
     Binv, _ = _pinv_scaled(B, rcond)
-    cov = Binv @ (M * G / max(G - 1, 1)) @ Binv
+    M = np.zeros_like(B)
+    for J, e in zip(J_blocks, e_blocks):
+        e = np.asarray(e, dtype=float)
+        if leverage and J.size:
+            U, S, Vt = np.linalg.svd(J, full_matrices=False)
+            K = (S[:, None] * (Vt @ Binv @ Vt.T)) * S[None, :]
+            lam, Q = np.linalg.eigh(0.5 * (K + K.T))
+            lam = np.clip(lam, 0.0, max_leverage)
+            UQ = U @ Q
+            e = e + UQ @ ((1.0 / np.sqrt(1.0 - lam) - 1.0) * (UQ.T @ e))
+        sg = J.T @ e
+        M += np.outer(sg, sg)
+    scale = 1.0 if leverage else G / max(G - 1, 1)
+    cov = Binv @ (M * scale) @ Binv
     return 0.5 * (cov + cov.T)
 
 
