@@ -421,7 +421,8 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
 
 def plan_from_files(ident_path: str | Path, vehicle_path: str | Path, rig_path: str | Path,
                     *, n_tests: int = 3, criterion: str = "A",
-                    kinds: Sequence[str] = _KINDS) -> tuple[TestPlan, dict]:
+                    kinds: Sequence[str] = _KINDS, weight: str = "energy"
+                    ) -> tuple[TestPlan, dict]:
     """:func:`plan_tests` from an ``identification.json``, a quarter-car problem file and a
     rig file.  Returns the plan and the bench's ``[harvester]`` table (for the skeleton)."""
     from ..datasets.friction_source import load_friction_sets
@@ -443,5 +444,5 @@ def plan_from_files(ident_path: str | Path, vehicle_path: str | Path, rig_path: 
     harvester = HarvesterParams(**harv_tab) if harv_tab else HarvesterParams()
     sigma = road_velocity_sigma(prob, sets["best"])
     return plan_tests(law, rig, harvester, sigma, n_tests=n_tests, criterion=criterion,
-                      kinds=kinds), harv_tab
+                      kinds=kinds, weight=weight), harv_tab
 
