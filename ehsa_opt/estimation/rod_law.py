@@ -271,6 +271,10 @@ class RodLawFit:
         Per test: rms of its residuals and the 99th percentile of its |stroke
         acceleration| (NaN when unknown) — how the model error grows with the test's
         severity (a hidden backlash or compliance shows up at high accelerations).
+    alternatives : list of dict
+        Other least-squares laws (from the refit's other starting points) that fit the
+        samples equally well (likelihood ratio on the effective sample size, 95 %); the
+        band holds their distance to the law (they extrapolate differently).
     """
 
     parameters: dict[str, float]
@@ -287,6 +291,7 @@ class RodLawFit:
     n_tests: int = 1
     test_residual_rms_N: list[float] = field(default_factory=list)
     test_peak_acceleration_m_per_s2: list[float] = field(default_factory=list)
+    alternatives: list[dict[str, float]] = field(default_factory=list)
 
     def rod_N(self, v_m_per_s: Any) -> np.ndarray:
         """F_rod of the law at ``v_m_per_s``."""
@@ -309,12 +314,19 @@ class RodLawFit:
         """Half-width of the ``level`` band of F_rod(v): the larger of the Newey–West
         one (normal quantile) and the cluster-robust one (Student t, tests − 1 degrees
         of freedom), so neither the autocorrelation within a test nor an error shared
-        by the cycles of a test makes it too narrow."""
+        by the cycles of a test makes it too narrow; plus the largest distance of an
+        equally good alternative law (:attr:`alternatives`)."""
         from scipy import stats
         hw = stats.norm.ppf(0.5 + level / 2) * self.std_N(v_m_per_s, "hac")
         if self.covariance_cluster is not None:
             tq = stats.t.ppf(0.5 + level / 2, max(self.n_tests - 1, 1))
             hw = np.fmax(hw, tq * self.std_N(v_m_per_s, "cluster"))
+        if self.alternatives:
+            v = np.atleast_1d(np.asarray(v_m_per_s, dtype=float))
+            f = self.rod_N(v)
+            hw = hw + np.max([np.abs(np.asarray(rod_friction_N(
+                v, [a[n] for n in FRICTION_NAMES], self.lead_m_per_rad)) - f)
+                for a in self.alternatives], axis=0)
         return hw
 
     def band_N(self, v_m_per_s: Any, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
@@ -337,6 +349,7 @@ class RodLawFit:
                 "test_peak_acceleration_m_per_s2": [
                     None if not math.isfinite(x) else float(x)
                     for x in self.test_peak_acceleration_m_per_s2],
+                "alternatives": [dict(a) for a in self.alternatives],
                 "covariance": np.asarray(self.covariance).tolist(),
                 "covariance_iid": np.asarray(self.covariance_iid).tolist(),
                 "covariance_cluster": (None if self.covariance_cluster is None else
@@ -356,7 +369,8 @@ class RodLawFit:
                    int(d.get("n_tests", 1)),
                    [float(x) for x in d.get("test_residual_rms_N", [])],
                    [math.nan if x is None else float(x)
-                    for x in d.get("test_peak_acceleration_m_per_s2", [])])
+                    for x in d.get("test_peak_acceleration_m_per_s2", [])],
+                   [{k: float(v) for k, v in a.items()} for a in d.get("alternatives", [])])
 
 
 def _varied(params: Mapping[str, float], has_generator: bool) -> list[str]:
@@ -408,10 +422,13 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
         def resid(q: np.ndarray) -> np.ndarray:
             return np.asarray(rod_friction_N(vcat, to_law(unpack(q)), lead)) - ycat
         lo = np.array([(1e-4 if "velocity" in n else 0.0) / _SCALE[n] for n in names])
-        q0 = np.clip(np.array([p0[n] / _SCALE[n] for n in names]), lo, np.inf)
-        res = optimize.least_squares(resid, q0, bounds=(lo, np.inf), x_scale="jac")
-        law = to_law(unpack(res.x))
-        p0 = dict(zip(FRICTION_NAMES, law))
+        fits = []
+        for start in _refit_starts(p0, lead, names):
+            q0 = np.clip(np.array([start[n] / _SCALE[n] for n in names]), lo, np.inf)
+            res = optimize.least_squares(resid, q0, bounds=(lo, np.inf), x_scale="jac")
+            fits.append((2.0 * float(res.cost), to_law(unpack(res.x))))
+        fits.sort(key=lambda f: f[0])
+        p0 = dict(zip(FRICTION_NAMES, fits[0][1]))
     Js, es = [], []
     for v, y in zip(vs, ys):
         Js.append(rod_gradient(v, p0, names, lead))
@@ -419,9 +436,41 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
     cov, cov_iid, Ls, neff = hac_covariance(Js, es, rcond=rcond)
     cov_cl = cluster_covariance(Js, es, rcond=rcond) if len(Js) >= _MIN_CLUSTERS else None
     ecat = np.concatenate(es)
+    alternatives = []
+    if refit and len(fits) > 1:
+        # equally good laws: a likelihood-ratio threshold on the effective sample size
+        # (chi-square 1 dof, 95 %): ΔSSE <= 3.84 σ² n/n_eff
+        sse0 = fits[0][0]
+        tau = ecat.size / max(float(sum(neff)), 1.0)
+        tol = 3.84 * sse0 / max(ecat.size, 1) * tau
+        alternatives = [dict(zip(FRICTION_NAMES, law)) for sse, law in fits[1:]
+                        if sse - sse0 <= tol]
     peaks = samples.peak_velocity_m_per_s()
     return RodLawFit(p0, names, cov, cov_iid, lead, int(ecat.size), float(sum(neff)), Ls,
                      float(np.sqrt(np.mean(ecat ** 2))),
                      (float(peaks.min()), float(peaks.max())), cov_cl, len(Js),
                      [float(np.sqrt(np.mean(e ** 2))) for e in es],
-                     [float(x) for x in samples.peak_acceleration_m_per_s2()])
+                     [float(x) for x in samples.peak_acceleration_m_per_s2()], alternatives)
+
+
+def _refit_starts(p: Mapping[str, float], lead: float, names: Sequence[str]
+                  ) -> list[dict[str, float]]:
+    """Starting points of the least-squares refit: the given law and the same rod friction
+    with its non-identifiable parts moved (the viscous slope all at the nut or all at the
+    bearing, the bearing's Coulomb level at the nut) and with both Stribeck velocities
+    five times larger and smaller — the rod friction's least squares has separate local
+    minima along these directions, which extrapolate differently."""
+    out = [dict(p)]
+    if "bearing_viscous_Nms_per_rad" in names:
+        r2 = lead * lead
+        nut = dict(p, nut_viscous_Ns_per_m=p["nut_viscous_Ns_per_m"]
+                   + p["bearing_viscous_Nms_per_rad"] / r2, bearing_viscous_Nms_per_rad=0.0)
+        brg = dict(p, nut_viscous_Ns_per_m=0.0, bearing_viscous_Nms_per_rad=(
+            p["bearing_viscous_Nms_per_rad"] + p["nut_viscous_Ns_per_m"] * r2))
+        col = dict(p, nut_coulomb_N=p["nut_coulomb_N"] + p["bearing_coulomb_Nm"] / lead,
+                   nut_breakaway_N=p["nut_breakaway_N"] + p["bearing_breakaway_Nm"] / lead,
+                   bearing_coulomb_Nm=0.0, bearing_breakaway_Nm=0.0)
+        out += [nut, brg, col]
+    for k in (5.0, 0.2):
+        out.append({n: (v * k if "breakaway_velocity" in n else v) for n, v in p.items()})
+    return out
