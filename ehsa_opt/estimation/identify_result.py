@@ -73,7 +73,8 @@ class FitResult:
         Best start per iteration: ``objective``, ``rms_F``, ``rms_V`` (lists),
         ``parameters`` (name → list).
     nit : int
-    varied : list[str]
+    free : list[str]
+        The fitted names (as :attr:`FitOutcome.free <ehsa_opt.estimation.discrepancy.fit.FitOutcome>`).
     identifiability : dict or None
         See :func:`~ehsa_opt.estimation.identifiability.fisher_identifiability`.
     path : str
@@ -92,7 +93,7 @@ class FitResult:
     starts: list[dict]
     history: dict
     nit: int
-    varied: list[str] = field(default_factory=list)
+    free: list[str] = field(default_factory=list)
     identifiability: dict | None = None
     objective: float = math.nan
     seconds: float = 0.0
@@ -225,11 +226,11 @@ def summarise_identifiability(data: BenchData, fits: Sequence[FitResult]) -> dic
             weak_counts[s] = weak_counts.get(s, 0) + 1
     r = data.harvester.lead_m_per_rad
     spread = {}
-    for n in good[0][1].varied:
+    for n in good[0][1].free:
         vals = np.array([f.parameters[n] for _, f in good])
         spread[n] = float(np.std(vals) / max(abs(np.mean(vals)), 1e-300))
     rod_spread = {}
-    if "nut_coulomb_N" in good[0][1].varied:
+    if "nut_coulomb_N" in good[0][1].free:
         for v in (0.02, 0.05, 0.1):
             vals = np.array([float(rod_friction_N(v, [f.parameters[n] for n in FRICTION_NAMES],
                                                   r)) for _, f in good])

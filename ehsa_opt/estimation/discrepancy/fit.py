@@ -16,8 +16,8 @@ Euler tracks its slow manifold with the right first-order lag).  The objective i
 the Gaussian log-likelihood of force (and voltage) residuals, each channel
 scaled by its noise level estimated from the measured signal itself
 (:func:`noise_std`).  Parameters are scaled by typical magnitudes; bounds come
-from :data:`~ehsa_opt.physics.params.FRICTION_RANGES` (widened) and each component's
-``ParamSpec``; IPOPT's return status is checked and reported.
+from :data:`BASE_SPECS` (the discrepancy's override of the declared base parameters) and
+each component's ``ParamSpec``; IPOPT's return status is checked and reported.
 
 Forward predictions for held-out tests are true simulations (CVODES, one
 unrecorded warm-up cycle for sine tests), never collocation.
@@ -37,16 +37,18 @@ from ...physics import BenchModel
 from ...physics.bench_sim import simulate_bench
 from ...physics.components import Component, ParamSpec
 from ...physics.motion import FilteredMotion, SineMotion
+from ...physics.base_parameters import Parameter, override
 from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .. import core
 from ..collocation import given_block, theta_block
 from ..given_fit import GivenFit, fit_given
 from ..identify_options import IdentifyOptions, estimate_motion
 from ..identify_result import force_relative_error_percent
+from ..starts import Starts, draw_starts
 
 __all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
            "fit_group", "predict", "FilteredMotion", "force_relative_error_percent",
-           "linear_baseline", "BASE_SPECS"]
+           "linear_baseline", "param_scale", "BASE_SPECS", "DISCREPANCY_PARAMETERS"]
 
 NUT_NAMES = FRICTION_NAMES[:4]
 
@@ -55,26 +57,26 @@ NO_GENERATOR_FIXED: dict[str, float] = {
     "load_ohm": 1.0, "bearing_breakaway_Nm": 0.0, "bearing_coulomb_Nm": 0.0,
     "bearing_breakaway_velocity_rad_per_s": 1.0, "bearing_viscous_Nms_per_rad": 0.0}
 
-#: Bounds and typical scales of the base parameters (bounds wider than the SPEC §2
-#: distributor ranges, which are for drawing starts, not limits).
-BASE_SPECS: dict[str, ParamSpec] = {
-    "nut_breakaway_N": ParamSpec("nut_breakaway_N", "N", 50.0, 0.0, 2000.0),
-    "nut_coulomb_N": ParamSpec("nut_coulomb_N", "N", 30.0, 0.0, 2000.0),
-    "nut_breakaway_velocity_m_per_s": ParamSpec("nut_breakaway_velocity_m_per_s", "m/s", 0.01,
-                                                2e-4, 0.5),
-    "nut_viscous_Ns_per_m": ParamSpec("nut_viscous_Ns_per_m", "N s/m", 150.0, 0.0, 1e4),
-    "bearing_breakaway_Nm": ParamSpec("bearing_breakaway_Nm", "N m", 0.02, 0.0, 1.0),
-    "bearing_coulomb_Nm": ParamSpec("bearing_coulomb_Nm", "N m", 0.015, 0.0, 1.0),
-    "bearing_breakaway_velocity_rad_per_s": ParamSpec("bearing_breakaway_velocity_rad_per_s",
-                                                      "rad/s", 1.0, 0.01, 50.0),
-    "bearing_viscous_Nms_per_rad": ParamSpec("bearing_viscous_Nms_per_rad", "N m s/rad", 3e-5,
-                                             0.0, 1e-2),
-    "inertia_kg": ParamSpec("inertia_kg", "kg", 50.0, 0.0, 1e4, "moving mass M"),
-    "offset_N": ParamSpec("offset_N", "N", 0.0, -1e3, 1e3, "force offset"),
-}
+#: The base parameters in the discrepancy fit: a named override of
+#: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`.
+DISCREPANCY_PARAMETERS: dict[str, Parameter] = override(
+    "discrepancy",
+    "the likelihood fit also serves rigs other than the prototype (EMPS, other generators), so "
+    "its bounds are wider than the identification's distributor ends, yet finite and well "
+    "inside the physical ones so the scaled NLP stays well conditioned",
+    {"nut_breakaway_N": (0.0, 2000.0), "nut_coulomb_N": (0.0, 2000.0),
+     "nut_breakaway_velocity_m_per_s": (2e-4, 0.5), "nut_viscous_Ns_per_m": (0.0, 1e4),
+     "bearing_breakaway_Nm": (0.0, 1.0), "bearing_coulomb_Nm": (0.0, 1.0),
+     "bearing_breakaway_velocity_rad_per_s": (0.01, 50.0),
+     "bearing_viscous_Nms_per_rad": (0.0, 1e-2), "offset_N": (-1e3, 1e3)})
+#: The same as ``ParamSpec`` (default: the typical value, which also sets :func:`param_scale`).
+BASE_SPECS: dict[str, ParamSpec] = {n: ParamSpec(n, q.unit, q.typical, q.lower, q.upper, q.doc)
+                                    for n, q in DISCREPANCY_PARAMETERS.items()}
 
 
-def _scale(spec: ParamSpec) -> float:
+def param_scale(spec: ParamSpec) -> float:
+    """Typical magnitude of a parameter (its default, else a twentieth of its bound):
+    the scale the decision variables are divided by."""
     if spec.default != 0.0:
         return abs(spec.default)
     return max(abs(spec.lower), abs(spec.upper)) / 20.0 or 1.0
@@ -203,7 +205,7 @@ def linear_baseline(prepared: Sequence[PreparedTest], rig: Rig,
     """Quick least-squares friction (rigid, quasi-static current): the force is linear
     in (F_C, F_brk − F_C, f_v[, M, offset]) for a fixed breakaway velocity, tried on
     a small grid.  Used as the IPOPT initial point; bearing friction starts at zero
-    (its split from the nut friction is not identifiable on a rigid bench, SPEC §2)."""
+    (its split from the nut friction is not identifiable on a rigid bench)."""
     h = rig.harvester
     r = h.lead_m_per_rad
     best: tuple[float, dict[str, float]] | None = None
@@ -311,10 +313,11 @@ _ORDER = (("nut_breakaway_N", "nut_coulomb_N"), ("bearing_breakaway_Nm", "bearin
 _USABLE = ("Solve_Succeeded", "Solved_To_Acceptable_Level", "Maximum_Iterations_Exceeded")
 
 
-def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mapping[str, float]],
+def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
               *, free: Sequence[str] | None = None, fixed: Mapping[str, float] | None = None,
               max_iter: int = 300, regularisation: float = 1e-6,
-              max_cpu_s: float | None = None, substeps: int | None = None) -> FitOutcome:
+              max_cpu_s: float | None = None, substeps: int | None = None,
+              seed: int = 0) -> FitOutcome:
     """Fit one parameter set to all ``prepared`` tests: the likelihood objective on the
     estimation core (:mod:`ehsa_opt.estimation.core`, ``theta`` transcription).
 
@@ -322,9 +325,10 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     ----------
     prepared : list of PreparedTest
     rig : Rig
-    starts : list of dict
-        Initial parameter values (missing names: ParamSpec defaults); the best
-        converged start is kept.
+    starts : int or list of dict
+        Start points (missing names: ParamSpec defaults), or a number of points drawn
+        (seeded by ``seed``) in the declared start ranges (:mod:`ehsa_opt.estimation.starts`);
+        the best converged start is kept.
     free : list of str, optional
         Names to fit (default: all base names and all component parameters).
     fixed : dict, optional
@@ -341,6 +345,8 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
         Collocation sub-intervals per sample interval (default 1: at 1 kHz the
         collocation objective at the true backlash parameters matches the CVODES
         simulation's within 1 %).
+    seed : int
+        Seed of the drawn start points (when ``starts`` is a number).
     """
     if max_cpu_s is not None:
         import warnings
@@ -356,10 +362,11 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     fixed = dict(fixed or {})
     if not rig.has_generator:
         fixed = {**NO_GENERATOR_FIXED, **fixed}
+    starts = draw_starts(model, free, starts, seed, where="fit_group")
     space = core.ParamSpace(tuple(model.param_names), tuple(free),
                             tuple(specs[n].lower for n in free),
                             tuple(specs[n].upper for n in free),
-                            tuple(_scale(specs[n]) for n in free), (), _ORDER)
+                            tuple(param_scale(specs[n]) for n in free), (), _ORDER)
 
     def default_of(n: str) -> float:
         return float(fixed.get(n, specs[n].default))

@@ -1,0 +1,291 @@
+"""The library of candidate effects and their residual signatures.
+
+A candidate is a registered :class:`~ehsa_opt.physics.components.Component`
+(``COMPONENTS``) plus what the workflow needs to test it: *probe* parameter sets
+whose simulated output changes (Δy = y(baseline + effect at probe) − y(baseline))
+are the candidate's signature, and *starts* for its re-identification.
+
+Ranking (a score test, linearised): the baseline's normalised residual r is
+projected onto the signature columns after removing what a refit of the
+baseline friction would absorb anyway (the columns tanh(v/u_c), Stribeck(v), v
+of the force, plus a and 1 on a rig without generator).  The score is the share
+of the residual energy the signature explains, ‖P r‖²/‖r‖²; the χ² statistic
+‖P r‖² (≈ number of columns for pure noise) is reported beside it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from ....physics import COMPONENTS, make_component
+from ..fit import PreparedTest, Rig, predict
+from ..localise import best_rotor_period, stroke_window
+
+__all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for",
+           "absorbed_columns", "compatible"]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A candidate effect: its component name, signature probes and fit starts.
+
+    Attributes
+    ----------
+    name : str
+        Registered component name.
+    probes : tuple of dict
+        Parameter sets whose output change is a signature column each.
+    starts : tuple of dict
+        Candidate initial values of the effect parameters for re-identification
+        (combined with the baseline friction); they are screened by forward
+        simulation and IPOPT starts from the best (nonconvex effects such as a
+        gap need a start near the right magnitude).
+    needs_generator : bool
+        Only testable on rigs that measure the generator (voltage, rotor).
+    shares : tuple of float
+        Bearing shares of the baseline's lumped friction each start is screened at
+        (a gap decides how far the rotor coasts by the friction on the rotor side).
+    refine : tuple of dict
+        Overrides tried on the best screened start (e.g. the contact stiffness over
+        its decades).
+    full_refit : str
+        How the full refit (friction and effect) is done: ``"collocation"`` (IPOPT)
+        or ``"simulation"`` (Gauss–Newton on the forward simulation from the
+        effect-only collocation fit; see :func:`~ehsa_opt.estimation.discrepancy.candidate_fit.fit_candidate`).
+    effect_fit : str
+        How the effect-only stage is done: ``"collocation"`` (IPOPT) or
+        ``"simulation"`` (Gauss–Newton on the forward simulation from the screened
+        start).
+    log_names : tuple of str
+        Effect parameters refined in log10 on the simulation (they span decades).
+    rigid_channels : tuple of int or None
+        Output channels (0 force, 1 voltage) the effect can change on a rig without
+        a transmission effect (the rotor then turns with the imposed motion):
+        a mechanical effect on the rod or rotor side changes only the force.  The SSE
+        alternative of the decision rule is judged on these channels only — a gain
+        elsewhere is the current model's re-fit, not the effect.  None: all.
+    amplitudes : tuple of str
+        Effect parameters that are all zero when the effect is absent (its size):
+        the effect earns only when the ~95 % interval of one of them excludes zero
+        (:func:`~ehsa_opt.estimation.discrepancy.evidence.significant`).  Empty for a transmission effect, whose
+        absence is a limit (infinite stiffness), not a zero.
+    """
+
+    name: str
+    probes: tuple[dict, ...]
+    starts: tuple[dict, ...]
+    needs_generator: bool = False
+    shares: tuple[float, ...] = (0.0,)
+    refine: tuple[dict, ...] = ()
+    full_refit: str = "collocation"
+    effect_fit: str = "collocation"
+    log_names: tuple[str, ...] = ()
+    amplitudes: tuple[str, ...] = ()
+    rigid_channels: tuple[int, ...] | None = None
+    without_generator_only: bool = False
+
+    def applicable(self, rig: Rig) -> bool:
+        if self.without_generator_only and rig.has_generator:
+            return False  # a generator bench has its own elastic transmission (compliance)
+        return rig.has_generator or not self.needs_generator
+
+    def component(self, **kwargs):
+        return make_component(self.name, **kwargs)
+
+
+#: The candidate library (every name is a registered component).
+CANDIDATES: dict[str, Candidate] = {
+    "backlash": Candidate(
+        "backlash",
+        # one probe per ~half decade of the realistic gaps: the signature is far from
+        # linear in the gap, and a 0.8 mm gap projects on neither 0.05 nor 0.2 mm
+        probes=({"backlash_gap_m": 5e-5}, {"backlash_gap_m": 2e-4}, {"backlash_gap_m": 1e-3}),
+        # gaps over the realistic 0.005-2 mm and below (1.6x apart) at a mid stiffness,
+        # each at four rotor-side friction shares; then the stiffness decades 1e4-1e9
+        starts=tuple({"backlash_gap_m": float(g), "backlash_contact_stiffness_N_per_m": 5e6}
+                     for g in np.geomspace(5e-6, 2e-3, 14)),
+        needs_generator=True,
+        shares=(0.0, 0.15, 0.3, 0.45),
+        refine=tuple({"backlash_contact_stiffness_N_per_m": float(k)}
+                     for k in (1e4, 1e5, 1e6, 1e7, 1e8, 1e9)),
+        # both stages on the simulation: the effect-only collocation NLP took 225 s per
+        # solve on the default data's 6 fit tests (4 tests: 5 s) - IPOPT on a stiff
+        # contact's defects; Gauss-Newton from the screened start costs seconds
+        effect_fit="simulation", full_refit="simulation",
+        log_names=("backlash_contact_stiffness_N_per_m",)),
+    "asymmetric_friction": Candidate(
+        "asymmetric_friction",
+        probes=({"asym_coulomb_N": 5.0}, {"asym_viscous_Ns_per_m": 30.0}),
+        starts=({"asym_coulomb_N": 0.5, "asym_viscous_Ns_per_m": 1.0},
+                {"asym_coulomb_N": -0.5, "asym_viscous_Ns_per_m": -1.0}),
+        amplitudes=("asym_coulomb_N", "asym_viscous_Ns_per_m"),
+        rigid_channels=(0,)),
+    "cogging": Candidate(
+        "cogging",
+        probes=({"cogging_sin_Nm": 0.005}, {"cogging_cos_Nm": 0.005}),
+        starts=({"cogging_sin_Nm": 1e-3, "cogging_cos_Nm": 1e-3},
+                {"cogging_sin_Nm": 2e-2, "cogging_cos_Nm": -2e-2}),
+        amplitudes=("cogging_sin_Nm", "cogging_cos_Nm"),
+        rigid_channels=(0,)),
+    "compliance": Candidate(
+        "compliance",
+        # one probe per decade of the realistic mount stiffness 1e4-1e8 N/m (1e9 is
+        # rigid at these rates): like a gap, the signature is far from linear in it
+        probes=tuple({"compliance_stiffness_N_per_m": k, "compliance_damping_Ns_per_m": 1e3}
+                     for k in (1e4, 1e5, 1e6, 1e7, 1e8)),
+        starts=tuple({"compliance_stiffness_N_per_m": k, "compliance_damping_Ns_per_m": c}
+                     for k in np.geomspace(1e4, 1e9, 11) for c in (3e2, 3e3)),
+        needs_generator=True,
+        # on the simulation: on data it does not describe (e.g. a wide gap) the
+        # effect-only collocation NLP of a compliance is degenerate and ran for > 20 min
+        effect_fit="simulation", full_refit="simulation",
+        log_names=("compliance_stiffness_N_per_m",)),
+    "voltage_drop": Candidate(
+        "voltage_drop",
+        probes=({"voltage_drop_V": 0.5},),
+        starts=tuple({"voltage_drop_V": v} for v in (0.05, 0.2, 0.5, 1.0, 2.0, 3.0)),
+        needs_generator=True, amplitudes=("voltage_drop_V",)),
+    "winding_heating": Candidate(
+        "winding_heating",
+        probes=({"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 100.0},
+                {"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 0.3}),
+        starts=tuple({"winding_heating_K_per_J": h, "winding_cooling_time_s": tau}
+                     for h in (0.3, 1.0, 3.0, 10.0) for tau in (0.5, 5.0, 50.0)),
+        needs_generator=True, amplitudes=("winding_heating_K_per_J",)),
+    "position_friction": Candidate(
+        "position_friction",
+        # centre and width are not in the probes or starts: they come from the
+        # component's defaults, which components_for sets from where the force
+        # residual behaves like friction on the stroke (localise.stroke_window)
+        probes=({"position_friction_N": 10.0},),
+        starts=tuple({"position_friction_N": a} for a in (-5.0, 2.0, 8.0, 30.0)),
+        amplitudes=("position_friction_N",),
+        rigid_channels=(0,)),
+    "flexibility": Candidate(
+        "flexibility",
+        # the resonance starts at the fit residual's spectral peak (components_for);
+        # the probes and starts add the load mass and a few frequencies around it
+        probes=({"flex_load_mass_kg": 10.0, "flex_damping_ratio": 0.1},
+                {"flex_load_mass_kg": 10.0, "flex_damping_ratio": 0.5}),
+        starts=tuple({"flex_load_mass_kg": m, "flex_damping_ratio": z}
+                     for m in (2.0, 10.0, 30.0) for z in (0.05, 0.3)),
+        refine=tuple({"flex_frequency_hz": f} for f in (20.0, 50.0, 115.0, 200.0, 400.0)),
+        effect_fit="simulation", full_refit="simulation",
+        log_names=("flex_frequency_hz",),
+        amplitudes=("flex_load_mass_kg",), rigid_channels=(0,),
+        without_generator_only=True),
+    "magnetic_saturation": Candidate(
+        "magnetic_saturation",
+        probes=({"saturation_per_A2": 0.05},),
+        starts=tuple({"saturation_per_A2": b} for b in (0.003, 0.01, 0.03, 0.1, 0.3)),
+        needs_generator=True, amplitudes=("saturation_per_A2",)),
+}
+assert set(CANDIDATES) <= set(COMPONENTS)
+
+
+def candidate_names() -> list[str]:
+    """Names of the candidate library, in ranking-table order."""
+    return list(CANDIDATES)
+
+
+def absorbed_columns(pt: PreparedTest, rig: Rig, u_brk: float) -> np.ndarray:
+    """Columns (stacked channels) a baseline refit absorbs, normalised by σ."""
+    x, v, a = pt.u
+    N = v.size
+    ust, uc = math.sqrt(2) * u_brk, u_brk / 10
+    cols = [np.tanh(v / uc), np.exp(-(v / ust) ** 2) * v / ust, v]
+    if not rig.has_generator:
+        cols += [a, np.ones(N)]
+    F = np.column_stack(cols) * pt.wnorm[0][:, None]
+    ny = pt.y.shape[0]
+    return np.vstack([F] + [np.zeros_like(F)] * (ny - 1))
+
+
+def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[str, float],
+                     baseline_pred: Sequence[np.ndarray], names: Sequence[str] | None = None,
+                     components: dict | None = None) -> dict[str, dict]:
+    """Score each candidate's signature against the baseline residual.
+
+    ``rig`` may already hold effects (a later round of the workflow): the
+    candidate is added to them.  ``components`` maps a name to the component
+    instance to use (e.g. a cogging with the period found in the residual).
+
+    Returns
+    -------
+    dict name → {"score", "chi2", "columns", "applicable"}; inapplicable
+    candidates (e.g. voltage_drop on a rig without generator) get score NaN.
+    """
+    names = list(names or CANDIDATES)
+    r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel() for pt, yp in
+                        zip(prepared, baseline_pred)])
+    u_brk = float(baseline.get("nut_breakaway_velocity_m_per_s", 0.01))
+    B = np.vstack([absorbed_columns(pt, rig, u_brk) for pt in prepared])
+    Qb, _ = np.linalg.qr(B)
+    r_perp = r - Qb @ (Qb.T @ r)
+    total = float(r_perp @ r_perp)
+    out: dict[str, dict] = {}
+    for name in names:
+        cand = CANDIDATES[name]
+        comp = (components or {}).get(name) or cand.component()
+        taken = {c.name for c in rig.components}
+        clash = name in taken or (comp.transmission and any(c.transmission
+                                                            for c in rig.components))
+        if not cand.applicable(rig) or clash:
+            out[name] = {"score": math.nan, "chi2": math.nan, "columns": 0, "applicable": False}
+            continue
+        crig = rig.with_components([*rig.components, comp])
+        spec_defaults = {q.name: q.default for q in crig.model().param_specs.values()}
+        spec_defaults.update(comp.defaults())  # e.g. a stroke window set from the data
+        cols = []
+        for probe in cand.probes:
+            vals = {**spec_defaults, **baseline, **probe}
+            pred = predict(prepared, crig, vals)
+            cols.append(np.concatenate([((yp - yb) * pt.wnorm).ravel() for pt, yp, yb
+                                        in zip(prepared, pred, baseline_pred)]))
+        S = np.column_stack(cols)
+        S = S - Qb @ (Qb.T @ S)
+        Qs, Rs = np.linalg.qr(S)
+        keep = np.abs(np.diag(Rs)) > 1e-9 * max(np.abs(np.diag(Rs)).max(), 1e-300)
+        Qs = Qs[:, keep]
+        proj = float(np.sum((Qs.T @ r_perp) ** 2))
+        out[name] = {"score": proj / total if total > 0 else 0.0, "chi2": proj,
+                     "columns": int(keep.sum()), "applicable": True}
+    return out
+
+
+def components_for(names: Sequence[str], prepared: Sequence[PreparedTest],
+                    preds: Sequence[np.ndarray], lead: float) -> dict:
+    """Candidate components configured from the residual (cogging period; the stroke
+    window a position-dependent friction starts from)."""
+    out = {}
+    for n in names:
+        if n == "cogging":
+            out[n] = CANDIDATES[n].component(
+                periods_per_rev=best_rotor_period(prepared, preds, lead_m_per_rad=lead))
+        elif n == "flexibility":
+            from ..localise import residual_spectrum
+            sp = residual_spectrum(prepared, [pt.y[0] - yp[0] for pt, yp in zip(prepared, preds)],
+                                   min_hz=5.0)
+            f0 = float(np.clip(sp.get("peak_hz", 100.0), 5.0, 1000.0)) if sp else 100.0
+            out[n] = CANDIDATES[n].component(frequency_hz=f0)
+        elif n == "position_friction":
+            win = stroke_window(prepared, preds)
+            out[n] = (CANDIDATES[n].component(centre_m=win[0], width_m=win[1]) if win
+                      else CANDIDATES[n].component())
+        else:
+            out[n] = CANDIDATES[n].component()
+    return out
+
+
+def compatible(rig: Rig, component) -> bool:
+    """Whether ``component`` can join the rig's components (one transmission at most,
+    no duplicate name)."""
+    names = {c.name for c in rig.components}
+    if component.name in names:
+        return False
+    return not (component.transmission and any(c.transmission for c in rig.components))
+

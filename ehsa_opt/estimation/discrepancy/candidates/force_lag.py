@@ -1,0 +1,102 @@
+"""Catalogue member ``force_lag``: a measurement-channel delay of the force.
+
+A delay of the force channel relative to the displacement is not a component of
+the bench model (it acts on the record, not on the physics): the delay τ is found
+by a time-shift search on the baseline residual (:func:`~ehsa_opt.estimation.discrepancy.terms.shift_lag`), the
+measured force is re-aligned by it (F(t + τ), the ends cropped) and the baseline is
+refitted; the delay is named when it earns by the decision rule (:func:`~ehsa_opt.estimation.discrepancy.evidence.earns`),
+compared on the re-aligned held-out tests against the baseline on the same samples.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace as _replace
+from typing import Sequence
+
+import numpy as np
+
+from ..evidence import (
+    delta_bic,
+    earns,
+    excess_reduction,
+    force_error_percent,
+    normalised_sse,
+)
+from ..fit import PreparedTest, fit_group, predict, prepare_tests
+from ..terms import shift_lag
+
+__all__ = ["try_lag"]
+
+
+def _lag_tests(pts: Sequence[PreparedTest], tau: float, has_generator: bool
+               ) -> list[PreparedTest]:
+    """The tests with the force channel moved back by ``tau`` (F(t + τ)), the ends
+    that the shift leaves without data cropped."""
+    out = []
+    for pt in pts:
+        t = pt.test
+        keep = (t.time_s + tau >= t.time_s[0]) & (t.time_s + tau <= t.time_s[-1])
+        F = np.interp(t.time_s + tau, t.time_s, t.force_N)
+        nt = _replace(t, time_s=t.time_s[keep], displacement_m=t.displacement_m[keep],
+                      force_N=F[keep],
+                      voltage_V=t.voltage_V[keep] if t.voltage_V is not None else None)
+        out += prepare_tests([nt], has_generator, mass_kg=pt.mass_kg)
+    return out
+
+
+def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit, n_eff_held,
+             err0, settings, say):
+    """Catalogue member ``force_lag`` (a measurement-channel delay of the force): the
+    delay from a time-shift search on the baseline residual (:func:`~ehsa_opt.estimation.discrepancy.terms.shift_lag`),
+    the force re-aligned by it and the baseline refitted; kept when it earns by the
+    decision rule (compared on the re-aligned held-out tests, cropped alike)."""
+    lag = shift_lag(fit_pts, fit_pred)
+    if lag is None:
+        return None
+    tau = lag[0]
+    for it in range(2):  # re-estimate once on the re-aligned baseline
+        f2 = _lag_tests(fit_pts, tau, rig.has_generator)
+        h2 = _lag_tests(held_pts, tau, rig.has_generator) if held_pts else []
+        b2 = fit_group(f2, rig, [base.parameters], max_iter=settings.max_iter)
+        if not b2.parameters:
+            return None
+        pf = predict(f2, rig, b2.parameters)
+        if it == 1:
+            break  # f2, h2, b2 belong to the tau applied (reported below)
+        again = shift_lag(f2, pf)
+        if again is None:
+            break
+        tau += again[0]
+    ph = predict(h2, rig, b2.parameters) if h2 else []
+    # the "before" on the same (cropped) samples: the baseline on the un-shifted data
+    f0 = _lag_tests(fit_pts, 0.0, rig.has_generator)
+    h0 = [_crop_like(p, q) for p, q in zip(held_pts, h2)]
+    b0h = predict(h0, rig, base.parameters) if h0 else []
+    b0f = predict([_crop_like(p, q) for p, q in zip(fit_pts, f2)], rig, base.parameters)
+    ev, ev0, pe, pe0 = (h2, h0, ph, b0h) if h2 else (f2, f0, pf, b0f)
+    e_before, e_after = force_error_percent(ev0, pe0), force_error_percent(ev, pe)
+    d_fit = delta_bic(normalised_sse(f2, pf), normalised_sse([_crop_like(p, q) for p, q in zip(fit_pts, f2)], b0f), 1,
+                  n_eff_fit)
+    d_held = delta_bic(normalised_sse(ev, pe), normalised_sse(ev0, pe0), 1, n_eff_held if h2 else n_eff_fit)
+    c = dict(effect="force_lag", applicable=True, score=math.nan, chi2=math.nan, round=1,
+             fitted=True, fit=b2, error_before=e_before, error_after=e_after,
+             excess_reduction=excess_reduction(e_before, e_after, floor), delta_bic_fit=d_fit,
+             delta_bic_heldout=d_held, sse_heldout=normalised_sse(ev, pe),
+             earns=earns(e_before, e_after, floor, d_fit, d_held),
+             parameters={"force_lag_s": tau}, predictions=pf + ph, rig=rig)
+    say(f"force_lag: {1e3 * tau:.2f} ms, error {e_before:.3f} -> {e_after:.3f} % "
+        f"({'earns' if c['earns'] else 'does not earn'})")
+    if not c["earns"]:
+        return None
+    return f2, h2, b2, pf, ph, e_after, c
+
+
+def _crop_like(pt: PreparedTest, like: PreparedTest) -> PreparedTest:
+    """``pt`` on the samples of ``like`` (same time stamps)."""
+    keep = np.isin(pt.time_s, like.time_s)
+    t = pt.test
+    nt = _replace(t, time_s=t.time_s[keep], displacement_m=t.displacement_m[keep],
+                  force_N=t.force_N[keep],
+                  voltage_V=t.voltage_V[keep] if t.voltage_V is not None else None)
+    return prepare_tests([nt], pt.y.shape[0] > 1, mass_kg=pt.mass_kg)[0]
