@@ -170,7 +170,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
 def _cmd_plan_tests(args: argparse.Namespace) -> int:
     from .design.test_plan import plan_from_files
-    plan, harv = plan_from_files(args.identification, args.vehicle, args.rig, n_tests=args.n)
+    plan, harv = plan_from_files(args.identification, args.vehicle, args.rig, n_tests=args.n,
+                                 weight=args.weight)
     print("\n".join(plan.lines() + plan.write(args.out, harv)))
     return 0 if plan.success else 1
 # ------------------------------------------------------------------ discrepancy
@@ -312,7 +313,10 @@ def build_parser() -> argparse.ArgumentParser:
     pt = sub.add_parser("plan-tests", help="propose bench tests where the road puts the strokes")
     for a, kw in (("identification", {"metavar": "ID.json"}), ("--vehicle", {"required": True}),
                   ("--rig", {"required": True}), ("--n", {"type": _POSITIVE, "default": 3}),
-                  ("--out", {"default": "plan"})):
+                  ("--out", {"default": "plan"}),
+                  ("--weight", {"choices": ("energy", "time"), "default": "energy",
+                                "help": "road weight of a velocity: the friction energy "
+                                        "dissipated there (default) or the time"})):
         pt.add_argument(a, **kw)
     pt.set_defaults(func=_cmd_plan_tests)
     d = sub.add_parser("discrepancy", help="find, name and add the missing effect in a model "

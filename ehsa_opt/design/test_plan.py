@@ -16,9 +16,12 @@ uncertainty of the rod friction *where the road puts the strokes*:
   and power the rig must deliver);
 * the road's stroke velocity is Gaussian with the σ_v of the vehicle's design on its
   road (friction-aware fast path, :func:`ehsa_opt.vehicle.fast_path.friction_metrics`)
-  and W = E_road[g gᵀ]; the **A-optimal** criterion (road-weighted, also called
-  I-optimal) is tr(W Σ) = E_road[Var F_rod(v)], the **D-optimal** one −log det of the
-  information on its identifiable subspace;
+  and W = E_road[w(v) g gᵀ], w(v) ∝ F_rod(v) |v| by default (the friction's dissipated
+  power: a velocity counts as much as the friction energy the road spends there, what
+  power, damping and comfort depend on; ``weight="time"``: w = 1, the share of the time,
+  which the many slow strokes dominate); the **A-optimal** criterion (road-weighted,
+  also called I-optimal) is tr(W Σ), the **D-optimal** one −log det of the information
+  on its identifiable subspace;
 * tests are chosen greedily, one at a time, each the candidate that improves the
   criterion most given those already chosen.
 
@@ -141,6 +144,7 @@ class Candidate:
     peak_velocity_m_per_s: float = 0.0
     peak_force_N: float = 0.0
     peak_power_W: float = 0.0
+    peak_acceleration_m_per_s2: float = 0.0
 
     @property
     def file(self) -> str:
@@ -196,7 +200,7 @@ def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
                     vp = w * a
                     F = meq * w * w * a + ceq * vp + float(law.rod_N(vp))
                     out.append(Candidate("sine", float(a), float(load), float(f), None,
-                                         float(vp), float(F), float(F * vp)))
+                                         float(vp), float(F), float(F * vp), float(w * w * a)))
         if "triangle" in kinds:
             ceq = float(equivalent_damping_Ns_per_m(h, 0.0))
             a = 0.5 * rig.stroke_m
@@ -205,7 +209,8 @@ def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
                     continue
                 F = meq * v / rig.reversal_s + ceq * v + float(law.rod_N(v))
                 out.append(Candidate("triangle", float(a), float(load), None, float(v),
-                                     float(v), float(F), float(F * v)))
+                                     float(v), float(F), float(F * v),
+                                     float(2.0 * v / rig.reversal_s)))
     return [c for c in out if c.peak_velocity_m_per_s <= rig.peak_velocity_m_per_s * (1 + 1e-9)
             and c.peak_force_N <= rig.force_N and c.peak_power_W <= rig.actuator_power_W]
 
@@ -311,7 +316,8 @@ def _pinv(A: np.ndarray, rcond: float = 1e-9) -> np.ndarray:
 def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
                sigma_v_m_per_s: float, *, n_tests: int = 3, criterion: str = "A",
                kinds: Sequence[str] = _KINDS,
-               velocities_m_per_s: Sequence[float] = (0.5, 1.0, 1.5)) -> TestPlan:
+               velocities_m_per_s: Sequence[float] = (0.5, 1.0, 1.5),
+               weight: str = "energy") -> TestPlan:
     """Greedy optimal design of ``n_tests`` bench tests (see the module docstring).
 
     Parameters
@@ -325,9 +331,16 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
         The road's stroke-velocity σ (:func:`road_velocity_sigma`).
     criterion : {"A", "D"}
         Road-weighted A-optimal (default) or D-optimal.
+    weight : {"energy", "time"}
+        How the road weights the velocities in the A-optimal criterion: by the friction's
+        dissipated power F_rod(v) |v| times the road's density (default: the share of the
+        friction's energy a velocity carries, what the vehicle results depend on), or by
+        the density alone (the share of the time).
     """
     if criterion not in ("A", "D"):
         raise ParameterError(f"plan-tests: criterion must be 'A' or 'D', got {criterion!r}")
+    if weight not in ("energy", "time"):
+        raise ParameterError(f"plan-tests: weight must be 'energy' or 'time', got {weight!r}")
     if not (isinstance(n_tests, int) and n_tests >= 1):
         raise ParameterError(f"plan-tests: the number of tests must be >= 1, got {n_tests!r}")
     cands = candidate_tests(rig, harvester, law, kinds)
@@ -344,6 +357,9 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
     vr = 2.5 * sigma_v_m_per_s * (x + 1.0)
     wr = wq * 2.5 * sigma_v_m_per_s * 2.0 * np.exp(-0.5 * (vr / sigma_v_m_per_s) ** 2) / (
         sigma_v_m_per_s * math.sqrt(2 * math.pi))
+    if weight == "energy":
+        pw = np.maximum(law.rod_N(vr), 0.0) * vr
+        wr = wr * pw / max(float(np.sum(wr * pw)), 1e-300)
     Graw = rod_gradient(vr, p, names, lead)
     Wraw = (Graw * wr[:, None]).T @ Graw
     # the band the identification reports is the larger of Newey-West and cluster-robust;
@@ -358,7 +374,6 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
     # scaled coordinates: the covariance's own standard deviations
     d = np.sqrt(np.maximum(np.diag(cov0), 1e-300))
     J0 = _pinv(cov0 / np.outer(d, d))
-    s2 = s2 / kappa
     Gr = Graw * d
     W = (Gr * wr[:, None]).T @ Gr
     infos = []
@@ -368,7 +383,7 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
         # give the mean of these smooth periodic records to well below a per cent
         sub = v[np.unique(np.linspace(0, v.size - 1, min(v.size, 400)).astype(int))]
         G = rod_gradient(sub, p, names, lead) * d
-        infos.append(v.size * (G.T @ G) / sub.size / s2)
+        infos.append(v.size * (G.T @ G) / sub.size / (s2 / kappa))
 
     def score(J: np.ndarray) -> float:
         if criterion == "A":
@@ -406,7 +421,8 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
 
 def plan_from_files(ident_path: str | Path, vehicle_path: str | Path, rig_path: str | Path,
                     *, n_tests: int = 3, criterion: str = "A",
-                    kinds: Sequence[str] = _KINDS) -> tuple[TestPlan, dict]:
+                    kinds: Sequence[str] = _KINDS, weight: str = "energy"
+                    ) -> tuple[TestPlan, dict]:
     """:func:`plan_tests` from an ``identification.json``, a quarter-car problem file and a
     rig file.  Returns the plan and the bench's ``[harvester]`` table (for the skeleton)."""
     from ..datasets.friction_source import load_friction_sets
@@ -428,5 +444,5 @@ def plan_from_files(ident_path: str | Path, vehicle_path: str | Path, rig_path: 
     harvester = HarvesterParams(**harv_tab) if harv_tab else HarvesterParams()
     sigma = road_velocity_sigma(prob, sets["best"])
     return plan_tests(law, rig, harvester, sigma, n_tests=n_tests, criterion=criterion,
-                      kinds=kinds), harv_tab
+                      kinds=kinds, weight=weight), harv_tab
 

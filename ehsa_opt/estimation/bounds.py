@@ -13,11 +13,15 @@ fastest test the grid goes on to 3 m/s (:data:`V_MAX_M_PER_S`), the largest stro
 velocity the vehicle studies meet, where nothing was measured.
 
 The **band of the best law** (:mod:`ehsa_opt.estimation.rod_law`): the rod friction of
-the best set with the 95 % half-width of its sandwich covariance on every test's friction
-samples — the larger of Newey–West (autocorrelated residuals: the effective sample size,
-not the number of samples) and cluster-robust (tests as clusters: an error repeated in
-every cycle of a test).  It widens beyond the data as the uncertainty of the law's
-high-velocity part (viscous coefficient, Coulomb level) does.
+the best set ± the 95 % half-width of the sandwich covariance of the least-squares rod law
+on every test's friction samples (refitted from the best set: a sandwich is the variance
+of the estimator at its own root, where the scores sum to zero; evaluated at another
+point its "meat" holds the squared misfit of that point instead) — the larger of
+Newey–West (autocorrelated residuals: the effective sample size, not the number of
+samples) and cluster-robust (tests as clusters: an error repeated in every cycle of a
+test) — plus the distance between the best set and that least-squares law.  It widens
+beyond the data as the uncertainty of the law's high-velocity part (viscous coefficient,
+Coulomb level) does.
 
 Friction sets (admissible :class:`~ehsa_opt.physics.params.FrictionParams`):
 
@@ -281,9 +285,9 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
     # the best law's band over the whole grid: every successful test's samples
     if samples_all is None:
         samples_all = friction_samples(data, ref_params, tests=[t for t, _ in good])
-    law = rod_law_fit(samples_all, best.as_dict(), lead, has_generator=gen)
+    law = rod_law_fit(samples_all, best.as_dict(), lead, has_generator=gen, refit=True)
     rod_best = rod_curve_N(v, best, lead)
-    stat = law.half_width_N(v, level)
+    stat = law.half_width_N(v, level) + np.abs(rod_best - law.rod_N(v))
     lo_m, hi_m = _set_margins(v, env, v_data, rod_best, stat)
     sets = {"min": ordered_set(best, v, lo_m, lead, "below", gen), "best": best,
             "max": ordered_set(best, v, hi_m, lead, "above", gen)}

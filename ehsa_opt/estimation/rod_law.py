@@ -56,11 +56,13 @@ _SCALE = {"nut_breakaway_N": 10.0, "nut_coulomb_N": 10.0,
 
 @dataclass
 class FrictionSamples:
-    """Per test: stroke velocity (m/s) and friction force at the rod (N), end-trimmed."""
+    """Per test: stroke velocity (m/s) and friction force at the rod (N), end-trimmed, and
+    (optional) the stroke acceleration (m/s²) on the same samples."""
 
     files: list[str]
     velocity_m_per_s: list[np.ndarray]
     friction_N: list[np.ndarray]
+    acceleration_m_per_s2: list[np.ndarray] | None = None
 
     def __len__(self) -> int:
         return len(self.files)
@@ -68,6 +70,13 @@ class FrictionSamples:
     def peak_velocity_m_per_s(self) -> np.ndarray:
         """99th percentile of |v| of every test."""
         return np.array([float(np.percentile(np.abs(v), 99.0)) for v in self.velocity_m_per_s])
+
+    def peak_acceleration_m_per_s2(self) -> np.ndarray:
+        """99th percentile of |a| of every test (NaN without accelerations)."""
+        if self.acceleration_m_per_s2 is None:
+            return np.full(len(self.files), np.nan)
+        return np.array([float(np.percentile(np.abs(a), 99.0))
+                         for a in self.acceleration_m_per_s2])
 
 
 def friction_samples(data: Any, parameters: Mapping[str, float] | None = None,
@@ -94,15 +103,16 @@ def friction_samples(data: Any, parameters: Mapping[str, float] | None = None,
              if k not in FRICTION_NAMES and k != "load_ohm" and v is not None}
     preds = simulate_tests(tests, data.harvester, other, has_generator=data.has_generator,
                            options=opt)
-    vs, ys = [], []
+    vs, ys, acc = [], [], []
     for test, pr in zip(tests, preds):
         n = test.n_samples
         k = int(round(opt.trim_fraction * n))
         keep = slice(k, n - k)
-        v = test_motion(test, opt).evaluate(test.time_s)[1]
+        _, v, a = test_motion(test, opt).evaluate(test.time_s)[:3]
         vs.append(np.asarray(v[keep], dtype=float))
+        acc.append(np.asarray(a[keep], dtype=float))
         ys.append(np.asarray(test.force_N[keep] - pr.force_N[keep], dtype=float))
-    return FrictionSamples([t.file for t in tests], vs, ys)
+    return FrictionSamples([t.file for t in tests], vs, ys, acc)
 
 
 def rod_gradient(v: np.ndarray, params: Mapping[str, float], names: Sequence[str],
@@ -145,16 +155,39 @@ def _pinv_scaled(B: np.ndarray, rcond: float) -> tuple[np.ndarray, int]:
 
 
 def cluster_covariance(J_blocks: Sequence[np.ndarray], e_blocks: Sequence[np.ndarray],
-                       rcond: float = 1e-6) -> np.ndarray:
+                       rcond: float = 1e-6, leverage: bool = True,
+                       max_leverage: float = 0.99) -> np.ndarray:
     """Cluster-robust sandwich with every block (test) one cluster: B⁺ M B⁺ with
-    M = G/(G−1) Σ_g (J_gᵀ e_g)(J_gᵀ e_g)ᵀ — valid for any correlation within a test,
-    including an error that repeats every cycle (a model error), which no bandwidth
-    shorter than the test captures."""
+    M = Σ_g J_gᵀ ẽ_g ẽ_gᵀ J_g — valid for any correlation within a test, including an
+    error that repeats every cycle (a model error), which no bandwidth shorter than the
+    test captures.
+
+    ``leverage`` (default): ẽ_g = (I − H_gg)^(−1/2) e_g with H_gg = J_g B⁺ J_gᵀ, the
+    bias-reduced (CR2, Bell and McCaffrey 2002) form.  The plain form (ẽ = e, scaled by
+    G/(G−1)) is biased low when a few tests own a direction of the parameters — the one
+    fast test that alone determines the viscous slope: the fit absorbs that test's error,
+    its residuals come out small, and the band beyond the slow tests is too narrow.
+    H_gg has rank ≤ p, so the correction is computed in p dimensions (thin SVD of J_g);
+    its eigenvalues are capped at ``max_leverage`` (a test that alone determines a
+    direction cannot show its own error at all: the cap keeps the band finite and wide).
+    """
     B = sum(J.T @ J for J in J_blocks)
-    M = sum(np.outer(J.T @ e, J.T @ e) for J, e in zip(J_blocks, e_blocks))
     G = len(J_blocks)
     Binv, _ = _pinv_scaled(B, rcond)
-    cov = Binv @ (M * G / max(G - 1, 1)) @ Binv
+    M = np.zeros_like(B)
+    for J, e in zip(J_blocks, e_blocks):
+        e = np.asarray(e, dtype=float)
+        if leverage and J.size:
+            U, S, Vt = np.linalg.svd(J, full_matrices=False)
+            K = (S[:, None] * (Vt @ Binv @ Vt.T)) * S[None, :]
+            lam, Q = np.linalg.eigh(0.5 * (K + K.T))
+            lam = np.clip(lam, 0.0, max_leverage)
+            UQ = U @ Q
+            e = e + UQ @ ((1.0 / np.sqrt(1.0 - lam) - 1.0) * (UQ.T @ e))
+        sg = J.T @ e
+        M += np.outer(sg, sg)
+    scale = 1.0 if leverage else G / max(G - 1, 1)
+    cov = Binv @ (M * scale) @ Binv
     return 0.5 * (cov + cov.T)
 
 
@@ -231,6 +264,17 @@ class RodLawFit:
     residual_rms_N : float
     velocity_range_m_per_s : tuple
         Smallest and largest per-test 99th-percentile |v| of the samples.
+    covariance_cluster : ndarray or None
+        Cluster-robust covariance (tests as clusters; None with fewer than four tests).
+    n_tests : int
+    test_residual_rms_N, test_peak_acceleration_m_per_s2 : list of float
+        Per test: rms of its residuals and the 99th percentile of its |stroke
+        acceleration| (NaN when unknown) — how the model error grows with the test's
+        severity (a hidden backlash or compliance shows up at high accelerations).
+    alternatives : list of dict
+        Other least-squares laws (from the refit's other starting points) that fit the
+        samples equally well (likelihood ratio on the effective sample size, 95 %); the
+        band holds their distance to the law (they extrapolate differently).
     """
 
     parameters: dict[str, float]
@@ -245,6 +289,9 @@ class RodLawFit:
     velocity_range_m_per_s: tuple[float, float] = (math.nan, math.nan)
     covariance_cluster: np.ndarray | None = None
     n_tests: int = 1
+    test_residual_rms_N: list[float] = field(default_factory=list)
+    test_peak_acceleration_m_per_s2: list[float] = field(default_factory=list)
+    alternatives: list[dict[str, float]] = field(default_factory=list)
 
     def rod_N(self, v_m_per_s: Any) -> np.ndarray:
         """F_rod of the law at ``v_m_per_s``."""
@@ -267,12 +314,19 @@ class RodLawFit:
         """Half-width of the ``level`` band of F_rod(v): the larger of the Newey–West
         one (normal quantile) and the cluster-robust one (Student t, tests − 1 degrees
         of freedom), so neither the autocorrelation within a test nor an error shared
-        by the cycles of a test makes it too narrow."""
+        by the cycles of a test makes it too narrow; plus the largest distance of an
+        equally good alternative law (:attr:`alternatives`)."""
         from scipy import stats
         hw = stats.norm.ppf(0.5 + level / 2) * self.std_N(v_m_per_s, "hac")
         if self.covariance_cluster is not None:
             tq = stats.t.ppf(0.5 + level / 2, max(self.n_tests - 1, 1))
             hw = np.fmax(hw, tq * self.std_N(v_m_per_s, "cluster"))
+        if self.alternatives:
+            v = np.atleast_1d(np.asarray(v_m_per_s, dtype=float))
+            f = self.rod_N(v)
+            hw = hw + np.max([np.abs(np.asarray(rod_friction_N(
+                v, [a[n] for n in FRICTION_NAMES], self.lead_m_per_rad)) - f)
+                for a in self.alternatives], axis=0)
         return hw
 
     def band_N(self, v_m_per_s: Any, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
@@ -291,6 +345,11 @@ class RodLawFit:
                 "varied": self.varied, "parameters": dict(self.parameters),
                 "lead_m_per_rad": self.lead_m_per_rad,
                 "velocity_range_m_per_s": list(self.velocity_range_m_per_s),
+                "test_residual_rms_N": [float(x) for x in self.test_residual_rms_N],
+                "test_peak_acceleration_m_per_s2": [
+                    None if not math.isfinite(x) else float(x)
+                    for x in self.test_peak_acceleration_m_per_s2],
+                "alternatives": [dict(a) for a in self.alternatives],
                 "covariance": np.asarray(self.covariance).tolist(),
                 "covariance_iid": np.asarray(self.covariance_iid).tolist(),
                 "covariance_cluster": (None if self.covariance_cluster is None else
@@ -307,7 +366,11 @@ class RodLawFit:
                    float(d.get("residual_rms_N", math.nan)),
                    tuple(d.get("velocity_range_m_per_s", (math.nan, math.nan))),
                    None if cl is None else np.asarray(cl, dtype=float),
-                   int(d.get("n_tests", 1)))
+                   int(d.get("n_tests", 1)),
+                   [float(x) for x in d.get("test_residual_rms_N", [])],
+                   [math.nan if x is None else float(x)
+                    for x in d.get("test_peak_acceleration_m_per_s2", [])],
+                   [{k: float(v) for k, v in a.items()} for a in d.get("alternatives", [])])
 
 
 def _varied(params: Mapping[str, float], has_generator: bool) -> list[str]:
@@ -359,10 +422,13 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
         def resid(q: np.ndarray) -> np.ndarray:
             return np.asarray(rod_friction_N(vcat, to_law(unpack(q)), lead)) - ycat
         lo = np.array([(1e-4 if "velocity" in n else 0.0) / _SCALE[n] for n in names])
-        q0 = np.clip(np.array([p0[n] / _SCALE[n] for n in names]), lo, np.inf)
-        res = optimize.least_squares(resid, q0, bounds=(lo, np.inf), x_scale="jac")
-        law = to_law(unpack(res.x))
-        p0 = dict(zip(FRICTION_NAMES, law))
+        fits = []
+        for start in _refit_starts(p0, lead, names):
+            q0 = np.clip(np.array([start[n] / _SCALE[n] for n in names]), lo, np.inf)
+            res = optimize.least_squares(resid, q0, bounds=(lo, np.inf), x_scale="jac")
+            fits.append((2.0 * float(res.cost), to_law(unpack(res.x))))
+        fits.sort(key=lambda f: f[0])
+        p0 = dict(zip(FRICTION_NAMES, fits[0][1]))
     Js, es = [], []
     for v, y in zip(vs, ys):
         Js.append(rod_gradient(v, p0, names, lead))
@@ -370,7 +436,41 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
     cov, cov_iid, Ls, neff = hac_covariance(Js, es, rcond=rcond)
     cov_cl = cluster_covariance(Js, es, rcond=rcond) if len(Js) >= _MIN_CLUSTERS else None
     ecat = np.concatenate(es)
+    alternatives = []
+    if refit and len(fits) > 1:
+        # equally good laws: a likelihood-ratio threshold on the effective sample size
+        # (chi-square 1 dof, 95 %): ΔSSE <= 3.84 σ² n/n_eff
+        sse0 = fits[0][0]
+        tau = ecat.size / max(float(sum(neff)), 1.0)
+        tol = 3.84 * sse0 / max(ecat.size, 1) * tau
+        alternatives = [dict(zip(FRICTION_NAMES, law)) for sse, law in fits[1:]
+                        if sse - sse0 <= tol]
     peaks = samples.peak_velocity_m_per_s()
     return RodLawFit(p0, names, cov, cov_iid, lead, int(ecat.size), float(sum(neff)), Ls,
                      float(np.sqrt(np.mean(ecat ** 2))),
-                     (float(peaks.min()), float(peaks.max())), cov_cl, len(Js))
+                     (float(peaks.min()), float(peaks.max())), cov_cl, len(Js),
+                     [float(np.sqrt(np.mean(e ** 2))) for e in es],
+                     [float(x) for x in samples.peak_acceleration_m_per_s2()], alternatives)
+
+
+def _refit_starts(p: Mapping[str, float], lead: float, names: Sequence[str]
+                  ) -> list[dict[str, float]]:
+    """Starting points of the least-squares refit: the given law and the same rod friction
+    with its non-identifiable parts moved (the viscous slope all at the nut or all at the
+    bearing, the bearing's Coulomb level at the nut) and with both Stribeck velocities
+    five times larger and smaller — the rod friction's least squares has separate local
+    minima along these directions, which extrapolate differently."""
+    out = [dict(p)]
+    if "bearing_viscous_Nms_per_rad" in names:
+        r2 = lead * lead
+        nut = dict(p, nut_viscous_Ns_per_m=p["nut_viscous_Ns_per_m"]
+                   + p["bearing_viscous_Nms_per_rad"] / r2, bearing_viscous_Nms_per_rad=0.0)
+        brg = dict(p, nut_viscous_Ns_per_m=0.0, bearing_viscous_Nms_per_rad=(
+            p["bearing_viscous_Nms_per_rad"] + p["nut_viscous_Ns_per_m"] * r2))
+        col = dict(p, nut_coulomb_N=p["nut_coulomb_N"] + p["bearing_coulomb_Nm"] / lead,
+                   nut_breakaway_N=p["nut_breakaway_N"] + p["bearing_breakaway_Nm"] / lead,
+                   bearing_coulomb_Nm=0.0, bearing_breakaway_Nm=0.0)
+        out += [nut, brg, col]
+    for k in (5.0, 0.2):
+        out.append({n: (v * k if "breakaway_velocity" in n else v) for n, v in p.items()})
+    return out

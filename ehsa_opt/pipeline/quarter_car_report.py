@@ -119,21 +119,30 @@ def step_fig13(ctx: Context) -> StepOutput:
         np.linspace(0.8, 1.6, 5 if ctx.quick else 9),
         np.linspace(6.5, 10.0, 5 if ctx.quick else 9),
         _exact_peaks(ctx.vehicle()[0], ctx.harvester(), loads)]), 4))
+    v_ident, v_source = identified_range(ctx)
     study = stepped_sine_response(ctx.vehicle()[0], ctx.harvester(), fc, loads,
                                   freqs, velocity_amplitude_m_per_s=v_road,
-                                  max_time_s=20.0 if ctx.quick else 60.0)
+                                  max_time_s=20.0 if ctx.quick else 60.0,
+                                  identified_range_m_per_s=v_ident)
     rel = "figures/fig13_frequency_response.png"
     plots.save(study.plot(), ctx.out_dir / rel)
     i_none, i_max = study.cases.index("none"), study.cases.index("max")
     ratio = 100 * study.voltage_amplitude_V[i_max, 1] / study.voltage_amplitude_V[i_none, 1]
     ratio_lo, ratio_hi = float(ratio[0]), float(ratio[-1])
     rows = ["| friction | R_e (Ω) | peak x2/x0 | at (Hz) | max V_g amplitude (V) | at (Hz) | "
-            "steady |", "|---|---|---|---|---|---|---|"]
+            f"steady | {RANGE_HEADER} (worst frequency) |", "|---|---|---|---|---|---|---|---|"]
+    oor_t, oor_e = [], []
     for i, c in enumerate(study.cases):
         for j, r in enumerate(study.loads_ohm):
             k = int(np.argmax(study.sprung_transmissibility[i, j]))
             kv = int(np.argmax(study.voltage_amplitude_V[i, j]))
             ok = bool(study.settled[i, j].all())
+            t_ij = study.out_of_range_time_fraction[i, j]
+            e_ij = study.out_of_range_friction_energy_fraction[i, j]
+            kw = int(np.nanargmax(np.fmax(t_ij, np.nan_to_num(e_ij))))
+            e_cell = None if c == "none" else float(e_ij[kw])
+            oor_t.append(float(t_ij[kw]))
+            oor_e.append(e_cell)
             rows.append(f"| {c} | {r:g} | {study.sprung_transmissibility[i, j, k]:.2f} | "
                         f"{study.frequencies_hz[k]:.2f} | "
                         f"{study.voltage_amplitude_V[i, j, kv]:.1f} | "
@@ -142,7 +151,8 @@ def step_fig13(ctx: Context) -> StepOutput:
                             f"{study.frequencies_hz[q]:.2f} Hz (change "
                             f"{100 * study.amplitude_change[i, j, q]:.1f} %)"
                             for q in np.flatnonzero(~study.settled[i, j])))
-                        + " |")
+                        + f" | {range_cell(t_ij[kw], e_cell)} (at "
+                        f"{study.frequencies_hz[kw]:.2f} Hz) |")
     for j, r in enumerate(study.loads_ohm):
         k = int(np.argmax(study.linear_transmissibility[j]))
         kv = int(np.argmax(study.linear_voltage_amplitude_V[j]))
@@ -183,6 +193,8 @@ def step_fig13(ctx: Context) -> StepOutput:
           "simulation equals the exact linear response "
           f"within **{100 * study.frictionless_deviation():.2f} %** at every frequency and "
           "load (rows 'exact linear')." + unsettled + "\n\n" + "\n".join(rows) +
+          range_flag(oor_t, oor_e, v_ident, v_source) + " In the figure, ○ marks the points "
+          "above the limit." +
           "\n\nThe paper (text of its Fig 13): the generator voltage varies with the friction "
           f"magnitude and falls as the sprung-mass displacement falls. Ours: {volt_text} "
           "(friction matters most at low frequency, where the stroke velocity is small), and "
@@ -191,7 +203,14 @@ def step_fig13(ctx: Context) -> StepOutput:
     return StepOutput(md, [rel], {"voltage_amplitude_V": study.voltage_amplitude_V.tolist(),
                                   "frequencies_hz": study.frequencies_hz.tolist(),
                                   "settled": study.settled.tolist(),
-                                  "frictionless_deviation": study.frictionless_deviation()})
+                                  "frictionless_deviation": study.frictionless_deviation(),
+                                  "identified_range_m_per_s": v_ident,
+                                  "out_of_range_time_fraction":
+                                      study.out_of_range_time_fraction.tolist(),
+                                  "out_of_range_friction_energy_fraction": np.where(
+                                      np.isfinite(study.out_of_range_friction_energy_fraction),
+                                      study.out_of_range_friction_energy_fraction,
+                                      -1.0).tolist()})
 
 
 def _exact_peaks(vehicle: VehicleParams, harvester: HarvesterParams,
@@ -210,26 +229,37 @@ def step_fig14(ctx: Context) -> StepOutput:
     if (na := _not_applicable(ctx)) is not None:
         return na
     fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
-    study = force_velocity_loops(ctx.harvester(), fc)
+    v_ident, v_source = identified_range(ctx)
+    study = force_velocity_loops(ctx.harvester(), fc, identified_range_m_per_s=v_ident)
     rel = "figures/fig14_force_velocity.png"
     plots.save(study.plot(), ctx.out_dir / rel)
-    rows = ["| circuit | ours: min friction | ours: max friction | paper (min–max) |",
-            "|---|---|---|---|"]
-    res = {}
+    rows = ["| circuit | ours: min friction | ours: max friction | paper (min–max) | "
+            f"{RANGE_HEADER}: min / max friction |", "|---|---|---|---|---|"]
+    res, oor_t, oor_e = {}, [], []
     for circuit in ("open circuit", "short circuit"):
         lo = study.equivalent_damping_Ns_per_m[(circuit, "min")]
         hi = study.equivalent_damping_Ns_per_m[(circuit, "max")]
         p = PAPER_FIG14_RANGES[circuit]
-        rows.append(f"| {circuit} | {lo:.0f} N s/m | {hi:.0f} N s/m | {p[0]:.0f}–{p[1]:.0f} N s/m |")
+        cells = []
+        for case in ("min", "max"):
+            t, e = study.out_of_range[(circuit, case)]
+            oor_t.append(t)
+            oor_e.append(e)
+            cells.append(range_cell(t, e))
+        rows.append(f"| {circuit} | {lo:.0f} N s/m | {hi:.0f} N s/m | {p[0]:.0f}–{p[1]:.0f} N s/m "
+                    f"| {' ; '.join(cells)} |")
         res[circuit] = [lo, hi]
     md = ("Equivalent damping coefficient c_eq = ∮F dx / (π ω A²) of the harvester on a sine "
           f"stroke of {1e3 * study.amplitude_m:g} mm at {study.frequency_hz:g} Hz **(assumption: "
           "the paper's stroke for Fig 14 is not in the text)**, open circuit (friction only) and "
           f"short circuit (R_e = 0). Friction: {fc.source}.\n\n" + "\n".join(rows) +
+          range_flag(oor_t, oor_e, v_ident, v_source) + " In the figure the velocities "
+          "beyond the identified range are shaded." +
           "\n\nShort circuit adds the electrical damping K_t K_e/(r² R_i) ≈ "
           f"{ctx.harvester().equivalent_damping_Ns_per_m(0.0, 0.0):.0f} N s/m to the friction. "
           + _compare_ranges(res) + "\n\n"
           f"![Fig 14]({rel})\n")
+    res["out_of_range"] = {f"{c} / {k}": list(x) for (c, k), x in study.out_of_range.items()}
     return StepOutput(md, [rel], res)
 
 

@@ -68,6 +68,12 @@ def fig13_frequency_response(study: FrequencyResponseStudy) -> Figure:
                                                                    study.sprung_transmissibility)):
                     a.plot(study.frequencies_hz[bad], y[i, j][bad], "x", color=kw["color"],
                            ms=7, mew=1.5)
+            over = _over_limit(study, i, j)
+            if over.any():  # friction there mostly extrapolated: marked
+                for a, y in ((ax[0], study.voltage_amplitude_V), (ax[1],
+                                                                   study.sprung_transmissibility)):
+                    a.plot(study.frequencies_hz[over], y[i, j][over], "o", mfc="none",
+                           color=kw["color"], ms=8, mew=1.2)
     ax[0].set_ylabel("generator voltage amplitude (V)")
     ax[1].set_ylabel("sprung displacement / road amplitude (–)")
     for a in ax:
@@ -81,17 +87,45 @@ def fig13_frequency_response(study: FrequencyResponseStudy) -> Figure:
             f"{1e3 * study.amplitude_m:.3g} mm at 1 Hz, falling as 1/f)" if va else
             f"road sine amplitude {1e3 * study.amplitude_m:g} mm")
     unsettled = getattr(study, "settled", None) is not None and not np.all(study.settled)
+    any_over = any(_over_limit(study, i, j).any() for i in range(len(study.cases))
+                   for j in range(len(study.loads_ohm)))
     fig.suptitle(f"Stepped sine at steady state: {road}\nfriction: {study.friction_source}"
-                 + ("\n× = not at steady state within the time limit" if unsettled else ""),
+                 + ("\n× = not at steady state within the time limit" if unsettled else "")
+                 + (f"\n○ = over {100 * study.out_of_range_limit:g} % of the time or friction energy "
+                    f"above the identified {study.identified_range_m_per_s:.2f} m/s"
+                    if any_over else ""),
                  fontsize=9)
     fig.tight_layout(rect=(0, 0.1 if len(labels) > 6 else 0.06, 1, 1))
     return fig
 
 
+def _over_limit(study: FrequencyResponseStudy, i: int, j: int) -> np.ndarray:
+    """Frequencies of case i, load j whose out-of-range share exceeds the limit."""
+    t = getattr(study, "out_of_range_time_fraction", None)
+    e = getattr(study, "out_of_range_friction_energy_fraction", None)
+    if t is None or e is None or study.cases[i] == "none":
+        return np.zeros(study.frequencies_hz.size, bool)
+    return np.fmax(t[i, j], np.nan_to_num(e[i, j])) > study.out_of_range_limit
+
+
 def fig14_force_velocity(study: ForceVelocityStudy) -> Figure:
-    """Paper Fig 14: force–velocity loops, open and short circuit, min/max friction."""
+    """Paper Fig 14: force–velocity loops, open and short circuit, min/max friction;
+    velocities beyond the friction's identified range shaded."""
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    v_id = getattr(study, "identified_range_m_per_s", None)
+    oor = getattr(study, "out_of_range", {}) or {}
     for i, circuit in enumerate(("open circuit", "short circuit")):
+        if v_id is not None:
+            vmax = max(float(np.max(np.abs(study.loops[(circuit, c)][0]))) for c in ("min", "max"))
+            if vmax > v_id:
+                for sgn in (-1, 1):
+                    ax[i].axvspan(sgn * v_id, sgn * vmax, color="0.85", zorder=0)
+            for c in ("min", "max"):
+                t, e = oor.get((circuit, c), (0.0, 0.0))
+                if max(t, e) > study.out_of_range_limit:
+                    ax[i].text(0.02, 0.95 - 0.07 * (c == "max"), f"⚠ {c}: {100 * t:.0f} % time "
+                               f"/ {100 * e:.0f} % friction energy beyond {v_id:.2f} m/s",
+                               transform=ax[i].transAxes, fontsize=7, va="top")
         for case in ("min", "max"):
             v, f = study.loops[(circuit, case)]
             c = study.equivalent_damping_Ns_per_m[(circuit, case)]
@@ -103,7 +137,9 @@ def fig14_force_velocity(study: ForceVelocityStudy) -> Figure:
         ax[i].grid(True, alpha=0.3)
         ax[i].legend(fontsize=8)
     fig.suptitle(f"Sine stroke {1e3 * study.amplitude_m:g} mm at {study.frequency_hz:g} Hz "
-                 f"(friction: {study.friction_source})", fontsize=9)
+                 f"(friction: {study.friction_source})"
+                 + (f"\nidentified friction range |v| <= {v_id:.2f} m/s (beyond: shaded)"
+                    if v_id is not None else ""), fontsize=9)
     fig.tight_layout()
     return fig
 

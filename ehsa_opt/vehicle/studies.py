@@ -27,7 +27,9 @@ from ..physics.bench_sim import simulate_bench
 from ..physics.motion import SineMotion
 from ..physics.params import (FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError,
                               RoadParams, VehicleParams)
+from ..physics.friction import rod_friction_N
 from ..physics.quarter_car_model import PARAM_NAMES, STATE_NAMES, param_vector
+from .coverage import OUT_OF_RANGE_LIMIT
 from .frequency_path import linear_frequency_response
 from .road import road_psd_m3
 from .simulate import QuarterCarSimulation, simulate_batch, simulate_quarter_car
@@ -141,6 +143,12 @@ class FrequencyResponseStudy:
     velocity_amplitude_m_per_s : float or None
         Road velocity amplitude of a constant-velocity input (displacement
         v / (2π f), falling with frequency like a real road); None = constant displacement.
+    identified_range_m_per_s : float or None
+        The friction's identified range the fractions below are measured against.
+    out_of_range_time_fraction, out_of_range_friction_energy_fraction : ndarray (C, L, F)
+        Share of the last (steady) window's time, and of the friction's dissipated energy,
+        at stroke velocities above the identified range (NaN energy without friction);
+        None when no range was given.
     """
 
     frequencies_hz: np.ndarray
@@ -158,6 +166,10 @@ class FrequencyResponseStudy:
     linear_voltage_amplitude_V: np.ndarray | None = None
     linear_transmissibility: np.ndarray | None = None
     tolerance: float = 1e-3
+    identified_range_m_per_s: float | None = None
+    out_of_range_limit: float = OUT_OF_RANGE_LIMIT
+    out_of_range_time_fraction: np.ndarray | None = None
+    out_of_range_friction_energy_fraction: np.ndarray | None = None
 
     def frictionless_deviation(self) -> float:
         """Largest relative deviation of the case "none" from the exact linear response
@@ -193,7 +205,8 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
                           frequencies_hz: Sequence[float], amplitude_m: float = 0.01,
                           sample_rate_hz: float = 1000.0, tolerance: float = 1e-3,
                           window_min_s: float = 1.0, max_time_s: float = 60.0,
-                          velocity_amplitude_m_per_s: float | None = None
+                          velocity_amplitude_m_per_s: float | None = None,
+                          identified_range_m_per_s: float | None = None
                           ) -> FrequencyResponseStudy:
     """Steady-state generator voltage and sprung-mass displacement vs road sine frequency.
 
@@ -213,6 +226,10 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
     are marked in :attr:`FrequencyResponseStudy.settled`).  Friction makes the system
     nonlinear, hence simulation; without friction the result is checked against the
     exact response (:meth:`FrequencyResponseStudy.frictionless_deviation`).
+
+    With ``identified_range_m_per_s`` every point also states the share of its last
+    window's time and of the friction's dissipated energy at stroke velocities above that
+    range (:func:`~ehsa_opt.vehicle.coverage.series_coverage`).
     """
     if not 0.0 < tolerance < 0.1:
         raise ParameterError(f"stepped sine: tolerance = {tolerance:g} must be in (0, 0.1) "
@@ -231,6 +248,10 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
     steps, sim_time = 0, []
     re = params[PARAM_NAMES.index("load_ohm")]
     i_x2, i_cur = STATE_NAMES.index("x2_m"), STATE_NAMES.index("current_A")
+    i_v2, i_v1 = STATE_NAMES.index("v2_m_per_s"), STATE_NAMES.index("v1_m_per_s")
+    oor_t, oor_e = np.full(shape, np.nan), np.full(shape, np.nan)
+    pair_fr = [frictions.cases[c] for c, _ in pairs]
+    lead = float(harvester.lead_m_per_rad)
     for k, f in enumerate(freqs):
         amp = (amplitude_m if velocity_amplitude_m_per_s is None
                else velocity_amplitude_m_per_s / (2.0 * math.pi * f))
@@ -257,6 +278,10 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
                 rel[active] = np.max(np.abs(cur - last[:, active])
                                      / np.maximum(np.abs(cur), 1e-300), axis=0)
             last[:, active] = cur
+            if identified_range_m_per_s is not None:
+                _window_coverage(zt[:, i_v2] - zt[:, i_v1], [pair_fr[q] for q in active],
+                                 lead, float(identified_range_m_per_s), active, oor_t[..., k],
+                                 oor_e[..., k], len(loads))
             t0 = float(t[-1])
             active = active[~(rel[active] < tolerance)]
         trans[:, :, k] = last[0].reshape(len(cases), len(loads))
@@ -270,7 +295,24 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
                                   vehicle, {"step_designs": steps,
                                             "simulated_s_per_frequency": sim_time},
                                   velocity_amplitude_m_per_s, settled, change, lin_v, lin_x,
-                                  float(tolerance))
+                                  float(tolerance), identified_range_m_per_s,
+                                  None if identified_range_m_per_s is None else oor_t,
+                                  None if identified_range_m_per_s is None else oor_e)
+
+
+def _window_coverage(v_stroke: np.ndarray, frictions: Sequence[FrictionParams | None],
+                     lead: float, v_max: float, active: np.ndarray, out_t: np.ndarray,
+                     out_e: np.ndarray, n_loads: int) -> None:
+    """Out-of-range fractions of one window's stroke velocities (active pairs × samples)
+    into ``out_t`` / ``out_e`` (cases × loads views at one frequency)."""
+    from .coverage import series_coverage
+    for row, (q, fr) in enumerate(zip(active, frictions)):
+        v = v_stroke[row]
+        power = None if fr is None else np.asarray(
+            rod_friction_N(np.abs(v), fr.as_array(), lead), dtype=float) * np.abs(v)
+        c = series_coverage(v[None], v_max, None if power is None else power[None])
+        out_t[q // n_loads, q % n_loads] = float(c["time_fraction"][0])
+        out_e[q // n_loads, q % n_loads] = float(c["energy_fraction"][0])
 
 
 # --------------------------------------------------------------------------- Fig 14
@@ -284,6 +326,10 @@ class ForceVelocityStudy:
         ``(circuit, case) -> (velocity m/s, force N)`` over one steady cycle.
     equivalent_damping_Ns_per_m : dict
         ``(circuit, case) -> c_eq = ∮F dx / (π ω A²)`` (energy-equivalent).
+    identified_range_m_per_s : float or None
+    out_of_range : dict
+        ``(circuit, case) -> (time, friction energy)`` shares of the steady cycle at
+        stroke velocities above the identified range (empty without a range).
     """
 
     loops: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]]
@@ -291,6 +337,9 @@ class ForceVelocityStudy:
     amplitude_m: float
     frequency_hz: float
     friction_source: str
+    identified_range_m_per_s: float | None = None
+    out_of_range: dict[tuple[str, str], tuple[float, float]] = field(default_factory=dict)
+    out_of_range_limit: float = OUT_OF_RANGE_LIMIT
 
     def plot(self, ax: Any = None) -> Any:
         """Paper Fig 14 (two panels; ``ax`` not used); writes nothing."""
@@ -300,14 +349,18 @@ class ForceVelocityStudy:
 
 def force_velocity_loops(harvester: HarvesterParams, frictions: FrictionCases,
                          amplitude_m: float = 0.015, frequency_hz: float = 1.5,
-                         samples_per_cycle: int = 400) -> ForceVelocityStudy:
+                         samples_per_cycle: int = 400,
+                         identified_range_m_per_s: float | None = None) -> ForceVelocityStudy:
     """Bench-like sine stroke of the harvester, open (R_e → ∞) and short circuit (R_e = 0).
 
     Uses the rigid :class:`~ehsa_opt.physics.bench_model.BenchModel` (same harvester
-    physics as the quarter car).  Open circuit is R_e = 10⁹ Ω (i ≈ 0).
+    physics as the quarter car).  Open circuit is R_e = 10⁹ Ω (i ≈ 0).  With
+    ``identified_range_m_per_s`` every loop states its share of time and friction energy
+    above that range (:func:`~ehsa_opt.vehicle.coverage.series_coverage`).
     """
+    from .coverage import series_coverage
     model = BenchModel(harvester)
-    loops, ceq = {}, {}
+    loops, ceq, oor = {}, {}, {}
     w = 2.0 * math.pi * frequency_hz
     t = np.linspace(0.0, 2.0 / frequency_hz, 2 * samples_per_cycle + 1)
     motion = SineMotion(amplitude_m, frequency_hz)
@@ -320,7 +373,14 @@ def force_velocity_loops(harvester: HarvesterParams, frictions: FrictionCases,
             work = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x)))
             loops[(circuit, case)] = (v, f)
             ceq[(circuit, case)] = work / (math.pi * w * amplitude_m ** 2)
-    return ForceVelocityStudy(loops, ceq, amplitude_m, frequency_hz, frictions.source)
+            if identified_range_m_per_s is not None:
+                power = np.asarray(rod_friction_N(np.abs(v), frictions.cases[case].as_array(),
+                                                  harvester.lead_m_per_rad)) * np.abs(v)
+                c = series_coverage(v[None], identified_range_m_per_s, power[None])
+                oor[(circuit, case)] = (float(c["time_fraction"][0]),
+                                        float(c["energy_fraction"][0]))
+    return ForceVelocityStudy(loops, ceq, amplitude_m, frequency_hz, frictions.source,
+                              identified_range_m_per_s, oor)
 
 
 # --------------------------------------------------------------------------- Figs 15/16/21

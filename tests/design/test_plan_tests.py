@@ -102,3 +102,17 @@ def test_cli_plan_tests_writes_the_skeleton(law, tmp_path, capsys) -> None:
     assert main(["plan-tests", str(ident), "--vehicle", "quarter_car_class_c", "--rig",
                  str(rig), "--out", str(tmp_path / "p2")]) == 2
     assert "unknown key 'stroke'" in capsys.readouterr().err
+
+
+def test_road_weight_by_friction_energy_reaches_further_than_by_time(law) -> None:
+    """The friction energy F|v| p(v) puts more weight on fast strokes than the time p(v):
+    the energy-weighted plan's first test is at least as fast, its band at 1 m/s at least
+    as narrow; an unknown weight is refused with the choices."""
+    rig = RigLimits(peak_velocity_m_per_s=1.5)
+    e = plan_tests(law, rig, HarvesterParams(), 0.4, n_tests=1, kinds=("sine",))
+    t = plan_tests(law, rig, HarvesterParams(), 0.4, n_tests=1, kinds=("sine",),
+                   weight="time")
+    assert e.proposed[0].peak_velocity_m_per_s >= t.proposed[0].peak_velocity_m_per_s
+    assert e.band_after_N[1] <= t.band_after_N[1] * (1 + 1e-9)
+    with pytest.raises(ParameterError, match="'energy' or 'time'"):
+        plan_tests(law, rig, HarvesterParams(), 0.4, weight="power")

@@ -103,3 +103,25 @@ def test_ordered_set_keeps_its_margin_and_its_order(side: str) -> None:
     assert np.all(g2 <= b2 + 1e-9) if side == "below" else np.all(g2 >= b2 - 1e-9)
     with pytest.raises(ValueError, match="side"):
         ordered_set(TRUTH, v, margin, LEAD, "sideways")
+
+
+def test_cluster_covariance_corrects_for_a_test_that_owns_a_direction() -> None:
+    """Two parameters: a level seen by every test and a slope seen by one test only.  The
+    plain cluster-robust variance of the slope uses that test's residuals, which the fit
+    has absorbed; the leverage-corrected (CR2) one scales them back up, so it is larger,
+    and on i.i.d. blocks without a lone test both agree with the classical variance."""
+    from ehsa_opt.estimation.rod_law import cluster_covariance
+    rng = np.random.default_rng(5)
+    J = [np.column_stack([np.ones(50), np.zeros(50)]) for _ in range(6)]
+    J.append(np.column_stack([np.ones(50), np.linspace(-1, 1, 50)]))
+    J.append(np.column_stack([np.ones(50), np.linspace(-1, 1, 50) ** 2]))  # shares the slope
+    e = [rng.normal(0, 1, 50) for _ in J]
+    plain = cluster_covariance(J, e, leverage=False)
+    cr2 = cluster_covariance(J, e)
+    assert cr2[1, 1] > plain[1, 1]
+    Jb = [np.column_stack([np.ones(200), rng.normal(size=200)]) for _ in range(40)]
+    eb = [rng.normal(0, 1, 200) for _ in Jb]
+    classic = np.linalg.inv(sum(j.T @ j for j in Jb))
+    for lev in (False, True):
+        c = cluster_covariance(Jb, eb, leverage=lev)
+        assert np.allclose(np.diag(c), np.diag(classic), rtol=0.35)

@@ -167,3 +167,44 @@ def test_validity_flags_the_fast_path_beyond_its_indicator():
         assert np.all((corr > FAST_PATH_MAX_CORRECTION) == flagged)
         v = check_validity(m)
         assert all(("fast_path_indicator" in v.codes(k)) == flagged for k in range(2))
+
+
+def test_fig13_fig14_state_the_share_beyond_the_identified_range_and_warn():
+    """The stepped sine and the force-velocity loops measure their stroke velocities
+    against the identified range: a sine stroke of amplitude V spends (2/π) arccos(v/V)
+    of its time above v; above the limit the report's cell and the warning say so."""
+    from ehsa_opt.pipeline.coverage_report import range_cell
+    from ehsa_opt.vehicle.coverage import OUT_OF_RANGE_LIMIT, coverage_warning
+    from ehsa_opt.vehicle.frequency_path import linear_frequency_response
+    fc = friction_cases(None)
+    vehicle, h = VehicleParams(), HarvesterParams(load_ohm=47.0)
+    f, amp = 1.1, 0.01
+    lin = linear_frequency_response(vehicle, h, [f])
+    v_amp = 2 * np.pi * f * amp * abs(lin["x2"][0] - lin["x1"][0])
+    v_id = 0.1 * v_amp
+    study = stepped_sine_response(vehicle, h, fc, [47.0], [f], amplitude_m=amp,
+                                  identified_range_m_per_s=v_id)
+    none, mx = study.cases.index("none"), study.cases.index("max")
+    t = study.out_of_range_time_fraction
+    assert t[none, 0, 0] == pytest.approx(2 / np.pi * np.arccos(0.1), abs=0.01)
+    assert np.isnan(study.out_of_range_friction_energy_fraction[none, 0, 0])
+    e = study.out_of_range_friction_energy_fraction[mx, 0, 0]
+    assert t[mx, 0, 0] > OUT_OF_RANGE_LIMIT and e > t[mx, 0, 0]  # fast strokes carry more
+    assert "⚠" in range_cell(t[mx, 0, 0], e)
+    assert coverage_warning({"time_fraction": t[mx, 0, 0], "energy_fraction": e}, v_id)
+    # far above every stroke: nothing out of range, no warning, no mark
+    calm = stepped_sine_response(vehicle, h, fc, [47.0], [f], amplitude_m=amp,
+                                 identified_range_m_per_s=10 * v_amp)
+    assert np.all(calm.out_of_range_time_fraction == 0.0)
+    assert "⚠" not in range_cell(calm.out_of_range_time_fraction[mx, 0, 0],
+                                 calm.out_of_range_friction_energy_fraction[mx, 0, 0])
+    loops = force_velocity_loops(h, fc, identified_range_m_per_s=0.05)
+    peak = 2 * np.pi * 1.5 * 0.015
+    for key, (tt, ee) in loops.out_of_range.items():
+        assert tt == pytest.approx(2 / np.pi * np.arccos(0.05 / peak), abs=0.01), key
+        assert coverage_warning({"time_fraction": tt, "energy_fraction": ee}, 0.05)
+    assert not any(max(x) > 0 for x in force_velocity_loops(
+        h, fc, identified_range_m_per_s=1.0).out_of_range.values())
+    import matplotlib.pyplot as plt
+    for fig in (study.plot(), loops.plot()):
+        plt.close(fig)
