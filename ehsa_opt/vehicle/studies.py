@@ -167,9 +167,9 @@ class FrequencyResponseStudy:
     linear_transmissibility: np.ndarray | None = None
     tolerance: float = 1e-3
     identified_range_m_per_s: float | None = None
-    out_of_range_limit: float = OUT_OF_RANGE_LIMIT
     out_of_range_time_fraction: np.ndarray | None = None
     out_of_range_friction_energy_fraction: np.ndarray | None = None
+    out_of_range_limit: float = OUT_OF_RANGE_LIMIT
 
     def frictionless_deviation(self) -> float:
         """Largest relative deviation of the case "none" from the exact linear response
