@@ -35,45 +35,17 @@ def _validity_cell(cfg: Any, outputs: dict) -> str:
     return check_validity(m, stroke_limit_m=cfg.vehicle.stroke_limit_m).cell(0)
 
 
-def step_goal_attainment(ctx: Context) -> StepOutput:
-    """Goal attainment on the paper's problem; results carry ``design`` and
-    ``optimum_harvester`` (HarvesterParams fields, read by the Fig 21 step)."""
-    from ..design.optimize import build_problem, objectives_at, optimize
-    from ..physics.params import HarvesterParams
-
-    if (na := not_applicable(ctx)) is not None:
-        return na
-    cfg = design_config(ctx)
-    outcome = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")
-    ga = outcome.goal_attainment_result
-    assert ga is not None
-    names = {"ga_design": "fig17_design_history.png", "ga_mass": "fig18_equivalent_mass.png",
-             "ga_objectives": "fig19_objective_history.png"}
-    outcome.write_figures(ctx.out_dir / "figures", names)
-    figs = [f"figures/{name}" for name in names.values()]
-    out = outcome.record
+def _goal_attainment_rows(cfg: Any, ga: Any, out: dict, at_lower: dict, pd_out: dict,
+                          gamma_paper: float) -> list[str]:
+    """Markdown rows of the prototype / optimum / paper comparison table."""
     proto = out["prototype"]["objectives"]
     pm = out["prototype"]["metrics"]
     om = out["metrics"]
     ch = out["goal_attainment"]["changes"]
     d = out["design"]
-    box = cfg.space
-    at_lower = {n: math.isclose(d[n], lo, rel_tol=1e-6)
-                for n, lo in zip(box.names, box.lower)}
     P = PAPER_OPTIMUM
     (p0, p1), (e0, e1) = P["power_W"], P["efficiency_pct"]
-    Ri = cfg.harvester.internal_resistance_ohm
-    # physics of the efficiency and power gap
-    ri_paper = P["load_ohm"] * (100.0 / P["efficiency_pct"][1] - 1.0)
-    re_paper0 = ri_paper * P["efficiency_pct"][0] / (100.0 - P["efficiency_pct"][0])
-    # the paper's design evaluated by our model
-    problem = build_problem(cfg)
-    paper_design = {k: P[k] for k in ("total_inertia_gcm2", "lead_mm_per_rev",
-                                      "speed_constant_rpm_per_V", "load_ohm")}
-    pd_out = objectives_at(problem, paper_design)
-    gamma_paper = max((pd_out[k] - g) / w for k, g, w in
-                      zip(OBJECTIVE_NAMES, ga.goals, ga.weights) if w > 0)
-    rows = [
+    return [
         "| | prototype (ours) | optimum (ours) | paper's optimum in our model | paper |",
         "|---|---|---|---|---|",
         f"| J_t (g cm²) | {cfg.harvester.total_inertia_gcm2:.0f} | {d['total_inertia_gcm2']:.1f}"
@@ -108,8 +80,21 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         + " | ".join(_validity_cell(cfg, o) for o in
                      ({**proto, **pm}, {**out["objectives"], **om}, pd_out)) + " | – |",
     ]
-    binding = [k for k, g, w in zip(OBJECTIVE_NAMES, ga.goals, ga.weights)
-               if w > 0 and abs((ga.objectives[k] - g) / w - ga.gamma) < 1e-5]
+
+
+def _goal_attainment_markdown(cfg: Any, ga: Any, out: dict, at_lower: dict, pd_out: dict,
+                              gamma_paper: float, binding: list[str], figs: list[str]) -> str:
+    """Markdown of the goal-attainment section: setting, table, agreement, power gap."""
+    pm = out["prototype"]["metrics"]
+    om = out["metrics"]
+    d = out["design"]
+    P = PAPER_OPTIMUM
+    (p0, p1), (e0, e1) = P["power_W"], P["efficiency_pct"]
+    Ri = cfg.harvester.internal_resistance_ohm
+    # physics of the efficiency and power gap
+    ri_paper = P["load_ohm"] * (100.0 / P["efficiency_pct"][1] - 1.0)
+    re_paper0 = ri_paper * P["efficiency_pct"][0] / (100.0 - P["efficiency_pct"][0])
+    rows = _goal_attainment_rows(cfg, ga, out, at_lower, pd_out, gamma_paper)
     both = at_lower["total_inertia_gcm2"] and at_lower["speed_constant_rpm_per_V"]
     agreement = (
         ("**Agreement.** J_t and k_n end at their lower bounds, as in the paper"
@@ -128,7 +113,7 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
          "road holding more")
         + f" but gives γ = {gamma_paper:+.4f}"
         + (f" because its {'/'.join(worse)} is worse." if worse else "."))
-    md = (
+    return (
         f"In the paper's design space (R_i = {cfg.harvester.internal_resistance_ohm:g} Ω and "
         f"L_i fixed for every k_n, no rated limits; the product's default motor model is in "
         f"the next section). "
@@ -166,6 +151,42 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         f"column 4) " + paper_design_sentence + " Vehicle, road seed and R_e of the prototype are "
         "our assumptions (the paper does not give them), so absolute values differ from the paper's.\n\n"
         + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
+
+
+def step_goal_attainment(ctx: Context) -> StepOutput:
+    """Goal attainment on the paper's problem; results carry ``design`` and
+    ``optimum_harvester`` (HarvesterParams fields, read by the Fig 21 step)."""
+    from ..design.optimize import build_problem, objectives_at, optimize
+    from ..physics.params import HarvesterParams
+
+    if (na := not_applicable(ctx)) is not None:
+        return na
+    cfg = design_config(ctx)
+    outcome = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")
+    ga = outcome.goal_attainment_result
+    assert ga is not None
+    names = {"ga_design": "fig17_design_history.png", "ga_mass": "fig18_equivalent_mass.png",
+             "ga_objectives": "fig19_objective_history.png"}
+    outcome.write_figures(ctx.out_dir / "figures", names)
+    figs = [f"figures/{name}" for name in names.values()]
+    out = outcome.record
+    proto = out["prototype"]["objectives"]
+    pm = out["prototype"]["metrics"]
+    om = out["metrics"]
+    d = out["design"]
+    box = cfg.space
+    at_lower = {n: math.isclose(d[n], lo, rel_tol=1e-6)
+                for n, lo in zip(box.names, box.lower)}
+    # the paper's design evaluated by our model
+    problem = build_problem(cfg)
+    paper_design = {k: PAPER_OPTIMUM[k] for k in ("total_inertia_gcm2", "lead_mm_per_rev",
+                                                  "speed_constant_rpm_per_V", "load_ohm")}
+    pd_out = objectives_at(problem, paper_design)
+    gamma_paper = max((pd_out[k] - g) / w for k, g, w in
+                      zip(OBJECTIVE_NAMES, ga.goals, ga.weights) if w > 0)
+    binding = [k for k, g, w in zip(OBJECTIVE_NAMES, ga.goals, ga.weights)
+               if w > 0 and abs((ga.objectives[k] - g) / w - ga.gamma) < 1e-5]
+    md = _goal_attainment_markdown(cfg, ga, out, at_lower, pd_out, gamma_paper, binding, figs)
     from dataclasses import asdict
     h_opt = HarvesterParams.from_design(d["total_inertia_gcm2"], d["lead_mm_per_rev"],
                                         d["speed_constant_rpm_per_V"], d["load_ohm"],
@@ -258,36 +279,16 @@ def _order_note(rows: list[dict]) -> str:
             "road/tyre (the dissipation bound), not the method.\n\n")
 
 
-def step_friction_on_optimum(ctx: Context) -> StepOutput:
-    from .. import plots
-    from ..design.friction_optimum import friction_on_optimum
-    from ..design.sweep import default_friction_sets
-    from ..physics.params import HarvesterParams
-    from ..plots.design import friction_on_optimum as fig_fn
+def _range_cell_of(r: dict, case: str) -> str:
+    """Out-of-identified-range cell of one friction run (no energy share without friction)."""
+    from .coverage_report import range_cell
+    e = None if case == "none" else r.get("out_of_range_friction_energy_fraction")
+    return range_cell(r.get("out_of_range_time_fraction", float("nan")), e)
 
-    if (na := not_applicable(ctx)) is not None:
-        return na
-    cfg = design_config(ctx)
-    ga = ctx.results.get("design", {}).get("design")  # the goal-attainment step
-    if ga is None:
-        from ..design.optimize import optimize
-        ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga").design
-    sets, source = default_friction_sets(ctx.results.get("identification"),
-                                           ctx.friction_bounds)
-    speeds = (30.0, 70.0, 100.0, 130.0) if ctx.quick else (30.0, 50.0, 70.0, 90.0, 100.0,
-                                                            110.0, 130.0)
-    length = 300.0 if ctx.quick else 1000.0
-    from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
-    v_id, v_src = identified_range(ctx)
-    rows = friction_on_optimum(cfg, ga, sets, speeds, road_length_m=length, jobs=ctx.jobs,
-                               identified_range_m_per_s=v_id)
-    paper_design = {k: PAPER_OPTIMUM[k] for k in ("total_inertia_gcm2", "lead_mm_per_rev",
-                                                  "speed_constant_rpm_per_V", "load_ohm")}
-    rows_paper = friction_on_optimum(cfg, paper_design, sets, (100.0,), road_length_m=length,
-                                     jobs=1, identified_range_m_per_s=v_id)
-    pp = {r["friction"]: r for r in rows_paper}
-    rel = "figures/fig20_friction_on_optimum.png"
-    plots.save(fig_fn(rows), ctx.out_dir / rel)
+
+def _table4_lines(rows: list[dict]) -> list[str]:
+    """Markdown rows of our Table 4 at 100 km/h beside the paper's."""
+    from .coverage_report import RANGE_HEADER
     at100 = {r["friction"]: r for r in rows if r["speed_km_per_h"] == 100.0}
     T = PAPER_TABLE4
     lines = ["| at 100 km/h | no friction (ours / paper) | min friction (ours / paper) | "
@@ -309,17 +310,18 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
         ("valid" if not at100.get(c, {}).get("validity") else
          "**INVALID: " + "; ".join(at100[c]["validity"]) + "**")
         for c in ("none", "min", "max")) + " |")
+    lines.append(f"| {RANGE_HEADER} (ours; not in the paper) | " + " | ".join(
+        _range_cell_of(at100.get(c, {}), c) for c in ("none", "min", "max")) + " |")
+    return lines
+
+
+def _friction_explanation(cfg: Any, ga: dict, rows: list[dict], pp: dict,
+                          source: str) -> str:
+    """Markdown of the frequency-path check, invalid runs and the comparison with the paper."""
+    from ..physics.params import HarvesterParams
+    at100 = {r["friction"]: r for r in rows if r["speed_km_per_h"] == 100.0}
     invalid_runs = [f"{r['friction']} at {r['speed_km_per_h']:g} km/h" for r in rows
                     if r.get("validity")]
-
-    def rcell(r: dict, case: str) -> str:
-        e = None if case == "none" else r.get("out_of_range_friction_energy_fraction")
-        return range_cell(r.get("out_of_range_time_fraction", float("nan")), e)
-    lines.append(f"| {RANGE_HEADER} (ours; not in the paper) | " + " | ".join(
-        rcell(at100.get(c, {}), c) for c in ("none", "min", "max")) + " |")
-    t_all = [r.get("out_of_range_time_fraction", 0.0) for r in rows]
-    e_all = [None if r["friction"] == "none" else r.get("out_of_range_friction_energy_fraction")
-             for r in rows]
     h_opt = HarvesterParams.from_design(ga["total_inertia_gcm2"], ga["lead_mm_per_rev"],
                                         ga["speed_constant_rpm_per_V"], ga["load_ohm"],
                                         base=cfg.harvester)
@@ -337,7 +339,7 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
     if invalid_runs:
         check += ("**Invalid runs** (left out of the comparison below): "
                   + ", ".join(invalid_runs) + ".\n\n")
-    explain = (
+    return check + (
         f"**Against the paper.** Friction costs power and efficiency as in the paper "
         f"(efficiency falls from R_e/(R_e+R_i) = {none100.get('efficiency_pct', float('nan')):.1f} % "
         f"because part of the damper's work goes into friction). Comfort and road holding "
@@ -356,28 +358,68 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
         f"our tyre stiffness and the class-C mean roughness (140 W at 100 km/h), below the "
         f"paper's 174.9 W frictionless value. The friction sets are ours ({source}).\n\n"
         + _order_note(rows))
+
+
+def _paper_design_lines(pp: dict) -> str:
+    """Markdown table of the paper's design with friction in our model at 100 km/h."""
+    from .coverage_report import RANGE_HEADER
+    return ("| paper's design (J_t 250, lead 7, k_n 29.8, R_e 75) in our model, 100 km/h "
+            "| no friction | min friction | max friction |\n|---|---|---|---|\n"
+            + "".join(f"| {lab} | " + " | ".join(
+                ("–" if (c == "none" and "change" in key) else format(pp[c][key], fmt))
+                for c in ("none", "min", "max")) + " |\n"
+                for key, lab, fmt in (("power_W", "power (W)", ".1f"),
+                                      ("efficiency_pct", "efficiency (%)", ".2f"),
+                                      ("comfort_change_pct", "comfort change (%)", "+.2f"),
+                                      ("road_holding_change_pct", "road holding change (%)",
+                                       "+.2f")))
+            + "".join(f"| {RANGE_HEADER} | " + " | ".join(_range_cell_of(pp[c], c) for c in
+                                                           ("none", "min", "max")) + " |\n"
+                      for _ in [0]))
+
+
+def step_friction_on_optimum(ctx: Context) -> StepOutput:
+    from .. import plots
+    from ..design.friction_optimum import friction_on_optimum
+    from ..design.sweep import default_friction_sets
+    from ..plots.design import friction_on_optimum as fig_fn
+
+    if (na := not_applicable(ctx)) is not None:
+        return na
+    cfg = design_config(ctx)
+    ga = ctx.results.get("design", {}).get("design")  # the goal-attainment step
+    if ga is None:
+        from ..design.optimize import optimize
+        ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga").design
+    sets, source = default_friction_sets(ctx.results.get("identification"),
+                                           ctx.friction_bounds)
+    speeds = (30.0, 70.0, 100.0, 130.0) if ctx.quick else (30.0, 50.0, 70.0, 90.0, 100.0,
+                                                            110.0, 130.0)
+    length = 300.0 if ctx.quick else 1000.0
+    from .coverage_report import identified_range, range_flag
+    v_id, v_src = identified_range(ctx)
+    rows = friction_on_optimum(cfg, ga, sets, speeds, road_length_m=length, jobs=ctx.jobs,
+                               identified_range_m_per_s=v_id)
+    paper_design = {k: PAPER_OPTIMUM[k] for k in ("total_inertia_gcm2", "lead_mm_per_rev",
+                                                  "speed_constant_rpm_per_V", "load_ohm")}
+    rows_paper = friction_on_optimum(cfg, paper_design, sets, (100.0,), road_length_m=length,
+                                     jobs=1, identified_range_m_per_s=v_id)
+    pp = {r["friction"]: r for r in rows_paper}
+    rel = "figures/fig20_friction_on_optimum.png"
+    plots.save(fig_fn(rows), ctx.out_dir / rel)
+    t_all = [r.get("out_of_range_time_fraction", 0.0) for r in rows]
+    e_all = [None if r["friction"] == "none" else r.get("out_of_range_friction_energy_fraction")
+             for r in rows]
     md = (f"The goal-attainment optimum ({', '.join(f'{k} = {v:.4g}' for k, v in ga.items())}) "
           f"simulated in the time domain with friction, {cfg.vehicle_name} quarter car, class "
           f"{cfg.road.iso_class}, {len(speeds)} speeds, {length:g} m roads. Friction sets: "
           f"{source}. Sign convention as the paper's: a positive change is an improvement "
-          f"(lower α or η_rh than without friction).\n\n" + "\n".join(lines) + "\n\n"
-          + "| paper's design (J_t 250, lead 7, k_n 29.8, R_e 75) in our model, 100 km/h "
-            "| no friction | min friction | max friction |\n|---|---|---|---|\n"
-          + "".join(f"| {lab} | " + " | ".join(
-              ("–" if (c == "none" and "change" in key) else format(pp[c][key], fmt))
-              for c in ("none", "min", "max")) + " |\n"
-              for key, lab, fmt in (("power_W", "power (W)", ".1f"),
-                                    ("efficiency_pct", "efficiency (%)", ".2f"),
-                                    ("comfort_change_pct", "comfort change (%)", "+.2f"),
-                                    ("road_holding_change_pct", "road holding change (%)",
-                                     "+.2f")))
-          + "".join(f"| {RANGE_HEADER} | " + " | ".join(rcell(pp[c], c) for c in
-                                                         ("none", "min", "max")) + " |\n"
-                    for _ in [0])
+          f"(lower α or η_rh than without friction).\n\n" + "\n".join(_table4_lines(rows))
+          + "\n\n" + _paper_design_lines(pp)
           + range_flag(t_all, e_all, v_id, v_src) + " (All speeds of Fig 20: "
           + ", ".join(f"{r['speed_km_per_h']:g} km/h {r['friction']} "
                       f"{100 * r.get('out_of_range_time_fraction', 0.0):.0f} %"
                       for r in rows if r["friction"] == "max") + " of the time.)\n\n"
-          + "\n" + check + explain + f"![fig20]({rel})\n")
+          + "\n" + _friction_explanation(cfg, ga, rows, pp, source) + f"![fig20]({rel})\n")
     return StepOutput(md, [rel], {"rows": rows, "friction_source": source,
                                   "paper_design_rows": rows_paper})

@@ -27,37 +27,8 @@ def _fmt(v: float) -> str:
     return f"{v:.4g}"
 
 
-def step_identify_prototype(ctx):
-    """Per-test identification of the embedded prototype data, bounds, identifiability."""
-    from ..datasets.bench_format import load_bench
-    from ..datasets.embedded import load_truth
-    from ..estimation.bounds import friction_bounds
-    from ..utils.io import atomic_write_json
-    from .base import StepOutput
-
-    path = ctx.bench_dir
-    data = load_bench(path)
-    truth = (load_truth(path) or {}).get("friction", {})
-    starts = 2 if ctx.quick else 4
-    opts = IdentifyOptions(max_samples=500, max_intervals=100) if ctx.quick else IdentifyOptions()
-    if not data.has_generator:
-        opts = IdentifyOptions.for_rig(False)
-    rep = identify(data, starts=starts, jobs=ctx.jobs, seed=0, options=opts)
-    figdir = ctx.figure_dir / "identify_prototype"
-    figs = _rel(ctx, rep.write(figdir))
-    try:
-        fb = friction_bounds(rep)
-    except ValueError:
-        fb = None
-    doc = rep.to_json()
-    if fb is not None:
-        doc.update(fb.to_json())
-        from .. import plots
-        rel_b = "figures/identify_prototype/friction_bounds.png"
-        plots.save(fb.plot(truth=_truth_params(truth)), ctx.out_dir / rel_b)
-        figs.append(rel_b)
-    atomic_write_json(ctx.out_dir / "identify_prototype.json", doc)
-    r = data.harvester.lead_m_per_rad
+def _prototype_table2_lines(data, opts, starts: int, rep, truth: dict) -> list[str]:
+    """Markdown of the per-test setting and the paper-method bounds (Table 2)."""
     ok = [f for f in rep.fits if f.success]
     lines = [f"Each of the {len(data)} test(s) identified separately by direct collocation "
              f"(Radau, degree {opts.degree}, ≤ {opts.max_intervals} intervals) and IPOPT, "
@@ -75,9 +46,12 @@ def step_identify_prototype(ctx):
         lo, hi = rep.bounds.get(n, [float("nan")] * 2)
         lines.append(f"| `{n}` | {_fmt(lo)} | {_fmt(hi)} | {_fmt(truth.get(n, float('nan')))} "
                      f"| not in the text |")
-    if not ok:
-        return StepOutput("\n".join(lines[:1]) + "\nNo test converged: no bounds.\n", figs,
-                          {"converged": 0, "tests": len(data)})
+    return lines
+
+
+def _fit_quality_lines(ctx, ok: list, path) -> list[str]:
+    """Markdown of Eq 5 and the force error over the converged tests, with the hidden effects."""
+    from ..datasets.embedded import load_truth
     dF = [f.delta_F for f in ok]
     dV = [f.delta_V for f in ok if f.delta_V is not None]
     rel = [f.force_relative_error_percent for f in ok]
@@ -89,8 +63,13 @@ def step_identify_prototype(ctx):
     else:
         tail = (f"Hidden effects in the data (truth.toml): {hidden}; the discrepancy step "
                 "below looks for them." if hidden else "")
-    lines += ["", f"Eq 5 over the tests: δ_F {min(dF):.3f}–{max(dF):.3f}{dv_txt}; force "
-              f"relative error {min(rel):.2f}–{max(rel):.2f} %. {tail}\n"]
+    return ["", f"Eq 5 over the tests: δ_F {min(dF):.3f}–{max(dF):.3f}{dv_txt}; force "
+            f"relative error {min(rel):.2f}–{max(rel):.2f} %. {tail}\n"]
+
+
+def _identifiability_lines(ctx, rep, ok: list, opts) -> list[str]:
+    """Markdown of identifiability, spread across tests, voltage and the joint fit."""
+    lines: list[str] = []
     ident = rep.identifiable
     spread = ident.get("relative_spread_of_parameters", {})
     rod = ident.get("rod_friction_spread_by_velocity_m_per_s", {})
@@ -145,10 +124,13 @@ def step_identify_prototype(ctx):
                   f"{np.mean([x['force_relative_error_percent'] for x in he]):.2f} "
                   f"% (mean), held-out δ_F {min(x['delta_F'] for x in he):.3f}–"
                   f"{max(x['delta_F'] for x in he):.3f}.\n"]
-    if fb is not None:
-        lines += _bounds_markdown(fb, truth)
-    for f in figs:
-        lines.append(f"![{Path(f).stem}]({f})")
+    return lines
+
+
+def _prototype_results(data, rep, ok: list, fb) -> dict:
+    """Results of the prototype identification: convergence, rod friction, friction sets."""
+    rod = rep.identifiable.get("rod_friction_spread_by_velocity_m_per_s", {})
+    r = data.harvester.lead_m_per_rad
     rod_at = {v: d["mean_N"] for v, d in rod.items()}
     res = {"converged": len(ok), "tests": len(data), "rod_friction_mean_N": rod_at,
            "seconds": rep.seconds, "lead_m_per_rad": r, "has_generator": data.has_generator}
@@ -164,7 +146,51 @@ def step_identify_prototype(ctx):
                     if fb.paper_sets else None,
                     "paper_friction_max": fb.paper_sets["max"].as_dict()
                     if fb.paper_sets else None})
-    return StepOutput("\n".join(lines) + "\n", figs, res)
+    return res
+
+
+def step_identify_prototype(ctx):
+    """Per-test identification of the embedded prototype data, bounds, identifiability."""
+    from ..datasets.bench_format import load_bench
+    from ..datasets.embedded import load_truth
+    from ..estimation.bounds import friction_bounds
+    from ..utils.io import atomic_write_json
+    from .base import StepOutput
+
+    path = ctx.bench_dir
+    data = load_bench(path)
+    truth = (load_truth(path) or {}).get("friction", {})
+    starts = 2 if ctx.quick else 4
+    opts = IdentifyOptions(max_samples=500, max_intervals=100) if ctx.quick else IdentifyOptions()
+    if not data.has_generator:
+        opts = IdentifyOptions.for_rig(False)
+    rep = identify(data, starts=starts, jobs=ctx.jobs, seed=0, options=opts)
+    figdir = ctx.figure_dir / "identify_prototype"
+    figs = _rel(ctx, rep.write(figdir))
+    try:
+        fb = friction_bounds(rep)
+    except ValueError:
+        fb = None
+    doc = rep.to_json()
+    if fb is not None:
+        doc.update(fb.to_json())
+        from .. import plots
+        rel_b = "figures/identify_prototype/friction_bounds.png"
+        plots.save(fb.plot(truth=_truth_params(truth)), ctx.out_dir / rel_b)
+        figs.append(rel_b)
+    atomic_write_json(ctx.out_dir / "identify_prototype.json", doc)
+    ok = [f for f in rep.fits if f.success]
+    lines = _prototype_table2_lines(data, opts, starts, rep, truth)
+    if not ok:
+        return StepOutput("\n".join(lines[:1]) + "\nNo test converged: no bounds.\n", figs,
+                          {"converged": 0, "tests": len(data)})
+    lines += _fit_quality_lines(ctx, ok, path)
+    lines += _identifiability_lines(ctx, rep, ok, opts)
+    if fb is not None:
+        lines += _bounds_markdown(fb, truth)
+    for f in figs:
+        lines.append(f"![{Path(f).stem}]({f})")
+    return StepOutput("\n".join(lines) + "\n", figs, _prototype_results(data, rep, ok, fb))
 
 
 def _truth_params(truth: dict) -> "FrictionParams | None":

@@ -126,16 +126,142 @@ def _design_space(cfg: Any, sets: dict, ga_design: dict, speeds: tuple, n_lead: 
     return rows
 
 
+def _fronts(cfg: Any, plain: Any, robust: Any, ga_p: Any, ga_r: Any,
+            quick: bool) -> tuple[dict, dict]:
+    """Frictionless and friction-aware NSGA-II fronts and GA optima, all evaluated with friction."""
+    from ..design.nsga2 import run_nsga2
+    pop, gens = (16, 8) if quick else (40, 25)
+    fr_p = run_nsga2(plain, pop_size=pop, n_gen=gens, seed=cfg.nsga2.seed)
+    fr_r = run_nsga2(robust, pop_size=pop, n_gen=gens, seed=cfg.nsga2.seed)
+    ev = robust.evaluator
+    fronts = {"frictionless front, with friction": ev(fr_p.designs),
+              "friction-aware front": ev(fr_r.designs)}
+    points = {"frictionless GA optimum": {k: float(np.ravel(v)[0]) for k, v in ev(
+        {k: np.array([v]) for k, v in ga_p.design.items()}).items()},
+              "friction-aware GA optimum": {k: float(np.ravel(v)[0]) for k, v in ev(
+        {k: np.array([v]) for k, v in ga_r.design.items()}).items()}}
+    return fronts, points
+
+
+def _price_of_friction(cfg: Any, road: Any, hs: list, sets: dict) -> tuple[dict, list[str]]:
+    """Both optima re-simulated in the time domain with each friction set: numbers and rows."""
+    from ..design.robust import time_domain_objectives
+    price_lines = ["| friction | power W: frictionless opt. / friction-aware opt. (Δ) | "
+                   "comfort α (Δ %) | road holding η_rh (Δ %) |", "|---|---|---|---|"]
+    price = {}
+    for name, fr in (("min", sets["min"]), ("max", sets["max"])):
+        td = time_domain_objectives(cfg.vehicle, road, hs, [fr], "at")
+        pw, a, rh = td["power_W"], td["comfort"], td["road_holding"]
+        price[name] = {"power_W": [float(pw[0]), float(pw[1])],
+                       "comfort": [float(a[0]), float(a[1])],
+                       "road_holding": [float(rh[0]), float(rh[1])]}
+        price_lines.append(
+            f"| {name} | {pw[0]:.1f} / {pw[1]:.1f} ({pw[1] - pw[0]:+.1f} W) | {a[0]:.4f} / "
+            f"{a[1]:.4f} ({100 * (a[1] / a[0] - 1):+.1f} %) | {rh[0]:.4f} / {rh[1]:.4f} "
+            f"({100 * (rh[1] / rh[0] - 1):+.1f} %) |")
+    return price, price_lines
+
+
+def _add_price_coverage(ctx: Context, cfg: Any, road: Any, robust: Any, designs: list,
+                        sets: dict, price_lines: list[str]) -> str:
+    """Append the out-of-range column to the price rows (fast path); return the range flag."""
+    # how much of each optimum's friction is extrapolated (fast path, Gaussian stroke
+    # velocity), beside the price table
+    from ..vehicle.coverage import design_coverage
+    from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
+    v_id, v_src = identified_range(ctx)
+    cov_t, cov_e = [], []
+    price_lines[0] += f" {RANGE_HEADER}: frictionless opt.; friction-aware opt. (fast path) |"
+    price_lines[1] += "---|"
+    for j, name in enumerate(("min", "max")):
+        cells = []
+        for d in designs:
+            c = design_coverage(cfg.vehicle, road, robust.evaluator.design_mapping(
+                {k: np.array([v]) for k, v in d.items()}), [sets[name]], v_id,
+                base=cfg.harvester)
+            t, e = float(c["time_fraction"][0, 0]), float(c["energy_fraction"][0, 0])
+            cov_t.append(t)
+            cov_e.append(e)
+            cells.append(range_cell(t, e))
+        price_lines[2 + j] += " " + "; ".join(cells) + " |"
+    return range_flag(cov_t, cov_e, v_id, v_src)
+
+
+def _fast_path_check(cfg: Any, sets: dict, start: dict, hs: list, quick: bool) -> dict:
+    """Fast path against the time domain on a small validation set: errors, rows, timings."""
+    from ..vehicle.fast_path.validation import CHECK_METRICS, RoadCase, check_case, summarise
+    from .paper_reference import PAPER_OPTIMUM
+    cases = [RoadCase("C", 70.0, 21, 300.0)] if quick else [
+        RoadCase("B", 30.0, 21), RoadCase("C", 70.0, 22), RoadCase("D", 130.0, 23)]
+    designs = [cfg.harvester, _harvester(cfg, {k: PAPER_OPTIMUM[k] for k in start}), *hs]
+    fr_sets = [dataclasses.replace(sets["min"], **{k: 0.0 for k in
+                                                   ("nut_breakaway_N", "nut_coulomb_N",
+                                                    "nut_viscous_Ns_per_m",
+                                                    "bearing_breakaway_Nm",
+                                                    "bearing_coulomb_Nm",
+                                                    "bearing_viscous_Nms_per_rad")}),
+               sets["min"], sets["max"]]
+    res = [check_case(cfg.vehicle, c, designs, fr_sets) for c in cases]
+    s = summarise(res)
+    err_lines = ["| metric | worst abs. error | median abs. error |", "|---|---|---|"]
+    err_lines += [f"| {k} | {100 * s[k]['worst']:.2f} % | {100 * s[k]['median']:.2f} % |"
+                  for k in CHECK_METRICS]
+    return {"cases": cases, "n_designs": len(designs), "summary": s, "lines": err_lines,
+            "n_pairs": sum(r["n_pairs"] for r in res),
+            "time_wall_s": sum(r["time_wall_s"] for r in res),
+            "fast_wall_s": sum(r["fast_wall_s"] for r in res)}
+
+
+def _design_text(d: dict) -> str:
+    """One-line description of a design (J_t, lead, k_n, R_e)."""
+    return (f"J_t = {d['total_inertia_gcm2']:.0f} g cm², p = {d['lead_mm_per_rev']:.2f} "
+            f"mm/rev, k_n = {d['speed_constant_rpm_per_V']:.1f} rpm/V, R_e = "
+            f"{d['load_ohm']:.1f} Ω")
+
+
+def _robust_markdown(cfg: Any, source: str, ga_p: Any, ga_r: Any, figs: list[str], road: Any,
+                     price_lines: list[str], price_flag: str, fp: dict, conv_table: str,
+                     best_level: str, t0: float) -> str:
+    """Markdown of the robust-design section."""
+    fmt = _design_text
+    length = road.length_m
+    cases = fp["cases"]
+    return (
+        f"Friction sets: {source}. Friction-aware objectives: worst of min/max by the fast "
+        f"path (stochastic equivalent linearisation, `ehsa_opt.vehicle.fast_path.linearisation`, with the "
+        f"friction's residual force under Gaussian closure), goals = "
+        f"the prototype's objectives under the same friction.\n\n"
+        f"- frictionless goal-attainment optimum: {fmt(ga_p.design)} (γ = {ga_p.gamma:+.3f})\n"
+        f"- friction-aware optimum: {fmt(ga_r.design)} (γ = {ga_r.gamma:+.3f})\n\n"
+        f"![fronts]({figs[0]})\n\n"
+        f"**The price of ignoring friction** (both optima re-simulated in the time domain with "
+        f"friction, class {road.iso_class}, {road.speed_km_per_h:g} km/h, {length:g} m):\n\n"
+        + "\n".join(price_lines) + price_flag + " The worst case over min/max is a bound "
+        "only because the sets are ordered at every velocity (min ≤ best ≤ max).\n\n"
+        f"**Fast path against the time domain** ({fp['n_designs']} designs — prototype, paper "
+        f"optimum, both optima — × none/min/max friction × "
+        + ", ".join(f"{c.iso_class} {c.speed_km_per_h:g} km/h ({c.length:.0f} m)"
+                    for c in cases)
+        + f"; {fp['n_pairs']:.0f} pairs; time domain {fp['time_wall_s']:.1f} s, fast path "
+        f"{fp['fast_wall_s']:.3f} s; the full "
+        f"validation set is `validation/friction_fast_path.py`):\n\n"
+        + "\n".join(fp["lines"]) + "\n\n"
+        "**Road-class convention** (fast path; paper optimum at 100 km/h with no/min/max "
+        "friction — our friction sets, not the paper's — and Fig 19's power):\n\n"
+        + conv_table + "\n\n" + _convention_statement(cfg, best_level) + "\n\n"
+        f"**Design space** — optimum lead and load (grid, J_t and k_n at the frictionless "
+        f"optimum; min over the grid of the attainment factor against the prototype at the "
+        f"same friction and speed):\n\n![design space]({figs[1]})\n\n"
+        f"_(step {time.perf_counter() - t0:.1f} s)_\n")
+
+
 def step_robust_design(ctx: Context) -> StepOutput:
     from .. import plots
     from ..design.goal import solve_goal_attainment
-    from ..design.nsga2 import run_nsga2
     from ..design.optimize import build_problem, goals_and_weights
     from ..design.problem import OBJECTIVE_NAMES
-    from ..design.robust import time_domain_objectives
     from ..design.sweep import default_friction_sets
     from ..plots.robust import fronts_with_friction, optimum_vs_friction_and_speed
-    from ..vehicle.fast_path.validation import (CHECK_METRICS, RoadCase, check_case, summarise)
     from .design_problem import design_config
     from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
 
@@ -155,17 +281,7 @@ def step_robust_design(ctx: Context) -> StepOutput:
     ga_p = solve_goal_attainment(plain, g_p, w_p, start, n_starts=n_starts, seed=0)
     ga_r = solve_goal_attainment(robust, g_r, w_r, start, n_starts=n_starts, seed=0)
 
-    # fronts
-    pop, gens = (16, 8) if quick else (40, 25)
-    fr_p = run_nsga2(plain, pop_size=pop, n_gen=gens, seed=cfg.nsga2.seed)
-    fr_r = run_nsga2(robust, pop_size=pop, n_gen=gens, seed=cfg.nsga2.seed)
-    ev = robust.evaluator
-    fronts = {"frictionless front, with friction": ev(fr_p.designs),
-              "friction-aware front": ev(fr_r.designs)}
-    points = {"frictionless GA optimum": {k: float(np.ravel(v)[0]) for k, v in ev(
-        {k: np.array([v]) for k, v in ga_p.design.items()}).items()},
-              "friction-aware GA optimum": {k: float(np.ravel(v)[0]) for k, v in ev(
-        {k: np.array([v]) for k, v in ga_r.design.items()}).items()}}
+    fronts, points = _fronts(cfg, plain, robust, ga_p, ga_r, quick)
     figs = ["figures/robust_fronts.png", "figures/robust_design_space.png"]
     plots.save(fronts_with_friction(fronts, points), ctx.out_dir / figs[0])
 
@@ -173,99 +289,20 @@ def step_robust_design(ctx: Context) -> StepOutput:
     length = 300.0 if quick else 1000.0
     road = dataclasses.replace(cfg.road, length_m=length)
     hs = [_harvester(cfg, ga_p.design), _harvester(cfg, ga_r.design)]
-    price_lines = ["| friction | power W: frictionless opt. / friction-aware opt. (Δ) | "
-                   "comfort α (Δ %) | road holding η_rh (Δ %) |", "|---|---|---|---|"]
-    price = {}
-    for name, fr in (("min", sets["min"]), ("max", sets["max"])):
-        td = time_domain_objectives(cfg.vehicle, road, hs, [fr], "at")
-        pw, a, rh = td["power_W"], td["comfort"], td["road_holding"]
-        price[name] = {"power_W": [float(pw[0]), float(pw[1])],
-                       "comfort": [float(a[0]), float(a[1])],
-                       "road_holding": [float(rh[0]), float(rh[1])]}
-        price_lines.append(
-            f"| {name} | {pw[0]:.1f} / {pw[1]:.1f} ({pw[1] - pw[0]:+.1f} W) | {a[0]:.4f} / "
-            f"{a[1]:.4f} ({100 * (a[1] / a[0] - 1):+.1f} %) | {rh[0]:.4f} / {rh[1]:.4f} "
-            f"({100 * (rh[1] / rh[0] - 1):+.1f} %) |")
-
-    # how much of each optimum's friction is extrapolated (fast path, Gaussian stroke
-    # velocity), beside the price table
-    from ..vehicle.coverage import design_coverage
-    from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
-    v_id, v_src = identified_range(ctx)
-    cov_t, cov_e = [], []
-    price_lines[0] += f" {RANGE_HEADER}: frictionless opt.; friction-aware opt. (fast path) |"
-    price_lines[1] += "---|"
-    for j, name in enumerate(("min", "max")):
-        cells = []
-        for d in (ga_p.design, ga_r.design):
-            c = design_coverage(cfg.vehicle, road, robust.evaluator.design_mapping(
-                {k: np.array([v]) for k, v in d.items()}), [sets[name]], v_id,
-                base=cfg.harvester)
-            t, e = float(c["time_fraction"][0, 0]), float(c["energy_fraction"][0, 0])
-            cov_t.append(t)
-            cov_e.append(e)
-            cells.append(range_cell(t, e))
-        price_lines[2 + j] += " " + "; ".join(cells) + " |"
-    price_flag = range_flag(cov_t, cov_e, v_id, v_src)
-
-    # fast-path error table
-    cases = [RoadCase("C", 70.0, 21, 300.0)] if quick else [
-        RoadCase("B", 30.0, 21), RoadCase("C", 70.0, 22), RoadCase("D", 130.0, 23)]
-    designs = [cfg.harvester, _harvester(cfg, {k: PAPER_OPTIMUM[k] for k in start}), *hs]
-    fr_sets = [dataclasses.replace(sets["min"], **{k: 0.0 for k in
-                                                   ("nut_breakaway_N", "nut_coulomb_N",
-                                                    "nut_viscous_Ns_per_m",
-                                                    "bearing_breakaway_Nm",
-                                                    "bearing_coulomb_Nm",
-                                                    "bearing_viscous_Nms_per_rad")}),
-               sets["min"], sets["max"]]
-    res = [check_case(cfg.vehicle, c, designs, fr_sets) for c in cases]
-    s = summarise(res)
-    err_lines = ["| metric | worst abs. error | median abs. error |", "|---|---|---|"]
-    err_lines += [f"| {k} | {100 * s[k]['worst']:.2f} % | {100 * s[k]['median']:.2f} % |"
-                  for k in CHECK_METRICS]
-    rate = sum(r["n_pairs"] for r in res)
-    t_td = sum(r["time_wall_s"] for r in res)
-    t_fp = sum(r["fast_wall_s"] for r in res)
+    price, price_lines = _price_of_friction(cfg, road, hs, sets)
+    price_flag = _add_price_coverage(ctx, cfg, road, robust, [ga_p.design, ga_r.design], sets,
+                                     price_lines)
+    fp = _fast_path_check(cfg, sets, start, hs, quick)
 
     conv_table, best_level = _road_convention(cfg, sets, PAPER_OPTIMUM, PAPER_TABLE4)
     speeds = (30.0, 70.0, 130.0) if quick else (30.0, 50.0, 70.0, 90.0, 110.0, 130.0)
     rows = _design_space(cfg, sets, ga_p.design, speeds, 8 if quick else 16,
                          12 if quick else 40)
     plots.save(optimum_vs_friction_and_speed(rows), ctx.out_dir / figs[1])
-
-    def fmt(d: dict) -> str:
-        return (f"J_t = {d['total_inertia_gcm2']:.0f} g cm², p = {d['lead_mm_per_rev']:.2f} "
-                f"mm/rev, k_n = {d['speed_constant_rpm_per_V']:.1f} rpm/V, R_e = "
-                f"{d['load_ohm']:.1f} Ω")
-    md = (
-        f"Friction sets: {source}. Friction-aware objectives: worst of min/max by the fast "
-        f"path (stochastic equivalent linearisation, `ehsa_opt.vehicle.fast_path.linearisation`, with the "
-        f"friction's residual force under Gaussian closure), goals = "
-        f"the prototype's objectives under the same friction.\n\n"
-        f"- frictionless goal-attainment optimum: {fmt(ga_p.design)} (γ = {ga_p.gamma:+.3f})\n"
-        f"- friction-aware optimum: {fmt(ga_r.design)} (γ = {ga_r.gamma:+.3f})\n\n"
-        f"![fronts]({figs[0]})\n\n"
-        f"**The price of ignoring friction** (both optima re-simulated in the time domain with "
-        f"friction, class {road.iso_class}, {road.speed_km_per_h:g} km/h, {length:g} m):\n\n"
-        + "\n".join(price_lines) + price_flag + " The worst case over min/max is a bound "
-        "only because the sets are ordered at every velocity (min ≤ best ≤ max).\n\n"
-        f"**Fast path against the time domain** ({len(designs)} designs — prototype, paper "
-        f"optimum, both optima — × none/min/max friction × "
-        + ", ".join(f"{c.iso_class} {c.speed_km_per_h:g} km/h ({c.length:.0f} m)"
-                    for c in cases)
-        + f"; {rate:.0f} pairs; time domain {t_td:.1f} s, fast path {t_fp:.3f} s; the full "
-        f"validation set is `validation/friction_fast_path.py`):\n\n"
-        + "\n".join(err_lines) + "\n\n"
-        "**Road-class convention** (fast path; paper optimum at 100 km/h with no/min/max "
-        "friction — our friction sets, not the paper's — and Fig 19's power):\n\n"
-        + conv_table + "\n\n" + _convention_statement(cfg, best_level) + "\n\n"
-        f"**Design space** — optimum lead and load (grid, J_t and k_n at the frictionless "
-        f"optimum; min over the grid of the attainment factor against the prototype at the "
-        f"same friction and speed):\n\n![design space]({figs[1]})\n\n"
-        f"_(step {time.perf_counter() - t0:.1f} s)_\n")
+    md = _robust_markdown(cfg, source, ga_p, ga_r, figs, road, price_lines, price_flag, fp,
+                          conv_table, best_level, t0)
     results = {"frictionless_optimum": ga_p.design, "robust_optimum": ga_r.design,
-               "price_of_ignoring_friction": price, "fast_path_errors": s,
+               "price_of_ignoring_friction": price, "fast_path_errors": fp["summary"],
                "closer_road_convention": best_level, "design_space": rows,
                "objectives_frictionless_front": {k: np.asarray(fronts[
                    "frictionless front, with friction"][k]).tolist() for k in OBJECTIVE_NAMES}}
