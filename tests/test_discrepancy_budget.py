@@ -72,3 +72,24 @@ def test_cli_budget_cuts_with_a_stated_partial_answer(tmp_path, capsys):
     doc = json.loads((out / "discrepancy.json").read_text())
     assert doc["partial"] and doc["budget_s"] == 2.0
     assert "time budget of 2 s reached" in capsys.readouterr().out
+
+
+def test_workflow_deadline_gives_a_stated_partial_answer(tmp_path):
+    """The workflow's own deadline (``budget_s``): reached after the baseline, no round
+    starts; the result is decided on what was done and says where it was cut."""
+    from ehsa_opt.estimation.discrepancy import run_discrepancy
+    from ehsa_opt.estimation.discrepancy.results import DiscrepancySettings
+    d = tmp_path / "data"
+    write_synthetic(d, SyntheticSpec(frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(15.0, 109.0),
+                                     cycles=1.0, seed=2))
+    res = run_discrepancy(d, DiscrepancySettings(budget_s=1e-3, discover=False))
+    assert not res.success and res.effect == "undecided" and not res.candidates
+    assert "reached before round 1" in res.cut and "partial answer" in res.message
+    doc = res.as_dict()
+    assert doc["partial"] and doc["cut"] == res.cut
+    try:
+        DiscrepancySettings(budget_s=0)
+    except ValueError as exc:
+        assert "budget_s" in str(exc)
+    else:
+        raise AssertionError("budget_s=0 accepted")

@@ -92,7 +92,8 @@ from .decide import (
     supported,
 )
 from .lag import try_lag
-from .results import NONE_OF_CATALOGUE, CandidateResult, DiscrepancyResult, DiscrepancySettings
+from .results import (NONE_OF_CATALOGUE, UNDECIDED, CandidateResult, DiscrepancyResult,
+                      DiscrepancySettings)
 from .rounds import _judge, _on_top, _run_fits
 from .terms import TermProposal, discover_term
 
@@ -118,6 +119,8 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                      log: Any) -> DiscrepancyResult:
     t_start = time.perf_counter()
     settings = settings or DiscrepancySettings()
+    deadline = t_start + settings.budget_s if settings.budget_s else math.inf
+    cut = ""
     say = log or (lambda msg: None)
     notes: list[str] = []
     if not isinstance(data, BenchData):
@@ -196,6 +199,11 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     # that completes its path: (state before it, its error before) until then
     joint: tuple | None = None
     for rnd in range(1, settings.max_effects + 1):
+        if time.perf_counter() > deadline:
+            cut = cut or (f"time budget {settings.budget_s:g} s reached before round {rnd}: "
+                          f"no further round run")
+            say(cut)
+            break
         comps = components_for(remaining, fit_pts, cur_fit, lead)
         sub_pred = [cur_fit[next(k for k, q in enumerate(fit_pts) if q is p)] for p in sub_pts]
         flex = "flexibility" in remaining and not rig.has_generator
@@ -247,10 +255,20 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                      cur_ev_pred=cur_held or cur_fit, masks=masks)
 
         def fit_and_judge(names: list[str]) -> None:
-            args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts, cur_rig,
-                     cur_params, settings.max_iter) for n in names]
-            for out in _run_fits(args, settings.jobs):
-                _judge(cands[out[0]], out, **judge)
+            nonlocal cut
+            # with a budget, the fits go in batches of `jobs` and stop at the deadline
+            step = len(names) if math.isinf(deadline) else settings.jobs
+            for a in range(0, len(names), max(step, 1)):
+                if time.perf_counter() > deadline:
+                    cut = (f"time budget {settings.budget_s:g} s reached in round {rnd}: "
+                           f"{', '.join(names[a:])} not re-identified; the round is decided "
+                           f"on the candidates fitted before the cut")
+                    say(cut)
+                    return
+                args = [(n, comps[n], CANDIDATES[n].starts, sub_pts, fit_pts, held_pts,
+                         cur_rig, cur_params, settings.max_iter) for n in names[a:a + step]]
+                for out in _run_fits(args, settings.jobs):
+                    _judge(cands[out[0]], out, **judge)
 
         fit_and_judge(chosen)
         if flex_out is not None:  # judged by the same rule, fitted by variable projection
@@ -263,7 +281,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 cf.intervals["flex_stiffness_N_per_m"] = (iv[0] * w2, iv[1] * w2) if iv else None
         earning = [c for c in cands.values() if c.earns]
         first = None
-        if should_widen(earning, force_can_earn):
+        if not cut and should_widen(earning, force_can_earn):
             more = [n for n in order if n not in chosen and scores[n]["applicable"]
                     and n != "flexibility"
                     and compatible(cur_rig, comps[n])]
@@ -275,7 +293,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 fit_and_judge(more)
                 earning = [c for c in cands.values() if c.earns]
                 blocked = confounded(list(cands.values()))
-                if blocked is not None:
+                if blocked is not None and not cut:
                     first = lookahead_winner(
                         earning, blocked, lambda c: _on_top(c, blocked, judge, sub_pts,
                                                             settings.max_iter, rnd), say,
@@ -358,14 +376,19 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 f"{term.error_after:.3f} % ({'earns' if term.earns else 'does not earn'})")
     if effects:
         effect = " + ".join(effects)
+    elif cut:  # nothing named before the cut: the completed work does not say "none"
+        effect = UNDECIDED
     else:
         effect = NONE_OF_CATALOGUE if term is not None and term.earns else "none"
     loc1 = localise(fit_pts + held_pts, cur_fit + cur_held, lead_m_per_rad=lead) \
         if effects else None
-    ok = base.success and all(c.fit is not None and c.fit.parameters
-                              for c in all_cands if c.fitted)
+    ok = base.success and not cut and all(c.fit is not None and c.fit.parameters
+                                          for c in all_cands if c.fitted)
     msg = (f"effect {effect}: relative force error on {evaluation} "
            f"{err0:.3f} % -> {cur_err:.3f} % (noise floor {floor:.3f} %)")
+    if cut:
+        msg += f"; partial answer — {cut}"
+        notes.append(cut)
     if effect == NONE_OF_CATALOGUE:
         msg += f"; proposed term: {term.description}"
     validation = None
@@ -389,7 +412,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         ok, msg, effect, err0, cur_err, evaluation, all_cands, base, rig, fit_pts, held_pts,
         base_fit_pred + base_held_pred, loc0, loc1, {"fit": n_eff_fit, "heldout": n_eff_held},
         time.perf_counter() - t_start, str(getattr(data, "path", "")), effects, steps, term,
-        floor, validation, notes)
+        floor, validation, notes, cut)
 
 
 def _flexibility_round(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_params, comps,
