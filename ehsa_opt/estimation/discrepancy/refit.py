@@ -26,6 +26,7 @@ from .fit import (
     force_relative_error_percent,
     predict,
 )
+from .deadline import past_deadline
 from .polish import polish
 
 __all__ = ["split_tests", "effective_samples", "split_friction", "fit_candidate", "compatible",
@@ -181,9 +182,15 @@ def _screen(fit_pts: Sequence[PreparedTest], rig: Rig, crig: Rig, starts: Sequen
         return _screen_sse(fit_pts, rig, predict(fit_pts, crig, st), st)
 
     pool = [split_friction(st, sh, r) if sh > 0 else dict(st) for st in starts for sh in shares]
-    sses = [cost(st) for st in pool]
+    sses = []
+    for st in pool:  # at the run's deadline: the best of those simulated so far
+        sses.append(cost(st))
+        if past_deadline():
+            break
     best, sbest = pool[int(np.nanargmin(sses))], float(np.nanmin(sses))
     for over in refine:
+        if past_deadline():
+            break
         st = {**best, **over}
         c = cost(st)
         if c < sbest:
@@ -376,6 +383,9 @@ def _match_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, res: FitOutcom
     if not sse > MISMATCH_RATIO * res.sse:
         return res, pf
     notes = [f"simulated SSE {sse:.4g} vs collocation {res.sse:.4g}"]
+    if past_deadline():
+        notes.append("not refined: the run's time budget was reached")
+        return replace(res, starts=[*res.starts, {"refinement": notes}]), pf
     fine = fit_group(fit_pts, crig, [res.parameters], free=list(free), fixed=res.parameters,
                      max_iter=max_iter, substeps=REFINE_SUBSTEPS)
     if fine.parameters:

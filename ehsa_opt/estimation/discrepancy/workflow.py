@@ -55,6 +55,7 @@ from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
 from ..identify_options import MIN_RESOLVED_SAMPLES
 from .candidates import CANDIDATES, components_for, signature_scores
+from .deadline import deadline_set
 from .evidence import WHITE_P, disturbance_masks, residual_is_white
 from .fit import (
     Rig,
@@ -111,7 +112,9 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
     log : callable, optional
         Progress messages (e.g. ``print``).
     """
-    with single_threaded_blas():  # process-level parallelism only (see the utility)
+    # process-level parallelism only (see the utility); the deadline reaches into the
+    # candidate fits (their screening and simulation refinements stop at it)
+    with single_threaded_blas(), deadline_set(settings.budget_s if settings else None):
         return _run_discrepancy(data, settings, log)
 
 
