@@ -1,4 +1,4 @@
-"""Held-out confusion benchmark of the model-discrepancy workflow (issue 12).
+"""Held-out confusion benchmark of the model-discrepancy workflow.
 
 Two disjoint sets of synthetic cases:
 
@@ -15,7 +15,7 @@ Two disjoint sets of synthetic cases:
     effects outside the catalogue (force channel lag, rough spot over 6 mm of
     stroke, periodic lead error).
 
-Since issue 12's new members the rough spot is a catalogue case: its generator
+Since the catalogue holds ``position_friction`` the rough spot is a catalogue case: its generator
 (:class:`RoughSpot`) stays, and the case (label ``position_friction~rough_spot``)
 is right when ``position_friction`` is named.  Both sets also hold cases of the
 members ``position_friction`` and ``magnetic_saturation``.
@@ -111,7 +111,7 @@ CASES = {
                                                                "rough_centre_m": -0.005}},
          None, 1),
         ("none", {}, None, 3),
-        # added for issue 12's held-out failure modes (other magnitudes and seeds than
+        # added for the held-out failure modes (other magnitudes and seeds than
         # the held-out cases): a gap plus a cogging ranked below the transmission
         # candidates, and a strong heating (a second effect was named at the floor)
         ("backlash+cogging", {"backlash": {"backlash_gap_m": 8e-5},
@@ -123,7 +123,7 @@ CASES = {
         ("backlash+cogging", {"backlash": {"backlash_gap_m": 1.5e-4},
                               "cogging": {"cogging_cos_Nm": 0.015}}, ("cogging_periods", 18), 7),
         ("winding_heating", {"winding_heating": {"winding_heating_K_per_J": 8.0}}, None, 2),
-        # the members position_friction and magnetic_saturation (issue 12)
+        # the members position_friction and magnetic_saturation
         ("position_friction", {"position_friction": {
             "position_friction_N": 10.0, "position_friction_centre_m": 0.003,
             "position_friction_width_m": 0.008}}, None, 1),
@@ -173,7 +173,7 @@ CASES = {
          15),
         ("out:lead_error", {"bench_lead_error": {"lead_error_rel": 0.05}}, None, 16),
         ("none", {}, None, 17),
-        # chosen a priori with the members (issue 12): a small and a realistic size each
+        # chosen a priori with the members: a small and a realistic size each
         ("position_friction", {"position_friction": {
             "position_friction_N": 3.0, "position_friction_centre_m": 0.002,
             "position_friction_width_m": 0.006}}, None, 18),
@@ -243,12 +243,12 @@ def run_case(args: tuple) -> dict:
 def oracle(res, effects: dict, post: tuple | None, friction) -> dict:
     """What the *true* model achieves on the case's held-out tests: its relative force
     error and whether it would pass the excess-reduction part of the decision rule
-    (:func:`~ehsa_opt.estimation.discrepancy.refit.earns` with ΔBIC ignored) against
+    (:func:`~ehsa_opt.estimation.discrepancy.evidence.earns` with ΔBIC ignored) against
     the workflow's baseline.  A catalogue case whose truth does not pass is below
     what the held-out data can show (the detection limit): no method could name it
     by this rule.  Not defined for the force-channel lag (not a model component)."""
     from ehsa_opt.estimation.discrepancy.fit import predict
-    from ehsa_opt.estimation.discrepancy.refit import _force_error, earns
+    from ehsa_opt.estimation.discrepancy.evidence import earns, force_error_percent
     from ehsa_opt.physics import make_component
     if post and post[0] == "lag_s" or not res.heldout_tests:
         return {"error_true": None, "truth_earns": None}
@@ -261,8 +261,8 @@ def oracle(res, effects: dict, post: tuple | None, friction) -> dict:
         values.update({**c.defaults(), **effects[c.name]})
     pred = predict(held, res.rig.with_components(comps), values)
     base = res.baseline_pred[len(res.fit_tests):]
-    e0, e1 = _force_error(held, base), _force_error(held, pred)
-    from ehsa_opt.estimation.discrepancy.decide import channel_sse, channel_sse_excess_reduction
+    e0, e1 = force_error_percent(held, base), force_error_percent(held, pred)
+    from ehsa_opt.estimation.discrepancy.evidence import channel_sse, channel_sse_excess_reduction
     s0, n = channel_sse(held, base)
     sse_red = channel_sse_excess_reduction(s0, channel_sse(held, pred)[0], n)
     return {"error_true": e1, "truth_earns": bool(earns(
@@ -330,7 +330,7 @@ def main() -> None:
                                    for a in answers))
     cat = [r for r in rows if not r["truth"].startswith("out:")]
     out = [r for r in rows if r["truth"].startswith("out:")]
-    from ehsa_opt.estimation.discrepancy.refit import MIN_EXCESS_REDUCTION
+    from ehsa_opt.estimation.discrepancy.evidence import MIN_EXCESS_REDUCTION
     worse = [r for r in rows for (_, e0, e1, *sse) in r["named_gains"]
              if not (e1 < e0 or (sse and sse[0] is not None
                                  and sse[0] >= MIN_EXCESS_REDUCTION))]

@@ -1,6 +1,8 @@
 """The package's layout keeps its promises (docs/architecture.md): no import cycle,
 lower rooms never import higher ones, no module over 600 lines, no collocation/IPOPT
-builder outside the estimation room, no pickle loads of output files."""
+builder outside the estimation room, no pickle loads of output files; in the folders
+of :data:`PUBLIC_ONLY`, only public names cross modules and no function is longer
+than :data:`MAX_FUNCTION_LINES` lines."""
 
 from __future__ import annotations
 
@@ -130,6 +132,66 @@ def test_collocation_only_in_estimation() -> None:
     assert not offenders, f"IPOPT/nlpsol builders outside ehsa_opt/estimation: {offenders}"
 
 
+
+
+#: Folders (relative to ``ehsa_opt/``, as path prefixes) whose modules import no
+#: ``_private`` name from another ehsa_opt module and define no function over
+#: :data:`MAX_FUNCTION_LINES` lines.  Widen by adding prefixes ("" is the package).
+PUBLIC_ONLY: tuple[str, ...] = ("estimation/discrepancy/",)
+MAX_FUNCTION_LINES = 120
+
+
+def _in_public_only(path: Path) -> bool:
+    rel = path.relative_to(PKG).as_posix()
+    return any(rel.startswith(prefix) for prefix in PUBLIC_ONLY)
+
+
+def private_imports(source: str, mod: str) -> list[str]:
+    """``module:line: from X import _name`` for every import of a private name from
+    another ehsa_opt module (relative imports and ``ehsa_opt.…``) in the ``source`` of
+    module ``mod``, also inside functions."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        if not node.level and not (node.module or "").startswith("ehsa_opt"):
+            continue  # third-party or standard library
+        for alias in node.names:
+            if alias.name.startswith("_") and not alias.name.startswith("__"):
+                src = "." * node.level + (node.module or "")
+                found.append(f"{mod}:{node.lineno}: from {src} import {alias.name}")
+    return found
+
+
+def test_private_imports_finds_a_private_name() -> None:
+    """The rule below sees what it must refuse (and lets public names and stdlib pass)."""
+    src = ("from .fit import _hidden, public\nfrom dataclasses import replace as _r\n"
+           "def f():\n    from ehsa_opt.utils import _x\n")
+    found = private_imports(src, "ehsa_opt.estimation.discrepancy.probe")
+    assert [f.split(": ", 1)[1] for f in found] == ["from .fit import _hidden",
+                                                    "from ehsa_opt.utils import _x"]
+
+
+def test_only_public_names_cross_modules() -> None:
+    bad = [f for p in sorted(PKG.rglob("*.py")) if _in_public_only(p)
+           for f in private_imports(p.read_text(encoding="utf-8"), module_name(p))]
+    assert not bad, ("a module imports a private name from another module; make it public "
+                     "(no leading underscore, in __all__) or keep it in its module:\n"
+                     + "\n".join(bad))
+
+
+def test_no_long_functions() -> None:
+    long = []
+    for p in sorted(PKG.rglob("*.py")):
+        if not _in_public_only(p):
+            continue
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > MAX_FUNCTION_LINES:
+                    long.append(f"{p.relative_to(PKG)}:{node.lineno} {node.name}: {n} lines")
+    assert not long, (f"functions over {MAX_FUNCTION_LINES} lines (split them into named "
+                      "steps):\n" + "\n".join(long))
 
 
 def test_no_pickle_loads_or_eval() -> None:

@@ -185,7 +185,7 @@ def test_default_data_set_gives_backlash(max_tests, top):
 
 
 def test_split_friction_keeps_the_rod_equivalent_friction():
-    from ehsa_opt.estimation.discrepancy.refit import split_friction
+    from ehsa_opt.estimation.discrepancy.candidate_fit import split_friction
     r = H.lead_m_per_rad
     p = {"nut_breakaway_N": 80.0, "nut_coulomb_N": 50.0, "nut_breakaway_velocity_m_per_s": 0.01,
          "nut_viscous_Ns_per_m": 200.0, "bearing_breakaway_Nm": 0.004,
@@ -202,9 +202,9 @@ def test_split_friction_keeps_the_rod_equivalent_friction():
         split_friction(p, 1.5, r)
 
 
-# ------------------------------------------------------------------ issue 12
+# ------------------------------------------------------------------ the decision rule
 def test_decision_rule_needs_a_gain_beyond_the_noise_floor():
-    from ehsa_opt.estimation.discrepancy.refit import earns, excess_reduction
+    from ehsa_opt.estimation.discrepancy.evidence import earns, excess_reduction
     # 8.35 -> 8.33 % with a 1 % noise floor: 0.2 % of the excess, refused
     assert excess_reduction(8.35, 8.33, 1.0) < 0.01
     assert not earns(8.35, 8.33, 1.0, -10.0, -10.0)
@@ -221,7 +221,7 @@ def test_sse_alternative_tolerates_a_force_change_below_the_data_resolution():
     # a voltage-channel effect: SSE excess reduced 81 %, the force error (at the floor)
     # unchanged up to rounding (1.5910 -> 1.5913 %); 3000 held-out force samples resolve
     # floor/sqrt(2N) = 1.63/77.5 = 0.021 percentage points
-    from ehsa_opt.estimation.discrepancy.refit import earns, force_resolution
+    from ehsa_opt.estimation.discrepancy.evidence import earns, force_resolution
     assert force_resolution(1.63, 3000) == pytest.approx(1.63 / math.sqrt(6000.0))
     assert force_resolution(1.63, None) == 0.0
     assert earns(1.5910, 1.5913, 1.63, -161.0, -307.0, 0.81, n_force=3000)
@@ -232,7 +232,7 @@ def test_sse_alternative_tolerates_a_force_change_below_the_data_resolution():
 
 def test_a_round_at_the_noise_floor_is_skipped_exactly():
     """can_earn is False only where earns() is False for every possible refit."""
-    from ehsa_opt.estimation.discrepancy.refit import can_earn, earns
+    from ehsa_opt.estimation.discrepancy.evidence import can_earn, earns
     rng = np.random.default_rng(0)
     floor, n = 1.0, 1000.0
     for err0, sse0 in [(1.02, 1.05 * n), (0.95, 1.2 * n), (1.04, 1.0 * n)]:
@@ -255,10 +255,10 @@ def test_sse_alternative_is_judged_per_channel():
     channel at its noise level (force) count as the SSE alternative."""
     from types import SimpleNamespace as NS
 
-    from ehsa_opt.estimation.discrepancy.decide import (channel_sse,
+    from ehsa_opt.estimation.discrepancy.evidence import (channel_sse,
                                                          channel_sse_excess_reduction,
                                                          sse_can_earn)
-    from ehsa_opt.estimation.discrepancy.refit import earns
+    from ehsa_opt.estimation.discrepancy.evidence import earns
     n = np.array([1000.0, 1000.0])
     # force at its noise level, voltage 1.4 x N: pooled, a force-only drop of 5 % of
     # the force SSE removed 12 % of the pooled excess and earned
@@ -289,19 +289,20 @@ def test_sse_alternative_is_judged_per_channel():
 def test_winner_is_the_lowest_heldout_dbic_and_small_gains_widen_the_round():
     from types import SimpleNamespace as NS
 
-    from ehsa_opt.estimation.discrepancy.decide import WIDEN_BELOW, choose_winner, should_widen
-    from ehsa_opt.estimation.discrepancy.refit import _dbic
+    from ehsa_opt.estimation.discrepancy.evidence import choose_winner
+    from ehsa_opt.estimation.discrepancy.search import WIDEN_BELOW, should_widen
+    from ehsa_opt.estimation.discrepancy.evidence import delta_bic
     n_eff, sse0 = 500.0, 5000.0
     # a gap of ~zero fits as well as the compliance it reduces to (nested, one
     # parameter more): the simpler one wins although its SSE is marginally higher
     comp = NS(effect="compliance", sse_heldout=1000.0, excess_reduction=1.0, sse_reduction=None,
-              delta_bic_heldout=_dbic(1000.0, sse0, 2, n_eff))
+              delta_bic_heldout=delta_bic(1000.0, sse0, 2, n_eff))
     back = NS(effect="backlash", sse_heldout=999.0, excess_reduction=1.0, sse_reduction=None,
-              delta_bic_heldout=_dbic(999.0, sse0, 3, n_eff))
+              delta_bic_heldout=delta_bic(999.0, sse0, 3, n_eff))
     assert choose_winner([back, comp]) is comp
     # a clearly better fit still wins with more parameters
     back.sse_heldout = 900.0
-    back.delta_bic_heldout = _dbic(900.0, sse0, 3, n_eff)
+    back.delta_bic_heldout = delta_bic(900.0, sse0, 3, n_eff)
     assert choose_winner([comp, back]) is back
     with pytest.raises(ValueError):
         choose_winner([])
@@ -319,7 +320,7 @@ def test_winner_is_the_lowest_heldout_dbic_and_small_gains_widen_the_round():
 
 def test_an_effect_earns_only_with_a_resolved_size():
     from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
-    from ehsa_opt.estimation.discrepancy.decide import significant
+    from ehsa_opt.estimation.discrepancy.evidence import significant
     amp = CANDIDATES["voltage_drop"].amplitudes
     assert amp == ("voltage_drop_V",)
     # a voltage drop of ~0 V whose interval straddles zero is not named
@@ -346,7 +347,7 @@ def test_lookahead_adds_first_what_lets_a_confounded_candidate_earn():
     earn is added first, if the two-step path ends below the default winner."""
     from types import SimpleNamespace as NS
 
-    from ehsa_opt.estimation.discrepancy.decide import confounded, lookahead_winner
+    from ehsa_opt.estimation.discrepancy.lookahead import confounded, lookahead_winner
 
     def cand(effect, earns, dbic_fit, dbic_held, sse, err):
         return NS(effect=effect, fitted=True, earns=earns, predictions=[], sse_heldout=sse,
@@ -379,7 +380,7 @@ def test_lookahead_adds_first_what_lets_a_confounded_candidate_earn():
                                                         error_after=1.6)
     assert lookahead_winner([comp, cog], gap, fails) is None
     # a first step that does not earn alone (a few % of the excess) but is supported
-    from ehsa_opt.estimation.discrepancy.decide import supported
+    from ehsa_opt.estimation.discrepancy.lookahead import supported
     weak = cand("cogging", False, -50.0, -12.0, 4850.0, 14.1)
     weak.error_before, weak.resolved = 14.28, True
     assert supported(weak)
@@ -404,7 +405,7 @@ def test_a_confounded_candidate_is_added_first_when_a_path_over_it_earns():
     top of the gap completes a path that earns as a whole."""
     from types import SimpleNamespace as NS
 
-    from ehsa_opt.estimation.discrepancy.decide import confounded_first
+    from ehsa_opt.estimation.discrepancy.lookahead import confounded_first
     gap = NS(effect="backlash", delta_bic_fit=-1005.0, delta_bic_heldout=155.0,
              error_after=15.41)
     cog = NS(effect="cogging")
@@ -489,8 +490,8 @@ def test_rotor_period_read_off_the_residual_spectrum():
 def test_rough_spot_is_named_position_friction_else_no_catalogue_name(tmp_path):
     """A rough spot (the benchmark's generator-only law) is named by the member
     ``position_friction`` with its window; without that member in the catalogue it is
-    answered 'none of the catalogue' with the stroke term.  Changed by issue 12's new
-    members: the case is the *tuning* set's rough spot (the held-out one, which this
+    answered 'none of the catalogue' with the stroke term.  Changed when
+    ``position_friction`` joined the catalogue: the case is the *tuning* set's rough spot (the held-out one, which this
     test used before, stays independent evidence)."""
     import importlib.util
     import sys
@@ -533,7 +534,7 @@ def test_two_effects_are_named_in_turn(tmp_path):
 def test_backlash_screen_finds_gap_share_and_stiffness_decade():
     """The start screen of a gap (forward simulations, linear friction correction) picks
     the true gap among decades, a rotor-side friction share and the stiffness decade."""
-    from ehsa_opt.estimation.discrepancy.refit import _screen
+    from ehsa_opt.estimation.discrepancy.candidate_fit import screen_starts
     from ehsa_opt.physics import make_component
     tests = generate_bench_tests(SyntheticSpec(
         effects={"backlash": {"backlash_gap_m": 3e-4, "backlash_contact_stiffness_N_per_m": 5e7}},
@@ -547,14 +548,14 @@ def test_backlash_screen_finds_gap_share_and_stiffness_decade():
     crig = rig.with_components([comp])
     starts = [{**comp.defaults(), **base.parameters, "backlash_gap_m": g,
                "backlash_contact_stiffness_N_per_m": 5e6} for g in (3e-5, 1e-4, 3e-4, 1e-3)]
-    best = _screen(pts, rig, crig, starts, (0.0, 0.3),
+    best = screen_starts(pts, rig, crig, starts, (0.0, 0.3),
                    [{"backlash_contact_stiffness_N_per_m": k} for k in (5e5, 5e7, 1e9)])
     assert best["backlash_gap_m"] == 3e-4
     assert best["backlash_contact_stiffness_N_per_m"] == 5e7  # truth 5e7 N/m
 
 
 def test_fit_candidate_rejects_an_unknown_full_refit():
-    from ehsa_opt.estimation.discrepancy.refit import fit_candidate
+    from ehsa_opt.estimation.discrepancy.candidate_fit import fit_candidate
     from ehsa_opt.physics import make_component
     with pytest.raises(ValueError, match="full_refit"):
         fit_candidate("backlash", make_component("backlash"), [], [], [], Rig(H, True, ()), {},
@@ -577,7 +578,7 @@ def test_compliance_is_recovered_on_the_simulation_off_the_generator_grid():
     """Mount compliance at a stiffness between the start decades, on another grid and
     friction: screened start, effect-only and joint Gauss-Newton on the simulation
     (stiffness in log10) recover it (2.5e6 -> 2.488e6 N/m), with a finite interval."""
-    from ehsa_opt.estimation.discrepancy.refit import fit_candidate
+    from ehsa_opt.estimation.discrepancy.candidate_fit import fit_candidate
     from ehsa_opt.physics import make_component
     from ehsa_opt.physics.params import FrictionParams
     fr = FrictionParams(nut_breakaway_N=75.0, nut_coulomb_N=50.0,

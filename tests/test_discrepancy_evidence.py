@@ -13,7 +13,7 @@ from ehsa_opt.estimation.discrepancy.evidence import (
     ljung_box,
     own_evidence,
 )
-from ehsa_opt.estimation.discrepancy.refit import excess_reduction
+from ehsa_opt.estimation.discrepancy.evidence import excess_reduction
 
 
 def test_ljung_box_tells_white_from_coloured():
@@ -84,7 +84,7 @@ def test_documented_pulse_edges_are_masked(tmp_path):
 def test_a_white_residual_gives_no_term():
     from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
     from ehsa_opt.estimation.discrepancy.fit import prepare_tests
-    from ehsa_opt.estimation.discrepancy.workflow import _term
+    from ehsa_opt.estimation.discrepancy.terms import propose_term
     tests = generate_bench_tests(SyntheticSpec(frequencies_hz=(0.8, 2.0, 3.2),
                                                loads_ohm=(22.0, 100.0), cycles=1.0, seed=4,
                                                noise_force_N=0.0, noise_voltage_V=0.0))
@@ -95,7 +95,7 @@ def test_a_white_residual_gives_no_term():
         pt.y = pt.y.copy()
         pt.y[0] = pt.y[0] + rng.normal(0, 2.0, pt.y.shape[1])
         pt.sigma = np.array([2.0, 0.05])
-    term = _term(pts[:4], preds[:4], pts[4:], preds[4:], 0.01 / (2 * math.pi), 0, 0.5, 500.0)
+    term = propose_term(pts[:4], preds[:4], pts[4:], preds[4:], 0.01 / (2 * math.pi), 0, 0.5, 500.0)
     assert not term.columns and not term.earns
     assert "white" in term.message
 
@@ -106,7 +106,7 @@ def test_noise_floor_is_not_biased_by_a_fast_curving_signal():
     from ehsa_opt.datasets.bench_format import load_bench
     from ehsa_opt.datasets.embedded import embedded_data_dir
     from ehsa_opt.estimation.discrepancy.fit import noise_std
-    from ehsa_opt.estimation.discrepancy.refit import floor_noise_std
+    from ehsa_opt.estimation.discrepancy.evidence import floor_noise_std
     tests = [t for t in load_bench(embedded_data_dir("bench_prototype")).tests
              if t.frequency_hz >= 3.0]
     assert tests

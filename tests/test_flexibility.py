@@ -11,7 +11,7 @@ from ehsa_opt.datasets.embedded import embedded_data_dir
 from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
 from ehsa_opt.estimation.discrepancy.fit import Rig, fit_group, linear_baseline, predict, \
     prepare_tests
-from ehsa_opt.estimation.discrepancy.flexibility import fit_flexibility
+from ehsa_opt.estimation.discrepancy.candidates.flexibility import fit_flexibility
 from ehsa_opt.physics import BenchModel, Flexibility
 from ehsa_opt.physics.params import HarvesterParams
 

@@ -4,7 +4,7 @@ import pytest
 
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.discrepancy.fit import Rig, prepare_tests
-from ehsa_opt.estimation.discrepancy.refit import reproducibility
+from ehsa_opt.estimation.discrepancy.candidate_fit import reproducibility
 from ehsa_opt.physics import make_component
 
 

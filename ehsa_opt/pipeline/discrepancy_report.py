@@ -21,7 +21,7 @@ from .base import Context, StepOutput
 __all__ = ["write_report", "write_partial_report", "run_with_budget", "report_markdown", "step_discrepancy",
            "truth_error"]
 
-#: Published EMPS figures (Janot et al. 2019, SPEC §9).
+#: Published EMPS figures (Janot et al. 2019).
 _EMPS_PUBLISHED = {"before": 4.08, "after": 3.11, "f_v_pos": 166.7, "f_v_neg": 240.4,
                    "F_C_pos": 20.14, "F_C_neg": 20.63}
 
@@ -42,7 +42,7 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
              f"({len(res.fit_tests)} fit tests, {len(res.heldout_tests)} held-out)."
              + (f" The true parameters (truth.toml) simulate to {floor:.3f} % on the same "
                 f"tests." if floor is not None else "") + "\n")
-    from ..estimation.discrepancy.refit import MIN_EXCESS_REDUCTION
+    from ..estimation.discrepancy.evidence import MIN_EXCESS_REDUCTION
     L.append(f"Decision rule: an effect is named only if its refit removes at least "
              f"{100 * MIN_EXCESS_REDUCTION:.0f} % of the {res.evaluation} relative force error "
              f"*above the noise floor* ({_fmt(res.noise_floor, '.3f')} %: what the measurement "
@@ -334,7 +334,7 @@ def truth_error(res: DiscrepancyResult, truth: dict | None) -> float | None:
     if not truth or "friction" not in truth:
         return None
     from ..estimation.discrepancy.fit import predict
-    from ..estimation.discrepancy.refit import _force_error
+    from ..estimation.discrepancy.evidence import force_error_percent
     from ..physics import make_component
     effects = truth.get("effects", {})
     comps = [make_component(n) for n in effects]
@@ -342,7 +342,7 @@ def truth_error(res: DiscrepancyResult, truth: dict | None) -> float | None:
     for c in comps:
         values.update({**c.defaults(), **effects[c.name]})
     rig = res.rig.with_components(comps)
-    return _force_error(res.eval_tests, predict(res.eval_tests, rig, values))
+    return force_error_percent(res.eval_tests, predict(res.eval_tests, rig, values))
 
 
 #: Budget of the discrepancy step of ``reproduce --quick --data DIR``, s: no candidate fit

@@ -1,23 +1,38 @@
-"""Model-discrepancy workflow (SPEC §7–9): find where simulation and measurement
-disagree, name the missing effect from a library of physical candidates, add it,
-re-identify and show the gap shrink on held-out data.
+"""Model-discrepancy workflow: find where simulation and measurement disagree, name
+the missing effect from a library of physical candidates, add it, re-identify and
+show the gap shrink on held-out data.
 
-Modules: :mod:`.fit` (collocation + IPOPT re-identification, predictions),
-:mod:`.localise` (residual maps and structure statistics), :mod:`.candidates`
-(candidate library and signature scores), :mod:`.workflow` (the decision), :mod:`.results` (settings and result objects).
+Modules, one concept each:
+
+* :mod:`.workflow`: the phases of :func:`run_discrepancy`;
+* :mod:`.split`: fit and held-out tests;
+* :mod:`.fit`: the rig, the prepared tests, the collocation + IPOPT fit of a group
+  of parameters and the forward simulation (:func:`predict`);
+* :mod:`.polish`: Gauss–Newton refinement on the forward simulation;
+* :mod:`.localise`: residual maps and structure statistics;
+* :mod:`.candidates`: the catalogue — every member (components, ``force_lag``,
+  ``flexibility``), signature scores;
+* :mod:`.candidate_fit`: re-identifying one candidate on the current model;
+* :mod:`.evidence`: the statistics and the decision rule;
+* :mod:`.search`: the forward-selection rounds; :mod:`.lookahead`: the look-ahead
+  through a confounded candidate;
+* :mod:`.terms`: a data-driven term for what no catalogue effect explains;
+* :mod:`.openloop`: the open-loop validation of the EMPS benchmark;
+* :mod:`.results`: settings and result objects.
 """
 
 from .candidates import CANDIDATES, Candidate, signature_scores
 from .fit import FitOutcome, Rig, fit_group, predict, prepare_tests
 from .localise import Localisation, localise
-from .terms import TermProposal, discover_term
 from .results import (
     NONE_OF_CATALOGUE,
     CandidateResult,
     DiscrepancyResult,
     DiscrepancySettings,
 )
-from .workflow import run_discrepancy, split_tests
+from .split import split_tests
+from .terms import TermProposal, discover_term
+from .workflow import run_discrepancy
 
 __all__ = ["CANDIDATES", "Candidate", "signature_scores", "FitOutcome", "Rig", "fit_group",
            "predict", "prepare_tests", "Localisation", "localise", "CandidateResult",

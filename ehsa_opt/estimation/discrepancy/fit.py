@@ -46,7 +46,7 @@ from ..identify_result import force_relative_error_percent
 
 __all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
            "fit_group", "predict", "FilteredMotion", "force_relative_error_percent",
-           "linear_baseline", "BASE_SPECS"]
+           "linear_baseline", "param_scale", "BASE_SPECS"]
 
 NUT_NAMES = FRICTION_NAMES[:4]
 
@@ -55,8 +55,9 @@ NO_GENERATOR_FIXED: dict[str, float] = {
     "load_ohm": 1.0, "bearing_breakaway_Nm": 0.0, "bearing_coulomb_Nm": 0.0,
     "bearing_breakaway_velocity_rad_per_s": 1.0, "bearing_viscous_Nms_per_rad": 0.0}
 
-#: Bounds and typical scales of the base parameters (bounds wider than the SPEC §2
-#: distributor ranges, which are for drawing starts, not limits).
+#: Bounds and typical scales of the base parameters (bounds wider than the
+#: distributor ranges of :data:`~ehsa_opt.physics.params.FRICTION_RANGES`, which are for
+#: drawing starts, not limits).
 BASE_SPECS: dict[str, ParamSpec] = {
     "nut_breakaway_N": ParamSpec("nut_breakaway_N", "N", 50.0, 0.0, 2000.0),
     "nut_coulomb_N": ParamSpec("nut_coulomb_N", "N", 30.0, 0.0, 2000.0),
@@ -74,7 +75,9 @@ BASE_SPECS: dict[str, ParamSpec] = {
 }
 
 
-def _scale(spec: ParamSpec) -> float:
+def param_scale(spec: ParamSpec) -> float:
+    """Typical magnitude of a parameter (its default, else a twentieth of its bound):
+    the scale the decision variables are divided by."""
     if spec.default != 0.0:
         return abs(spec.default)
     return max(abs(spec.lower), abs(spec.upper)) / 20.0 or 1.0
@@ -203,7 +206,7 @@ def linear_baseline(prepared: Sequence[PreparedTest], rig: Rig,
     """Quick least-squares friction (rigid, quasi-static current): the force is linear
     in (F_C, F_brk − F_C, f_v[, M, offset]) for a fixed breakaway velocity, tried on
     a small grid.  Used as the IPOPT initial point; bearing friction starts at zero
-    (its split from the nut friction is not identifiable on a rigid bench, SPEC §2)."""
+    (its split from the nut friction is not identifiable on a rigid bench)."""
     h = rig.harvester
     r = h.lead_m_per_rad
     best: tuple[float, dict[str, float]] | None = None
@@ -368,7 +371,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     space = core.ParamSpace(tuple(model.param_names), tuple(free),
                             tuple(specs[n].lower for n in free),
                             tuple(specs[n].upper for n in free),
-                            tuple(_scale(specs[n]) for n in free), (), _ORDER)
+                            tuple(param_scale(specs[n]) for n in free), (), _ORDER)
 
     def default_of(n: str) -> float:
         return float(fixed.get(n, specs[n].default))
@@ -412,26 +415,14 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     records = [{"status": r.status, "success": r.success, "objective": r.objective,
                 "iterations": r.iterations} for r in recs]
     usable = [r for r in recs if (r.success or r.status in _USABLE) and np.isfinite(r.objective)]
-    if not usable:
-        # one restart: the failed solves' parameters (clipped into the bounds) with
-        # states re-simulated from them (a feasible start near where IPOPT stalled)
-        z_r = _restart_point(recs, space)
-        if z_r is not None:
-            rvals = space.values_of(z_r, np.zeros(len(model.param_names)))
-            pr = {n: (rvals[n] if n in free else default_of(n)) for n in names}
-            try:
-                g_r = [((_simulate(model, pt, pr, tf).states - b.info["off"])
-                        / b.info["sx"][:, None]).ravel(order="F")
-                       for pt, b, tf in zip(prepared, blocks, grids)]
-            except Exception:  # noqa: BLE001 - a start the simulator refuses: no restart
-                g_r = None
-            if g_r is not None:
-                rec_r = core.solve_starts(nlp, blocks, [z_r], zref=z0s[0], state_guesses=[g_r])
-                recs = list(recs) + rec_r
-                records += [{"status": r.status, "success": r.success, "objective": r.objective,
-                             "iterations": r.iterations, "restart": True} for r in rec_r]
-                usable = [r for r in rec_r if (r.success or r.status in _USABLE)
-                          and np.isfinite(r.objective)]
+    if not usable:  # one restart from where the failed solves stopped
+        extra = _restart(nlp, blocks, grids, recs, space, model, prepared, z0s[0],
+                         lambda vals: {n: (vals[n] if n in free else default_of(n))
+                                       for n in names})
+        records += [{"status": r.status, "success": r.success, "objective": r.objective,
+                     "iterations": r.iterations, "restart": True} for r in extra]
+        usable = [r for r in extra if (r.success or r.status in _USABLE)
+                  and np.isfinite(r.objective)]
     if not usable:
         return FitOutcome(False, "IPOPT failed from every start (" + "; ".join(
             r["status"] for r in records) + ")", {}, free, math.inf, math.inf, n_obs, records,
@@ -451,6 +442,27 @@ def _nlp_weights(pt: PreparedTest) -> np.ndarray:
     """(ny, N) residual weights of the collocation objective: the resolved samples over
     the noise level, the left-out ones at :data:`WINDOW_WEIGHT` of that."""
     return np.maximum(pt.weight, WINDOW_WEIGHT)[None, :] / pt.sigma[:, None]
+
+
+def _restart(nlp: core.NLP, blocks: Sequence[Any], grids: Sequence[np.ndarray],
+             recs: Sequence[Any], space: core.ParamSpace, model: BenchModel,
+             prepared: Sequence[PreparedTest], zref: np.ndarray, values: Any) -> list:
+    """One more IPOPT solve after every start failed: from the failed solves'
+    parameters (:func:`_restart_point`) with states re-simulated from them (a feasible
+    start near where IPOPT stopped).  ``values(dict of varied values)`` gives the model
+    parameters.  Returns the new solve records (empty when there is no finite point or
+    the simulator refuses it)."""
+    z_r = _restart_point(recs, space)
+    if z_r is None:
+        return []
+    pr = values(space.values_of(z_r, np.zeros(len(model.param_names))))
+    try:
+        g_r = [((_simulate(model, pt, pr, tf).states - b.info["off"])
+                / b.info["sx"][:, None]).ravel(order="F")
+               for pt, b, tf in zip(prepared, blocks, grids)]
+    except Exception:  # noqa: BLE001 - a start the simulator refuses: no restart
+        return []
+    return core.solve_starts(nlp, blocks, [z_r], zref=zref, state_guesses=[g_r])
 
 
 def _restart_point(recs: Sequence[Any], space: core.ParamSpace) -> np.ndarray | None:

@@ -11,7 +11,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .deadline import past_deadline
-from .fit import BASE_SPECS, PreparedTest, Rig, _scale, predict
+from .fit import BASE_SPECS, PreparedTest, Rig, param_scale, predict
 
 __all__ = ["PolishOutcome", "polish", "gauss_newton_covariance"]
 
@@ -91,7 +91,7 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         if n in free and not specs[n].lower > 0:
             raise ValueError(f"polish: {n} cannot be refined in log10 (lower bound "
                              f"{specs[n].lower} is not > 0)")
-    scales = np.array([_scale(specs[n]) for n in free])
+    scales = np.array([param_scale(specs[n]) for n in free])
     lo = np.array([specs[n].lower for n in free], dtype=float)
     hi = np.array([specs[n].upper for n in free], dtype=float)
     lb = np.where(is_log, np.log10(np.maximum(lo, 1e-300)), lo / scales)

@@ -14,7 +14,7 @@ import numpy as np
 from .candidates import CANDIDATES
 from .fit import FitOutcome, PreparedTest, Rig, force_relative_error_percent
 from .localise import Localisation
-from .refit import MIN_EXCESS_REDUCTION
+from .evidence import MIN_EXCESS_REDUCTION
 from .terms import TermProposal
 
 __all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "NONE_OF_CATALOGUE",

@@ -28,7 +28,8 @@ standardised columns, followed by a least-squares refit on the selected columns
 (removes the lasso's shrinkage).  The group carrying most of the fitted term's
 energy names it, in words.  The term's *held-out gain* is measured like a
 catalogue effect's: the held-out force prediction plus the term, against the
-held-out measurement.
+held-out measurement; :func:`propose_term` judges it by the decision rule
+(:func:`~.evidence.earns`), and proposes none when the residual is white.
 """
 
 from __future__ import annotations
@@ -39,9 +40,11 @@ from typing import Sequence
 
 import numpy as np
 
+from .evidence import WHITE_P, delta_bic, earns, residual_is_white
 from .fit import PreparedTest, force_relative_error_percent
 
-__all__ = ["TermProposal", "feature_library", "discover_term", "GROUPS"]
+__all__ = ["TermProposal", "feature_library", "discover_term", "propose_term", "shift_lag",
+           "GROUPS", "LAG_GRID_S", "TERM_PREFERENCE"]
 
 #: Feature groups of the library, in the order they are described.
 GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity")
@@ -259,7 +262,7 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     term_fit = X[:, support] @ b
     sel = {names[k]: float(coef[k]) for k in support}
     desc, qty = _describe(group, sel, centres, width, coef, names)
-    lag = _shift_lag(fit_pts, fit_preds)
+    lag = shift_lag(fit_pts, fit_preds)
     if lag is not None and lag[1] < float((y - term_fit) @ (y - term_fit)):
         # a pure time shift of the model force explains the fit set better than the
         # sparse term: propose the lag (exact shift, not its first-order Taylor term)
@@ -289,7 +292,7 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
                         e0, e1, sse_b, sse_a, qty)
 
 
-#: Lags searched by :func:`_shift_lag`, s.
+#: Lags searched by :func:`shift_lag`, s.
 LAG_GRID_S = np.arange(-0.02, 0.02001, 0.0002)
 
 
@@ -298,7 +301,7 @@ def _shifted(pt: PreparedTest, pred: np.ndarray, tau: float) -> np.ndarray:
     return np.interp(pt.time_s - tau, pt.time_s, pred[0])
 
 
-def _shift_lag(pts, preds) -> tuple[float, float] | None:
+def shift_lag(pts, preds) -> tuple[float, float] | None:
     """The delay τ of the force channel (on :data:`LAG_GRID_S`) minimising the fit-set
     SSE of (F − F̂(t − τ))/σ, and that SSE; None when τ = 0 is best."""
     sses = []
@@ -332,3 +335,29 @@ def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
                         force_relative_error_percent(np.concatenate(pb), m),
                         force_relative_error_percent(np.concatenate(pa), m), sse_b, sse_a,
                         {"lag_ms": 1e3 * tau})
+
+
+#: A catalogue effect that earns is still not named when the data-driven term leaves
+#: less than this share of the effect's remaining error above the noise floor (the
+#: catalogue name would point at the wrong part: e.g. backlash for a lagging force
+#: channel).  Not applied to a term of the ``velocity`` group: a friction law of another
+#: shape is what the catalogue's friction effects are (its constant column *is* a
+#: direction-dependent Coulomb level, collinear with the offset).
+TERM_PREFERENCE = 0.5
+
+
+def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> TermProposal:
+    """The data-driven term of the current residual, judged by the decision rule —
+    none when the residual of the fit tests is white (Ljung–Box, :func:`~.evidence.residual_is_white`):
+    a term fitted to a white residual is fitted to noise."""
+    white, p = residual_is_white(fit_pts, fit_pred)
+    if white:
+        return TermProposal(True, f"the residual is white (Ljung-Box p = {p:.2g} > "
+                                  f"{WHITE_P:g} on every fit test): no term proposed",
+                            description="none (white residual)")
+    term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead, seed=seed)
+    if term.columns:
+        d_b = delta_bic(term.sse_after, term.sse_before, len(term.columns), n_eff)
+        term.earns = earns(term.error_before, term.error_after, floor, d_b, d_b)
+    return term
+

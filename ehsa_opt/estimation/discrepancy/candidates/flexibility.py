@@ -6,7 +6,7 @@ acceleration — linear in the load mass m for a given resonance (f, ζ).  The r
 model of a rig without generator is linear in M, F_0 and the friction levels at
 fixed velocities too, so the refit of the current model with a flexibility is a
 linear least-squares problem for each (f, ζ): the columns a rigid refit absorbs
-(:func:`~.candidates._absorbed_columns`) plus the flexibility column, on the fit
+(:func:`~.catalogue.absorbed_columns`) plus the flexibility column, on the fit
 tests.  The resonance is searched on a grid (log-spaced frequencies around the
 fit residual's spectral peak, a few damping ratios), m ≥ 0 (a negative mass is no
 flexibility).  This costs milliseconds per grid point where the forward simulation
@@ -21,16 +21,18 @@ interval).
 from __future__ import annotations
 
 import math
+import time
 from typing import Sequence
 
 import numpy as np
 from scipy.signal import cont2discrete, lfilter
 
-from ..covariance import hac_covariance
-from .candidates import _absorbed_columns
-from .fit import PreparedTest, Rig
+from ...covariance import hac_covariance
+from ..fit import FitOutcome, PreparedTest, Rig
+from .catalogue import absorbed_columns, compatible
 
-__all__ = ["flexibility_column", "fit_flexibility", "FREQUENCIES_HZ", "DAMPING_RATIOS"]
+__all__ = ["flexibility_column", "fit_flexibility", "fit_flexibility_member", "FREQUENCIES_HZ",
+           "DAMPING_RATIOS"]
 
 #: Resonance grid (Hz) and damping ratios searched.
 FREQUENCIES_HZ = tuple(float(f) for f in np.geomspace(5.0, 450.0, 41))
@@ -51,7 +53,7 @@ def flexibility_column(pt: PreparedTest, frequency_hz: float, damping_ratio: flo
 def _design(pts: Sequence[PreparedTest], rig: Rig, u_brk: float, f: float, z: float
             ) -> tuple[np.ndarray, np.ndarray]:
     """(absorbed columns, flexibility column) of the force channel, σ-normalised."""
-    B = np.vstack([_absorbed_columns(pt, rig, u_brk)[:pt.y.shape[1]] for pt in pts])
+    B = np.vstack([absorbed_columns(pt, rig, u_brk)[:pt.y.shape[1]] for pt in pts])
     g = np.concatenate([flexibility_column(pt, f, z) / pt.sigma[0] for pt in pts])
     return B, g
 
@@ -162,3 +164,51 @@ def fit_flexibility(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.ndarr
                                "flex_load_mass_kg": best_neg[3]} if best_neg else None),
             "covariance_info": {"method": h.method, "n_eff": h.n_eff, "n": h.n,
                                 "bandwidth_samples": h.bandwidth}}
+
+
+def fit_flexibility_member(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_params, comps,
+                           scores) -> tuple | None:
+    """The flexibility of a rig without generator fitted by variable projection
+    (:func:`fit_flexibility`), as the ``(name, FitOutcome, fit outputs, held-out outputs,
+    rig)`` a generic re-identification returns; its score (share of the fit residual
+    explained) set in ``scores``.  None when it cannot join the rig."""
+    comp = comps["flexibility"]
+    if not compatible(cur_rig, comp):
+        return None
+    t0 = time.perf_counter()
+    out = fit_flexibility(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_params,
+                          start_hz=comp.frequency_hz)
+    r0 = sum(float(np.sum(((pt.y[0] - yp[0]) / pt.sigma[0]) ** 2))
+             for pt, yp in zip(fit_pts, cur_fit))
+    crig = cur_rig.with_components([*cur_rig.components, comp])
+    n_obs = sum(pt.y.shape[1] for pt in fit_pts)
+    if not out["parameters"]:
+        neg = out.get("best_negative") or {}
+        scores["flexibility"] = {"score": 0.0, "chi2": 0.0, "columns": 1, "applicable": True}
+        res = FitOutcome(False, "variable projection: every resonance asks for a negative load "
+                         f"mass (best {neg.get('flex_load_mass_kg', math.nan):.3g} kg at "
+                         f"{neg.get('flex_frequency_hz', math.nan):.3g} Hz): no flexibility",
+                         {}, [], math.inf, math.inf, n_obs, [], time.perf_counter() - t0)
+        return ("flexibility", res, [], [], crig)
+    r1 = sum(float(np.sum(((pt.y[0] - yp[0]) / pt.sigma[0]) ** 2))
+             for pt, yp in zip(fit_pts, out["fit_pred"]))
+    scores["flexibility"] = {"score": max(0.0, 1.0 - r1 / r0) if r0 > 0 else 0.0,
+                             "chi2": max(r0 - r1, 0.0), "columns": 1, "applicable": True}
+    fp = out["parameters"]
+    lo, hi = out["intervals"]["flex_load_mass_kg"]
+    sd = (hi - lo) / (2 * 1.96)
+    params = {**cur_params, **{k: fp[k] for k in ("flex_load_mass_kg", "flex_frequency_hz",
+                                                  "flex_damping_ratio")}}
+    note = (f"variable projection: resonance {fp['flex_frequency_hz']:.3g} Hz, damping ratio "
+            f"{fp['flex_damping_ratio']:.2g}, stiffness {fp['flex_stiffness_N_per_m']:.3g} N/m"
+            + ("; the unconstrained best asks for a negative load mass "
+               f"({out['best_negative']['flex_load_mass_kg']:.3g} kg at "
+               f"{out['best_negative']['flex_frequency_hz']:.3g} Hz)"
+               if out.get("negative_mass") else ""))
+    res = FitOutcome(True, note, params, ["flex_load_mass_kg"], r1 / n_obs, r1, n_obs,
+                     [{"flexibility": {k: v for k, v in out.items()
+                                       if k not in ("fit_pred", "eval_pred")}}],
+                     time.perf_counter() - t0, np.array([[sd * sd]]),
+                     out.get("covariance_info"))
+    return ("flexibility", res, out["fit_pred"], out["eval_pred"], crig)
+

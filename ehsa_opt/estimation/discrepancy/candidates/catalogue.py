@@ -21,11 +21,12 @@ from typing import Sequence
 
 import numpy as np
 
-from ...physics import COMPONENTS, make_component
-from .fit import PreparedTest, Rig, predict
-from .localise import best_rotor_period, stroke_window
+from ....physics import COMPONENTS, make_component
+from ..fit import PreparedTest, Rig, predict
+from ..localise import best_rotor_period, stroke_window
 
-__all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for"]
+__all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for",
+           "absorbed_columns", "compatible"]
 
 
 @dataclass(frozen=True)
@@ -54,7 +55,7 @@ class Candidate:
     full_refit : str
         How the full refit (friction and effect) is done: ``"collocation"`` (IPOPT)
         or ``"simulation"`` (Gauss–Newton on the forward simulation from the
-        effect-only collocation fit; see :func:`~.refit.fit_candidate`).
+        effect-only collocation fit; see :func:`~ehsa_opt.estimation.discrepancy.candidate_fit.fit_candidate`).
     effect_fit : str
         How the effect-only stage is done: ``"collocation"`` (IPOPT) or
         ``"simulation"`` (Gauss–Newton on the forward simulation from the screened
@@ -70,7 +71,7 @@ class Candidate:
     amplitudes : tuple of str
         Effect parameters that are all zero when the effect is absent (its size):
         the effect earns only when the ~95 % interval of one of them excludes zero
-        (:func:`~.decide.significant`).  Empty for a transmission effect, whose
+        (:func:`~ehsa_opt.estimation.discrepancy.evidence.significant`).  Empty for a transmission effect, whose
         absence is a limit (infinite stiffness), not a zero.
     """
 
@@ -191,7 +192,7 @@ def candidate_names() -> list[str]:
     return list(CANDIDATES)
 
 
-def _absorbed_columns(pt: PreparedTest, rig: Rig, u_brk: float) -> np.ndarray:
+def absorbed_columns(pt: PreparedTest, rig: Rig, u_brk: float) -> np.ndarray:
     """Columns (stacked channels) a baseline refit absorbs, normalised by σ."""
     x, v, a = pt.u
     N = v.size
@@ -222,7 +223,7 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
     r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel() for pt, yp in
                         zip(prepared, baseline_pred)])
     u_brk = float(baseline.get("nut_breakaway_velocity_m_per_s", 0.01))
-    B = np.vstack([_absorbed_columns(pt, rig, u_brk) for pt in prepared])
+    B = np.vstack([absorbed_columns(pt, rig, u_brk) for pt in prepared])
     Qb, _ = np.linalg.qr(B)
     r_perp = r - Qb @ (Qb.T @ r)
     total = float(r_perp @ r_perp)
@@ -266,7 +267,7 @@ def components_for(names: Sequence[str], prepared: Sequence[PreparedTest],
             out[n] = CANDIDATES[n].component(
                 periods_per_rev=best_rotor_period(prepared, preds, lead_m_per_rad=lead))
         elif n == "flexibility":
-            from .localise import residual_spectrum
+            from ..localise import residual_spectrum
             sp = residual_spectrum(prepared, [pt.y[0] - yp[0] for pt, yp in zip(prepared, preds)],
                                    min_hz=5.0)
             f0 = float(np.clip(sp.get("peak_hz", 100.0), 5.0, 1000.0)) if sp else 100.0
@@ -278,3 +279,13 @@ def components_for(names: Sequence[str], prepared: Sequence[PreparedTest],
         else:
             out[n] = CANDIDATES[n].component()
     return out
+
+
+def compatible(rig: Rig, component) -> bool:
+    """Whether ``component`` can join the rig's components (one transmission at most,
+    no duplicate name)."""
+    names = {c.name for c in rig.components}
+    if component.name in names:
+        return False
+    return not (component.transmission and any(c.transmission for c in rig.components))
+

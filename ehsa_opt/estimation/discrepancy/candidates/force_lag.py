@@ -2,9 +2,9 @@
 
 A delay of the force channel relative to the displacement is not a component of
 the bench model (it acts on the record, not on the physics): the delay τ is found
-by a time-shift search on the baseline residual (:func:`~.terms._shift_lag`), the
+by a time-shift search on the baseline residual (:func:`~ehsa_opt.estimation.discrepancy.terms.shift_lag`), the
 measured force is re-aligned by it (F(t + τ), the ends cropped) and the baseline is
-refitted; the delay is named when it earns by the workflow's decision rule,
+refitted; the delay is named when it earns by the decision rule (:func:`~ehsa_opt.estimation.discrepancy.evidence.earns`),
 compared on the re-aligned held-out tests against the baseline on the same samples.
 """
 
@@ -16,8 +16,15 @@ from typing import Sequence
 
 import numpy as np
 
-from .fit import PreparedTest, fit_group, predict, prepare_tests
-from .refit import _dbic, _force_error, _sse, earns, excess_reduction
+from ..evidence import (
+    delta_bic,
+    earns,
+    excess_reduction,
+    force_error_percent,
+    normalised_sse,
+)
+from ..fit import PreparedTest, fit_group, predict, prepare_tests
+from ..terms import shift_lag
 
 __all__ = ["try_lag"]
 
@@ -41,11 +48,10 @@ def _lag_tests(pts: Sequence[PreparedTest], tau: float, has_generator: bool
 def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit, n_eff_held,
              err0, settings, say):
     """Catalogue member ``force_lag`` (a measurement-channel delay of the force): the
-    delay from a time-shift search on the baseline residual (:func:`~.terms._shift_lag`),
+    delay from a time-shift search on the baseline residual (:func:`~ehsa_opt.estimation.discrepancy.terms.shift_lag`),
     the force re-aligned by it and the baseline refitted; kept when it earns by the
     decision rule (compared on the re-aligned held-out tests, cropped alike)."""
-    from .terms import _shift_lag
-    lag = _shift_lag(fit_pts, fit_pred)
+    lag = shift_lag(fit_pts, fit_pred)
     if lag is None:
         return None
     tau = lag[0]
@@ -58,7 +64,7 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
         pf = predict(f2, rig, b2.parameters)
         if it == 1:
             break  # f2, h2, b2 belong to the tau applied (reported below)
-        again = _shift_lag(f2, pf)
+        again = shift_lag(f2, pf)
         if again is None:
             break
         tau += again[0]
@@ -69,14 +75,14 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
     b0h = predict(h0, rig, base.parameters) if h0 else []
     b0f = predict([_crop_like(p, q) for p, q in zip(fit_pts, f2)], rig, base.parameters)
     ev, ev0, pe, pe0 = (h2, h0, ph, b0h) if h2 else (f2, f0, pf, b0f)
-    e_before, e_after = _force_error(ev0, pe0), _force_error(ev, pe)
-    d_fit = _dbic(_sse(f2, pf), _sse([_crop_like(p, q) for p, q in zip(fit_pts, f2)], b0f), 1,
+    e_before, e_after = force_error_percent(ev0, pe0), force_error_percent(ev, pe)
+    d_fit = delta_bic(normalised_sse(f2, pf), normalised_sse([_crop_like(p, q) for p, q in zip(fit_pts, f2)], b0f), 1,
                   n_eff_fit)
-    d_held = _dbic(_sse(ev, pe), _sse(ev0, pe0), 1, n_eff_held if h2 else n_eff_fit)
+    d_held = delta_bic(normalised_sse(ev, pe), normalised_sse(ev0, pe0), 1, n_eff_held if h2 else n_eff_fit)
     c = dict(effect="force_lag", applicable=True, score=math.nan, chi2=math.nan, round=1,
              fitted=True, fit=b2, error_before=e_before, error_after=e_after,
              excess_reduction=excess_reduction(e_before, e_after, floor), delta_bic_fit=d_fit,
-             delta_bic_heldout=d_held, sse_heldout=_sse(ev, pe),
+             delta_bic_heldout=d_held, sse_heldout=normalised_sse(ev, pe),
              earns=earns(e_before, e_after, floor, d_fit, d_held),
              parameters={"force_lag_s": tau}, predictions=pf + ph, rig=rig)
     say(f"force_lag: {1e3 * tau:.2f} ms, error {e_before:.3f} -> {e_after:.3f} % "

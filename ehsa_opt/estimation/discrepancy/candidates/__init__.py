@@ -1,0 +1,27 @@
+"""The catalogue of candidate effects: every member the discrepancy search can name.
+
+* :mod:`.catalogue`: the members that are components of the bench model
+  (:data:`CANDIDATES`: signature probes, fit starts and recipe of each), their
+  signature scores and the columns a baseline refit absorbs;
+* :mod:`.force_lag`: the member ``force_lag``, a delay of the force channel (it acts
+  on the record, not on the physics: found by a time-shift search, the force
+  re-aligned and the baseline refitted);
+* :mod:`.flexibility`: the member ``flexibility`` of a rig without generator, fitted
+  by variable projection.
+"""
+
+from .catalogue import (
+    CANDIDATES,
+    Candidate,
+    absorbed_columns,
+    candidate_names,
+    compatible,
+    components_for,
+    signature_scores,
+)
+from .flexibility import fit_flexibility, fit_flexibility_member
+from .force_lag import try_lag
+
+__all__ = ["CANDIDATES", "Candidate", "absorbed_columns", "candidate_names", "compatible",
+           "components_for", "signature_scores", "fit_flexibility", "fit_flexibility_member",
+           "try_lag"]

@@ -1,0 +1,201 @@
+"""Look-ahead through a confounded candidate: when one effect hides another.
+
+A candidate that fits the fit tests best but fails on the held-out ones
+(:func:`confounded`) has absorbed another effect's residual (a gap taking up a
+12-per-rev cogging ripple).  It is re-identified on top of each earning or
+:func:`supported` candidate (:func:`fit_on_top`, :func:`lookahead_winner`), or they
+on top of it (:func:`confounded_first`); a two-step path that earns as a whole and
+ends below the round's default winner decides which effect is added first.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+from .candidate_fit import fit_member
+from .candidates import CANDIDATES, compatible, components_for
+from .evidence import (
+    channel_sse,
+    choose_winner,
+    earns,
+    effective_samples,
+    judge_candidate,
+    normalised_sse,
+    significant,
+)
+
+__all__ = ["confounded", "supported", "fit_on_top", "lookahead_winner", "confounded_first"]
+
+
+def confounded(cands: Sequence[Any]) -> Any | None:
+    """The fitted candidate that explains the fit tests best (lowest ΔBIC there, < 0)
+    but does not earn on the held-out tests — a sign that its refit absorbed another
+    effect's residual on the fit tests (a gap taking up a 12-per-rev cogging ripple:
+    fit ΔBIC −1005, held-out error 14.28 → 15.41 %); None when there is none."""
+    pool = [c for c in cands if c.fitted and not c.earns and c.predictions is not None
+            and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0]
+    return min(pool, key=lambda c: c.delta_bic_fit) if pool else None
+
+
+def supported(c: Any) -> bool:
+    """Whether a fitted candidate may be the first step of a look-ahead path
+    (:func:`lookahead_winner`) without earning by itself: it explains something on
+    the fit tests (ΔBIC < 0 there) and its size is resolved (``c.resolved``,
+    :func:`significant`).  Its held-out gain is not required: beside a 0.1 mm gap
+    a 12-per-rev cogging fitted alone stays small (the gap dominates the residual);
+    the path is judged as a whole."""
+    return bool(c.fitted and c.predictions is not None and getattr(c, "resolved", True)
+                and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0)
+
+
+def lookahead_winner(earning: Sequence[Any], blocked: Any, try_on_top: Any,
+                     say: Any = None, max_paths: int = 2, first_steps: Sequence[Any] = ()
+                     ) -> Any | None:
+    """A first step C that lets the confounded candidate ``blocked`` earn on top of
+    it, preferred to the round's default winner.
+
+    The first steps are the earning candidates (by held-out ΔBIC), then the
+    ``first_steps`` (candidates that are :func:`supported` without earning alone, by
+    fit ΔBIC: a 12-per-rev cogging fitted alone beside a 0.1 mm gap stays small).
+    For the (at most ``max_paths``) first of them with which ``blocked`` is
+    compatible, ``try_on_top(C)`` re-identifies ``blocked`` on the model with C (C's
+    parameters free again) and returns it judged against C (a CandidateResult, or
+    None when incompatible or failed; its ``first_resolved`` says whether C's size is
+    resolved in the joint fit).  A path earns when ``blocked`` earns on top of C, the
+    held-out error ends below the current model's and C's size is resolved in the
+    joint fit (C is no passenger).  The C of the earning path with the lowest
+    held-out SSE is returned — and only when that SSE is below the default winner's
+    (:func:`choose_winner`; the two-step path must explain more than the one step
+    it replaces).  None otherwise (the default winner stands).
+
+    Parameters
+    ----------
+    earning : sequence of CandidateResult
+        The round's earning candidates.
+    blocked : CandidateResult
+        The confounded candidate (:func:`confounded`).
+    try_on_top : callable
+        ``try_on_top(c) -> CandidateResult | None``.
+    say : callable, optional
+        Progress messages.
+    max_paths : int
+        At most this many first steps are tried.
+    first_steps : sequence of CandidateResult
+        Further first steps (:func:`supported`), besides the earning candidates.
+    """
+    best, best_sse = None, choose_winner(earning).sse_heldout if earning else math.inf
+    pool = sorted(earning, key=lambda c: (c.delta_bic_heldout, c.sse_heldout)) + sorted(
+        (c for c in first_steps if c not in earning), key=lambda c: c.delta_bic_fit)
+    for c, step in _paths(pool, blocked, try_on_top, max_paths):
+        ok = (step.earns and step.error_after < c.error_before
+              and getattr(step, "first_resolved", True))
+        if say:
+            say(f"look-ahead: {blocked.effect} on top of {c.effect}: held-out error "
+                f"{c.error_before:.3f} -> {c.error_after:.3f} -> {step.error_after:.3f} %"
+                f"{' (the path earns)' if ok else ' (the path does not earn)'}")
+        if ok and step.sse_heldout < best_sse:
+            best, best_sse = c, step.sse_heldout
+    return best
+
+
+def _paths(pool: Sequence[Any], blocked: Any, attempt: Any, max_paths: int):
+    """(C, step) for the candidates C of ``pool`` other than ``blocked`` in order, with
+    ``step = attempt(C)`` not None, at most ``max_paths`` of them (the look-ahead's
+    two-step paths, either order)."""
+    tried = 0
+    for c in pool:
+        if tried >= max_paths:
+            return
+        if c is blocked:
+            continue
+        step = attempt(c)
+        if step is None:
+            continue
+        tried += 1
+        yield c, step
+
+def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd: int
+               ) -> Any:
+    """``blocked`` re-identified on the model with ``c`` and judged against it (the
+    look-ahead of :func:`lookahead_winner`); None when incompatible."""
+    comp = judge["comps"][blocked.effect]
+    if c.rig is None or c.fit is None or not compatible(c.rig, comp):
+        return None
+    fit_pts, held_pts = judge["fit_pts"], judge["held_pts"]
+    pf, ph = c.predictions[:len(fit_pts)], c.predictions[len(fit_pts):]
+    # configured from the residual of the model with c (the cogging period: the
+    # baseline's residual was dominated by what c explains)
+    comp = components_for([blocked.effect], fit_pts, pf, c.rig.harvester.lead_m_per_rad
+                          )[blocked.effect]
+    ev_pts, ev_pred = (held_pts, ph) if held_pts else (fit_pts, pf)
+    sse_fit = normalised_sse(fit_pts, pf)
+    n_eff_fit = effective_samples(fit_pts, pf)
+    ch_sse0, ch_n = channel_sse(ev_pts, ev_pred)
+    step = type(blocked)(blocked.effect, True, blocked.score, blocked.chi2, rnd + 1,
+                           error_before=c.error_after)
+    out = fit_member((blocked.effect, comp, CANDIDATES[blocked.effect].starts, sub_pts, fit_pts,
+                    held_pts, c.rig, dict(c.fit.parameters), max_iter))
+    judge_candidate(step, out, member=CANDIDATES.get(blocked.effect), **{**judge, "sse_fit": sse_fit, "n_eff_fit": n_eff_fit,
+                         "cur_ev_pred": ev_pred,
+                         "sse_held": normalised_sse(held_pts, ph) if held_pts else math.nan,
+                         "n_eff_held": effective_samples(held_pts, ph) if held_pts else math.nan,
+                         "cur_err": c.error_after, "ch_sse0": ch_sse0, "ch_n": ch_n})
+    if step.predictions is None:
+        return None
+    amp = CANDIDATES[c.effect].amplitudes if c.effect in CANDIDATES else ()
+    step.first_resolved = significant({n: step.fit.interval(n) for n in amp}, amp)
+    return step
+
+
+
+def confounded_first(blocked: Any, others: Sequence[Any], try_on_blocked: Any,
+                     err_before: float, floor: float, best_sse: float, say: Any = None,
+                     max_paths: int = 4) -> bool:
+    """Whether the confounded candidate ``blocked`` should be added first: some other
+    candidate C, re-identified on top of it (C's own and ``blocked``'s parameters
+    free), completes a path ``blocked`` → C that earns as a whole.
+
+    The reverse of :func:`lookahead_winner`: when the effect that ``blocked``
+    absorbed on the fit tests cannot be fitted alone (a 12-per-rev cogging beside a
+    0.1 mm gap: fitted alone on the baseline it finds nothing, fit ΔBIC > 0), the
+    joint refit on top of ``blocked`` can still separate them.  A path earns when C
+    earns on top of ``blocked`` (``step.earns``, its size resolved), the path as a
+    whole earns against the current model by :func:`~.evidence.earns` (held-out force
+    error ``err_before`` → the path's, ΔBIC summed over the two steps) and its
+    held-out SSE ends below ``best_sse`` (the default winner's, or ∞).
+
+    Parameters
+    ----------
+    blocked : CandidateResult
+        The confounded candidate (:func:`confounded`).
+    others : sequence of CandidateResult
+        Fitted candidates to try as the second step (rank order; at most
+        ``max_paths`` are tried).
+    try_on_blocked : callable
+        ``try_on_blocked(c) -> CandidateResult | None``: C re-identified on the model
+        with ``blocked``, judged against it.
+    err_before : float
+        Held-out relative force error of the current model, %.
+    floor : float
+        Noise floor of that error, %.
+    best_sse : float
+        Held-out SSE (noise-normalised) the path must end below.
+    say : callable, optional
+        Progress messages.
+    max_paths : int
+        At most this many second steps are tried.
+    """
+    for c, step in _paths(others, blocked, try_on_blocked, max_paths):
+        whole = earns(err_before, step.error_after, floor,
+                      blocked.delta_bic_fit + step.delta_bic_fit,
+                      blocked.delta_bic_heldout + step.delta_bic_heldout)
+        ok = step.earns and whole and step.sse_heldout < best_sse
+        if say:
+            say(f"look-ahead: {c.effect} on top of {blocked.effect}: held-out error "
+                f"{err_before:.3f} -> {blocked.error_after:.3f} -> {step.error_after:.3f} %"
+                f"{' (the path earns)' if ok else ' (the path does not earn)'}")
+        if ok:
+            return True
+    return False
+

@@ -1,0 +1,463 @@
+"""The forward-selection search: round after round, rank the catalogue on the
+current residual, re-identify the top candidates, judge them by the decision rule
+and add the winner; look ahead where one effect hides another.
+
+* :func:`run_rounds`: the rounds, on a :class:`SearchState` (the current model) over
+  the :class:`SearchTests`; a round is ranked (:func:`rank_round`), its candidates
+  fitted and judged (:func:`judge_round`), widened and looked ahead when the best
+  explains little (:func:`widen_round`), and its winner added (:func:`add_winner`);
+* :func:`should_widen`: whether the round re-identifies the lower-ranked candidates
+  too before deciding (the best earning candidate explains little of the excess).
+
+The statistics, the rule each candidate is judged by and the choice of the winner
+(:func:`~.evidence.choose_winner`) are in :mod:`.evidence`; the look-ahead through a
+confounded candidate in :mod:`.lookahead`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from .candidate_fit import fit_members
+from .deadline import past_deadline
+from .candidates import (
+    CANDIDATES,
+    compatible,
+    components_for,
+    fit_flexibility_member,
+    signature_scores,
+)
+from .evidence import (
+    MIN_EXCESS_OVER_FLOOR,
+    MIN_EXCESS_REDUCTION,
+    MIN_SSE_EXCESS,
+    can_earn,
+    channel_sse,
+    choose_winner,
+    disturbance_masks,
+    effective_samples,
+    excess_reduction,
+    judge_candidate,
+    normalised_sse,
+    sse_can_earn,
+)
+from .fit import PreparedTest, Rig
+from .lookahead import (
+    confounded,
+    confounded_first,
+    fit_on_top,
+    lookahead_winner,
+    supported,
+)
+from .results import CandidateResult, DiscrepancySettings
+from .terms import TERM_PREFERENCE, propose_term
+
+__all__ = ["SearchTests", "SearchState", "RoundRanking", "run_rounds", "rank_round",
+           "judge_round", "widen_round", "add_winner", "should_widen", "WIDEN_BELOW"]
+
+
+@dataclass
+class SearchTests:
+    """What the search is judged on, fixed over its rounds.
+
+    Attributes
+    ----------
+    rig : Rig
+        The baseline rig (no effects).
+    fit_pts, held_pts : list of PreparedTest
+        Fit and held-out tests (``held_pts`` empty: the decision uses the fit tests).
+    sub_pts : list of PreparedTest
+        The fit tests the candidates are re-identified on (a spread subset).
+    floor : float
+        Noise floor of the relative force error on the evaluation tests, %.
+    evaluation : str
+        ``"held-out"``, ``"validation set"`` or ``"all data"``.
+    validation_dir : Path or None
+        The validation set's directory (its documented disturbances are masked).
+    """
+
+    rig: Rig
+    fit_pts: list[PreparedTest]
+    held_pts: list[PreparedTest]
+    sub_pts: list[PreparedTest]
+    floor: float
+    evaluation: str
+    validation_dir: Path | None = None
+
+    @property
+    def eval_pts(self) -> list[PreparedTest]:
+        """The tests the decision is judged on."""
+        return self.held_pts or self.fit_pts
+
+    @property
+    def lead_m_per_rad(self) -> float:
+        return self.rig.harvester.lead_m_per_rad
+
+
+@dataclass
+class SearchState:
+    """The current model of the search: its rig, parameters, simulated outputs,
+    effective sample sizes, held-out force error (%) and the effects named so far."""
+
+    rig: Rig
+    params: dict[str, float]
+    fit_pred: list[np.ndarray]
+    held_pred: list[np.ndarray]
+    n_eff_fit: float
+    n_eff_held: float
+    error: float
+    effects: list[str] = field(default_factory=list)
+    steps: list[dict] = field(default_factory=list)
+    remaining: list[str] = field(default_factory=list)
+    #: where the run's time budget cut the search ("" while it was not reached)
+    cut: str = ""
+
+    def snapshot(self) -> SearchState:
+        """A copy that later rounds do not change."""
+        return replace(self, effects=list(self.effects), steps=list(self.steps),
+                       remaining=list(self.remaining))
+
+    def eval_pred(self) -> list[np.ndarray]:
+        return self.held_pred or self.fit_pred
+
+
+@dataclass
+class RoundRanking:
+    """One round's ranking: the configured components, signature scores, the
+    flexibility member's fit (or None), the rank order, a result per candidate and
+    the candidates chosen for re-identification."""
+
+    comps: dict
+    scores: dict
+    flex_out: tuple | None
+    order: list[str]
+    cands: dict[str, CandidateResult]
+    chosen: list[str]
+
+
+def run_rounds(tests: SearchTests, state: SearchState, settings: DiscrepancySettings,
+               say: Callable[[str], None], notes: list[str], all_cands: list
+               ) -> SearchState:
+    """Add effects round after round until nothing earns or ``max_effects`` are named.
+
+    Every candidate judged is appended to ``all_cands``, every note to ``notes``.
+    A look-ahead first step (no gain alone) is named only together with the effect
+    that completes its path; when no round is left to complete it, the state before
+    it is returned."""
+    # (state before the look-ahead first step, its error before) until it is completed
+    joint: tuple | None = None
+    for rnd in range(1, settings.max_effects + 1):
+        if past_deadline():
+            state.cut = state.cut or (f"time budget {settings.budget_s:g} s reached before "
+                                      f"round {rnd}: no further round run")
+            say(state.cut)
+            break
+        go_on, joint = _round(rnd, tests, state, joint, settings, say, notes, all_cands)
+        if not go_on:
+            break
+    if joint is not None:  # the path was not completed: its first step is not named
+        cut, state = state.cut, joint[0]
+        state.cut = cut
+        note = (f"the look-ahead path was not completed: its first step is not named "
+                f"(error back to {state.error:.3f} %)")
+        say(note)
+        notes.append(note)
+    return state
+
+
+def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None,
+           settings: DiscrepancySettings, say, notes: list[str], all_cands: list
+           ) -> tuple[bool, tuple | None]:
+    """One round on ``state`` (changed in place when a winner is added).  Returns
+    whether to go on and the look-ahead path's start (see :func:`run_rounds`)."""
+    rk = rank_round(tests, state, settings)
+    judge = _judge_context(rnd, tests, state, rk, say, notes)
+    if judge is None:  # nothing can earn: the round is not re-identified
+        all_cands += [rk.cands[n] for n in rk.order]
+        return False, joint
+    judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True)
+    earning, first, blocked = widen_round(rnd, rk, tests, state, settings, judge, say)
+    all_cands += [rk.cands[n] for n in rk.order]
+    if first is not None and not first.earns and (rnd == settings.max_effects
+                                                  or len(state.remaining) < 2
+                                                  or joint is not None):
+        say(f"round {rnd}: no round left to complete a path through {first.effect}")
+        first = None
+    if first is not None and not first.earns:
+        joint = (state.snapshot(), state.error)
+        note = (f"round {rnd}: {first.effect} is added first (it removes "
+                f"{100 * first.excess_reduction:.0f} % of the excess alone, and "
+                + (f"lets {blocked.effect} earn on top of it)" if first is not blocked
+                   else "a candidate fitted on top of it completes a path that earns)"))
+        say(note)
+        notes.append(note)
+        first.earns = True
+    if not earning and first is None:
+        return False, joint
+    win = first or choose_winner(earning)
+    if settings.discover and _term_preferred(rnd, win, tests, state, settings, say):
+        win.earns = False
+        return False, joint
+    joint = add_winner(rnd, win, first, joint, tests, state, say)
+    return bool(state.remaining), joint
+
+
+def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySettings
+               ) -> RoundRanking:
+    """Rank the remaining candidates by their signature score on the current residual
+    (the flexibility member by its variable-projection fit) and choose the ``top``
+    applicable ones that can join the current rig."""
+    fit_pts, sub_pts, remaining = tests.fit_pts, tests.sub_pts, state.remaining
+    comps = components_for(remaining, fit_pts, state.fit_pred, tests.lead_m_per_rad)
+    sub_pred = [state.fit_pred[next(k for k, q in enumerate(fit_pts) if q is p)]
+                for p in sub_pts]
+    flex = "flexibility" in remaining and not tests.rig.has_generator
+    scores = signature_scores(sub_pts, state.rig, state.params, sub_pred,
+                              [n for n in remaining if n != "flexibility"], comps)
+    flex_out = None
+    if "flexibility" in remaining:
+        flex_out = fit_flexibility_member(fit_pts, state.fit_pred, tests.held_pts,
+                                          state.held_pred, state.rig, state.params, comps,
+                                          scores) if flex else None
+        if flex_out is None:
+            scores["flexibility"] = {"score": math.nan, "chi2": math.nan, "columns": 0,
+                                     "applicable": False}
+    order = sorted(remaining, key=lambda n: (not scores[n]["applicable"],
+                                             -np.nan_to_num(scores[n]["score"])))
+    cands = {n: CandidateResult(n, scores[n]["applicable"], scores[n]["score"],
+                                scores[n]["chi2"], len(state.effects) + 1,
+                                error_before=state.error) for n in order}
+    chosen = [n for n in order if scores[n]["applicable"] and n != "flexibility"
+              and compatible(state.rig, comps[n])][:settings.top]
+    return RoundRanking(comps, scores, flex_out, order, cands, chosen)
+
+
+def _judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRanking,
+                   say, notes: list[str]) -> dict | None:
+    """The current model's measures every candidate of the round is judged against
+    (keyword arguments of :func:`~.evidence.judge_candidate`); None when no refit can
+    earn by the decision rule (said and noted)."""
+    fit_pts, held_pts, eval_pts, floor = tests.fit_pts, tests.held_pts, tests.eval_pts, \
+        tests.floor
+    cur_err = state.error
+    sse_fit, sse_held = normalised_sse(fit_pts, state.fit_pred), (
+        normalised_sse(held_pts, state.held_pred) if held_pts else math.nan)
+    n_obs = sum(pt.y.size for pt in eval_pts)
+    sse0 = sse_held if held_pts else sse_fit
+    ch_sse0, ch_n = channel_sse(eval_pts, state.eval_pred())
+    say(f"round {rnd} (error {cur_err:.3f} %, floor {floor:.3f} %, SSE/N {sse0 / n_obs:.3f}"
+        f" [per channel " + ", ".join(f"{a / b:.3f}" for a, b in zip(ch_sse0, ch_n))
+        + "]) ranking: " + ", ".join(f"{n} {rk.scores[n]['score']:.3g}" for n in rk.order))
+    if not (can_earn(cur_err, floor, 0.0, 1.0) or sse_can_earn(ch_sse0, ch_n)):
+        excess = math.sqrt(max(cur_err ** 2 - floor ** 2, 0.0))
+        note = (f"round {rnd}: candidates not re-identified — the {tests.evaluation} force "
+                f"error {cur_err:.3f} % exceeds the noise floor {floor:.3f} % by "
+                f"{excess:.3f} % (≤ {MIN_EXCESS_OVER_FLOOR:g} × floor) and the SSE of "
+                f"every channel is within {1 + MIN_SSE_EXCESS:g} × its noise expectation "
+                f"(all channels {sse0 / n_obs:.3f}): no refit can earn by the decision rule")
+        say(note)
+        notes.append(note)
+        return None
+    masks, mask_note = disturbance_masks(held_pts, tests.validation_dir)
+    if mask_note and mask_note not in notes:
+        say(mask_note)
+        notes.append(mask_note)
+    return dict(comps=rk.comps, fit_pts=fit_pts, held_pts=held_pts, sse_fit=sse_fit,
+                sse_held=sse_held, n_eff_fit=state.n_eff_fit, n_eff_held=state.n_eff_held,
+                cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say,
+                cur_ev_pred=state.eval_pred(), masks=masks)
+
+
+def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
+                state: SearchState, settings: DiscrepancySettings, judge: dict,
+                with_flexibility: bool = False) -> None:
+    """Re-identify the candidates ``names`` on the current model
+    (:func:`~.candidate_fit.fit_members`) and judge each
+    (:func:`~.evidence.judge_candidate`); ``with_flexibility``: the flexibility
+    member's fit is judged by the same rule too."""
+    names = list(names)
+    # with a time budget the fits go in batches of `jobs`, none started after the deadline
+    step = len(names) if settings.budget_s is None else settings.jobs
+    for a in range(0, len(names), max(step, 1)):
+        if past_deadline():
+            state.cut = (f"time budget {settings.budget_s:g} s reached in round "
+                         f"{len(state.effects) + 1}: {', '.join(names[a:])} not "
+                         f"re-identified; the round is decided on the candidates fitted "
+                         f"before the cut")
+            judge["say"](state.cut)
+            return
+        args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
+                 tests.held_pts, state.rig, state.params, settings.max_iter)
+                for n in names[a:a + step]]
+        for out in fit_members(args, settings.jobs):
+            judge_candidate(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
+    if not with_flexibility or rk.flex_out is None:
+        return
+    # judged by the same rule, fitted by variable projection
+    judge_candidate(rk.cands["flexibility"], rk.flex_out, member=CANDIDATES.get("flexibility"),
+                    **judge)
+    cf = rk.cands["flexibility"]
+    if cf.parameters:  # the stiffness k = m (2π f)² and its interval, for the report
+        w2 = (2 * math.pi * cf.parameters["flex_frequency_hz"]) ** 2
+        cf.parameters["flex_stiffness_N_per_m"] = cf.parameters["flex_load_mass_kg"] * w2
+        iv = cf.intervals.get("flex_load_mass_kg")
+        cf.intervals["flex_stiffness_N_per_m"] = (iv[0] * w2, iv[1] * w2) if iv else None
+
+
+def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchState,
+                settings: DiscrepancySettings, judge: dict, say
+                ) -> tuple[list, CandidateResult | None, CandidateResult | None]:
+    """When the best earning candidate explains little (:func:`should_widen`),
+    re-identify the remaining applicable ones too, and look ahead through the
+    confounded candidate (:func:`lookahead_winner`, :func:`confounded_first`).
+    Returns the earning candidates, the first step of a look-ahead path (or None)
+    and the confounded candidate (or None)."""
+    cands, order = rk.cands, rk.order
+    earning = [c for c in cands.values() if c.earns]
+    first = blocked = None
+    if state.cut or not should_widen(earning, can_earn(state.error, tests.floor, 0.0, 1.0)):
+        return earning, first, blocked
+    more = [n for n in order if n not in rk.chosen and rk.scores[n]["applicable"]
+            and n != "flexibility" and compatible(state.rig, rk.comps[n])]
+    if not more:
+        return earning, first, blocked
+    best = max(earning, key=lambda c: c.excess_reduction)
+    say(f"round {rnd}: the best earning candidate ({best.effect}) removes only "
+        f"{100 * best.excess_reduction:.0f} % of the excess (< "
+        f"{100 * WIDEN_BELOW:.0f} %): also re-identifying {', '.join(more)}")
+    judge_round(rk, more, tests, state, settings, judge)
+    earning = [c for c in cands.values() if c.earns]
+    blocked = confounded(list(cands.values()))
+    if blocked is None or state.cut:  # no look-ahead path after the time budget
+        blocked = None
+        return earning, first, blocked
+    first = lookahead_winner(
+        earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,
+                                               settings.max_iter, rnd), say,
+        first_steps=[c for c in cands.values() if supported(c)])
+    others = [cands[n] for n in order if cands[n].fitted
+              and cands[n].predictions is not None and cands[n] is not blocked]
+    if first is None and confounded_first(
+            blocked, others,
+            lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd),
+            state.error, tests.floor,
+            choose_winner(earning).sse_heldout if earning else math.inf, say):
+        first = blocked
+    return earning, first, blocked
+
+
+def _term_preferred(rnd: int, win: CandidateResult, tests: SearchTests, state: SearchState,
+                    settings: DiscrepancySettings, say) -> bool:
+    """Whether a data-driven term (:func:`~.terms.propose_term`) explains the residual
+    far better than the winner (:data:`~.terms.TERM_PREFERENCE`): the catalogue name
+    would point at the wrong part, so the winner is not named."""
+    floor = tests.floor
+    rival = propose_term(tests.fit_pts, state.fit_pred, tests.eval_pts, state.eval_pred(),
+                         tests.lead_m_per_rad, settings.seed, floor,
+                         state.n_eff_held if tests.held_pts else state.n_eff_fit)
+    ex_win = math.sqrt(max(win.error_after ** 2 - floor ** 2, 0.0))
+    ex_term = math.sqrt(max(rival.error_after ** 2 - floor ** 2, 0.0))
+    if rival.earns and rival.group != "velocity" and ex_term < TERM_PREFERENCE * ex_win:
+        say(f"round {rnd}: {win.effect} earns ({win.error_after:.3f} %) but a data-driven "
+            f"term explains the residual far better ({rival.error_after:.3f} %): "
+            f"{rival.description}")
+        return True
+    return False
+
+
+def add_winner(rnd: int, win: CandidateResult, first: CandidateResult | None,
+               joint: tuple | None, tests: SearchTests, state: SearchState, say
+               ) -> tuple | None:
+    """Add the round's winner to ``state`` (in place) and record the step; a winner
+    that completes a look-ahead path started at ``joint`` is recorded with its first
+    step as one joint step.  Returns the path's start still open (or None)."""
+    fit_pts, held_pts = tests.fit_pts, tests.held_pts
+    state.effects.append(win.effect)
+    state.remaining.remove(win.effect)
+    state.rig, state.params = win.rig, dict(win.fit.parameters)
+    state.fit_pred = win.predictions[:len(fit_pts)]
+    state.held_pred = win.predictions[len(fit_pts):]
+    state.n_eff_fit = effective_samples(fit_pts, state.fit_pred)
+    state.n_eff_held = effective_samples(held_pts, state.held_pred) if held_pts else math.nan
+    state.error = win.error_after
+    steps = state.steps
+    steps.append({"effect": win.effect, "error_after": state.error,
+                  "excess_reduction": win.excess_reduction,
+                  "sse_excess_reduction": win.sse_reduction,
+                  "parameters": win.parameters})
+    if joint is not None and win is not first:  # the path is complete: one step
+        prev = steps.pop(-2)
+        steps[-1] = {"effect": f"{prev['effect']} + {win.effect}", "error_after": state.error,
+                     "excess_reduction": excess_reduction(joint[1], state.error, tests.floor),
+                     "parameters": {**prev["parameters"], **win.parameters},
+                     "joint": True}
+        joint = None
+    say(f"round {rnd}: added {win.effect}, {tests.evaluation} error {state.error:.3f} %")
+    return joint
+
+
+#: When the best earning candidate of a round removes less than this share of the
+#: held-out force error's excess over the noise floor, the round re-identifies every
+#: remaining applicable candidate before deciding (see :func:`should_widen`).
+WIDEN_BELOW = 0.5
+
+
+
+
+
+
+
+
+
+
+def should_widen(earning: Sequence[Any], force_excess: bool = True) -> bool:
+    """Whether to re-identify the remaining lower-ranked candidates before deciding.
+
+    True when some candidate earns but the best earning one removes less than
+    :data:`WIDEN_BELOW` of the held-out force error's excess over the noise floor
+    (when the force has no excess beyond noise, ``force_excess`` False: of the SSE
+    alternative's excess — a voltage-seen effect): most of what the model
+    misses is then unexplained by the top-ranked candidates, and the ranking (a
+    linearised score on the fit tests) may have put the effect that explains it
+    below ``top`` — a 12-per-rev cogging beside a 0.1 mm gap ranked 5th, the gap's
+    refit absorbed the ripple on the fit tests and failed on the held-out ones, and
+    a compliance earning 11 % of the excess took the only transmission slot.
+
+    Parameters
+    ----------
+    earning : sequence of CandidateResult
+        The earning candidates of the round (``excess_reduction`` set; an optional
+        ``sse_reduction`` attribute holds the SSE alternative's share).
+    force_excess : bool
+        Whether the force error's excess over the noise floor is beyond noise
+        (:func:`~.evidence.can_earn` on the force alone).  Then the force gain decides
+        alone: a compliance beside a gap plus a cogging removed 11 % of the force
+        excess but more than half of the voltage channel's, and the round was not
+        widened.
+    """
+    if not earning:
+        return False
+    gains = []
+    for c in earning:
+        g = c.excess_reduction if math.isfinite(c.excess_reduction) else -math.inf
+        s = getattr(c, "sse_reduction", None)
+        use_sse = not force_excess and s is not None and math.isfinite(s)
+        gains.append(max(g, s) if use_sse else g)
+    return max(gains) < max(WIDEN_BELOW, MIN_EXCESS_REDUCTION)
+
+
+
+
+
+
+
+
+
+
+
+
