@@ -10,8 +10,9 @@ import ast
 from pathlib import Path
 
 import pytest
+from tests.paths import PACKAGE
 
-PKG = Path(__file__).resolve().parent.parent / "ehsa_opt"
+PKG = PACKAGE
 
 #: Rooms from the bottom up; a module may import its own room and rooms below it.
 ROOMS = ["utils", "physics", "datasets", "estimation", "vehicle", "design", "plots",

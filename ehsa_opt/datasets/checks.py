@@ -25,7 +25,7 @@ These checks look at what the numbers *mean*, with stated tolerances:
 
 Tolerances were set on the embedded prototype data (gains 0.65–1.06 for force,
 1.000–1.008 for voltage) and are checked on generated data with other seeds,
-effects and grids, and on the EMPS data (``tests/test_bench_checks.py``).
+effects and grids, and on the EMPS data (``validation/bench_checks_heldout.py``).
 """
 
 from __future__ import annotations

@@ -14,7 +14,7 @@ with e the residuals at the fitted θ and Bartlett weights w_l = 1 − |l|/(L+1)
 West 1987).  The bandwidth L of each test is Andrews' (1991) AR(1) plug-in on that test's
 residuals: time-series residuals are strongly autocorrelated (a model error repeats every
 cycle, the noise is filtered), and i.i.d. samples would make the band several times too
-narrow (``tests/test_rod_law.py`` checks the coverage of both on an AR(1) regression).
+narrow (``tests/estimation/test_rod_law.py`` checks the coverage of both on an AR(1) regression).
 Tests are independent of each other.  B⁺ is the pseudo-inverse with the identifiability
 threshold: the nut/bearing split is not determined by a rigid bench, and any friction *at the
 rod* has (almost) no component along it.

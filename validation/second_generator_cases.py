@@ -1,0 +1,106 @@
+"""Case list of the second-generator confusion benchmark (fixed before its first run).
+
+How the cases were chosen
+-------------------------
+Written down, and committed on its own, before the discrepancy workflow was run on any
+data of the second generator; the product is never tuned on these cases afterwards.
+Tuning is allowed only on :data:`TUNING` (other seeds, other magnitudes, the rigs
+swapped), which anyone may run and tune on.
+
+* **Clean campaigns** (nothing hidden; expected answer ``none``), one per protocol family
+  so that a failure names the protocol: sines only (rig B, 18 tests), constant-velocity
+  strokes (triangles at four speeds and trapezoids, rig B, 15 tests), multisines and
+  road-like records (rig C, 15 tests), and the mixed campaign (rig C, 16 tests).
+* **Catalogue effects with other laws** (expected: that name), each on a mixed campaign
+  (6 sines, 6 triangles, 1 trapezoid, 2 multisines, 1 road record = 16 tests):
+  axial play closed by a Hertzian Hunt-Crossley contact (a moderate one on rig B and a
+  steel-like stiff one, 0.3 mm with kN impacts, on rig C), a two-mass mount compliance,
+  a non-sinusoidal detent (three harmonics), two Shockley diodes, the copper energy
+  balance of the winding, LuGre direction-dependent Coulomb and viscous terms, a flux
+  saturation 1/sqrt(1 + (i/i_sat)^2).  Magnitudes: realistic for a bench and above the
+  noise on the force or voltage channel (the generator's own noiseless difference to
+  the clean campaign was looked at, nothing else).
+* **Effects outside the catalogue** (expected: no catalogue name, i.e. ``none`` or ``none
+  of the catalogue``, unless a member earns with physical parameters -- that is reported
+  and judged by hand): ball-recirculation friction ripple (7.3 per screw revolution),
+  preload variation along the screw (friction rising with the square of the stroke
+  position), eddy-current damping with the Wouterse law (saturating with speed), and a
+  2 ms skew of the voltage channel against force and displacement.
+
+The friction of every campaign is LuGre with a Stribeck exponent (not the product's
+Simscape law); noise is AR(1) on force (1.5 N, 0.9) and voltage (20 mV, 0.7), white on
+displacement (0.5 um); 1 kHz.  Rig B: lead 10 mm, R_i 2.4 ohm, K_e 0.085 V s/rad, loads
+3.3/10/33 ohm.  Rig C: lead 6 mm, R_i 5.1 ohm, K_e 0.12 V s/rad, loads 10/33/100 ohm.
+
+Each case: ``(case id, expected, rig, protocol, campaign keywords, seed)``; the
+``expected`` label is ``none``, a catalogue name, or ``out:<effect>``.
+"""
+
+from __future__ import annotations
+
+from validation.second_generator import Effects as E
+
+__all__ = ["CASES", "TUNING"]
+
+CASES = [
+    ("clean-sines", "none", "rig_b", "sines", {}, 101),
+    ("clean-strokes", "none", "rig_b", "strokes", {}, 102),
+    ("clean-multi-road", "none", "rig_c", "multi", {}, 103),
+    ("clean-mixed", "none", "rig_c", "mixed", {}, 104),
+    ("backlash-hertz", "backlash", "rig_b", "mixed",
+     {"effects": E(play_m=1e-4, contact_stiffness=2e9)}, 105),
+    ("backlash-stiff", "backlash", "rig_c", "mixed",
+     {"effects": E(play_m=3e-4, contact_stiffness=3e10)}, 106),
+    ("compliance-two-mass", "compliance", "rig_b", "mixed",
+     {"effects": E(mount_stiffness_N_per_m=2e5, mount_damping_Ns_per_m=200.0)}, 107),
+    ("cogging-detent", "cogging", "rig_c", "mixed",
+     {"effects": E(cogging_Nm=0.02, cogging_detents=6)}, 108),
+    ("diode-shockley", "voltage_drop", "rig_b", "mixed",
+     {"effects": E(diode_saturation_A=1e-5, diode_ideality=1.05)}, 109),
+    ("heating-copper", "winding_heating", "rig_c", "mixed",
+     {"effects": E(thermal_capacity_J_per_K=0.1, thermal_resistance_K_per_W=10.0)}, 110),
+    ("asym-lugre", "asymmetric_friction", "rig_b", "mixed",
+     {"asym_coulomb_N": 12.0, "asym_viscous_Ns_per_m": 60.0}, 111),
+    ("saturation-flux", "magnetic_saturation", "rig_b", "mixed",
+     {"effects": E(saturation_current_A=4.0)}, 112),
+    ("out-recirculation", "out:recirculation_ripple", "rig_b", "mixed",
+     {"effects": E(ripple_depth=0.25, ripple_per_rev=7.3)}, 113),
+    ("out-preload", "out:preload_variation", "rig_c", "mixed",
+     {"effects": E(preload_gain=0.6, preload_span_m=0.008)}, 114),
+    ("out-eddy", "out:eddy_current", "rig_b", "mixed",
+     {"effects": E(eddy_Nms_per_rad=1e-3, eddy_corner_rad_per_s=60.0)}, 115),
+    ("out-voltage-skew", "out:voltage_skew", "rig_c", "mixed",
+     {"effects": E(voltage_delay_s=0.002)}, 116),
+]
+
+#: The tuning set: the same kinds of case with other seeds and magnitudes, rigs swapped.
+TUNING = [
+    ("t-clean-mixed", "none", "rig_b", "mixed", {}, 201),
+    ("t-clean-sines", "none", "rig_c", "sines", {}, 202),
+    ("t-clean-strokes", "none", "rig_c", "strokes", {}, 203),
+    ("t-backlash", "backlash", "rig_c", "mixed",
+     {"effects": E(play_m=1.5e-4, contact_stiffness=5e9)}, 204),
+    ("t-backlash-stiff", "backlash", "rig_b", "mixed",
+     {"effects": E(play_m=2e-4, contact_stiffness=5e10)}, 205),
+    ("t-compliance", "compliance", "rig_c", "mixed",
+     {"effects": E(mount_stiffness_N_per_m=5e5, mount_damping_Ns_per_m=400.0)}, 206),
+    ("t-cogging", "cogging", "rig_b", "mixed", {"effects": E(cogging_Nm=0.012,
+                                                             cogging_detents=8)}, 207),
+    ("t-diode", "voltage_drop", "rig_c", "mixed", {"effects": E(diode_saturation_A=1e-7)}, 208),
+    ("t-heating", "winding_heating", "rig_b", "mixed",
+     {"effects": E(thermal_capacity_J_per_K=0.2, thermal_resistance_K_per_W=6.0)}, 209),
+    ("t-asym", "asymmetric_friction", "rig_c", "mixed",
+     {"asym_coulomb_N": 7.0, "asym_viscous_Ns_per_m": 30.0}, 210),
+    ("t-saturation", "magnetic_saturation", "rig_c", "mixed",
+     {"effects": E(saturation_current_A=1.5)}, 211),
+    ("t-recirculation", "out:recirculation_ripple", "rig_c", "mixed",
+     {"effects": E(ripple_depth=0.15, ripple_per_rev=6.6)}, 212),
+    ("t-preload", "out:preload_variation", "rig_b", "mixed",
+     {"effects": E(preload_gain=0.3, preload_span_m=0.01)}, 213),
+    ("t-eddy", "out:eddy_current", "rig_c", "mixed",
+     {"effects": E(eddy_Nms_per_rad=4e-4, eddy_corner_rad_per_s=80.0)}, 214),
+    ("t-voltage-skew", "out:voltage_skew", "rig_b", "mixed",
+     {"effects": E(voltage_delay_s=0.001)}, 215),
+    ("t-load-cell", "out:load_cell", "rig_b", "mixed",
+     {"effects": E(load_cell_hz=80.0, load_cell_damping=0.1)}, 216),
+]
