@@ -291,7 +291,10 @@ def write_partial_report(out_dir: str | Path, data_dir: str | Path, messages: li
             steps.append({"effect": g.group(2), "error_after": float(g.group(4)),
                           "evaluation": g.group(3)})
     named = [st["effect"] for st in steps]
-    where = (f"in round {rounds}" if rounds else "before the first round (baseline fit)")
+    based = any(m.startswith("baseline:") for m in messages)
+    where = (f"in round {rounds}" if rounds else
+             "after the baseline fit, before the first round" if based
+             else "before the first round (baseline fit)")
     answer = " + ".join(named) if named else "undecided"
     msg = (f"time budget of {budget_s:.0f} s reached {where} after {seconds:.0f} s: partial "
            f"answer `{answer}` (" + (f"named in the completed rounds; error "

@@ -285,10 +285,9 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
     step = len(names) if settings.budget_s is None else settings.jobs
     for a in range(0, len(names), max(step, 1)):
         if past_deadline():
-            state.cut = (f"time budget {settings.budget_s:g} s reached in round "
-                         f"{len(state.effects) + 1}: {', '.join(names[a:])} not "
-                         f"re-identified; the round is decided on the candidates fitted "
-                         f"before the cut")
+            state.cut = (f"time budget {settings.budget_s:g} s reached in the round "
+                         f"in progress: {', '.join(names[a:])} not re-identified; the "
+                         f"round is decided on the candidates fitted before the cut")
             judge["say"](state.cut)
             return
         args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
