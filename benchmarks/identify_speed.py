@@ -53,7 +53,7 @@ from ehsa_opt.datasets.bench_format import load_bench  # noqa: E402
 from ehsa_opt.datasets.synthetic import PROTOTYPE_FRICTION  # noqa: E402
 from ehsa_opt.estimation.collocation import node_indices  # noqa: E402
 from ehsa_opt.estimation.identify import IdentifyOptions, identify  # noqa: E402
-from ehsa_opt.estimation.identify import _draw_start as draw_start  # noqa: E402
+from ehsa_opt.estimation.starts import draw_start  # noqa: E402
 from ehsa_opt.estimation.identify_options import PARAMETER_BOUNDS, test_motion  # noqa: E402
 from ehsa_opt.physics import BenchModel  # noqa: E402
 from ehsa_opt.physics.friction import bearing_friction_Nm, nut_friction_N, rod_friction_N  # noqa: E402

@@ -15,7 +15,7 @@
 2. Memory: peak RSS of a fresh process simulating 100 designs on a 600 m road at
    100 km/h (default ``keep_series=False``; and with ``keep_series=True``).
 3. Frequency domain (frictionless, exact): designs per second of
-   :func:`ehsa_opt.vehicle.metrics.linear_metrics` on random designs in the paper's box.
+   :func:`ehsa_opt.vehicle.frequency_path.linear_metrics` on random designs in the paper's box.
 
 Run from the repository root::
 
@@ -43,7 +43,7 @@ from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth  # noqa: E4
 from ehsa_opt.physics.friction import rod_friction_N  # noqa: E402
 from ehsa_opt.physics.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams  # noqa: E402
 from ehsa_opt.physics.quarter_car_model import QuarterCarModel, param_vector  # noqa: E402
-from ehsa_opt.vehicle.metrics import linear_metrics  # noqa: E402
+from ehsa_opt.vehicle.frequency_path import linear_metrics  # noqa: E402
 from ehsa_opt.vehicle.road import synthesize_road  # noqa: E402
 from ehsa_opt.vehicle.simulate import compiled_step, simulate_quarter_car  # noqa: E402
 

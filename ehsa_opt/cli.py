@@ -8,7 +8,6 @@ fix; nothing is written half-way.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Callable, Sequence
@@ -78,41 +77,11 @@ def _cmd_bench_convert_emps(args: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------ design
-def _design_figures(outcome: dict, out_dir: Path) -> list[Path]:
-    """Figures of an optimize run (goal-attainment history, front)."""
-    from . import plots
-    from .plots import design as pd
-
-    figs = []
-    ga = getattr(outcome, "goal_attainment", None)
-    if ga is not None:
-        for which, name in (("design", "ga_design_history.png"),
-                            ("mass", "ga_equivalent_mass.png"),
-                            ("objectives", "ga_objective_history.png")):
-            figs.append(plots.save(pd.goal_attainment_history(ga, which), out_dir / name))
-    res = outcome.result
-    if outcome["method"] == "nsga2" and res is not None and len(res.F):
-        ga_pt = outcome.get("goal_attainment", {}).get("objectives")
-        proto = outcome["prototype"]["objectives"]
-        figs.append(plots.save(pd.pareto_projections(res, ga_pt, proto),
-                               out_dir / "pareto_projections.png"))
-        ga_full = None
-        if ga_pt is not None:
-            ga_full = {**outcome["goal_attainment"]["design"], **ga_pt}
-        figs.append(plots.save(pd.parallel_coordinates(res, ga_full),
-                               out_dir / "parallel_coordinates.png"))
-        figs.append(plots.save(pd.hypervolume_history({"NSGA-II": res.history},
-                                                      res.hv_reference),
-                               out_dir / "hypervolume.png"))
-    return figs
-
-
 def _cmd_optimize(args: argparse.Namespace) -> int:
     from .design.config import check_method, load_design_config
-    from .design.optimize import check_out_dir, motor_summary, optimize, time_domain_summary
+    from .design.optimize import check_out_dir, optimize
     from .design.sweep import executor
     from .utils.progress import progress_bar
-    from .vehicle.coverage import out_of_range_lines
     cfg = load_design_config(args.problem)
     method = check_method(args.method or cfg.method)
     frictions = None
@@ -135,41 +104,20 @@ def _cmd_optimize(args: argparse.Namespace) -> int:
                            mapper=mapper if args.scheduler else None, progress=tick,
                            frictions=frictions, friction_mode=args.friction_mode,
                            friction_labels=tuple(args.friction or ()))
-    _design_figures(outcome, out / "figures")
-    d, o = outcome["design"], outcome["objectives"]
-    m = outcome["metrics"]
-    print(f"{method}: {outcome['message']}")
-    print("design: " + ", ".join(f"{k} = {v:.4g}" for k, v in d.items()))
-    print("objectives: " + ", ".join(f"{k} = {v:.4g}" for k, v in o.items()))
-    if "power_W" in m:
-        print(f"power {m['power_W']:.1f} W, efficiency {100 * m['efficiency']:.1f} %, "
-              f"W_k rms {m.get('comfort_weighted_rms_m_s2', float('nan')):.3f} m/s^2")
-    if "gamma" in outcome:
-        print(f"attainment factor gamma = {outcome['gamma']:+.4f}")
-    if method == "nsga2":
-        hv = outcome["hypervolume"]["history"]
-        print(f"front: {outcome['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
-              f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
-              f"{outcome.get('front_vs_goal_attainment')}")
-    for line in motor_summary(outcome):
-        print(line)
-    for line, to_err in out_of_range_lines(outcome.get("out_of_range")):
-        print(line, file=sys.stderr if to_err else sys.stdout)
-    if "time_domain_check" in outcome:
-        print(time_domain_summary(outcome))
+    outcome.write_figures(out / "figures")
+    print(outcome.summary())
+    for line in outcome.warnings():
+        print(line, file=sys.stderr)
     print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
                                             else ""))
-    return 0 if outcome["success"] or args.stop_after else 1
+    return 0 if outcome.success or args.stop_after else 1
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
     import time
 
-    from . import plots
-    from .design.sweep import out_of_range_warning, parse_sweep, rows_to_csv, run_sweep
+    from .design.sweep import parse_sweep, run_sweep, sweep_warnings, write_sweep
     from .physics.params import load_toml
-    from .plots.design import sweep_lines
-    from .utils.io import atomic_write_text
 
     spec = parse_sweep(load_toml(args.problem), args.problem,
                        friction_from=_friction_file(args.friction))
@@ -177,33 +125,12 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     rows = run_sweep(spec, jobs=args.jobs, scheduler=args.scheduler)
     dt = time.perf_counter() - t0
     out = Path(args.out)
-    atomic_write_text(out / "sweep.csv", rows_to_csv(rows))
-    hue = [k for k in ("vehicle", "iso_class", "friction") if
-           len({r[k] for r in rows}) > 1] + [k for k, _ in spec.design]
-    ys = ["power_W", "efficiency", "comfort_weighted_rms_m_s2", "road_holding"]
-    if len(spec.speeds_km_per_h) > 1:
-        plots.save(sweep_lines(rows, "speed_km_per_h", ys, hue), out / "sweep.png")
-    elif spec.design:
-        x = spec.design[0][0]
-        plots.save(sweep_lines(rows, x, ys, [h for h in hue if h != x] or ["vehicle"]),
-                   out / "sweep.png")
-    bad = [r for r in rows if float(r.get("road_holding", 0.0)) > 1.0]
-    if bad:
-        worst = max(bad, key=lambda r: float(r["road_holding"]))
-        print(f"warning: road holding > 1 in {len(bad)} of {len(rows)} cases (worst "
-              f"{float(worst['road_holding']):.2f}: " + ", ".join(
-                  f"{k} = {worst[k]}" for k in ("vehicle", "iso_class", "speed_km_per_h",
-                                                "friction") if k in worst)
-              + "): the tyre would leave the ground and the linear tyre model is invalid "
-                "there", file=sys.stderr)
-    if out_of_range_warning(rows, spec):
-        print(f"warning: {out_of_range_warning(rows, spec)}", file=sys.stderr)
+    write_sweep(out, rows, spec)
+    for line in sweep_warnings(rows, spec):
+        print(line, file=sys.stderr)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
     print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
     return 0
-#: |energy residual| above which ``simulate`` fails (the balance closes to < 1 % when the
-#: time step resolves the vehicle's modes).
-_ENERGY_TOLERANCE = 0.05
 
 
 def _friction_file(spec: str | None) -> str | None:
@@ -232,26 +159,15 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         rep = identify(data, starts=args.starts, jobs=args.jobs, seed=args.seed,
                        progress=lambda k: bar.update(1))
     out.mkdir(parents=True, exist_ok=True)
-    rep.plot(out)
+    rep.write(out)
     doc = identification_json(rep)
     atomic_write_json(out / "identification.json", doc)
-    ok = sum(f.success for f in rep.fits)
-    print(f"identified {ok}/{len(rep.fits)} tests in {rep.seconds:.1f} s "
-          f"({args.starts} starts each); results in {out / 'identification.json'}")
-    for t, f in zip(data.tests, rep.fits):
-        if f.success:
-            dv = f"{f.delta_V:.4f}" if f.delta_V is not None else "—"
-            print(f"  {t.file}: δ_F {f.delta_F:.4f}  δ_V {dv}  force error "
-                  f"{f.force_relative_error_percent:.2f} %  ({f.status})")
-        else:
-            print(f"  {t.file}: FAILED ({f.message})")
-    if not data.has_generator and rep.fits[0].success:
-        p = rep.fits[0].parameters
-        print(f"  M = {p['inertia_kg']:.2f} kg, F_v = {p['nut_viscous_Ns_per_m']:.1f} N s/m, "
-              f"F_C = {p['nut_coulomb_N']:.2f} N, offset = {p['offset_N']:.2f} N")
+    print(rep.summary(out / "identification.json"))
     for line in envelope_lines(doc, out / "identification.json"):
         print(line)
-    return 0 if ok else 1
+    return 0 if rep.success else 1
+
+
 def _cmd_plan_tests(args: argparse.Namespace) -> int:
     from .design.test_plan import plan_from_files
     plan, harv = plan_from_files(args.identification, args.vehicle, args.rig, n_tests=args.n)
@@ -280,91 +196,11 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
-def _in_file(path: str, func: Callable, *a, **kw):
-    """Call ``func``; a ParameterError that does not name ``path`` gets it prefixed."""
-    try:
-        return func(*a, **kw)
-    except ParameterError as exc:
-        if str(path) in str(exc):
-            raise
-        raise ParameterError(f"{path}: {exc}") from None
-
-
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    import warnings
-
-    from .datasets.problem_file import load_problem
-    from .vehicle.coverage import coverage_rows, identified_range_for
-    from .vehicle.simulate import simulate_quarter_car
-    prob = load_problem(args.problem)
-    if args.friction:
-        import dataclasses
-
-        from .datasets.friction_source import load_friction
-        prob = dataclasses.replace(prob, friction=load_friction(args.friction))
-    v_range = identified_range_for(args.friction or (), args.problem)[0]
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        sim = _in_file(args.problem, simulate_quarter_car, prob.vehicle, prob.harvester,
-                       prob.friction, prob.road,
-                       settle_s=prob.simulation.settle_s,
-                       sample_rate_hz=prob.simulation.sample_rate_hz,
-                       base_dir=prob.base_dir, keep_series=False, identified_range_m_per_s=v_range)
-    for w in caught:
-        print(f"warning: {w.message}", file=sys.stderr)
-    m = dict(sim.metrics_of(0))
-    if not sim.success:
-        raise ValueError(f"{args.problem}: simulation failed: {sim.message}")
-    residual = float(m.get("energy_residual", 0.0))
-    if not abs(residual) <= _ENERGY_TOLERANCE:
-        v = prob.vehicle
-        hop_hz = ((v.tyre_stiffness_N_per_m + v.suspension_stiffness_N_per_m)
-                  / v.unsprung_mass_kg) ** 0.5 / (2 * 3.141592653589793)
-        raise ValueError(
-            f"{args.problem}: the energy balance of the simulation does not close (residual "
-            f"{100 * residual:.3g} %, tolerance {100 * _ENERGY_TOLERANCE:g} %), so its metrics "
-            f"are not trustworthy; the vehicle's wheel-hop mode ({hop_hz:.3g} Hz) needs "
-            f"[simulation] sample_rate_hz of at least {20 * hop_hz:.3g} Hz (now "
-            f"{prob.simulation.sample_rate_hz:g}); check the [vehicle] masses and stiffnesses")
-    # load power R_e i² is instantaneous, so its peak gives the peak current and the peak
-    # terminal voltage i R_e exactly
-    r_e = prob.harvester.load_ohm
-    pk = float(m["peak_power_W"])
-    m["peak_current_A"] = (pk / r_e) ** 0.5 if r_e > 0 else None
-    m["peak_terminal_voltage_V"] = (pk * r_e) ** 0.5 if r_e > 0 else None
-    for key, limit, unit in (("peak_terminal_voltage_V", prob.simulation.rated_voltage_V, "V"),
-                             ("peak_current_A", prob.simulation.rated_current_A, "A")):
-        if limit is not None and m[key] is not None and m[key] > limit:
-            what = "terminal voltage" if unit == "V" else "current"
-            print(f"warning: peak {what} {m[key]:.3g} {unit} exceeds the rated {limit:g} "
-                  f"{unit} ([simulation] rated_{'voltage_V' if unit == 'V' else 'current_A'} "
-                  f"of {args.problem})", file=sys.stderr)
-    if args.json:
-        out = dict(m)
-        out["road"] = sim.road_source
-        out["frictionless"] = prob.friction is None or prob.friction.is_frictionless
-        out["wall_s"] = round(sim.stats["wall_s"], 4)
-        from .utils.io import json_safe
-        print(json.dumps(json_safe(out), allow_nan=False))  # standard JSON: inf/NaN -> null
-        return 0
-    rows = [("comfort alpha (-)", m["comfort"]),
-            ("W_k-weighted rms acceleration (m/s^2)", m["comfort_weighted_rms_m_s2"]),
-            ("road holding (-)", m["road_holding"]),
-            ("power in R_e (W)", m["power_W"]),
-            ("power, dimensionless (-)", m["power_dimensionless"]),
-            ("efficiency (%)", 100.0 * m["efficiency"]),
-            ("power absorbed by the damper (W)", m["dissipated_power_W"]),
-            ("dissipation bound (W)", m["dissipation_bound_W"]),
-            ("peak power (W)", m["peak_power_W"]),
-            ("peak terminal voltage i R_e (V)", m["peak_terminal_voltage_V"]),
-            ("peak current (A)", m["peak_current_A"]),
-            ("energy balance residual (%)", 100.0 * m["energy_residual"]),
-            *coverage_rows(m, v_range)]
-    print(f"{args.problem}: {sim.road_source}, "
-          f"{'frictionless' if prob.friction is None else 'with friction'}, "
-          f"{sim.stats['steps']} steps in {sim.stats['wall_s']:.2f} s")
-    for label, value in rows:
-        print(f"  {label:<40s} {'n/a' if value is None else format(value, '.4g')}")
+    from .vehicle.problem_simulation import simulate_problem
+    run = simulate_problem(args.problem, args.friction,
+                           on_warning=lambda line: print(line, file=sys.stderr))
+    print(run.to_json() if args.json else run.summary())
     return 0
 
 

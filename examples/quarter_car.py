@@ -14,7 +14,7 @@ from dataclasses import replace
 import numpy as np
 
 from ehsa_opt.datasets.problem_file import load_problem
-from ehsa_opt.vehicle.metrics import linear_metrics
+from ehsa_opt.vehicle.frequency_path import linear_metrics
 from ehsa_opt.vehicle.simulate import simulate_quarter_car
 
 

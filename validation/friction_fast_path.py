@@ -1,5 +1,5 @@
 """Benchmark: the friction-aware fast path (stochastic equivalent linearisation,
-``ehsa_opt.vehicle.equivalent``) against the exact time-domain simulation.
+``ehsa_opt.vehicle.fast_path.linearisation``) against the exact time-domain simulation.
 
 Validation set (issue 14):
   designs   prototype, paper optimum (§4.2), our optimum (goal attainment of
@@ -8,7 +8,7 @@ Validation set (issue 14):
   friction  none and the embedded data's true friction × 0.5 / × 1 / × 2
             (min / best / max)                                              -> 4
   roads     ISO 8608 classes B–D at 30–130 km/h, seeded, each at least 400 m and
-            60 s long (``fast_path_check.MIN_RECORD_S``: with friction the time
+            60 s long (``fast_path.validation.MIN_RECORD_S``: with friction the time
             domain's own metrics scatter by ±4 % between seeds on a 13 s record).
 
 Nothing of the fast path is tuned on this set (no correction factor; its
@@ -50,8 +50,8 @@ from ehsa_opt.design.goal import solve_goal_attainment  # noqa: E402
 from ehsa_opt.design.optimize import build_problem, goals_and_weights  # noqa: E402
 from ehsa_opt.design.problem import PAPER_BOX  # noqa: E402
 from ehsa_opt.physics.params import HarvesterParams  # noqa: E402
-from ehsa_opt.vehicle.equivalent import friction_metrics  # noqa: E402
-from ehsa_opt.vehicle.fast_path_check import (  # noqa: E402
+from ehsa_opt.vehicle.fast_path.linearisation import friction_metrics  # noqa: E402
+from ehsa_opt.vehicle.fast_path.validation import (  # noqa: E402
     CHECK_METRICS,
     MIN_RECORD_S,
     RoadCase,

@@ -1,4 +1,4 @@
-"""Bench data format (SPEC §3): ``bench.toml`` plus one CSV per test.
+"""Bench data format: ``bench.toml`` plus one CSV per test.
 
 Layout of a data directory::
 
@@ -11,7 +11,7 @@ Layout of a data directory::
     name = "prototype"
     has_generator = true        # false: no voltage column, no load (e.g. EMPS)
     description = "..."
-    [harvester]                 # optional; any HarvesterParams field by its SPEC §7 name
+    [harvester]                 # optional; any HarvesterParams field by its name
     lead_mm_per_rev = 5.0
     [[test]]
     file = "f1.5Hz_Re47.csv"

@@ -1,4 +1,4 @@
-"""Physics checks of bench data (issue 15): do the signals agree with ``bench.toml``?
+"""Physics checks of bench data: do the signals agree with ``bench.toml``?
 
 The loader in :mod:`.bench_format` checks syntax (columns, numbers, increasing time).
 These checks look at what the numbers *mean*, with stated tolerances:

@@ -1,5 +1,5 @@
 """The EMPS real ball-screw data set (Janot, Gautier & Brunot 2019), converted to the
-bench format (SPEC §9): displacement = measured load-side position, force =
+bench format: displacement = measured load-side position, force =
 g_τ × controller output voltage, no voltage column (the rig has no generator).
 """
 
@@ -16,7 +16,7 @@ __all__ = ["GAIN_N_PER_V", "EMPS_REFERENCE", "convert_emps"]
 #: Drive gain g_τ (N/V): force on the load side = g_τ × controller voltage.
 GAIN_N_PER_V = 35.15065188248547
 
-#: Published reference (inverse model, least squares; SPEC §9).
+#: Published reference (inverse model, least squares; Janot et al. 2019).
 EMPS_REFERENCE = {
     "inertia_kg": 95.11, "viscous_Ns_per_m": 203.5, "coulomb_N": 20.39, "offset_N": -3.16,
     "force_relative_error_percent": 4.08,

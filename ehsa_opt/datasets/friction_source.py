@@ -3,7 +3,7 @@ everywhere (``simulate``, ``sweep``, ``optimize``, ``reproduce``).
 
 An ``identification.json`` written by ``ehsa-opt identify`` carries a table
 ``friction_sets`` with one :class:`~ehsa_opt.physics.params.FrictionParams` per case
-(SPEC §7 names)::
+(the friction parameters' field names)::
 
     "friction_sets": {"min": {"nut_coulomb_N": ..., ...}, "best": {...}, "max": {...},
                       "method": "..."}

@@ -14,7 +14,7 @@ settle_s = 2.0
 sample_rate_hz = 1000.0
 ```
 
-Names as in SPEC §7.  Unknown keys are refused with the nearest valid name;
+Names as the parameters' field names.  Unknown keys are refused with the nearest valid name;
 ``profile_csv`` is relative to the problem file.
 """
 

@@ -39,7 +39,7 @@ class FrictionSpeedTask:
     identified_range_m_per_s: float | None = None
 
     def __call__(self) -> list[dict[str, Any]]:
-        from ..vehicle.metrics import linear_metrics
+        from ..vehicle.frequency_path import linear_metrics
         from ..vehicle.simulate import simulate_quarter_car
         names = [n for n, _ in self.frictions]
         fr = [f if f is not None else FrictionParams() for _, f in self.frictions]

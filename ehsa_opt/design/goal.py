@@ -82,9 +82,20 @@ class GoalAttainmentResult:
     stats: dict
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
-    def plot(self, **kw: Any) -> Any:
+    def summary(self) -> str:
+        """Status, attainment factor γ, the optimum and its objectives."""
+        return "\n".join([
+            f"goal attainment: {'converged' if self.success else 'FAILED'} ({self.message}); "
+            f"gamma = {self.gamma:+.4f}",
+            "design: " + ", ".join(f"{k} = {v:.4g}" for k, v in self.design.items()),
+            "objectives: " + ", ".join(f"{k} = {self.objectives[k]:.4g}"
+                                       for k in self.objective_names)])
+
+    def plot(self, ax: Any = None, which: str = "design") -> Any:
+        """Paper Fig 17 (``which="design"``), 18 (``"mass"``, into ``ax`` when given) or 19
+        (``"objectives"``); writes nothing."""
         from ..plots.design import goal_attainment_history
-        return goal_attainment_history(self, **kw)
+        return goal_attainment_history(self, which, ax=ax)
 
 
 def _fd_objectives(problem: DesignProblem, u: np.ndarray, h: float
@@ -157,8 +168,6 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
         Pareto-optimal and reproducible. Its iterations are appended to
         ``history`` (``phase`` 2).
     """
-    from scipy.optimize import minimize
-
     names = problem.objective_names
     g = np.asarray(goals, dtype=float).ravel()
     w = np.abs(g) if weights is None else np.asarray(weights, dtype=float).ravel()
@@ -181,39 +190,10 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
     t0 = time.perf_counter()
     runs_fj: list[_MemoObjectives] = []  # their evaluation counts make nfev
     runs = []
-    for k, u0 in enumerate(starts_u):
+    for u0 in starts_u:
         fj = _MemoObjectives(problem, fd_step)
         runs_fj.append(fj)
-
-        F0 = fj(u0)[0]
-        gamma0 = float(np.max(np.where(w > 0, (F0 - g) / np.where(w > 0, w, 1.0), -np.inf)))
-        z0 = np.append(u0, gamma0)
-        hist: list[tuple[np.ndarray, float]] = [(u0.copy(), gamma0)]
-
-        def cons(z: np.ndarray) -> np.ndarray:
-            return (g + w * z[-1] - fj(z[:-1])[0]) / scale
-
-        def cons_jac(z: np.ndarray) -> np.ndarray:
-            J = fj(z[:-1])[1]
-            return np.hstack([-J, w[:, None]]) / scale[:, None]
-
-        res = minimize(lambda z: z[-1], z0, jac=lambda z: np.eye(n + 1)[-1], method="SLSQP",
-                       bounds=[(0.0, 1.0)] * n + [(None, None)],
-                       constraints=[{"type": "ineq", "fun": cons, "jac": cons_jac}],
-                       callback=lambda zk: hist.append((np.clip(zk[:-1], 0, 1).copy(),
-                                                        float(zk[-1]))),
-                       options={"maxiter": max_iter, "ftol": tol})
-        u_end = np.clip(res.x[:-1], 0.0, 1.0)
-        F_end = fj(u_end)[0]
-        viol = float(np.max((F_end - g - w * res.x[-1]) / scale))
-        # the attained γ of the end point (tightest γ for that x)
-        pos = w > 0
-        gamma_end = float(np.max((F_end[pos] - g[pos]) / w[pos]))
-        hard_ok = bool(np.all(F_end[~pos] <= g[~pos] + 1e-9 * scale[~pos]))
-        runs.append({"u": u_end, "gamma": gamma_end, "status": int(res.status),
-                     "message": str(res.message), "nit": int(res.nit),
-                     "feasible": hard_ok and viol <= 1e-6, "history": hist,
-                     "start": problem.space.from_unit(u0)})
+        runs.append(_attain_from(problem, fj, u0, g, w, scale, max_iter, tol))
     ok = [r for r in runs if r["feasible"]]
     pool = [k for k, r in enumerate(runs) if r["feasible"] or not ok]
     g_min = min(runs[k]["gamma"] for k in pool)
@@ -222,30 +202,99 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
     best = runs[best_k]
     refined = None
     if refine and best["feasible"] and np.any(w > 0):
-        gstar = best["gamma"]
         fj2 = _MemoObjectives(problem, fd_step)
         runs_fj.append(fj2)
-
-        cap = g + w * gstar + 1e-9 * scale
-        hist2: list[tuple[np.ndarray, float]] = []
-        res2 = minimize(lambda u: float(np.sum(((fj2(u)[0] - g) / scale)[obj])), best["u"],
-                        jac=lambda u: np.sum((fj2(u)[1] / scale[:, None])[obj], axis=0),
-                        method="SLSQP", bounds=[(0.0, 1.0)] * n,
-                        constraints=[{"type": "ineq", "fun": lambda u: (cap - fj2(u)[0]) / scale,
-                                      "jac": lambda u: -fj2(u)[1] / scale[:, None]}],
-                        callback=lambda uk: hist2.append((np.clip(uk, 0, 1).copy(), gstar)),
-                        options={"maxiter": max_iter, "ftol": tol})
-        u2 = np.clip(res2.x, 0.0, 1.0)
-        F2 = fj2(u2)[0]
-        if np.all(F2 <= cap + 1e-8 * scale) and float(np.sum(((F2 - g) / scale)[obj])) <= float(
-                np.sum(((fj2(best["u"])[0] - g) / scale)[obj])):
-            refined = {"u": u2, "status": int(res2.status), "message": str(res2.message),
-                       "nit": int(res2.nit), "history": hist2}
-            best = {**best, "u": u2,
-                    "gamma": float(np.max((F2[w > 0] - g[w > 0]) / w[w > 0]))}
+        refined = _refine(fj2, best, g, w, scale, obj, max_iter, tol)
+        if refined is not None:
+            best = {**best, "u": refined["u"], "gamma": refined["gamma"]}
     d = {k: float(v) for k, v in problem.space.from_unit(best["u"]).items()}
     full = problem.evaluate_design({k: np.array([v]) for k, v in d.items()})
     objectives = {k: float(np.ravel(v)[0]) for k, v in full.items()}
+    success = bool(best["feasible"] and best["status"] == 0)
+    msg = (f"start {best_k + 1}/{len(runs)}: {best['message']}"
+           + ("" if best["feasible"] else " (constraints violated: no feasible end point)"))
+    starts = [{"start": {k: float(v) for k, v in r["start"].items()}, "gamma": r["gamma"],
+               "status": r["status"], "message": r["message"], "nit": r["nit"],
+               "feasible": r["feasible"]} for r in runs]
+    return GoalAttainmentResult(
+        success=success, message=msg, gamma=float(best["gamma"]), design=d,
+        objectives=objectives, goals=g[obj], weights=w[obj], objective_names=tuple(names),
+        history=_history(problem, best, refined), starts=starts,
+        stats={"nfev": sum(f.nfev for f in runs_fj), "seconds": time.perf_counter() - t0,
+               "n_starts": len(runs), "chosen_start": best_k,
+               "refinement": None if refined is None else
+               {k: refined[k] for k in ("status", "message", "nit")}},
+        x=best["u"])
+
+
+def _attain_from(problem: DesignProblem, fj: "_MemoObjectives", u0: np.ndarray, g: np.ndarray,
+                 w: np.ndarray, scale: np.ndarray, max_iter: int, tol: float) -> dict:
+    """One SLSQP run of min γ s.t. F_i(x) − w_i γ ≤ goal_i from the unit-cube point ``u0``:
+    its end point, attained γ, status, feasibility and iterates."""
+    from scipy.optimize import minimize
+
+    n = problem.space.n
+    F0 = fj(u0)[0]
+    gamma0 = float(np.max(np.where(w > 0, (F0 - g) / np.where(w > 0, w, 1.0), -np.inf)))
+    z0 = np.append(u0, gamma0)
+    hist: list[tuple[np.ndarray, float]] = [(u0.copy(), gamma0)]
+
+    def cons(z: np.ndarray) -> np.ndarray:
+        return (g + w * z[-1] - fj(z[:-1])[0]) / scale
+
+    def cons_jac(z: np.ndarray) -> np.ndarray:
+        J = fj(z[:-1])[1]
+        return np.hstack([-J, w[:, None]]) / scale[:, None]
+
+    res = minimize(lambda z: z[-1], z0, jac=lambda z: np.eye(n + 1)[-1], method="SLSQP",
+                   bounds=[(0.0, 1.0)] * n + [(None, None)],
+                   constraints=[{"type": "ineq", "fun": cons, "jac": cons_jac}],
+                   callback=lambda zk: hist.append((np.clip(zk[:-1], 0, 1).copy(),
+                                                    float(zk[-1]))),
+                   options={"maxiter": max_iter, "ftol": tol})
+    u_end = np.clip(res.x[:-1], 0.0, 1.0)
+    F_end = fj(u_end)[0]
+    viol = float(np.max((F_end - g - w * res.x[-1]) / scale))
+    # the attained γ of the end point (tightest γ for that x)
+    pos = w > 0
+    gamma_end = float(np.max((F_end[pos] - g[pos]) / w[pos]))
+    hard_ok = bool(np.all(F_end[~pos] <= g[~pos] + 1e-9 * scale[~pos]))
+    return {"u": u_end, "gamma": gamma_end, "status": int(res.status),
+            "message": str(res.message), "nit": int(res.nit),
+            "feasible": hard_ok and viol <= 1e-6, "history": hist,
+            "start": problem.space.from_unit(u0)}
+
+
+def _refine(fj2: "_MemoObjectives", best: dict, g: np.ndarray, w: np.ndarray,
+            scale: np.ndarray, obj: slice, max_iter: int, tol: float) -> dict | None:
+    """The tie-break stage (see ``refine``): keep every F_i ≤ goal_i + w_i γ* and minimise
+    Σ (F_i − goal_i)/scale_i over the objectives; None when it does not improve."""
+    from scipy.optimize import minimize
+
+    n = best["u"].size
+    gstar = best["gamma"]
+    cap = g + w * gstar + 1e-9 * scale
+    hist2: list[tuple[np.ndarray, float]] = []
+    res2 = minimize(lambda u: float(np.sum(((fj2(u)[0] - g) / scale)[obj])), best["u"],
+                    jac=lambda u: np.sum((fj2(u)[1] / scale[:, None])[obj], axis=0),
+                    method="SLSQP", bounds=[(0.0, 1.0)] * n,
+                    constraints=[{"type": "ineq", "fun": lambda u: (cap - fj2(u)[0]) / scale,
+                                  "jac": lambda u: -fj2(u)[1] / scale[:, None]}],
+                    callback=lambda uk: hist2.append((np.clip(uk, 0, 1).copy(), gstar)),
+                    options={"maxiter": max_iter, "ftol": tol})
+    u2 = np.clip(res2.x, 0.0, 1.0)
+    F2 = fj2(u2)[0]
+    if np.all(F2 <= cap + 1e-8 * scale) and float(np.sum(((F2 - g) / scale)[obj])) <= float(
+            np.sum(((fj2(best["u"])[0] - g) / scale)[obj])):
+        return {"u": u2, "status": int(res2.status), "message": str(res2.message),
+                "nit": int(res2.nit), "history": hist2,
+                "gamma": float(np.max((F2[w > 0] - g[w > 0]) / w[w > 0]))}
+    return None
+
+
+def _history(problem: DesignProblem, best: dict, refined: dict | None) -> list[dict]:
+    """The iterates of the chosen start (phase 1) and of the refinement (phase 2), each
+    with its design, objectives and γ."""
     history = []
     phases = [(1, u, gam) for u, gam in best["history"]]
     if refined is not None:
@@ -256,18 +305,4 @@ def solve_goal_attainment(problem: DesignProblem, goals: Sequence[float],
         history.append({"phase": phase, "design": dd,
                         "objectives": {k: float(np.ravel(v)[0]) for k, v in ff.items()},
                         "gamma": gam})
-    success = bool(best["feasible"] and best["status"] == 0)
-    msg = (f"start {best_k + 1}/{len(runs)}: {best['message']}"
-           + ("" if best["feasible"] else " (constraints violated: no feasible end point)"))
-    starts = [{"start": {k: float(v) for k, v in r["start"].items()}, "gamma": r["gamma"],
-               "status": r["status"], "message": r["message"], "nit": r["nit"],
-               "feasible": r["feasible"]} for r in runs]
-    return GoalAttainmentResult(
-        success=success, message=msg, gamma=float(best["gamma"]), design=d,
-        objectives=objectives, goals=g[obj], weights=w[obj], objective_names=tuple(names),
-        history=history, starts=starts,
-        stats={"nfev": sum(f.nfev for f in runs_fj), "seconds": time.perf_counter() - t0, "n_starts": len(runs),
-               "chosen_start": best_k,
-               "refinement": None if refined is None else
-               {k: refined[k] for k in ("status", "message", "nit")}},
-        x=best["u"])
+    return history

@@ -73,6 +73,19 @@ class ParetoResult:
             out.append(row)
         return out
 
+    def summary(self) -> str:
+        """Status, front size, the preferred design and the last hypervolume."""
+        i = self.preferred
+        hv = self.history[-1] if self.history else {}
+        return "\n".join([
+            f"NSGA-II: {'converged' if self.success else 'FAILED'} ({self.message})",
+            f"front: {self.F.shape[0]} designs" + (f", hypervolume {hv['hv']:.4g} after "
+                                                   f"{hv['n_eval']} evaluations" if hv else ""),
+            f"preferred ({self.pick}): " + ", ".join(
+                f"{k} = {float(v[i]):.4g}" for k, v in self.designs.items()),
+            "objectives: " + ", ".join(f"{k} = {float(self.F[i, j]):.4g}"
+                                       for j, k in enumerate(self.objective_names))])
+
     def to_csv_text(self) -> str:
         """``pareto.csv`` text: one row per non-dominated design, full precision."""
         rows = self.rows()
@@ -81,7 +94,9 @@ class ParetoResult:
         lines += [",".join(repr(r[c]) for c in cols) for r in rows]
         return "\n".join(lines) + "\n"
 
-    def plot(self, **kw: Any) -> Any:
+    def plot(self, ax: Any = None, **kw: Any) -> Any:
+        """The front's 2-D projections (several panels; ``ax`` not used; ``kw``: the
+        goal-attainment and prototype points); writes nothing."""
         from ..plots.design import pareto_projections
         return pareto_projections(self, **kw)
 
@@ -135,7 +150,6 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
     archive keeps feasible designs only, and a run that found none says so: its
     ``success`` is False.
     """
-    from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.termination import get_termination
 
     for name, v in (("pop", pop_size), ("gens", n_gen)):
@@ -150,46 +164,91 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
         raise ParameterError(f"nsga2: hv_scale (> 0) and hv_reference need {m} values")
     fp = problem.fingerprint()
     t0 = time.perf_counter()
-    resumed_from = 0
     if resume is not None:
-        rdir = Path(resume)
-        state = load_state(rdir)
-        if state.fingerprint != fp:
-            raise ParameterError(f"--resume {rdir}: the checkpoint belongs to a different "
-                                 f"problem (box, vehicle, road or objectives changed); start "
-                                 f"a new run")
-        if state.pop_size != pop_size or state.seed != seed:
-            raise ParameterError(
-                f"--resume {rdir}: checkpoint was made with pop {state.pop_size} and "
-                f"seed {state.seed}; pass the same --pop and --seed")
-        if state.arrays["pop_X"].shape[1] != problem.n_var or \
-                state.arrays["pop_F"].shape[1] != m:
-            raise ParameterError(f"--resume {rdir}: the checkpoint's designs do not fit this "
-                                 f"problem's {problem.n_var} variables and {m} objectives; "
-                                 f"start a new run")
-        verify_designs(rdir, state, problem)  # a re-signed file cannot steer the run
-        history = state.history
-        archive = state.arrays["archive_F"]
-        resumed_from = len(history)
-        if resumed_from > n_gen:
-            raise ParameterError(f"--resume {rdir}: checkpoint already has {resumed_from} "
-                                 f"generations > --gens {n_gen}")
-        algorithm = restore(state, problem, n_gen)
-        ck = Path(checkpoint) if checkpoint is not None else rdir
+        algorithm, history, archive = _resumed(problem, Path(resume), fp, pop_size, seed, n_gen)
+        ck = Path(checkpoint) if checkpoint is not None else Path(resume)
     else:
-        kw: dict[str, Any] = {}
-        if initial is not None:
-            first = np.atleast_2d(np.asarray(initial, dtype=float))[:pop_size]
-            rest = np.random.default_rng(seed).random((pop_size - first.shape[0],
-                                                       problem.n_var))
-            kw["sampling"] = np.clip(np.vstack([first, rest]), 0.0, 1.0)
-        algorithm = NSGA2(pop_size=pop_size, seed=seed, eliminate_duplicates=True, **kw)
-        algorithm.setup(problem, termination=("n_gen", n_gen), verbose=False)
-        history = []
-        archive = np.zeros((0, m))
+        algorithm, history, archive = _started(problem, pop_size, seed, n_gen, initial)
         ck = Path(checkpoint) if checkpoint is not None else None
+    resumed_from = len(history)
     algorithm.termination = get_termination("n_gen", n_gen)
-    interrupted = False
+    interrupted = _evolve(problem, algorithm, history, archive, n_gen, scale, ref,
+                          lambda arc: None if ck is None else save_state(
+                              ck, capture(algorithm, history, arc, fp, pop_size, seed)),
+                          progress, stop_after)
+    X, F = _front(algorithm)
+    # pick among the points inside the hypervolume box (F/scale < reference): the
+    # front's far tails (e.g. 1/ρ_g in the thousands) would otherwise set the
+    # normalisation; all points when none is inside
+    inside = np.all(F / scale < ref, axis=1)
+    cand = np.flatnonzero(inside) if inside.any() else np.arange(F.shape[0])
+    idx = int(cand[pick_preferred(F[cand] / scale, pick, pick_weights)])
+    msg = (f"stopped after {len(history)} of {n_gen} generations (resume with --resume)"
+           if interrupted else f"{len(history)} generations, {F.shape[0]} non-dominated designs")
+    feasible = True
+    if problem.n_ieq_constr:
+        feasible = bool(np.all(algorithm.opt.get("feas")))
+        if not feasible:
+            msg += ("; NO design within the constraints was found (the front shows the "
+                    "least infeasible)")
+    return ParetoResult(
+        success=not interrupted and feasible, message=msg, X=X,
+        designs=problem.space.from_unit(X), F=F,
+        objective_names=problem.objective_names, preferred=idx, pick=pick, history=history,
+        hv_scale=scale, hv_reference=ref,
+        stats={"n_eval": int(algorithm.evaluator.n_eval), "seconds": time.perf_counter() - t0,
+               "resumed_from": resumed_from, "generations": len(history)})
+
+
+def _resumed(problem: DesignProblem, rdir: Path, fp: str, pop_size: int, seed: int,
+             n_gen: int) -> tuple[Any, list[dict], np.ndarray]:
+    """The algorithm, history and archive of the checkpoint in ``rdir``, after checking that
+    it belongs to this problem, population and seed and was not altered."""
+    m = problem.n_obj
+    state = load_state(rdir)
+    if state.fingerprint != fp:
+        raise ParameterError(f"--resume {rdir}: the checkpoint belongs to a different "
+                             f"problem (box, vehicle, road or objectives changed); start "
+                             f"a new run")
+    if state.pop_size != pop_size or state.seed != seed:
+        raise ParameterError(
+            f"--resume {rdir}: checkpoint was made with pop {state.pop_size} and "
+            f"seed {state.seed}; pass the same --pop and --seed")
+    if state.arrays["pop_X"].shape[1] != problem.n_var or \
+            state.arrays["pop_F"].shape[1] != m:
+        raise ParameterError(f"--resume {rdir}: the checkpoint's designs do not fit this "
+                             f"problem's {problem.n_var} variables and {m} objectives; "
+                             f"start a new run")
+    verify_designs(rdir, state, problem)  # a re-signed file cannot steer the run
+    history = state.history
+    if len(history) > n_gen:
+        raise ParameterError(f"--resume {rdir}: checkpoint already has {len(history)} "
+                             f"generations > --gens {n_gen}")
+    return restore(state, problem, n_gen), history, state.arrays["archive_F"]
+
+
+def _started(problem: DesignProblem, pop_size: int, seed: int, n_gen: int,
+             initial: Any) -> tuple[Any, list[dict], np.ndarray]:
+    """A new NSGA-II run (``initial`` points first in the population), empty history and
+    archive."""
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+
+    kw: dict[str, Any] = {}
+    if initial is not None:
+        first = np.atleast_2d(np.asarray(initial, dtype=float))[:pop_size]
+        rest = np.random.default_rng(seed).random((pop_size - first.shape[0], problem.n_var))
+        kw["sampling"] = np.clip(np.vstack([first, rest]), 0.0, 1.0)
+    algorithm = NSGA2(pop_size=pop_size, seed=seed, eliminate_duplicates=True, **kw)
+    algorithm.setup(problem, termination=("n_gen", n_gen), verbose=False)
+    return algorithm, [], np.zeros((0, problem.n_obj))
+
+
+def _evolve(problem: DesignProblem, algorithm: Any, history: list[dict], archive: np.ndarray,
+            n_gen: int, scale: np.ndarray, ref: np.ndarray,
+            save: Callable[[np.ndarray], None], progress: Callable[[int, int], None] | None,
+            stop_after: int | None) -> bool:
+    """Generations until ``n_gen`` (or ``stop_after``): each appends its hypervolumes to
+    ``history`` and is saved by ``save(archive)``.  Returns whether the run stopped early."""
     hv_front: tuple[np.ndarray, float] | None = None  # last front and its hypervolume
     hv_archive = None if not history else float(history[-1]["hv_archive"])
     while len(history) < n_gen:
@@ -213,31 +272,9 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
         history.append({"gen": len(history) + 1, "n_eval": int(algorithm.evaluator.n_eval),
                         "hv": hv_front[1], "n_front": int(F.shape[0]),
                         "hv_archive": hv_archive, "n_archive": int(archive.shape[0])})
-        if ck is not None:
-            save_state(ck, capture(algorithm, history, archive, fp, pop_size, seed))
+        save(archive)
         if progress is not None:
             progress(len(history), n_gen)
         if stop_after is not None and len(history) >= stop_after and len(history) < n_gen:
-            interrupted = True
-            break
-    X, F = _front(algorithm)
-    # pick among the points inside the hypervolume box (F/scale < reference): the
-    # front's far tails (e.g. 1/ρ_g in the thousands) would otherwise set the
-    # normalisation; all points when none is inside
-    inside = np.all(F / scale < ref, axis=1)
-    cand = np.flatnonzero(inside) if inside.any() else np.arange(F.shape[0])
-    idx = int(cand[pick_preferred(F[cand] / scale, pick, pick_weights)])
-    msg = (f"stopped after {len(history)} of {n_gen} generations (resume with --resume)"
-           if interrupted else f"{len(history)} generations, {F.shape[0]} non-dominated designs")
-    feasible = True
-    if problem.n_ieq_constr:
-        feasible = bool(np.all(algorithm.opt.get("feas")))
-        if not feasible:
-            msg += ("; NO design within the constraints was found (the front shows the "
-                    "least infeasible)")
-    return ParetoResult(
-        success=not interrupted and feasible, message=msg, X=X, designs=problem.space.from_unit(X), F=F,
-        objective_names=problem.objective_names, preferred=idx, pick=pick, history=history,
-        hv_scale=scale, hv_reference=ref,
-        stats={"n_eval": int(algorithm.evaluator.n_eval), "seconds": time.perf_counter() - t0,
-               "resumed_from": resumed_from, "generations": len(history)})
+            return True
+    return False

@@ -26,8 +26,9 @@ import numpy as np
 from ..physics.params import FrictionParams, ParameterError
 from .checkpoint import load_state
 from .config import DesignConfig, check_method
-from .goal import GoalAttainmentResult, solve_goal_attainment
-from .nsga2 import ParetoResult, run_nsga2
+from .goal import solve_goal_attainment
+from .nsga2 import run_nsga2
+from .outcome import OptimizeOutcome, motor_summary, time_domain_summary
 from .problem import OBJECTIVE_NAMES, DesignProblem, QuarterCarObjectives
 
 __all__ = ["build_problem", "config_frictions", "front_check", "goals_and_weights", "optimize",
@@ -95,13 +96,6 @@ def design_record(design: Mapping[str, float], outputs: Mapping[str, float]) -> 
             "metrics": {k: float(v) for k, v in outputs.items() if k not in OBJECTIVE_NAMES}}
 
 
-class OptimizeOutcome(dict):
-    """result.json content, with the solver result under ``.result`` (not serialised)."""
-
-    result: GoalAttainmentResult | ParetoResult | None = None
-    goal_attainment: GoalAttainmentResult | None = None
-
-
 def _changes(proto: Mapping[str, float], opt: Mapping[str, float]) -> dict[str, float]:
     """Improvements in % the paper's way: comfort/road holding lower is better."""
     return {"comfort_improvement_pct": 100 * (1 - opt["comfort"] / proto["comfort"]),
@@ -146,7 +140,7 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
               identified_range_source=identified_range_source)
     if cfg.motor_model != "catalogue":
         return _optimize_one(cfg, method, out_dir=out_dir, **kw)
-    from ..utils.io import atomic_write_json, atomic_write_text
+    from ..utils.io import atomic_write_text
     if checkpoint is not None or resume is not None:
         raise ParameterError("--checkpoint/--resume: not available with a motor catalogue "
                              "(one run per motor); run one motor's problem instead")
@@ -155,12 +149,12 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
     for k, motor in enumerate(cfg.catalogue_motors()):
         res = _optimize_one(cfg, method, out_dir=out / f"motor_{k}", motor=motor, **kw)
         results.append((motor, res))
-    table = [{"motor": m.name, "source": m.source, "success": bool(r["success"]),
-              "feasible": bool(r.get("feasible", False)),
-              "gamma": r.get("gamma"), "design": r["design"], "objectives": r["objectives"],
-              "metrics": r["metrics"],
-              "active_constraints": r.get("active_constraints", []),
-              "constraints": r.get("constraints", {})} for m, r in results]
+    table = [{"motor": m.name, "source": m.source, "success": bool(r.record["success"]),
+              "feasible": bool(r.record.get("feasible", False)),
+              "gamma": r.record.get("gamma"), "design": r.design, "objectives": r.objectives,
+              "metrics": r.metrics,
+              "active_constraints": r.record.get("active_constraints", []),
+              "constraints": r.record.get("constraints", {})} for m, r in results]
     feasible = [i for i, row in enumerate(table) if row["feasible"]]
     method = check_method(method or cfg.method)
     if method == "goal-attainment":
@@ -169,11 +163,10 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
                                         else math.inf))
     else:
         best = max(feasible or list(range(len(table))),
-                   key=lambda i: results[i][1].get("n_feasible_front", 0))
-    outcome = OptimizeOutcome(results[best][1])
-    outcome.result = results[best][1].result
-    outcome.goal_attainment = results[best][1].goal_attainment
-    outcome.update({"motor": {"model": "catalogue", "catalogue": cfg.catalogue,
+                   key=lambda i: results[i][1].record.get("n_feasible_front", 0))
+    chosen = results[best][1]
+    rec = dict(chosen.record)
+    rec.update({"motor": {"model": "catalogue", "catalogue": cfg.catalogue,
                               "chosen": table[best]["motor"],
                               "source": table[best]["source"]},
                     "catalogue": table,
@@ -187,8 +180,8 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
         for m, r in results:
             pr = r.result
             ok = np.ones(pr.F.shape[0], bool)
-            if r.get("feasible_front") is not None:
-                ok = np.asarray(r["feasible_front"], bool)
+            if r.record.get("feasible_front") is not None:
+                ok = np.asarray(r.record["feasible_front"], bool)
             for i in np.flatnonzero(ok):
                 pts.append((m.name, {k: float(v[i]) for k, v in pr.designs.items()}, pr.F[i]))
         keep = (np.flatnonzero(non_dominated(np.array([p[2] for p in pts]))) if pts
@@ -197,11 +190,12 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
         lines = [",".join(["motor"] + names + list(OBJECTIVE_NAMES))]
         lines += [",".join([f'"{pts[i][0]}"'] + [repr(pts[i][1][n]) for n in names]
                            + [repr(float(v)) for v in pts[i][2]]) for i in keep]
-        outcome["n_front"] = len(lines) - 1
-        outcome["front_note"] = ("feasible points of every motor, non-dominated across motors"
+        rec["n_front"] = len(lines) - 1
+        rec["front_note"] = ("feasible points of every motor, non-dominated across motors"
                                  if pts else "no motor has a feasible design")
         atomic_write_text(out / "pareto.csv", "\n".join(lines) + "\n")
-    atomic_write_json(out / "result.json", dict(outcome), indent=2)
+    outcome = OptimizeOutcome(rec, chosen.result, chosen.goal_attainment_result)
+    atomic_write_text(out / "result.json", outcome.to_json())
     return outcome
 
 
@@ -236,8 +230,8 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
     goals, weights, proto = goals_and_weights(
         cfg, problem if motor is None else build_problem(cfg, None, frictions, friction_mode))
     ga_settings = cfg.goal_attainment
-    outcome = OptimizeOutcome()
-    outcome.update({"problem_file": cfg.path, "method": method,
+    rec: dict[str, Any] = {}
+    rec.update({"problem_file": cfg.path, "method": method,
                     "vehicle": cfg.vehicle_name, "road": {"iso_class": cfg.road.iso_class,
                                                           "speed_km_per_h": cfg.road.speed_km_per_h},
                     "box": cfg.space.as_dict(),
@@ -254,15 +248,14 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
                     "weights": dict(zip(OBJECTIVE_NAMES, ga.weights.tolist())),
                     "success": ga.success, "message": ga.message, "stats": ga.stats,
                     "starts": ga.starts, "changes": _changes(proto, ga.objectives)}
-        outcome["goal_attainment"] = ga_block
-        outcome.goal_attainment = ga
+        rec["goal_attainment"] = ga_block
         atomic_write_json(out / "ga_history.json", ga.history)
     if method == "goal-attainment":
         assert ga is not None
-        outcome.update(design_record(ga.design, ga.objectives))
-        outcome.update({"success": ga.success, "message": ga.message, "gamma": ga.gamma})
-        outcome.update(constraint_record(problem, ga.objectives))
-        outcome.result = ga
+        rec.update(design_record(ga.design, ga.objectives))
+        rec.update({"success": ga.success, "message": ga.message, "gamma": ga.gamma})
+        rec.update(constraint_record(problem, ga.objectives))
+        result: Any = ga
     else:
         ns = cfg.nsga2
         F_proto = np.array([proto[k] for k in OBJECTIVE_NAMES])
@@ -277,14 +270,14 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
         i = pr.preferred
         d = {k: float(v[i]) for k, v in pr.designs.items()}
         outputs = objectives_at(problem, d)
-        outcome.update(design_record(d, outputs))
-        outcome.update(constraint_record(problem, outputs))
+        rec.update(design_record(d, outputs))
+        rec.update(constraint_record(problem, outputs))
         front_out = problem.evaluate_design(pr.designs)
         if problem.constraint_names:
             G = np.column_stack([np.asarray(front_out[f"constraint_{c}"], float)
                                  for c in problem.constraint_names])
-            outcome["n_feasible_front"] = int(np.sum(np.all(G <= 1e-9, axis=1)))
-            outcome["feasible_front"] = np.all(G <= 1e-9, axis=1).tolist()
+            rec["n_feasible_front"] = int(np.sum(np.all(G <= 1e-9, axis=1)))
+            rec["feasible_front"] = np.all(G <= 1e-9, axis=1).tolist()
         from ..vehicle.validity import FAST_PATH_REGION, check_validity
         region, design = None, dict(pr.designs)
         if hasattr(ev, "frictions"):  # the fast path: its validated region
@@ -293,9 +286,9 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
                 [h.equivalent_damping_Ns_per_m(0.0) for h in harvesters_of(ev, pr.designs)])
         validity = check_validity(front_out, stroke_limit_m=cfg.vehicle.stroke_limit_m,
                                   design=design, fast_path_region=region)
-        outcome["front_validity"] = validity.as_list()  # per pareto.csv row
-        outcome["n_front_valid"] = int(np.sum(validity.valid))
-        outcome.update({"success": pr.success, "message": pr.message, "pick": pr.pick,
+        rec["front_validity"] = validity.as_list()  # per pareto.csv row
+        rec["n_front_valid"] = int(np.sum(validity.valid))
+        rec.update({"success": pr.success, "message": pr.message, "pick": pr.pick,
                         "n_front": int(pr.F.shape[0]),
                         "hypervolume": {"normalisation": "F / F(prototype)",
                                         "reference_point": ref.tolist(),
@@ -304,23 +297,24 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
         if ga is not None:
             f_ga = np.array([ga.objectives[k] for k in OBJECTIVE_NAMES])
             better = np.all(pr.F < f_ga * (1 - 0.01), axis=1)
-            outcome["front_vs_goal_attainment"] = {
+            rec["front_vs_goal_attainment"] = {
                 "n_dominating_by_1pct": int(better.sum()),
                 "best_ratio_per_point_min": float(np.min(np.max(pr.F / f_ga, axis=1)))}
         atomic_write_text(out / "pareto.csv", pr.to_csv_text())
-        outcome.result = pr
-    outcome["out_of_range"] = _out_of_range(cfg, ev, outcome["design"],
+        result = pr
+    rec["out_of_range"] = _out_of_range(cfg, ev, rec["design"],
                                             identified_range_m_per_s, identified_range_source,
                                             friction_labels)
     if check_time_domain and (hasattr(ev, "frictions") or problem.constraint_names):
         if method == "nsga2":
-            designs = {k: np.asarray(v, float) for k, v in outcome.result.designs.items()}
+            designs = {k: np.asarray(v, float) for k, v in result.designs.items()}
         else:
-            designs = {k: np.array([float(v)]) for k, v in outcome["design"].items()}
+            designs = {k: np.array([float(v)]) for k, v in rec["design"].items()}
         check, csv_text = front_check(cfg, ev, designs)
-        outcome["time_domain_check"] = check
+        rec["time_domain_check"] = check
         atomic_write_text(out / "front_check.csv", csv_text)
-    atomic_write_json(out / "result.json", dict(outcome), indent=2)
+    outcome = OptimizeOutcome(rec, result, ga)
+    atomic_write_text(out / "result.json", outcome.to_json())
     return outcome
 
 
@@ -359,7 +353,7 @@ def _friction_block(ev: Any, labels: Sequence[str]) -> dict[str, Any] | None:
     from dataclasses import asdict
     return {"mode": ev.mode, "labels": list(labels),
             "sets": [asdict(f) for f in ev.frictions],
-            "method": "stochastic equivalent linearisation (ehsa_opt.vehicle.equivalent)"}
+            "method": "stochastic equivalent linearisation (ehsa_opt.vehicle.fast_path.linearisation)"}
 
 
 def front_check(cfg: DesignConfig, ev: Any, designs: Mapping[str, np.ndarray]
@@ -500,36 +494,3 @@ def _time_domain_limits(cfg: DesignConfig, ev: Any, hs: Sequence[Any],
             "measured_peak_stroke_m": float(np.max(m["peak_stroke_m"])),
             "within_5pct": bool(all(v <= 0.05 for v in worst_td.values())
                                 and all(v <= 0.05 for v in diff.values()))}
-
-
-def motor_summary(outcome: Mapping[str, Any]) -> list[str]:
-    """Lines on the motor model, constraint values and active constraints (CLI)."""
-    lines = []
-    if outcome.get("motor"):
-        mb = outcome["motor"]
-        lines.append(f"motor: {mb.get('label', mb.get('chosen', mb['model']))}"
-                     + ("; constraints at the result: " + ", ".join(
-                         f"{k} {v:+.3f}" for k, v in outcome["constraints"].items())
-                        + f" (active: {', '.join(outcome['active_constraints']) or 'none'})"
-                        if outcome.get("constraints") else ""))
-    for row in outcome.get("catalogue", []):
-        lines.append(f"  {row['motor']}: {'feasible' if row['feasible'] else 'INFEASIBLE'}"
-                     + (f", gamma {row['gamma']:+.4f}" if row.get("gamma") is not None else "")
-                     + (f", at or beyond the limit: {', '.join(row['active_constraints'])}"
-                        if row["active_constraints"] else ""))
-    return lines
-
-
-def time_domain_summary(outcome: Mapping[str, Any]) -> str:
-    """One line on the time-domain re-simulation of the result (CLI)."""
-    chk = outcome["time_domain_check"]
-    lim = chk.get("rated_limits")
-    fr = bool(outcome.get("friction"))
-    return (f"time-domain check{' with friction' if fr else ''} ({chk['n_designs']} designs, "
-            f"{chk['road']['length_m']:g} m road): worst |error| of the "
-            f"{'fast' if fr else 'frequency'} path "
-            + ", ".join(f"{k} {100 * v:.2f} %" for k, v in chk["worst_abs_rel_error"].items())
-            + ("" if not lim else "; rated limits in the time domain, worst value/limit - 1: "
-               + ", ".join(f"{k} {v:+.4f}" for k, v in
-                           lim["time_domain_worst_constraint"].items()))
-            + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")

@@ -11,7 +11,7 @@ J_t, k_n and R_e), so every optimiser sees well-scaled variables.
 The objectives come from an *evaluator*: a picklable callable mapping a dict of
 physical design arrays to a dict of objective arrays (and extra quantities for
 reporting).  :class:`QuarterCarObjectives` is the paper's one, built on the exact
-frequency-domain path of the frictionless quarter car (:func:`ehsa_opt.vehicle.metrics
+frequency-domain path of the frictionless quarter car (:func:`ehsa_opt.vehicle.frequency_path
 linear_metrics`); tests plug in analytic functions with known answers.
 
 Classes and functions
@@ -19,7 +19,7 @@ Classes and functions
 DesignSpace, PAPER_BOX
     Named box with linear/log scaling (paper Table 3 by default).
 QuarterCarObjectives
-    [α, η_rh, 1/ρ_g, 1/η_g] of a design on a vehicle/road (SPEC §5).
+    [α, η_rh, 1/ρ_g, 1/η_g] of a design on a vehicle/road (paper Eqs 6–9).
 DesignProblem
     The pymoo problem.
 solve_goal_attainment, GoalAttainmentResult
@@ -156,7 +156,7 @@ class DesignSpace:
                 for n, lo, hi, lg in zip(self.names, self.lower, self.upper, self.log)}
 
 
-#: Paper Table 3 (R_e lower bound 1 Ω is our assumption, SPEC §6.2).
+#: Paper Table 3 (R_e lower bound 1 Ω is our assumption).
 PAPER_BOX = DesignSpace(
     DESIGN_VARIABLES, (250.0, 5.0, 29.8, 1.0), (10_000.0, 20.0, 11_900.0, 10_000.0),
     (True, False, True, True), "paper Table 3")
@@ -168,7 +168,7 @@ class QuarterCarObjectives:
     """Paper objectives [α, η_rh, 1/ρ_g, 1/η_g] of the frictionless quarter car.
 
     Evaluated exactly in the frequency domain by
-    :func:`ehsa_opt.vehicle.metrics.linear_metrics`, vectorised over designs.
+    :func:`ehsa_opt.vehicle.frequency_path.linear_metrics`, vectorised over designs.
 
     Attributes
     ----------
@@ -243,7 +243,7 @@ class QuarterCarObjectives:
         return fixed
 
     def __call__(self, design: Mapping[str, Any]) -> dict[str, np.ndarray]:
-        from ..vehicle.metrics import linear_metrics
+        from ..vehicle.frequency_path import linear_metrics
         mapping = self.design_mapping(design)
         m = linear_metrics(self.vehicle, self.road, mapping, **dict(self.metric_options))
         out = {"comfort": m["comfort"], "road_holding": m["road_holding"],

@@ -1,5 +1,5 @@
 """Design with friction in the loop: the paper's objectives by the friction-aware
-fast path (:func:`ehsa_opt.vehicle.equivalent.friction_metrics`), at one friction
+fast path (:func:`ehsa_opt.vehicle.fast_path.friction_metrics`), at one friction
 set, or the worst case / mean over several (e.g. the identified ``min`` and ``max``).
 
 :class:`FrictionObjectives` is an evaluator of :class:`~ehsa_opt.design.problem.DesignProblem`
@@ -26,8 +26,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..physics.params import FrictionParams, HarvesterParams, ParameterError, RoadParams, \
-    VehicleParams
+from ..physics.params import (FrictionParams, HarvesterParams, ParameterError, RoadParams,
+                              VehicleParams)
 from .problem import OBJECTIVE_NAMES, QuarterCarObjectives
 
 __all__ = ["FRICTION_MODES", "FrictionObjectives", "combine", "time_domain_objectives",
@@ -120,7 +120,7 @@ class FrictionObjectives(QuarterCarObjectives):
 
     def per_set(self, design: Mapping[str, Any]) -> list[dict[str, np.ndarray]]:
         """Objectives and extras at each friction set."""
-        from ..vehicle.equivalent import friction_metrics
+        from ..vehicle.fast_path import friction_metrics
         mapping = self.design_mapping(design)
         opts = dict(self.metric_options)
         return [objectives_from_metrics(friction_metrics(self.vehicle, self.road, mapping, f,

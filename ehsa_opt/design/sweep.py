@@ -47,6 +47,7 @@ from ..physics.params import (
 )
 
 __all__ = ["SweepSpec", "SweepTask", "run_sweep", "parse_sweep", "executor", "harvesters_from",
+           "road_holding_warning", "sweep_warnings", "write_sweep",
            "default_friction_sets", "rows_to_csv", "METRIC_COLUMNS", "DESIGN_KEYS",
            "out_of_range_warning"]
 
@@ -175,7 +176,7 @@ class SweepTask:
         if self.friction is None:
             from .problem import QuarterCarObjectives
             ev = QuarterCarObjectives(self.vehicle, self.road, self.base)
-            from ..vehicle.metrics import linear_metrics
+            from ..vehicle.frequency_path import linear_metrics
             m = linear_metrics(self.vehicle, self.road, ev.design_mapping(d))
             if self.identified_range_m_per_s is not None:
                 from ..vehicle.coverage import gaussian_coverage
@@ -354,6 +355,49 @@ def out_of_range_warning(rows: Sequence[Mapping[str, Any]], spec: "SweepSpec") -
             f"{spec.identified_range_source}); worst "
             f"{100 * frac(w, 'out_of_range_time_fraction'):.0f} % of the time ({case}): "
             f"columns out_of_range_* of sweep.csv")
+
+
+def road_holding_warning(rows: Sequence[Mapping[str, Any]]) -> str | None:
+    """A warning naming how many cases have road holding η_rh > 1 (the tyre would leave the
+    ground: the linear tyre model is invalid there) and the worst one; None when none."""
+    bad = [r for r in rows if float(r.get("road_holding", 0.0)) > 1.0]
+    if not bad:
+        return None
+    worst = max(bad, key=lambda r: float(r["road_holding"]))
+    return (f"road holding > 1 in {len(bad)} of {len(rows)} cases (worst "
+            f"{float(worst['road_holding']):.2f}: " + ", ".join(
+                f"{k} = {worst[k]}" for k in ("vehicle", "iso_class", "speed_km_per_h",
+                                              "friction") if k in worst)
+            + "): the tyre would leave the ground and the linear tyre model is invalid there")
+
+
+def sweep_warnings(rows: Sequence[Mapping[str, Any]], spec: SweepSpec) -> list[str]:
+    """The warnings of a sweep's rows: road holding beyond 1, friction beyond its range."""
+    return [f"warning: {w}" for w in (road_holding_warning(rows), out_of_range_warning(rows, spec))
+            if w]
+
+
+def write_sweep(out_dir: str | Path, rows: Sequence[Mapping[str, Any]],
+                spec: SweepSpec) -> list[Path]:
+    """The sweep's folder: ``sweep.csv`` and, when something varies, ``sweep.png`` (the
+    metrics against speed, else against the first design variable, one line per
+    combination of what else varies).  Returns the paths written."""
+    from .. import plots
+    from ..plots.design import sweep_lines
+    from ..utils.io import atomic_write_text
+    out = Path(out_dir)
+    atomic_write_text(out / "sweep.csv", rows_to_csv(rows))
+    paths = [out / "sweep.csv"]
+    hue = [k for k in ("vehicle", "iso_class", "friction") if
+           len({r[k] for r in rows}) > 1] + [k for k, _ in spec.design]
+    ys = ["power_W", "efficiency", "comfort_weighted_rms_m_s2", "road_holding"]
+    if len(spec.speeds_km_per_h) > 1:
+        paths.append(plots.save(sweep_lines(rows, "speed_km_per_h", ys, hue), out / "sweep.png"))
+    elif spec.design:
+        x = spec.design[0][0]
+        paths.append(plots.save(sweep_lines(rows, x, ys, [h for h in hue if h != x]
+                                            or ["vehicle"]), out / "sweep.png"))
+    return paths
 
 
 def rows_to_csv(rows: Sequence[Mapping[str, Any]]) -> str:

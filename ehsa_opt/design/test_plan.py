@@ -15,7 +15,7 @@ uncertainty of the rod friction *where the road puts the strokes*:
   samples carry the friction at the prescribed velocity; the load only sets the force
   and power the rig must deliver);
 * the road's stroke velocity is Gaussian with the σ_v of the vehicle's design on its
-  road (friction-aware fast path, :func:`ehsa_opt.vehicle.equivalent.friction_metrics`)
+  road (friction-aware fast path, :func:`ehsa_opt.vehicle.fast_path.friction_metrics`)
   and W = E_road[g gᵀ]; the **A-optimal** criterion (road-weighted, also called
   I-optimal) is tr(W Σ) = E_road[Var F_rod(v)], the **D-optimal** one −log det of the
   information on its identifiable subspace;
@@ -37,7 +37,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..estimation.rod_law import RodLawFit, Z95, rod_gradient
+from ..estimation.rod_law import Z95, RodLawFit, rod_gradient
 from ..physics.harvester import equivalent_damping_Ns_per_m, equivalent_mass_kg
 from ..physics.params import HarvesterParams, ParameterError, load_toml, nearest_name
 
@@ -213,7 +213,7 @@ def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
 def road_velocity_sigma(problem: Any, friction: Any) -> float:
     """σ_v (m/s) of a quarter-car problem's design on its road with ``friction`` (fast
     path)."""
-    from ..vehicle.equivalent import friction_metrics
+    from ..vehicle.fast_path import friction_metrics
     m = friction_metrics(problem.vehicle, problem.road, None, friction, base=problem.harvester)
     return float(np.asarray(m["stroke_velocity_rms_m_s"]).ravel()[0])
 

@@ -51,16 +51,16 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import stats
 
-from ..physics.friction import bearing_friction_Nm, rod_friction_N, simscape_friction
 from ..physics.params import FRICTION_NAMES, FrictionParams
+from .ordered_sets import ENVELOPE_PARAMETERS, fit_envelope, friction_set, ordered_set, rod_curve_N
 from .test_velocity import test_peak_velocity_m_per_s, test_velocity_range_m_per_s
 
 __all__ = ["FrictionBounds", "friction_bounds", "paper_friction_sets", "velocity_grid",
            "test_peak_velocity_m_per_s", "test_velocity_range_m_per_s",
            "identification_json", "DATA_METHOD", "PAPER_METHOD",
-           "fit_envelope", "ordered_set", "V_MAX_M_PER_S", "envelope_lines"]
+           "fit_envelope", "ordered_set", "ENVELOPE_PARAMETERS", "V_MAX_M_PER_S", "envelope_lines"]
 
 #: Velocity up to which the sets are ordered and banded (the vehicle studies' largest).
 V_MAX_M_PER_S = 3.0
@@ -77,14 +77,6 @@ PAPER_METHOD = ("paper's method: per-parameter minimum/maximum over the per-test
                 "(over-states the spread: the nut/bearing split is not determined by the "
                 "data, and the largest breakaway velocity makes a spurious Stribeck hump)")
 
-_NUT = FRICTION_NAMES[:4]
-_BEARING = FRICTION_NAMES[4:]
-#: Admissible ranges of the fitted nut parameters (as identification's bounds).
-_NUT_BOUNDS = {"nut_coulomb_N": (0.0, 1e4), "nut_excess_N": (0.0, 1e4),
-               "nut_breakaway_velocity_m_per_s": (1e-3, 5e-2),
-               "nut_viscous_Ns_per_m": (0.0, 1e5)}
-
-
 def velocity_grid(v_max_m_per_s: float, n: int = 48, v_min_m_per_s: float = 1e-3
                   ) -> np.ndarray:
     """Rod velocities (m/s) for the envelope: log-spaced from ``v_min_m_per_s`` to 2 cm/s
@@ -98,182 +90,6 @@ def velocity_grid(v_max_m_per_s: float, n: int = 48, v_min_m_per_s: float = 1e-3
     return np.unique(np.round(np.concatenate([low, high]), 12))
 
 
-def _friction(params: Mapping[str, float], has_generator: bool) -> FrictionParams:
-    """FrictionParams of an identified parameter dict (no bearings without generator)."""
-    vals = {n: float(params[n]) for n in FRICTION_NAMES if n in params}
-    if not has_generator:
-        vals = {n: v for n, v in vals.items() if n in _NUT}
-    if vals.get("nut_breakaway_N", 0.0) < vals.get("nut_coulomb_N", 0.0):
-        vals["nut_breakaway_N"] = vals["nut_coulomb_N"]
-    if vals.get("bearing_breakaway_Nm", 0.0) < vals.get("bearing_coulomb_Nm", 0.0):
-        vals["bearing_breakaway_Nm"] = vals["bearing_coulomb_Nm"]
-    return FrictionParams(**vals)
-
-
-def _rod(v: np.ndarray, fr: FrictionParams, lead: float) -> np.ndarray:
-    return np.asarray(rod_friction_N(v, fr, lead), dtype=float)
-
-
-def _basis(v: np.ndarray, best: FrictionParams, lead: float, gen: bool
-           ) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """Non-negative shapes (v ≥ 0) whose non-negative multiples are added to (``max``) or
-    taken from (``min``) the best set: per pair the Coulomb level, the Stribeck excess
-    over it (at the best set's breakaway velocity) and the viscous coefficient.  Returns
-    the names, the shapes (grid × k, N per unit) and how much of each the best set has."""
-    u = best.nut_breakaway_velocity_m_per_s
-    sq = math.sqrt(2.0 * math.e)
-    z = v / (math.sqrt(2.0) * u)
-    cols = {"nut_coulomb": np.tanh(v / (u / 10.0)), "nut_excess": sq * np.exp(-z * z) * z,
-            "nut_viscous": v}
-    have = {"nut_coulomb": best.nut_coulomb_N,
-            "nut_excess": best.nut_breakaway_N - best.nut_coulomb_N,
-            "nut_viscous": best.nut_viscous_Ns_per_m}
-    if gen:
-        w = best.bearing_breakaway_velocity_rad_per_s
-        om = v / lead
-        zb = om / (math.sqrt(2.0) * w)
-        cols.update({"bearing_coulomb": np.tanh(om / (w / 10.0)) / lead,
-                     "bearing_excess": sq * np.exp(-zb * zb) * zb / lead,
-                     "bearing_viscous": om / lead})
-        have.update({"bearing_coulomb": best.bearing_coulomb_Nm,
-                     "bearing_excess": best.bearing_breakaway_Nm - best.bearing_coulomb_Nm,
-                     "bearing_viscous": best.bearing_viscous_Nms_per_rad})
-    names = list(cols)
-    return names, np.column_stack([cols[n] for n in names]), np.array([have[n] for n in names])
-
-
-def _shifted(best: FrictionParams, names: Sequence[str], delta: np.ndarray, sign: float
-             ) -> FrictionParams:
-    d = dict(zip(names, sign * np.asarray(delta, dtype=float)))
-    b = best.as_dict()
-    nc, ne = d.get("nut_coulomb", 0.0), d.get("nut_excess", 0.0)
-    bc, be = d.get("bearing_coulomb", 0.0), d.get("bearing_excess", 0.0)
-    vals = dict(b, nut_coulomb_N=b["nut_coulomb_N"] + nc,
-                nut_breakaway_N=b["nut_breakaway_N"] + nc + ne,
-                nut_viscous_Ns_per_m=b["nut_viscous_Ns_per_m"] + d.get("nut_viscous", 0.0),
-                bearing_coulomb_Nm=b["bearing_coulomb_Nm"] + bc,
-                bearing_breakaway_Nm=b["bearing_breakaway_Nm"] + bc + be,
-                bearing_viscous_Nms_per_rad=(b["bearing_viscous_Nms_per_rad"]
-                                             + d.get("bearing_viscous", 0.0)))
-    vals = {k: max(float(x), 0.0) for k, x in vals.items()}
-    vals["nut_breakaway_N"] = max(vals["nut_breakaway_N"], vals["nut_coulomb_N"])
-    vals["bearing_breakaway_Nm"] = max(vals["bearing_breakaway_Nm"], vals["bearing_coulomb_Nm"])
-    return FrictionParams(**vals)
-
-
-def ordered_set(best: FrictionParams, v: np.ndarray, margin_N: np.ndarray, lead: float,
-                side: str, has_generator: bool = True) -> FrictionParams:
-    """The ``min`` (``side="below"``) or ``max`` (``"above"``) set: the best set with
-    non-negative amounts of its own shapes (Coulomb level, Stribeck excess, viscous
-    coefficient of each pair) taken away / added, the smallest total change (a linear
-    programme, HiGHS) that keeps the set at least ``margin_N`` below / above the best set
-    at every grid velocity.  Every shape is ≥ 0 for v ≥ 0, so ``min ≤ best ≤ max`` at
-    every velocity — on the grid and beyond it, by construction; ``min`` takes away at
-    most what the best set has (a margin larger than the best set's friction is clipped:
-    zero friction is the floor)."""
-    if side not in ("below", "above"):
-        raise ValueError(f"ordered_set: side must be 'below' or 'above', got {side!r}")
-    v = np.asarray(v, dtype=float)
-    margin = np.asarray(margin_N, dtype=float)
-    ok = np.isfinite(margin) & (v > 0)
-    v, margin = v[ok], np.maximum(margin[ok], 0.0)
-    names, Phi, have = _basis(v, best, lead, has_generator)
-    # a Coulomb level or a Stribeck hump (peak = its amount) never larger than the
-    # largest margin: without it a tall narrow hump below the grid's first velocity would
-    # meet a low-velocity margin "cheaply" (its tail) with an absurd breakaway force
-    cap = float(np.max(margin)) if margin.size else 0.0
-    ub = np.array([np.inf if "viscous" in n else cap * (lead if n.startswith("bearing") else 1.0)
-                   for n in names])
-    if side == "below":
-        margin = np.minimum(margin, np.asarray(rod_friction_N(v, best, lead), dtype=float))
-        ub = np.minimum(ub, np.maximum(have, 0.0))
-    # columns scaled to unit maximum on the grid (conditioning)
-    colmax = np.maximum(Phi.max(axis=0), 1e-300)
-    A = Phi / colmax
-    w = np.full(v.size, 1.0 / v.size)
-    res = optimize.linprog(c=w @ A, A_ub=-A, b_ub=-margin,
-                           bounds=list(zip(np.zeros(have.size), ub * colmax)), method="highs")
-    if not res.success:   # cannot happen for "below" (all of it) nor "above" (viscous grows)
-        raise RuntimeError(f"ordered_set ({side}): linear programme failed: {res.message}")
-    delta = res.x / colmax
-    return _shifted(best, names, delta, -1.0 if side == "below" else 1.0)
-
-
-def fit_envelope(target_N: np.ndarray, v: np.ndarray, split: FrictionParams, lead: float,
-                 side: str) -> FrictionParams:
-    """An admissible friction set whose rod friction follows ``target_N`` on ``v``.
-
-    The bearing torques are those of ``split`` times one factor (its breakaway velocity
-    kept; weakly pulled towards the mean ratio target / rod friction of ``split``); that
-    factor and the nut's four parameters are fitted by least squares (SLSQP) subject to the rod friction staying
-    ``<=`` (``side="below"``), ``>=`` (``"above"``) the target at every grid velocity,
-    or unconstrained (``"fit"``).
-    """
-    if side not in ("below", "above", "fit"):
-        raise ValueError(f"fit_envelope: side must be 'below', 'above' or 'fit', got {side!r}")
-    target = np.asarray(target_N, dtype=float)
-    ok = np.isfinite(target)
-    v, target = np.asarray(v, dtype=float)[ok], target[ok]
-    if v.size < 4:
-        raise ValueError("fit_envelope: fewer than 4 finite envelope points")
-    base = _rod(v, split, lead)
-    k0 = float(np.clip(np.mean(target / np.maximum(base, 1e-9)), 0.0, 1e3))
-    unit_bear = {n: getattr(split, n) for n in _BEARING}
-    b_unit = np.asarray(bearing_friction_Nm(v / lead, FrictionParams(**unit_bear)) / lead,
-                        dtype=float)
-    scale = max(float(np.max(np.abs(target))), 1.0)
-    x_scale = np.array([scale, scale, 0.01, scale / max(float(v.max()), 1e-6), 1.0])
-
-    def params(z: np.ndarray) -> FrictionParams:
-        x = z * x_scale
-        bear = {n: unit_bear[n] * (1.0 if "velocity" in n else x[4]) for n in _BEARING}
-        return FrictionParams(nut_breakaway_N=x[0] + x[1], nut_coulomb_N=x[0],
-                              nut_breakaway_velocity_m_per_s=x[2],
-                              nut_viscous_Ns_per_m=x[3], **bear)
-
-    def model(z: np.ndarray) -> np.ndarray:
-        x = z * x_scale
-        return (np.asarray(simscape_friction(v, x[0] + x[1], x[0], x[2], x[3]), dtype=float)
-                + x[4] * b_unit)
-
-    def obj(z: np.ndarray) -> float:
-        # a weak pull of the bearing factor towards the mean ratio keeps the split close
-        # to the joint fit's where the envelope allows it
-        return float(np.mean(((model(z) - target) / scale) ** 2)
-                     + 1e-3 * ((z[4] - k0) / max(k0, 0.1)) ** 2)
-
-    cons = []
-    if side == "below":
-        cons = [{"type": "ineq", "fun": lambda z: (target - model(z)) / scale}]
-    elif side == "above":
-        cons = [{"type": "ineq", "fun": lambda z: (model(z) - target) / scale}]
-    bounds = [(lo / s, hi / s) for (lo, hi), s in
-              zip([*_NUT_BOUNDS.values(), (0.0, 1e3)], x_scale)]
-    lo_b, hi_b = np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
-    starts = []
-    for u_brk in (0.003, 0.01, 0.03):
-        # feasible-ish starts: nothing (below) or a Coulomb level at the target's max (above)
-        c0 = {"below": 0.0, "above": 1.0, "fit": 0.5}[side]
-        starts.append(np.array([c0, 0.05, u_brk / 0.01, 0.0, 0.0 if side == "above" else
-                                0.5 * k0]))
-        starts.append(np.array([0.5, 0.1, u_brk / 0.01, 0.2, k0]))
-    # the split set itself scaled to touch the target (feasible for below/above)
-    ratio = target / np.maximum(base, 1e-9)
-    kf = float(np.clip({"below": ratio.min(), "above": ratio.max(), "fit": k0}[side], 0, 1e3))
-    starts.insert(0, np.array([split.nut_coulomb_N * kf, (split.nut_breakaway_N
-                               - split.nut_coulomb_N) * kf, split.nut_breakaway_velocity_m_per_s,
-                               split.nut_viscous_Ns_per_m * kf, kf]) / x_scale)
-    best = None
-    for z0 in starts:
-        res = optimize.minimize(obj, np.clip(z0, lo_b, hi_b), method="SLSQP", bounds=bounds,
-                                constraints=cons, options={"maxiter": 500, "ftol": 1e-12})
-        viol = 0.0 if not cons else float(max(0.0, -np.min(cons[0]["fun"](res.x))))
-        score = (viol > 1e-6, viol if viol > 1e-6 else 0.0, res.fun)
-        if best is None or score < best[0]:
-            best = (score, res.x)
-    return params(best[1])
-
-
 def paper_friction_sets(bounds: Mapping[str, Sequence[float]], has_generator: bool = True,
                         fill: Mapping[str, float] | None = None) -> dict[str, FrictionParams]:
     """The paper's method: ``min`` / ``max`` = per-parameter minimum / maximum over the
@@ -284,7 +100,7 @@ def paper_friction_sets(bounds: Mapping[str, Sequence[float]], has_generator: bo
     for j, case in enumerate(("min", "max")):
         vals = {n: float(v) for n, v in (fill or {}).items() if n in FRICTION_NAMES}
         vals.update({n: float(bounds[n][j]) for n in FRICTION_NAMES if n in bounds})
-        out[case] = _friction(vals, has_generator)
+        out[case] = friction_set(vals, has_generator)
     return out
 
 
@@ -359,7 +175,7 @@ class FrictionBounds:
                "mean_N": float(np.interp(v_m_per_s, self.velocity_m_per_s, self.mean_N))}
         for name, group in (("", self.sets), ("paper_", self.paper_sets)):
             for case, fr in group.items():
-                out[f"{name}{case}_N"] = float(_rod(np.array([v_m_per_s]), fr,
+                out[f"{name}{case}_N"] = float(rod_curve_N(np.array([v_m_per_s]), fr,
                                                     self.lead_m_per_rad)[0])
         return out
 
@@ -395,8 +211,9 @@ class FrictionBounds:
         return {"friction_sets": sets, "friction_envelope": env,
                 "velocity_range": self.velocity_range_json()}
 
-    def plot(self, **kw: Any) -> Any:
-        """Envelope, sets and paper bounds against velocity (:mod:`ehsa_opt.plots.identify`)."""
+    def plot(self, ax: Any = None, **kw: Any) -> Any:
+        """Envelope, sets and paper bounds against velocity (two panels, ``ax`` not used;
+        :mod:`ehsa_opt.plots.identify`); writes nothing."""
         from ..plots import identify as P
         return P.friction_bounds(self, **kw)
 
@@ -441,16 +258,68 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
     data = report.data
     gen = bool(data.has_generator)
     lead = float(data.harvester.lead_m_per_rad)
+    good, vrange = _usable_fits(report)
+    vpeak, vlow = vrange[:, 1], vrange[:, 0]
+    v, v_lo, v_data = _bounds_grid(vrange, v_max_m_per_s, n_grid)
+    frs = [friction_set(f.parameters, gen) for _, f in good]
+    joint = getattr(report, "joint", None)
+    joint_ok = joint is not None and joint.success
+    # friction samples: the frictionless model force depends on no fitted parameter on a
+    # bench with generator; without one, on each fit's inertia and offset
+    ref_params = joint.parameters if joint_ok else good[0][1].parameters
+    samples_all = friction_samples(data, ref_params, tests=[t for t, _ in good]) if gen else None
+    half = (_per_test_half_widths(data, good, frs, samples_all, v, lead, level)
+            if per_test_bands else np.zeros((len(frs), v.size)))
+    env = _envelope(v, np.array([rod_curve_N(v, fr, lead) for fr in frs]), half, vlow, vpeak)
+    band = ((f"per-test {100 * level:g} % sandwich band of the rod friction (the larger of "
+             "Newey-West and cluster-robust; effective sample size of the autocorrelated "
+             "residuals)") if per_test_bands else
+            (f"envelope of the per-test fits, united with the best law's {100 * level:g} % "
+             "sandwich band (the larger of Newey-West and cluster-robust over the tests: the "
+             "effective sample size of autocorrelated residuals)"))
+    best, best_source = _best_set(env, v, good, frs, joint if joint_ok else None, gen, lead)
+    # the best law's band over the whole grid: every successful test's samples
+    if samples_all is None:
+        samples_all = friction_samples(data, ref_params, tests=[t for t, _ in good])
+    law = rod_law_fit(samples_all, best.as_dict(), lead, has_generator=gen)
+    rod_best = rod_curve_N(v, best, lead)
+    stat = law.half_width_N(v, level)
+    lo_m, hi_m = _set_margins(v, env, v_data, rod_best, stat)
+    sets = {"min": ordered_set(best, v, lo_m, lead, "below", gen), "best": best,
+            "max": ordered_set(best, v, hi_m, lead, "above", gen)}
+    paper = (paper_friction_sets(report.bounds, gen, fill=good[0][1].parameters)
+             if report.bounds else {})
+    return FrictionBounds(v, env.per_test, env.lower, env.upper, env.mean, env.ci, sets,
+                          {c: rod_curve_N(v, fr, lead) for c, fr in sets.items()}, paper,
+                          {c: rod_curve_N(v, fr, lead) for c, fr in paper.items()}, lead,
+                          [t.file for t, _ in good], band,
+                          DATA_METHOD + f"; best = {best_source}",
+                          np.vstack([rod_best - stat, rod_best + stat]),
+                          np.vstack([rod_best - lo_m, rod_best + hi_m]),
+                          (v_lo, v_data), dict(zip([t.file for t, _ in good], vpeak.tolist())),
+                          law.summary(), level)
+
+
+def _usable_fits(report: Any) -> tuple[list, np.ndarray]:
+    """The (test, fit) pairs whose fit succeeded and resolves a velocity range, and those
+    ranges (tests × [lowest, peak] rod velocity, m/s)."""
+    data = report.data
     good = [(t, f) for t, f in zip(data.tests, report.fits) if f.success]
     if not good:
         raise ValueError("friction_bounds: no successful per-test fit; nothing bounds the "
                          "friction")
-    mass = data.harvester.equivalent_mass_kg() if gen else None
+    mass = data.harvester.equivalent_mass_kg() if data.has_generator else None
     vrange = np.array([test_velocity_range_m_per_s(t, mass) for t, _ in good])
     good = [g for g, rr in zip(good, vrange) if np.all(np.isfinite(rr))]
     vrange = vrange[np.all(np.isfinite(vrange), axis=1)]
     if not good:
         raise ValueError("friction_bounds: no per-test fit resolves any velocity")
+    return good, vrange
+
+
+def _bounds_grid(vrange: np.ndarray, v_max_m_per_s: float, n_grid: int
+                 ) -> tuple[np.ndarray, float, float]:
+    """The velocity grid of the bounds, its lower end and the data's largest velocity."""
     vpeak, vlow = vrange[:, 1], vrange[:, 0]
     v_data = float(vpeak.max())
     # from 10 % of the slowest test's peak velocity (the lowest velocity at which the
@@ -462,22 +331,39 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
     # every recorded test's own speeds on the grid (a plateau speed between grid points
     # would otherwise reach no grid point)
     v = np.unique(np.concatenate([v, vrange[vlow > 0].ravel()]))
-    frs = [_friction(f.parameters, gen) for _, f in good]
-    curves = np.array([_rod(v, fr, lead) for fr in frs])
-    joint = getattr(report, "joint", None)
-    joint_ok = joint is not None and joint.success
-    # friction samples: the frictionless model force depends on no fitted parameter on a
-    # bench with generator; without one, on each fit's inertia and offset
-    ref_params = joint.parameters if joint_ok else good[0][1].parameters
-    samples_all = friction_samples(data, ref_params, tests=[t for t, _ in good]) if gen else None
-    half = np.zeros_like(curves)
-    if per_test_bands:
-        for k, ((t, f), fr) in enumerate(zip(good, frs)):
-            smp = (friction_samples(data, f.parameters, tests=[t]) if not gen else
-                   type(samples_all)([t.file], [samples_all.velocity_m_per_s[k]],
-                                     [samples_all.friction_N[k]]))
-            half[k] = rod_law_fit(smp, fr.as_dict(), lead, has_generator=gen).half_width_N(
-                v, level)
+    return v, v_lo, v_data
+
+
+def _per_test_half_widths(data: Any, good: list, frs: list[FrictionParams], samples_all: Any,
+                          v: np.ndarray, lead: float, level: float) -> np.ndarray:
+    """Every per-test curve's own sandwich half-width on ``v`` (tests × grid, N)."""
+    from .rod_law import friction_samples, rod_law_fit
+    gen = bool(data.has_generator)
+    half = np.zeros((len(frs), v.size))
+    for k, ((t, f), fr) in enumerate(zip(good, frs)):
+        smp = (friction_samples(data, f.parameters, tests=[t]) if not gen else
+               type(samples_all)([t.file], [samples_all.velocity_m_per_s[k]],
+                                 [samples_all.friction_N[k]]))
+        half[k] = rod_law_fit(smp, fr.as_dict(), lead, has_generator=gen).half_width_N(v, level)
+    return half
+
+
+@dataclass
+class _Envelope:
+    """The per-test curves where each test reaches, their envelope and across-test mean."""
+
+    per_test: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    mean: np.ndarray
+    ci: np.ndarray
+    inside: np.ndarray
+
+
+def _envelope(v: np.ndarray, curves: np.ndarray, half: np.ndarray, vlow: np.ndarray,
+              vpeak: np.ndarray) -> _Envelope:
+    """Envelope (pointwise min/max of the curves ± their half-widths, each used only at the
+    velocities its test reaches), mean and its 95 % t interval over the tests."""
     reach = (v[None, :] <= vpeak[:, None] * (1.0 + 1e-9)) & (v[None, :] >= vlow[:, None])
     per_test = np.where(reach, curves, np.nan)
     with np.errstate(all="ignore"):
@@ -494,57 +380,45 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
     ci = np.vstack([mean - tq * sd / np.sqrt(np.maximum(n, 1)),
                     mean + tq * sd / np.sqrt(np.maximum(n, 1))])
     ci[:, n == 0] = np.nan
-    inside = n > 0
-    band = ((f"per-test {100 * level:g} % sandwich band of the rod friction (the larger of "
-             "Newey-West and cluster-robust; effective sample size of the autocorrelated "
-             "residuals)") if per_test_bands else
-            (f"envelope of the per-test fits, united with the best law's {100 * level:g} % "
-             "sandwich band (the larger of Newey-West and cluster-robust over the tests: the "
-             "effective sample size of autocorrelated residuals)"))
-    best, best_source = None, ""
-    if joint_ok:
-        cand = _friction(joint.parameters, gen)
-        rod = _rod(v[inside], cand, lead)
-        tol = 0.02 * np.maximum(np.abs(upper[inside]), 1.0)
-        if np.all((rod >= lower[inside] - tol) & (rod <= upper[inside] + tol)):
-            best, best_source = cand, "joint fit"
-        else:
-            best_source = ("fit to the across-test mean with the joint fit's split (the joint "
-                           "fit's rod friction leaves the envelope)")
-            best = fit_envelope(mean[inside], v[inside], cand, lead, "fit")
-    if best is None:
-        k = int(np.argmin(np.nanmean(np.abs(per_test - mean) / np.maximum(mean, 1e-9), axis=1)))
-        best, best_source = frs[k], f"per-test fit closest to the mean ({good[k][0].file})"
-    # the best law's band over the whole grid: every successful test's samples
-    if samples_all is None:
-        samples_all = friction_samples(data, ref_params, tests=[t for t, _ in good])
-    law = rod_law_fit(samples_all, best.as_dict(), lead, has_generator=gen)
-    rod_best = _rod(v, best, lead)
-    stat = law.half_width_N(v, level)
-    # margins of the sets below / above the best set: inside the data the envelope of the
-    # tests and the best law's band, whichever is wider; beyond it the band, plus the
-    # envelope's excess over the band at the data's edge carried in proportion to the
-    # friction (a spread between the tests that the statistics do not explain persists)
-    lo_m = np.where(inside, np.fmax(rod_best - lower, stat), stat)
-    hi_m = np.where(inside, np.fmax(upper - rod_best, stat), stat)
+    return _Envelope(per_test, lower, upper, mean, ci, n > 0)
+
+
+def _best_set(env: _Envelope, v: np.ndarray, good: list, frs: list[FrictionParams],
+              joint: Any, gen: bool, lead: float) -> tuple[FrictionParams, str]:
+    """The best set and where it comes from: the joint fit when its rod friction stays in
+    the envelope, else a fit to the across-test mean with its split; without a joint fit,
+    the per-test fit closest to the mean."""
+    inside = env.inside
+    if joint is not None:
+        cand = friction_set(joint.parameters, gen)
+        rod = rod_curve_N(v[inside], cand, lead)
+        tol = 0.02 * np.maximum(np.abs(env.upper[inside]), 1.0)
+        if np.all((rod >= env.lower[inside] - tol) & (rod <= env.upper[inside] + tol)):
+            return cand, "joint fit"
+        return (fit_envelope(env.mean[inside], v[inside], cand, lead, "fit"),
+                "fit to the across-test mean with the joint fit's split (the joint "
+                "fit's rod friction leaves the envelope)")
+    k = int(np.argmin(np.nanmean(np.abs(env.per_test - env.mean)
+                                 / np.maximum(env.mean, 1e-9), axis=1)))
+    return frs[k], f"per-test fit closest to the mean ({good[k][0].file})"
+
+
+def _set_margins(v: np.ndarray, env: _Envelope, v_data: float, rod_best: np.ndarray,
+                 stat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Margins of the min / max sets below / above the best set (N on the grid)."""
+    # inside the data the envelope of the tests and the best law's band, whichever is
+    # wider; beyond it the band, plus the envelope's excess over the band at the data's
+    # edge carried in proportion to the friction (a spread between the tests that the
+    # statistics do not explain persists)
+    inside = env.inside
+    lo_m = np.where(inside, np.fmax(rod_best - env.lower, stat), stat)
+    hi_m = np.where(inside, np.fmax(env.upper - rod_best, stat), stat)
     edge = int(np.flatnonzero(inside)[-1])
     out = ~inside & (v > v_data)
     scale = rod_best / max(rod_best[edge], 1e-9)
     lo_m = np.where(out, stat + max(lo_m[edge] - stat[edge], 0.0) * scale, lo_m)
     hi_m = np.where(out, stat + max(hi_m[edge] - stat[edge], 0.0) * scale, hi_m)
-    sets = {"min": ordered_set(best, v, lo_m, lead, "below", gen), "best": best,
-            "max": ordered_set(best, v, hi_m, lead, "above", gen)}
-    paper = (paper_friction_sets(report.bounds, gen, fill=good[0][1].parameters)
-             if report.bounds else {})
-    return FrictionBounds(v, per_test, lower, upper, mean, ci, sets,
-                          {c: _rod(v, fr, lead) for c, fr in sets.items()}, paper,
-                          {c: _rod(v, fr, lead) for c, fr in paper.items()}, lead,
-                          [t.file for t, _ in good], band,
-                          DATA_METHOD + f"; best = {best_source}",
-                          np.vstack([rod_best - stat, rod_best + stat]),
-                          np.vstack([rod_best - lo_m, rod_best + hi_m]),
-                          (v_lo, v_data), dict(zip([t.file for t, _ in good], vpeak.tolist())),
-                          law.summary(), level)
+    return lo_m, hi_m
 
 
 def identification_json(report: Any) -> dict:

@@ -76,10 +76,10 @@ class ParamSpace:
     ----------
     names : tuple of str
         The model's parameter names (``BenchModel.param_names``).
-    varied : tuple of str
+    free : tuple of str
         Decision parameters, in the order of ``z``.
     lower, upper, scale : tuple of float
-        Bounds and scales of the varied parameters (physical units); ``z = p / scale``.
+        Bounds and scales of the free parameters (physical units); ``z = p / scale``.
     ties : tuple of (str, str)
         ``(name, other)``: parameter ``name`` equals parameter ``other``.
     order : tuple of (str, str)
@@ -88,7 +88,7 @@ class ParamSpace:
     """
 
     names: tuple[str, ...]
-    varied: tuple[str, ...]
+    free: tuple[str, ...]
     lower: tuple[float, ...]
     upper: tuple[float, ...]
     scale: tuple[float, ...]
@@ -96,7 +96,7 @@ class ParamSpace:
     order: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
-        unknown = [n for n in self.varied if n not in self.names]
+        unknown = [n for n in self.free if n not in self.names]
         if unknown:
             raise ValueError(f"ParamSpace: cannot vary unknown parameter(s) "
                              f"{', '.join(unknown)} (known: {', '.join(self.names)})")
@@ -104,31 +104,31 @@ class ParamSpace:
             if n not in self.names or other not in self.names:
                 raise ValueError(f"ParamSpace: tie '{n}' = '{other}' names an unknown "
                                  "parameter")
-            if n in self.varied:
-                raise ValueError(f"ParamSpace: '{n}' is both varied and tied")
-        if not (len(self.lower) == len(self.upper) == len(self.scale) == len(self.varied)):
-            raise ValueError("ParamSpace: lower/upper/scale need one entry per varied name")
+            if n in self.free:
+                raise ValueError(f"ParamSpace: '{n}' is both free and tied")
+        if not (len(self.lower) == len(self.upper) == len(self.scale) == len(self.free)):
+            raise ValueError("ParamSpace: lower/upper/scale need one entry per free name")
 
     @property
     def nv(self) -> int:
-        return len(self.varied)
+        return len(self.free)
 
     @property
     def active_order(self) -> tuple[tuple[str, str], ...]:
-        return tuple((a, b) for a, b in self.order if a in self.varied or b in self.varied)
+        return tuple((a, b) for a, b in self.order if a in self.free or b in self.free)
 
     def expression(self, z: Any, pbase: Any) -> Any:
-        """Model parameter vector: varied entries ``scale·z``, tied entries their
+        """Model parameter vector: free entries ``scale·z``, tied entries their
         target's, the rest from ``pbase`` (a per-test NLP parameter)."""
         ex: dict[str, Any] = {n: pbase[k] for k, n in enumerate(self.names)}
-        for k, n in enumerate(self.varied):
+        for k, n in enumerate(self.free):
             ex[n] = self.scale[k] * z[k]
         for n, other in self.ties:
             ex[n] = ex[other]
         return ca.vertcat(*[ex[n] for n in self.names]), ex
 
     def z_of(self, values: Mapping[str, float]) -> np.ndarray:
-        z = np.array([float(values[n]) / s for n, s in zip(self.varied, self.scale)])
+        z = np.array([float(values[n]) / s for n, s in zip(self.free, self.scale)])
         return np.clip(z, self.lbz, self.ubz)
 
     @property
@@ -144,7 +144,7 @@ class ParamSpace:
         sit 1e-12 outside) and a base vector."""
         z = np.clip(np.asarray(z, float)[:self.nv], self.lbz, self.ubz)
         vals = {n: float(v) for n, v in zip(self.names, pbase)}
-        for k, n in enumerate(self.varied):
+        for k, n in enumerate(self.free):
             vals[n] = float(z[k] * self.scale[k])
         for n, other in self.ties:
             vals[n] = vals[other]
@@ -288,7 +288,7 @@ class NLP:
                 + objective.regularisation * ca.sumsqr(z - zref)
         pvec, ex = space.expression(z, ca.DM(np.zeros(len(space.names))))
         for a, b in space.active_order:
-            sc = space.scale[space.varied.index(a)] if a in space.varied else 1.0
+            sc = space.scale[space.free.index(a)] if a in space.free else 1.0
             g_parts.append((ex[a] - ex[b]) / sc)
             lbg.append(np.zeros(1))
             ubg.append(np.full(1, np.inf))
@@ -391,7 +391,7 @@ class NLP:
 
     # -------------------------------------------------------------- sensitivities
     def sensitivities(self, w: np.ndarray, p: np.ndarray) -> np.ndarray:
-        """d(outputs)/d(varied parameters [physical units], initial states).
+        """d(outputs)/d(free parameters [physical units], initial states).
 
         The states are eliminated through the collocation equations (their
         sensitivity solves the linearised defects); the initial states of each test

@@ -110,7 +110,7 @@ def _order_map(space: ParamSpace, pbase: np.ndarray
     nv = space.nv
     T = np.eye(nv)
     lo, hi = space.lbz.copy(), space.ubz.copy()
-    idx = {n: k for k, n in enumerate(space.varied)}
+    idx = {n: k for k, n in enumerate(space.free)}
     vals = {n: float(v) for n, v in zip(space.names, pbase)}
     seen: set[str] = set()
     for a, b in space.active_order:

@@ -1,5 +1,5 @@
-"""Identifiability at an identification optimum (SPEC §9): the Gauss–Newton Fisher
-information of the varied parameters (states eliminated by the collocation
+"""Identifiability at an identification optimum: the Gauss–Newton Fisher
+information of the free parameters (states eliminated by the collocation
 sensitivities of :meth:`ehsa_opt.estimation.core.NLP.sensitivities`, initial states
 marginalised), its eigen-decomposition in scaled coordinates, and identifiable
 combinations with 95 % intervals."""
@@ -18,25 +18,25 @@ __all__ = ["fisher_identifiability"]
 
 
 def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.ndarray],
-                           params: Mapping[str, float], varied: Sequence[str],
+                           params: Mapping[str, float], free: Sequence[str],
                            scales: Sequence[float], lead_m_per_rad: float,
                            peak_velocity_m_per_s: float, rtol: float,
                            velocities_m_per_s: Sequence[float] | None = None,
                            method: str = "") -> dict:
-    """Gauss–Newton Fisher information of the varied parameters at an optimum.
+    """Gauss–Newton Fisher information of the free parameters at an optimum.
 
     Parameters
     ----------
     dy : ndarray
-        d(outputs)/d(varied [physical], nuisance initial states) (rows as ``y``).
+        d(outputs)/d(free [physical], nuisance initial states) (rows as ``y``).
     y : ndarray
         Outputs at the optimum: per test, per channel, per observation.
     y_meas : list of ndarray
         Per test the measured channels (ny × n_obs).
     params : dict
         Parameter values at the optimum.
-    varied, scales :
-        Varied names and their scales (z = p / scale).
+    free, scales :
+        Free (fitted) names and their scales (z = p / scale).
     lead_m_per_rad, peak_velocity_m_per_s : float
         For the rod-friction combinations (at 0.1, 0.25, 0.5, 1 × peak velocity
         unless ``velocities_m_per_s``).
@@ -49,8 +49,46 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
     directions, the covariance-based 95 % intervals of the parameters and of
     identifiable combinations.
     """
-    varied = list(varied)
-    nv = len(varied)
+    free = list(free)
+    nv = len(free)
+    scales = np.asarray(scales, float)
+    Jw, resid, sizes = _weighted_jacobian(dy, y, y_meas)
+    Fz = _marginal_information(Jw, nv, scales)
+    ev, directions = _directions(Fz, free, rtol)
+    # intervals: the Newey-West sandwich (the residuals of a time series are
+    # autocorrelated: the independent-samples covariance pinv(Fz) is too narrow by
+    # about their correlation time), initial states profiled out
+    from .covariance import hac_covariance
+    colscale = np.concatenate([scales, np.ones(Jw.shape[1] - nv)])
+    hac = hac_covariance(Jw * colscale[None, :], np.concatenate(resid), groups=sizes,
+                         n_nuisance=Jw.shape[1] - nv, rcond=rtol)
+    cov = hac.cov * np.outer(scales, scales)
+    cov_iid = np.linalg.pinv(Fz, rcond=rtol) * np.outer(scales, scales)
+    params = dict(params)
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+    ci = {n: [params[n] - 1.96 * sd[j], params[n] + 1.96 * sd[j]] for j, n in enumerate(free)}
+    combos = _combinations(params, free, scales, cov, lead_m_per_rad, peak_velocity_m_per_s,
+                           velocities_m_per_s)
+    weak = [d for d in directions if not d["identifiable"]]
+    return {"method": method or ("Gauss-Newton Fisher information, states eliminated by collocation "
+                      "sensitivities, initial states marginalised; scaled coordinates"),
+            "parameters": free, "relative_eigenvalues": [d["relative_eigenvalue"]
+                                                            for d in directions],
+            "directions": directions,
+            "non_identifiable": [d["main"] for d in weak],
+            "condition_number": float(ev[-1] / max(ev[0], 1e-300)), "threshold": rtol,
+            "parameter_ci95": ci, "combinations": combos,
+            "interval_method": hac.method, "effective_samples": hac.n_eff,
+            "samples": hac.n, "hac_bandwidth_samples": hac.bandwidth,
+            "parameter_ci95_iid": {n: [params[n] - 1.96 * float(np.sqrt(max(cov_iid[j, j], 0))),
+                                       params[n] + 1.96 * float(np.sqrt(max(cov_iid[j, j], 0)))]
+                                   for j, n in enumerate(free)}}
+
+
+def _weighted_jacobian(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.ndarray]
+                       ) -> tuple[np.ndarray, list[np.ndarray], list[int]]:
+    """The Jacobian with every signal's rows divided by the noise level of its fit residual,
+    the weighted residuals per signal and their lengths."""
     rows, weights, pos, resid, sizes = [], [], 0, [], []
     for ym in y_meas:
         npts = ym.shape[1]
@@ -65,13 +103,23 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
             pos += npts
     rows_i = np.concatenate(rows)
     Wt = np.concatenate(weights)
-    Jw = dy[rows_i] * Wt[:, None]
+    return dy[rows_i] * Wt[:, None], resid, sizes
+
+
+def _marginal_information(Jw: np.ndarray, nv: int, scales: np.ndarray) -> np.ndarray:
+    """Fisher information of the first ``nv`` columns with the others (the initial states)
+    marginalised (Schur complement), in scaled coordinates z = p / scale."""
     Fall = Jw.T @ Jw
     Fpp, Fpx, Fxx = Fall[:nv, :nv], Fall[:nv, nv:], Fall[nv:, nv:]
     Fp = Fpp - Fpx @ np.linalg.pinv(Fxx) @ Fpx.T if Fxx.size else Fpp
     Fp = 0.5 * (Fp + Fp.T)
-    scales = np.asarray(scales, float)
-    Fz = Fp * np.outer(scales, scales)
+    return Fp * np.outer(scales, scales)
+
+
+def _directions(Fz: np.ndarray, free: list[str], rtol: float
+                ) -> tuple[np.ndarray, list[dict]]:
+    """Eigenvalues (ascending) of the scaled information and its directions: relative
+    eigenvalue, vector, main components and whether the data determine it."""
     ev, V = np.linalg.eigh(Fz)
     order = np.argsort(ev)
     ev, V = ev[order], V[:, order]
@@ -85,32 +133,28 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
         V[:, weak_idx] = Vw
         rel[weak_idx] = np.einsum("ij,ik,kj->j", Vw, Fz, Vw) / max(ev[-1], 1e-300)
     directions = []
-    for k in range(nv):
-        comp = {n: float(V[j, k]) for j, n in enumerate(varied)}
+    for k in range(len(free)):
+        comp = {n: float(V[j, k]) for j, n in enumerate(free)}
         main = {n: c for n, c in sorted(comp.items(), key=lambda kv: -abs(kv[1]))
                 if abs(c) > 0.1}
         directions.append({"relative_eigenvalue": float(max(rel[k], 0.0)), "vector": comp,
                            "main": main, "identifiable": bool(rel[k] >= rtol)})
-    # intervals: the Newey-West sandwich (the residuals of a time series are
-    # autocorrelated: the independent-samples covariance pinv(Fz) is too narrow by
-    # about their correlation time), initial states profiled out
-    from .covariance import hac_covariance
-    colscale = np.concatenate([scales, np.ones(Jw.shape[1] - nv)])
-    hac = hac_covariance(Jw * colscale[None, :], np.concatenate(resid), groups=sizes,
-                         n_nuisance=Jw.shape[1] - nv, rcond=rtol)
-    cov_z = hac.cov
-    cov = cov_z * np.outer(scales, scales)
-    cov_iid = np.linalg.pinv(Fz, rcond=rtol) * np.outer(scales, scales)
-    params = dict(params)
-    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
-    ci = {n: [params[n] - 1.96 * sd[j], params[n] + 1.96 * sd[j]] for j, n in enumerate(varied)}
+    return ev, directions
+
+
+def _combinations(params: dict, free: list[str], scales: np.ndarray, cov: np.ndarray,
+                  lead_m_per_rad: float, peak_velocity_m_per_s: float,
+                  velocities_m_per_s: Sequence[float] | None) -> dict:
+    """Identifiable combinations (rod friction at given velocities, total viscous and
+    Coulomb, the rig terms) with their 95 % intervals by the delta method on ``cov``."""
     combos = {}
     r = lead_m_per_rad
+    nv = len(free)
 
     def grad(fun: Callable[[dict], float]) -> tuple[float, np.ndarray]:
         base = fun(params)
         g = np.zeros(nv)
-        for j, n in enumerate(varied):
+        for j, n in enumerate(free):
             step = 1e-6 * scales[j]
             q = dict(params)
             q[n] += step
@@ -122,7 +166,7 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
         s = float(np.sqrt(max(g @ cov @ g, 0.0)))
         combos[name] = {"value": val, "ci95": [val - 1.96 * s, val + 1.96 * s]}
 
-    fr_names = [n for n in FRICTION_NAMES if n in varied]
+    fr_names = [n for n in FRICTION_NAMES if n in free]
     if fr_names:
         vmax = peak_velocity_m_per_s
         vel = velocities_m_per_s if velocities_m_per_s is not None else \
@@ -136,23 +180,9 @@ def fisher_identifiability(dy: np.ndarray, y: np.ndarray, y_meas: Sequence[np.nd
             lambda q: q["nut_viscous_Ns_per_m"] + q["bearing_viscous_Nms_per_rad"] / r ** 2)
         add("total_coulomb_N", lambda q: q["nut_coulomb_N"] + q["bearing_coulomb_Nm"] / r)
     for n in RIG_PARAM_NAMES:
-        if n in varied:
+        if n in free:
             add(n, lambda q, n=n: q[n])
-    weak = [d for d in directions if not d["identifiable"]]
-    return {"method": method or ("Gauss-Newton Fisher information, states eliminated by collocation "
-                      "sensitivities, initial states marginalised; scaled coordinates"),
-            "parameters": varied, "relative_eigenvalues": [d["relative_eigenvalue"]
-                                                            for d in directions],
-            "directions": directions,
-            "non_identifiable": [d["main"] for d in weak],
-            "condition_number": float(ev[-1] / max(ev[0], 1e-300)), "threshold": rtol,
-            "parameter_ci95": ci, "combinations": combos,
-            "interval_method": hac.method, "effective_samples": hac.n_eff,
-            "samples": hac.n, "hac_bandwidth_samples": hac.bandwidth,
-            "parameter_ci95_iid": {n: [params[n] - 1.96 * float(np.sqrt(max(cov_iid[j, j], 0))),
-                                       params[n] + 1.96 * float(np.sqrt(max(cov_iid[j, j], 0)))]
-                                   for j, n in enumerate(varied)}}
-
+    return combos
 
 
 def _varimax(V: np.ndarray, iterations: int = 100, tol: float = 1e-10) -> np.ndarray:

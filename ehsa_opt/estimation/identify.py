@@ -1,4 +1,4 @@
-"""Friction identification from bench tests (paper §3, SPEC §2–3 and §9).
+"""Friction identification from bench tests (paper §2–3; also the real EMPS data).
 
 The bench model (:class:`~ehsa_opt.physics.bench_model.BenchModel`, any state vector,
 with or without transmission components) is discretised by **direct
@@ -30,9 +30,10 @@ and IPOPT solves the same epigraph problem in the parameters only; otherwise
 :mod:`ehsa_opt.estimation.core`, whose NLPs are built once per structure and
 reused for every test of the same size.
 
-Multistart: ``starts`` initial points drawn uniformly (seeded) in the
-distributor ranges of SPEC §2 (components: in their ParamSpec bounds), run in
-parallel processes; the best successful start is kept, every start recorded.
+Multistart: ``starts`` initial points drawn uniformly (seeded) in the declared
+start ranges (:data:`~ehsa_opt.physics.base_parameters.PARAMETERS`; components: in
+their ParamSpec bounds), or given start points (:mod:`ehsa_opt.estimation.starts`), run
+in parallel processes; the best successful start is kept, every start recorded.
 
 Identifiability: at the optimum the Gauss–Newton Fisher information of the
 varied parameters (the collocation states eliminated through the sensitivity
@@ -83,6 +84,7 @@ from .identify_options import (
     test_motion,
     unresolved_tests,
 )
+from .starts import Starts, draw_starts
 from .identify_result import (
     FitResult,
     IdentificationReport,
@@ -109,31 +111,6 @@ def _bounds(model: BenchModel, name: str) -> tuple[float, float, float]:
     q = model.param_specs[name]
     scale = abs(q.default) if q.default != 0 else max(abs(q.upper), abs(q.lower), 1e-12)
     return q.lower, q.upper, scale
-
-
-def _draw_start(model: BenchModel, varied: Sequence[str], rng: np.random.Generator,
-                k: int) -> dict[str, float]:
-    """Start k: friction uniform in the distributor ranges, components at their
-    defaults for k = 0 and drawn in their bounds otherwise (log-uniform when the
-    bounds span more than two decades)."""
-    out = {}
-    for n in varied:
-        if n in START_RANGES:
-            lo, hi = START_RANGES[n]
-            out[n] = float(rng.uniform(lo, hi))
-        else:
-            q = model.param_specs[n]
-            if k == 0:
-                out[n] = q.default
-            elif q.lower > 0 and q.upper / q.lower > 100:
-                out[n] = float(np.exp(rng.uniform(np.log(q.lower), np.log(q.upper))))
-            else:
-                out[n] = float(rng.uniform(q.lower, q.upper))
-    for brk, coul in _TIES.items():
-        if brk in out and coul in out and out[brk] < out[coul]:
-            out[brk], out[coul] = out[coul], out[brk]
-    return out
-
 
 
 # ====================================================================== fit
@@ -249,7 +226,7 @@ def _history(su: _Setup, nlp: core.NLP, p: np.ndarray, rows: list[np.ndarray],
     return {"objective": obj.tolist(),
             "rms_F": np.sqrt(J[:, isF].max(axis=1)).tolist(),
             "rms_V": (np.sqrt(J[:, ~isF].max(axis=1)).tolist() if (~isF).any() else None),
-            "parameters": {n: [q[n] for q in pars] for n in su.space.varied}}
+            "parameters": {n: [q[n] for q in pars] for n in su.space.free}}
 
 
 def _fisher(su: _Setup, nlp: core.NLP, p: np.ndarray, w: np.ndarray) -> dict:
@@ -261,7 +238,7 @@ def _fisher(su: _Setup, nlp: core.NLP, p: np.ndarray, w: np.ndarray) -> dict:
         method = ("Gauss-Newton Fisher information; states fixed by the prescribed motion "
                   "(rigid path: no state depends on a varied parameter); scaled coordinates")
     return fisher_identifiability(dy, y, su.y_meas, su.space.values_of(w, su.pbases[0]),
-                                  su.space.varied, su.space.scale,
+                                  su.space.free, su.space.scale,
                                   su.model.harvester.lead_m_per_rad, vmax,
                                   su.options.identifiable_rtol, method=method or "")
 
@@ -273,8 +250,8 @@ def _pool(jobs: int) -> ProcessPoolExecutor:
 
 def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
               has_generator: bool = True, components: Sequence[Component] = (),
-              vary: Sequence[str] | None = None, fixed: Mapping[str, Any] | None = None,
-              starts: int = 4, seed: int = 0, jobs: int = 1,
+              free: Sequence[str] | None = None, fixed: Mapping[str, Any] | None = None,
+              starts: Starts = 4, seed: int = 0, jobs: int = 1,
               options: IdentifyOptions | None = None, identifiability: bool = True
               ) -> FitResult:
     """Identify ONE parameter set for all the given tests (per-test fit: one test).
@@ -288,14 +265,18 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
         identified beside the nut friction; the bearing friction is fixed at 0.
     components : sequence of Component
         Extra effects; their parameters vary in their ParamSpec bounds by default.
-    vary : sequence of str, optional
-        Names to vary (default: every parameter but ``load_ohm``; without
+    free : sequence of str, optional
+        Names to fit (default: every parameter but ``load_ohm``; without
         generator, not the bearing names).
     fixed : mapping, optional
         Name → value; a string value ties the parameter to another one
         (e.g. ``{"nut_breakaway_N": "nut_coulomb_N"}`` removes the Stribeck bump).
-    starts, seed, jobs : int
-        Multistart size, seed of the draws, parallel processes.
+    starts : int or list of dict
+        Number of start points drawn (seeded by ``seed``) in the declared start ranges, or
+        the start points themselves, each naming every free parameter
+        (:mod:`ehsa_opt.estimation.starts`).
+    seed, jobs : int
+        Seed of the draws, parallel processes.
     options : IdentifyOptions
         ``options.path`` picks the rigid or collocation path (default automatic).
     identifiability : bool
@@ -309,8 +290,6 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
     tests = list(tests)
     if not tests:
         raise ValueError("fit_tests: no tests given")
-    if not (isinstance(starts, int) and starts >= 1):
-        raise ValueError(f"fit_tests: starts must be an integer >= 1, got {starts!r}")
     if not (isinstance(jobs, int) and jobs >= 1):
         raise ValueError(f"fit_tests: jobs must be an integer >= 1, got {jobs!r}")
     if has_generator and any(t.voltage_V is None for t in tests):
@@ -330,14 +309,20 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
     if not has_generator:
         for n in _BEARING:
             fixed.setdefault(n, 1.0 if "velocity" in n else 0.0)
-    varied = list(vary) if vary is not None else _default_vary(model, has_generator, fixed)
+    varied = list(free) if free is not None else _default_vary(model, has_generator, fixed)
     unknown = [n for n in varied if n not in known]
     if unknown:
-        raise ValueError(f"fit_tests: cannot vary unknown parameter '{unknown[0]}' "
+        raise ValueError(f"fit_tests: cannot fit unknown free parameter '{unknown[0]}' "
                          f"(known: {', '.join(known)})")
     clash = [n for n in varied if n in fixed]
     if clash:
-        raise ValueError(f"fit_tests: {', '.join(clash)} both varied and fixed")
+        raise ValueError(f"fit_tests: {', '.join(clash)} both free and fixed")
+    draws = draw_starts(model, varied, starts, seed, where="fit_tests")
+    missing = sorted({n for d in draws for n in varied if n not in d})
+    if missing:
+        raise ValueError(f"fit_tests: a start point leaves out {', '.join(missing)}; give every "
+                         f"free parameter a start value, or pass starts as a number to draw")
+    starts = len(draws)
     t0 = time.perf_counter()
     short = unresolved_tests(tests, options, model_mass(model))
     if short:
@@ -348,8 +333,6 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
                          None, [], [], {}, 0, list(varied), None, math.nan,
                          time.perf_counter() - t0, "none")
     su = _setup(tests, model, has_generator, varied, fixed, options)
-    rng = np.random.default_rng(seed)
-    draws = [_draw_start(model, varied, rng, k) for k in range(starts)]
     if jobs == 1 or starts == 1:
         records = _run_starts(su, draws, identifiability)
     else:
@@ -371,7 +354,7 @@ def _predictions(su: _Setup, params: Mapping[str, float]) -> list[Prediction]:
     parameters); CVODES otherwise."""
     model = su.model
     if su.path == "collocation" and states_depend_on(
-            model, list(su.space.varied) + [o for _, o in su.space.ties]):
+            model, list(su.space.free) + [o for _, o in su.space.ties]):
         return simulate_tests(su.tests, model.harvester, params,
                               has_generator=model.generator, components=model.components,
                               motions=su.motions)
@@ -397,7 +380,7 @@ def _finish(su: _Setup, records: list[dict], seconds: float,
         return FitResult(False, f"all {len(records)} IPOPT starts failed (statuses: "
                          f"{sorted({r['status'] for r in records})})", best["status"],
                          {n: math.nan for n in names}, None, None, None, [], starts_out,
-                         best["history"], best["iterations"], list(su.space.varied), None,
+                         best["history"], best["iterations"], list(su.space.free), None,
                          math.nan, seconds, su.path)
     best = min(ok, key=lambda r: r["objective"])
     params = {n: best["final"][n] for n in names}
@@ -412,7 +395,7 @@ def _finish(su: _Setup, records: list[dict], seconds: float,
     msg = (f"{len(ok)}/{len(records)} starts converged; best objective {best['objective']:.6g} "
            f"({best['status']}; {su.path} path)")
     return FitResult(True, msg, best["status"], params, dF, dV, rel, per, starts_out,
-                     best["history"], best["iterations"], list(su.space.varied), ident,
+                     best["history"], best["iterations"], list(su.space.free), ident,
                      best["objective"], seconds, su.path)
 
 
@@ -514,7 +497,7 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
     good = [f for f in fits if f.success]
     bounds = {}
     if good:
-        for n in good[0].varied:
+        for n in good[0].free:
             vals = [f.parameters[n] for f in good]
             bounds[n] = [float(min(vals)), float(max(vals))]
     ident = summarise_identifiability(data, fits)

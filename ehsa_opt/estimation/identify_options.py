@@ -11,10 +11,12 @@ import numpy as np
 
 from ..datasets.bench_format import BenchTest
 from ..physics.motion import SampledMotion
-from ..physics.params import FRICTION_RANGES
+from ..physics.base_parameters import PARAMETERS, Parameter, override
+from ..physics.params import FRICTION_NAMES
 from .collocation import node_indices
 
-__all__ = ["IdentifyOptions", "PARAMETER_BOUNDS", "START_RANGES", "test_motion",
+__all__ = ["IdentifyOptions", "IDENTIFY_PARAMETERS", "PARAMETER_BOUNDS", "START_RANGES",
+           "test_motion",
            "MotionEstimate", "estimate_motion", "RECORDED_CUTOFF_FACTORS", "CORNER_WINDOW_CYCLES",
            "MIN_RESOLVED_SAMPLES", "unresolved_tests"]
 
@@ -33,27 +35,25 @@ END_WINDOW_CYCLES: float = 1.0
 #: deviations are "at rest" and stay out of objectives.
 DWELL_THRESHOLD_SIGMA: float = 3.0
 
-#: Admissible bounds (lower, upper, scale) of the parameters during identification:
-#: the SPEC §2 distributor ranges' upper ends (lower ends 0 for levels and viscous terms,
-#: so "no friction" stays admissible; the distributor ranges for breakaway velocities).
-#: Without bounds the unmodelled backlash of the embedded data drives Stribeck bumps
-#: to 1000 N at 0.2 m/s, far outside any ball screw.
-PARAMETER_BOUNDS: dict[str, tuple[float, float, float]] = {
-    "nut_breakaway_N": (0.0, 200.0, 100.0),
-    "nut_coulomb_N": (0.0, 150.0, 100.0),
-    "nut_breakaway_velocity_m_per_s": (1e-3, 5e-2, 0.01),
-    "nut_viscous_Ns_per_m": (0.0, 500.0, 100.0),
-    "bearing_breakaway_Nm": (0.0, 5e-2, 0.01),
-    "bearing_coulomb_Nm": (0.0, 5e-2, 0.01),
-    "bearing_breakaway_velocity_rad_per_s": (0.1, 5.0, 1.0),
-    "bearing_viscous_Nms_per_rad": (0.0, 1e-4, 1e-5),
-    "inertia_kg": (0.0, 1e4, 100.0),
-    "offset_N": (-1e4, 1e4, 10.0),
-}
+#: The identification's parameters: the declaration
+#: (:data:`~ehsa_opt.physics.base_parameters.PARAMETERS`) with the friction bounded by the
+#: distributor ranges' upper ends (lower ends 0 for levels and viscous terms, so "no
+#: friction" stays admissible; the distributor ranges for breakaway velocities).
+IDENTIFY_PARAMETERS: dict[str, Parameter] = override(
+    "identification",
+    "without bounds the unmodelled backlash of the embedded data drives Stribeck bumps to "
+    "1000 N at 0.2 m/s, far outside any ball screw: the friction stays inside the "
+    "distributor ranges' upper ends",
+    {n: ((PARAMETERS[n].start[0] if PARAMETERS[n].lower_open else PARAMETERS[n].lower),
+         PARAMETERS[n].start[1]) for n in FRICTION_NAMES})
 
-#: Ranges the multistart draws from: SPEC §2 distributor ranges, plus the rig terms.
-START_RANGES: dict[str, tuple[float, float]] = {
-    **FRICTION_RANGES, "inertia_kg": (10.0, 200.0), "offset_N": (-20.0, 20.0)}
+#: Admissible bounds (lower, upper, scale) of the parameters during identification
+#: (from :data:`IDENTIFY_PARAMETERS`).
+PARAMETER_BOUNDS: dict[str, tuple[float, float, float]] = {
+    n: (q.lower, q.upper, q.scale) for n, q in IDENTIFY_PARAMETERS.items()}
+
+#: Ranges the multistart draws from: the declaration's start ranges.
+START_RANGES: dict[str, tuple[float, float]] = {n: q.start for n, q in PARAMETERS.items()}
 
 
 # ====================================================================== options

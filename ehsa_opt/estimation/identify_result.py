@@ -7,13 +7,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
 from ..datasets.bench_format import BenchData, BenchTest
 from ..physics.friction import rod_friction_N
 from ..physics.params import FRICTION_NAMES
+from .test_simulation import Prediction, simulate_tests
+from .test_velocity import test_peak_velocity_m_per_s
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["Prediction", "FitResult", "IdentificationReport", "eq5_delta",
            "force_relative_error_percent", "test_errors", "summarise_identifiability"]
@@ -39,16 +44,6 @@ def force_relative_error_percent(simulated: Any, measured: Any) -> float:
 
 # ====================================================================== results
 @dataclass
-class Prediction:
-    """Simulated signals of one test on its own time grid."""
-
-    file: str
-    time_s: np.ndarray
-    force_N: np.ndarray
-    voltage_V: np.ndarray | None
-
-
-@dataclass
 class FitResult:
     """Result of :func:`fit_tests` (mirrors ``scipy.optimize.OptimizeResult``).
 
@@ -73,7 +68,8 @@ class FitResult:
         Best start per iteration: ``objective``, ``rms_F``, ``rms_V`` (lists),
         ``parameters`` (name → list).
     nit : int
-    varied : list[str]
+    free : list[str]
+        The fitted names (as :attr:`FitOutcome.free <ehsa_opt.estimation.discrepancy.fit.FitOutcome>`).
     identifiability : dict or None
         See :func:`~ehsa_opt.estimation.identifiability.fisher_identifiability`.
     path : str
@@ -92,7 +88,7 @@ class FitResult:
     starts: list[dict]
     history: dict
     nit: int
-    varied: list[str] = field(default_factory=list)
+    free: list[str] = field(default_factory=list)
     identifiability: dict | None = None
     objective: float = math.nan
     seconds: float = 0.0
@@ -101,12 +97,29 @@ class FitResult:
     def __getitem__(self, key: str) -> Any:  # OptimizeResult-like access
         return getattr(self, key)
 
-    def plot(self, tests: Sequence[BenchTest] | None = None, harvester: Any = None,
-             **kw: Any) -> Any:
-        """Figures 8–9 (and 11 when ``tests`` are given); see :mod:`ehsa_opt.plots.identify`."""
-        from ..plots import identify as P
-        return P.fit_result(self, tests=tests, harvester=harvester, **kw)
+    def summary(self) -> str:
+        """Status, Eq 5 δ and force error, and the parameters found."""
+        if not self.success:
+            return f"fit FAILED ({self.status}): {self.message}"
+        dv = f"{self.delta_V:.4f}" if self.delta_V is not None else "—"
+        return "\n".join(
+            [f"fit converged ({self.status}, {self.nit} iterations, {self.path}): δ_F "
+             f"{self.delta_F:.4f}, δ_V {dv}, force error "
+             f"{self.force_relative_error_percent:.2f} %"]
+            + [f"  {k} = {v:.6g}" for k, v in self.parameters.items()])
 
+    def plot(self, ax: Any = None, tests: Sequence[BenchTest] | None = None,
+             harvester: Any = None, **kw: Any) -> list[Figure]:
+        """Figures 8–9 (and 11 when ``tests`` and ``harvester`` are given: the first test
+        simulated at these parameters, ``kw`` to
+        :func:`~ehsa_opt.estimation.test_simulation.simulate_tests`); writes nothing.
+        ``ax`` is not used (several figures); it is accepted for the common protocol."""
+        from ..plots import identify as P
+        test = pred = None
+        if tests is not None and harvester is not None and self.success:
+            test = tests[0]
+            pred = simulate_tests(tests[:1], harvester, self.parameters, **kw)[0]
+        return P.fit_result(self, test, pred)
 
 
 @dataclass
@@ -167,10 +180,57 @@ class IdentificationReport:
                           "identifiable": self.identifiable, "joint_fit": joint,
                           "seconds": self.seconds})
 
-    def plot(self, out_dir: str | Path) -> list[Path]:
-        """Write Figs 8–12, the identifiability picture and the joint fit to ``out_dir``."""
+    def summary(self, json_path: str | Path = "identification.json") -> str:
+        """The lines ``ehsa-opt identify`` prints: tests converged, per-test Eq 5 δ and
+        force error (or why a test failed), the rig terms of a rig without generator."""
+        ok = sum(f.success for f in self.fits)
+        lines = [f"identified {ok}/{len(self.fits)} tests in {self.seconds:.1f} s "
+                 f"({self.starts} starts each); results in {json_path}"]
+        for t, f in zip(self.data.tests, self.fits):
+            if f.success:
+                dv = f"{f.delta_V:.4f}" if f.delta_V is not None else "—"
+                lines.append(f"  {t.file}: δ_F {f.delta_F:.4f}  δ_V {dv}  force error "
+                             f"{f.force_relative_error_percent:.2f} %  ({f.status})")
+            else:
+                lines.append(f"  {t.file}: FAILED ({f.message})")
+        if not self.data.has_generator and self.fits and self.fits[0].success:
+            p = self.fits[0].parameters
+            lines.append(f"  M = {p['inertia_kg']:.2f} kg, F_v = {p['nut_viscous_Ns_per_m']:.1f} "
+                         f"N s/m, F_C = {p['nut_coulomb_N']:.2f} N, offset = "
+                         f"{p['offset_N']:.2f} N")
+        return "\n".join(lines)
+
+    def figures(self) -> dict[str, Figure]:
+        """Figs 8–12, the identifiability picture and the joint fit on a held-out test,
+        keyed by file name; the model's signals they show are simulated here."""
+        from ..datasets.embedded import load_truth
         from ..plots import identify as P
-        return P.report_figures(self, Path(out_dir))
+        good = [k for k, f in enumerate(self.fits) if f.success]
+        if not good:
+            return {}
+        k = good[len(good) // 2]  # representative test: the middle one of the matrix
+        sim = {"has_generator": self.data.has_generator}
+        pred = simulate_tests([self.data.tests[k]], self.data.harvester,
+                              self.fits[k].parameters, **sim)[0]
+        held = None
+        if self.joint is not None and self.joint.success and self.holdout_files:
+            tests = [x for x in self.data.tests if x.file == self.holdout_files[0]]
+            held = simulate_tests(tests, self.data.harvester, self.joint.parameters, **sim)[0]
+        truth = None
+        if len(good) >= 2 and getattr(self.data, "path", None):
+            truth = (load_truth(self.data.path) or {}).get("friction")
+        peaks = [test_peak_velocity_m_per_s(t) for t in self.data.tests]
+        return P.report_figures(self, k, pred, peaks, held, truth)
+
+    def plot(self, ax: Any = None) -> list[Figure]:
+        """The figures of :meth:`figures` (a list; nothing written).  ``ax`` is not used
+        (several figures); it is accepted for the common protocol."""
+        return list(self.figures().values())
+
+    def write(self, out_dir: str | Path) -> list[Path]:
+        """Write the figures of :meth:`figures` to ``out_dir`` (PNG, atomically)."""
+        from .. import plots
+        return [plots.save(fig, Path(out_dir) / name) for name, fig in self.figures().items()]
 
 
 def _jsonable(obj: Any) -> Any:
@@ -225,11 +285,11 @@ def summarise_identifiability(data: BenchData, fits: Sequence[FitResult]) -> dic
             weak_counts[s] = weak_counts.get(s, 0) + 1
     r = data.harvester.lead_m_per_rad
     spread = {}
-    for n in good[0][1].varied:
+    for n in good[0][1].free:
         vals = np.array([f.parameters[n] for _, f in good])
         spread[n] = float(np.std(vals) / max(abs(np.mean(vals)), 1e-300))
     rod_spread = {}
-    if "nut_coulomb_N" in good[0][1].varied:
+    if "nut_coulomb_N" in good[0][1].free:
         for v in (0.02, 0.05, 0.1):
             vals = np.array([float(rod_friction_N(v, [f.parameters[n] for n in FRICTION_NAMES],
                                                   r)) for _, f in good])

@@ -11,6 +11,7 @@ components (backlash, compliance, …) by CVODES
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -23,9 +24,18 @@ from ..physics.motion import SampledMotion
 from ..physics.params import FrictionParams, HarvesterParams
 from .collocation import integrate_states
 from .identify_options import IdentifyOptions, test_motion
-from .identify_result import Prediction
 
-__all__ = ["simulate_tests", "outputs_on_grid", "model_defaults", "model_mass"]
+__all__ = ["Prediction", "simulate_tests", "outputs_on_grid", "model_defaults", "model_mass"]
+
+
+@dataclass
+class Prediction:
+    """Simulated signals of one test on its own time grid."""
+
+    file: str
+    time_s: np.ndarray
+    force_N: np.ndarray
+    voltage_V: np.ndarray | None
 
 
 def model_defaults(model: BenchModel) -> dict[str, float]:

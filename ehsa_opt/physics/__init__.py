@@ -1,6 +1,7 @@
 """Symbolic models: the harvester's equivalent quantities, the bench model and its
 pluggable components."""
 
+from .base_parameters import PARAMETERS, Parameter
 from .bench_model import BenchModel
 from .components import (
                          COMPONENTS,
@@ -24,7 +25,7 @@ from .harvester import (
                          equivalent_stiffness_N_per_m,
 )
 
-__all__ = ["BenchModel", "Component", "ParamSpec", "Backlash", "Compliance", "AsymmetricFriction",
+__all__ = ["Parameter", "PARAMETERS", "BenchModel", "Component", "ParamSpec", "Backlash", "Compliance", "AsymmetricFriction",
            "Cogging", "VoltageDrop", "WindingHeating", "PositionFriction", "MagneticSaturation",
            "Flexibility", "COMPONENTS",
            "make_component", "equivalent_mass_kg", "equivalent_damping_Ns_per_m",

@@ -27,12 +27,12 @@ rod force, and on a rigid transmission the rotor inertia is lumped into M::
     F = f_t + M a + F_0 + F_ns(v) + Σ f_extra                           (elastic; J kept)
 
 Nut–screw friction F_ns acts at the rod velocity; bearing friction T_b on the
-rotor speed (SPEC §2).  With L_i = 0 the current is algebraic, i = e/R (the
+rotor speed.  With L_i = 0 the current is algebraic, i = e/R (the
 exact quasi-static limit).  The equivalent rigid-model force is
-F = m_eq a + K_t i/r + F_ns(v) + T_b(v/r)/r (paper Eq 4, SPEC §1).
+F = m_eq a + K_t i/r + F_ns(v) + T_b(v/r)/r (paper Eq 4).
 
 Parameters are a flat vector ``p`` in :attr:`BenchModel.param_names` order:
-``load_ohm``, the eight friction names of SPEC §7, then (``generator=False``
+``load_ohm``, the eight friction parameter names, then (``generator=False``
 only) ``inertia_kg`` and ``offset_N``, then each component's parameters.  States are named in :attr:`BenchModel.state_names`.
 """
 

@@ -1,4 +1,4 @@
-"""Physical effects that plug into the bench model (SPEC §7–8).
+"""Physical effects that plug into the bench model (the discrepancy candidates).
 
 A :class:`Component` adds named parameters (with units and bounds) and
 contributes to one or more of the model's hooks:
@@ -131,7 +131,7 @@ class Component:
 
 
 class Backlash(Component):
-    """Axial play between nut and screw with a stiff, damped contact (SPEC §8).
+    """Axial play between nut and screw with a stiff, damped contact (the effect the paper names).
 
     With δ = x − rθ and h = b/2 (half the gap)::
 
@@ -147,8 +147,8 @@ class Backlash(Component):
     transmission = True
     parameters = (
         ParamSpec("backlash_gap_m", "m", 1e-4, 0.0, 2e-3, "total axial play b"),
-        ParamSpec("backlash_contact_stiffness_N_per_m", "N/m", 5e6, 1e4, 1e9,
-                  "contact stiffness k_c"),
+        ParamSpec("backlash_contact_stiffness_N_per_m", "N/m", 5e6, 1e4, 1e10,
+                  "contact stiffness k_c (steel on steel: 1e8-1e10)"),
         ParamSpec("backlash_contact_damping_Ns_per_m", "N s/m", 8e3, 0.0, 1e5,
                   "contact damping c_c"),
     )
@@ -205,7 +205,7 @@ class Compliance(Component):
 
 
 class AsymmetricFriction(Component):
-    """Direction-dependent Coulomb and viscous friction at the rod (SPEC §7, §9).
+    """Direction-dependent Coulomb and viscous friction at the rod (as on the EMPS rig).
 
     Adds ``ΔF_C tanh²(v/u_s) + Δf_v |v|`` (|·| smoothed) to the rod force, so that
     the Coulomb level is F_C + ΔF_C for v > 0 and F_C − ΔF_C for v < 0 (likewise

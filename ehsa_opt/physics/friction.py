@@ -1,4 +1,4 @@
-"""Simscape friction law (SPEC §2): one implementation for floats, numpy and CasADi.
+"""Simscape friction law: one implementation for floats, numpy and CasADi.
 
 For a velocity u::
 
@@ -79,7 +79,7 @@ def bearing_friction_Nm(omega_rad_s: Any, friction: FrictionParams | Any) -> Any
 def rod_friction_N(v_m_s: Any, friction: FrictionParams | Any, lead_m_per_rad: float) -> Any:
     """Total friction seen at the rod on a rigid transmission: F_ns(v) + T_b(v/r)/r, N.
 
-    This is the combination a rigid bench identifies (SPEC §2, identifiability).
+    This is the combination a rigid bench identifies (see the identifiability analysis).
     """
     r = lead_m_per_rad
     return nut_friction_N(v_m_s, friction) + bearing_friction_Nm(v_m_s / r, friction) / r

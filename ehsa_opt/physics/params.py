@@ -1,6 +1,6 @@
 """Parameter sets as frozen dataclasses with units in their names.
 
-Every field name carries its unit (SPEC §7), every value is validated when the
+Every field name carries its unit, every value is validated when the
 object is built, and every error says what to change.  The TOML loaders accept
 exactly these names; an unknown key is refused with the nearest valid name.
 
@@ -11,9 +11,9 @@ HarvesterParams
     mechanical quantities of paper Eqs 1–3.
 FrictionParams
     The eight Simscape friction parameters of the nut–screw pair and the
-    generator bearings (SPEC §2).
+    generator bearings.
 VehicleParams
-    Quarter-car masses and stiffnesses, with the presets of SPEC §4.
+    Quarter-car masses and stiffnesses, with the vehicle presets (assumptions: the paper's vehicle values are not published).
 RoadParams
     An ISO 8608 road (class, speed, length, seed) or a measured profile CSV.
 """
@@ -27,6 +27,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
+
+from .base_parameters import PARAMETERS
 
 __all__ = [
     "ParameterError",
@@ -253,22 +255,21 @@ FRICTION_NAMES: tuple[str, ...] = (
     "bearing_viscous_Nms_per_rad",
 )
 
-#: Distributor ranges for random initial points (SPEC §2, an assumption).
-FRICTION_RANGES: dict[str, tuple[float, float]] = {
-    "nut_breakaway_N": (10.0, 200.0),
-    "nut_coulomb_N": (5.0, 150.0),
-    "nut_breakaway_velocity_m_per_s": (1e-3, 5e-2),
-    "nut_viscous_Ns_per_m": (10.0, 500.0),
-    "bearing_breakaway_Nm": (1e-3, 5e-2),
-    "bearing_coulomb_Nm": (1e-3, 5e-2),
-    "bearing_breakaway_velocity_rad_per_s": (0.1, 5.0),
-    "bearing_viscous_Nms_per_rad": (1e-6, 1e-4),
-}
+#: Distributor ranges for random initial points (an assumption): the start ranges of
+#: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`.
+FRICTION_RANGES: dict[str, tuple[float, float]] = {n: PARAMETERS[n].start for n in FRICTION_NAMES}
+
+
+def _declared(name: str, default: float) -> Any:
+    """A friction field validated against the declaration's physical bounds."""
+    q = PARAMETERS[name]
+    low = {"gt": q.lower} if q.lower_open else {"ge": q.lower}
+    return _num(default, q.unit, q.doc, le=q.upper, hint=q.hint, **low)
 
 
 @dataclass(frozen=True)
 class FrictionParams:
-    """Simscape friction of the nut–screw pair and the generator bearings (SPEC §2).
+    """Simscape friction of the nut–screw pair and the generator bearings.
 
     For a velocity u (m/s at the nut, rad/s at the bearings)::
 
@@ -276,23 +277,19 @@ class FrictionParams:
         u_St = √2 u_brk,   u_Coul = u_brk / 10
 
     Constraints: breakaway ≥ Coulomb ≥ 0, breakaway velocities > 0, viscous ≥ 0.
-    The defaults are the frictionless case.
+    The defaults are the frictionless case.  Units, physical bounds and start ranges are
+    those of :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`.
     """
 
-    nut_breakaway_N: float = _num(0.0, "N", "nut-screw breakaway force F_brk", ge=0.0, le=1e5)
-    nut_coulomb_N: float = _num(0.0, "N", "nut-screw Coulomb force F_C", ge=0.0, le=1e5)
-    nut_breakaway_velocity_m_per_s: float = _num(
-        0.01, "m/s", "nut-screw breakaway velocity Vel_fbs", gt=0.0, le=10.0,
-        hint="velocity is in m/s, e.g. 0.01")
-    nut_viscous_Ns_per_m: float = _num(0.0, "N s/m", "nut-screw viscous coefficient f_v",
-                                       ge=0.0, le=1e6)
-    bearing_breakaway_Nm: float = _num(0.0, "N m", "bearing breakaway torque T_brk", ge=0.0,
-                                       le=100.0)
-    bearing_coulomb_Nm: float = _num(0.0, "N m", "bearing Coulomb torque T_C", ge=0.0, le=100.0)
-    bearing_breakaway_velocity_rad_per_s: float = _num(
-        1.0, "rad/s", "bearing breakaway velocity Vel_fsm", gt=0.0, le=1e4)
-    bearing_viscous_Nms_per_rad: float = _num(0.0, "N m s/rad", "bearing viscous coefficient t_v",
-                                              ge=0.0, le=10.0)
+    nut_breakaway_N: float = _declared("nut_breakaway_N", 0.0)
+    nut_coulomb_N: float = _declared("nut_coulomb_N", 0.0)
+    nut_breakaway_velocity_m_per_s: float = _declared("nut_breakaway_velocity_m_per_s", 0.01)
+    nut_viscous_Ns_per_m: float = _declared("nut_viscous_Ns_per_m", 0.0)
+    bearing_breakaway_Nm: float = _declared("bearing_breakaway_Nm", 0.0)
+    bearing_coulomb_Nm: float = _declared("bearing_coulomb_Nm", 0.0)
+    bearing_breakaway_velocity_rad_per_s: float = _declared("bearing_breakaway_velocity_rad_per_s",
+                                                            1.0)
+    bearing_viscous_Nms_per_rad: float = _declared("bearing_viscous_Nms_per_rad", 0.0)
 
     def __post_init__(self) -> None:
         _validate_numbers(self, "friction")
@@ -440,7 +437,7 @@ def from_mapping(cls: type, mapping: Mapping[str, Any], where: str) -> Any:
     cls : type
         One of the parameter dataclasses.
     mapping : mapping
-        Keys exactly as the field names (SPEC §7).
+        Keys exactly as the field names.
     where : str
         Location used in error messages, e.g. ``"problem.toml [harvester]"``.
     """

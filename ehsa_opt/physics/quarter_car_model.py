@@ -1,4 +1,4 @@
-"""Symbolic CasADi quarter car with the ball-screw harvester (SPEC §4).
+"""Symbolic CasADi quarter car with the ball-screw harvester (paper §4).
 
 States z = (x2, x1, v2, v1, i): sprung and unsprung displacement (m) and
 velocity (m/s), generator current (A).  Input: road elevation x0 (m).  With

@@ -1,4 +1,4 @@
-"""The reproduce step cache, verified before use (issue 15).
+"""The reproduce step cache, verified before use.
 
 Each ``OUT/cache/<step>.json`` entry is standard JSON::
 

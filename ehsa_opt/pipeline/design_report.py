@@ -22,58 +22,10 @@ import numpy as np
 
 from ..design import OBJECTIVE_NAMES
 from .base import Context, StepOutput
+from .design_problem import design_config, not_applicable
+from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
 
-__all__ = ["PAPER_DESIGN_FILE", "PAPER_OPTIMUM", "PAPER_TABLE4", "step_goal_attainment",
-           "step_pareto", "step_friction_on_optimum", "design_inputs"]
-
-#: The problem file of paper §4.2 (shipped in the package; ``problems/`` at the top of the
-#: repository links to it).
-PAPER_DESIGN_FILE = Path(__file__).resolve().parent.parent / "problems" / "paper_design.toml"
-
-#: Paper §4.2 optimum and changes (text of §4.2 and Fig 19).
-PAPER_OPTIMUM = {"total_inertia_gcm2": 250.0, "lead_mm_per_rev": 7.0,
-                 "speed_constant_rpm_per_V": 29.8, "load_ohm": 75.0,
-                 "comfort_improvement_pct": 23.86, "road_holding_improvement_pct": 26.91,
-                 "power_W": (100.0, 162.0), "efficiency_pct": (36.0, 81.0)}
-
-#: Paper Table 4 (100 km/h): no / min / max friction.
-PAPER_TABLE4 = {"power_W": (174.9, 148.61, 110.1), "efficiency_pct": (81.0, 67.58, 49.64),
-                "comfort_change_pct": (None, 0.57, -15.01),
-                "road_holding_change_pct": (None, 1.7, 7.83)}
-
-
-def design_inputs(ctx: Context) -> Any:
-    """Cache key of the design steps: the problem file's text and the data/vehicle."""
-    text = PAPER_DESIGN_FILE.read_text() if PAPER_DESIGN_FILE.is_file() else None
-    return [text, ctx.inputs()] if (ctx.custom_data or ctx.vehicle_file) else text
-
-
-def _cfg(ctx: Context | None = None, motor_model: str = "paper") -> Any:
-    """The paper's design problem; with ``reproduce --vehicle`` its vehicle replaced, with
-    ``reproduce --data`` the user's harvester (bench.toml: winding, inductance, inertia,
-    constants) as the start of the design space.  ``motor_model``: "paper" (R_i, L_i
-    fixed: the paper's design space, used by the reproduction steps) or "scaling" (the
-    product's default: the user's frame rewound, with rated limits)."""
-    import dataclasses
-
-    from ..design.config import load_design_config
-    if not PAPER_DESIGN_FILE.is_file():
-        raise FileNotFoundError(f"{PAPER_DESIGN_FILE} not found (the package is incomplete: reinstall it)")
-    cfg = load_design_config(PAPER_DESIGN_FILE)
-    if ctx is not None and ctx.vehicle_file is not None:
-        vehicle, name = ctx.vehicle()
-        cfg = dataclasses.replace(cfg, vehicle=vehicle, vehicle_name=name)
-    if ctx is not None and ctx.custom_data and ctx.has_generator:
-        cfg = dataclasses.replace(cfg, harvester=ctx.harvester(load_ohm=cfg.harvester.load_ohm))
-    return dataclasses.replace(cfg, motor_model=motor_model)
-
-
-def _not_applicable(ctx: Context) -> StepOutput | None:
-    if ctx.has_generator:
-        return None
-    return StepOutput("Not applicable: the bench rig has no generator, so the design of a "
-                      "harvester (inertia, lead, generator constant, load) has nothing to "
-                      "start from in these data.\n", [], {"applicable": False})
+__all__ = ["step_goal_attainment", "step_pareto", "step_friction_on_optimum"]
 
 
 def _validity_cell(cfg: Any, outputs: dict) -> str:
@@ -86,24 +38,20 @@ def _validity_cell(cfg: Any, outputs: dict) -> str:
 def step_goal_attainment(ctx: Context) -> StepOutput:
     """Goal attainment on the paper's problem; results carry ``design`` and
     ``optimum_harvester`` (HarvesterParams fields, read by the Fig 21 step)."""
-    from .. import plots
     from ..design.optimize import build_problem, objectives_at, optimize
     from ..physics.params import HarvesterParams
-    from ..plots.design import goal_attainment_history
 
-    if (na := _not_applicable(ctx)) is not None:
+    if (na := not_applicable(ctx)) is not None:
         return na
-    cfg = _cfg(ctx)
-    out = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")
-    ga = out.goal_attainment
+    cfg = design_config(ctx)
+    outcome = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")
+    ga = outcome.goal_attainment_result
     assert ga is not None
-    figs = []
-    for which, name in (("design", "fig17_design_history.png"),
-                        ("mass", "fig18_equivalent_mass.png"),
-                        ("objectives", "fig19_objective_history.png")):
-        rel = f"figures/{name}"
-        plots.save(goal_attainment_history(ga, which), ctx.out_dir / rel)
-        figs.append(rel)
+    names = {"ga_design": "fig17_design_history.png", "ga_mass": "fig18_equivalent_mass.png",
+             "ga_objectives": "fig19_objective_history.png"}
+    outcome.write_figures(ctx.out_dir / "figures", names)
+    figs = [f"figures/{name}" for name in names.values()]
+    out = outcome.record
     proto = out["prototype"]["objectives"]
     pm = out["prototype"]["metrics"]
     om = out["metrics"]
@@ -113,6 +61,7 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
     at_lower = {n: math.isclose(d[n], lo, rel_tol=1e-6)
                 for n, lo in zip(box.names, box.lower)}
     P = PAPER_OPTIMUM
+    (p0, p1), (e0, e1) = P["power_W"], P["efficiency_pct"]
     Ri = cfg.harvester.internal_resistance_ohm
     # physics of the efficiency and power gap
     ri_paper = P["load_ohm"] * (100.0 / P["efficiency_pct"][1] - 1.0)
@@ -128,25 +77,30 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         "| | prototype (ours) | optimum (ours) | paper's optimum in our model | paper |",
         "|---|---|---|---|---|",
         f"| J_t (g cm²) | {cfg.harvester.total_inertia_gcm2:.0f} | {d['total_inertia_gcm2']:.1f}"
-        f"{' (lower bound)' if at_lower['total_inertia_gcm2'] else ''} | 250 | 250 (lower bound) |",
+        f"{' (lower bound)' if at_lower['total_inertia_gcm2'] else ''} | "
+        f"{P['total_inertia_gcm2']:g} | {P['total_inertia_gcm2']:g} (lower bound) |",
         f"| lead (mm/rev) | {cfg.harvester.lead_mm_per_rev:.1f} | {d['lead_mm_per_rev']:.2f}"
-        f"{' (lower bound)' if at_lower['lead_mm_per_rev'] else ''} | 7 | ≈ 7 |",
+        f"{' (lower bound)' if at_lower['lead_mm_per_rev'] else ''} | {P['lead_mm_per_rev']:g} | "
+        f"≈ {P['lead_mm_per_rev']:g} |",
         f"| k_n (rpm/V) | {cfg.harvester.speed_constant_rpm_per_V:.1f} | "
         f"{d['speed_constant_rpm_per_V']:.1f}"
-        f"{' (lower bound)' if at_lower['speed_constant_rpm_per_V'] else ''} | 29.8 | "
-        f"29.8 (lower bound) |",
-        f"| R_e (Ω) | {cfg.harvester.load_ohm:.0f} | {d['load_ohm']:.1f} | 75 | ≈ 75 |",
+        f"{' (lower bound)' if at_lower['speed_constant_rpm_per_V'] else ''} | "
+        f"{P['speed_constant_rpm_per_V']:g} | {P['speed_constant_rpm_per_V']:g} (lower bound) |",
+        f"| R_e (Ω) | {cfg.harvester.load_ohm:.0f} | {d['load_ohm']:.1f} | {P['load_ohm']:g} | "
+        f"≈ {P['load_ohm']:g} |",
         f"| comfort α | {proto['comfort']:.4f} | {out['objectives']['comfort']:.4f} "
         f"(**{ch['comfort_improvement_pct']:+.2f} %**) | {pd_out['comfort']:.4f} "
-        f"({100 * (1 - pd_out['comfort'] / proto['comfort']):+.2f} %) | +23.86 % |",
+        f"({100 * (1 - pd_out['comfort'] / proto['comfort']):+.2f} %) | "
+        f"{P['comfort_improvement_pct']:+.2f} % |",
         f"| road holding η_rh | {proto['road_holding']:.4f} | "
         f"{out['objectives']['road_holding']:.4f} (**{ch['road_holding_improvement_pct']:+.2f} "
         f"%**) | {pd_out['road_holding']:.4f} "
-        f"({100 * (1 - pd_out['road_holding'] / proto['road_holding']):+.2f} %) | +26.91 % |",
+        f"({100 * (1 - pd_out['road_holding'] / proto['road_holding']):+.2f} %) | "
+        f"{P['road_holding_improvement_pct']:+.2f} % |",
         f"| power (W) | {pm['power_W']:.1f} | **{om['power_W']:.1f}** | "
-        f"{pd_out['power_W']:.1f} | 100 → 162 |",
+        f"{pd_out['power_W']:.1f} | {p0:g} → {p1:g} |",
         f"| efficiency (%) | {100 * pm['efficiency']:.1f} | **{100 * om['efficiency']:.1f}** | "
-        f"{100 * pd_out['efficiency']:.1f} | 36 → 81 |",
+        f"{100 * pd_out['efficiency']:.1f} | {e0:g} → {e1:g} |",
         f"| W_k rms acceleration (m/s²) | {pm['comfort_weighted_rms_m_s2']:.3f} | "
         f"{om['comfort_weighted_rms_m_s2']:.3f} | {pd_out['comfort_weighted_rms_m_s2']:.3f} | – |",
         f"| attainment factor γ | 0 (goals) | **{ga.gamma:+.4f}** | {gamma_paper:+.4f} | – |",
@@ -156,6 +110,24 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
     ]
     binding = [k for k, g, w in zip(OBJECTIVE_NAMES, ga.goals, ga.weights)
                if w > 0 and abs((ga.objectives[k] - g) / w - ga.gamma) < 1e-5]
+    both = at_lower["total_inertia_gcm2"] and at_lower["speed_constant_rpm_per_V"]
+    agreement = (
+        ("**Agreement.** J_t and k_n end at their lower bounds, as in the paper"
+         if both else "**Difference.** J_t and k_n do NOT both end at their lower bounds here, "
+         "unlike the paper")
+        + ": the smallest inertance (less high-frequency transmission) and the strongest "
+        "motor (largest K_e = K_t, so the needed damping K²/(r² R) comes with a large R_e, "
+        "i.e. high efficiency)" + (" are what the goals reward.\n\n" if both else
+                                   " are the paper's reasons.\n\n"))
+    opt_obj = out["objectives"]
+    more = [k.replace("_", " ") for k in ("comfort", "road_holding") if pd_out[k] < opt_obj[k]]
+    worse = [n for k, n in (("inverse_power", "power"), ("inverse_efficiency", "efficiency"))
+             if pd_out[k] > opt_obj[k]]
+    paper_design_sentence = (
+        (f"improves {' and '.join(more)} more" if more else "improves neither comfort nor "
+         "road holding more")
+        + f" but gives γ = {gamma_paper:+.4f}"
+        + (f" because its {'/'.join(worse)} is worse." if worse else "."))
     md = (
         f"In the paper's design space (R_i = {cfg.harvester.internal_resistance_ohm:g} Ω and "
         f"L_i fixed for every k_n, no rated limits; the product's default motor model is in "
@@ -169,11 +141,7 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         f"{'converged' if ga.success else 'FAILED'} ({ga.message}); all starts reached "
         f"γ within {np.ptp([s['gamma'] for s in ga.starts if s['feasible']]):.1e}. Binding "
         f"objectives at the optimum: {', '.join(binding)}.\n\n" + "\n".join(rows) + "\n\n"
-        f"**Agreement.** J_t and k_n end at their lower bounds, as in the paper "
-        f"({'both' if at_lower['total_inertia_gcm2'] and at_lower['speed_constant_rpm_per_V'] else 'NOT both'}"
-        f" here): the smallest inertance (less high-frequency transmission) and the strongest "
-        f"motor (largest K_e = K_t, so the needed damping K²/(r² R) comes with a large R_e, "
-        f"i.e. high efficiency).\n\n"
+        + agreement +
         f"**Why power and efficiency differ.** For the frictionless linear model the "
         f"efficiency is exactly η_g = R_e/(R_e + R_i) (the inductance stores energy "
         f"reversibly), and the power absorbed by the damper is the road's dissipation bound "
@@ -182,18 +150,21 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
         f"{om['dissipated_power_W']:.2f} W at the optimum). So harvested power = η_g · P_diss "
         f"can only grow through efficiency: from {pm['power_W']:.1f} W at "
         f"{100 * pm['efficiency']:.1f} % to at most {pm['dissipation_bound_W']:.1f} W. The "
-        f"paper's 100 → 162 W (+62 %) with 36 → 81 % efficiency (×2.25) is inconsistent "
-        f"with a design-invariant P_diss; its efficiencies imply R_i = 75·(1/0.81 − 1) = "
+        f"paper's {p0:g} → {p1:g} W ({100 * (p1 / p0 - 1):+.0f} %) with {e0:g} → {e1:g} % "
+        f"efficiency (×{e1 / e0:.2f}) is inconsistent "
+        f"with a design-invariant P_diss; its efficiencies imply R_i = "
+        f"{P['load_ohm']:g}·(1/{e1 / 100:g} − 1) = "
         f"{ri_paper:.1f} Ω (not the {Ri:g} Ω of Table 1) and an initial load R_e ≈ "
         f"{re_paper0:.1f} Ω. With our R_i = {Ri:g} Ω the prototype at R_e = "
         f"{cfg.harvester.load_ohm:g} Ω already has {100 * pm['efficiency']:.1f} %, so power "
         f"improves by at most {100 * (pm['dissipation_bound_W'] / pm['power_W'] - 1):.1f} %; "
         f"the goal attainment therefore spends its effort balancing {' and '.join(binding)}, "
-        f"which gives a larger R_e ({d['load_ohm']:.0f} Ω) than the paper's 75 Ω and the "
-        f"smallest lead: a lead of 7 mm/rev with R_e = 75 Ω (the paper's design, column 4) "
-        f"improves comfort and road holding more but gives γ = {gamma_paper:+.4f} because "
-        f"its power/efficiency is worse. Vehicle, road seed and R_e of the prototype are "
-        f"our assumptions (SPEC §4, §6), so absolute values differ from the paper's.\n\n"
+        f"which gives {'a larger' if d['load_ohm'] > P['load_ohm'] else 'a smaller'} R_e "
+        f"({d['load_ohm']:.0f} Ω) than the paper's {P['load_ohm']:g} Ω and the "
+        f"{'smallest' if at_lower['lead_mm_per_rev'] else 'a'} lead: a lead of "
+        f"{P['lead_mm_per_rev']:g} mm/rev with R_e = {P['load_ohm']:g} Ω (the paper's design, "
+        f"column 4) " + paper_design_sentence + " Vehicle, road seed and R_e of the prototype are "
+        "our assumptions (the paper does not give them), so absolute values differ from the paper's.\n\n"
         + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
     from dataclasses import asdict
     h_opt = HarvesterParams.from_design(d["total_inertia_gcm2"], d["lead_mm_per_rev"],
@@ -207,32 +178,24 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
 
 
 def step_pareto(ctx: Context) -> StepOutput:
-    from .. import plots
+    from ..design.nsga2 import ParetoResult
     from ..design.optimize import optimize
-    from ..plots.design import (
-        hypervolume_history,
-        parallel_coordinates,
-        pareto_projections,
-    )
 
-    if (na := _not_applicable(ctx)) is not None:
+    if (na := not_applicable(ctx)) is not None:
         return na
-    cfg = _cfg(ctx)
+    cfg = design_config(ctx)
     # quick: a small run; full: larger than the file's 40 × 25 for a denser front
     pop, gens = (24, 12) if ctx.quick else (max(cfg.nsga2.pop, 100), max(cfg.nsga2.gens, 60))
-    out = optimize(cfg, "nsga2", out_dir=ctx.out_dir / "design_nsga2", pop=pop, gens=gens)
-    pr = out.result
+    outcome = optimize(cfg, "nsga2", out_dir=ctx.out_dir / "design_nsga2", pop=pop, gens=gens)
+    pr = outcome.result
+    assert isinstance(pr, ParetoResult)
+    out = outcome.record
     ga_obj = out["goal_attainment"]["objectives"]
-    ga_full = {**out["goal_attainment"]["design"], **ga_obj}
     proto = out["prototype"]["objectives"]
-    figs = []
-    for fig, name in ((pareto_projections(pr, ga_obj, proto), "pareto_projections.png"),
-                      (parallel_coordinates(pr, ga_full), "pareto_parallel.png"),
-                      (hypervolume_history({f"NSGA-II {pop}×{gens}": pr.history},
-                                           pr.hv_reference), "pareto_hypervolume.png")):
-        rel = f"figures/{name}"
-        plots.save(fig, ctx.out_dir / rel)
-        figs.append(rel)
+    names = {"pareto": "pareto_projections.png", "parallel": "pareto_parallel.png",
+             "hypervolume": "pareto_hypervolume.png"}
+    outcome.write_figures(ctx.out_dir / "figures", names, front_label=f"NSGA-II {pop}×{gens}")
+    figs = [f"figures/{name}" for name in names.values()]
     f_ga = np.array([ga_obj[k] for k in OBJECTIVE_NAMES])
     ratio = pr.F / f_ga
     n_dom = int(np.sum(np.all(ratio < 0.99, axis=1)))
@@ -302,13 +265,13 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
     from ..physics.params import HarvesterParams
     from ..plots.design import friction_on_optimum as fig_fn
 
-    if (na := _not_applicable(ctx)) is not None:
+    if (na := not_applicable(ctx)) is not None:
         return na
-    cfg = _cfg(ctx)
+    cfg = design_config(ctx)
     ga = ctx.results.get("design", {}).get("design")  # the goal-attainment step
     if ga is None:
         from ..design.optimize import optimize
-        ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga")["design"]
+        ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga").design
     sets, source = default_friction_sets(ctx.results.get("identification"),
                                            ctx.friction_bounds)
     speeds = (30.0, 70.0, 100.0, 130.0) if ctx.quick else (30.0, 50.0, 70.0, 90.0, 100.0,

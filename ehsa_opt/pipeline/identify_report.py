@@ -1,4 +1,4 @@
-"""Reproduce-pipeline steps of the friction identification (paper §3, SPEC §9).
+"""Reproduce-pipeline steps of the friction identification (paper §3; the real EMPS data beside it).
 
 ``step_identify_prototype``: the paper's procedure on the embedded
 ``bench_prototype`` data (Table 2 bounds, Figs 8–12, identifiability, joint fit
@@ -44,7 +44,7 @@ def step_identify_prototype(ctx):
         opts = IdentifyOptions.for_rig(False)
     rep = identify(data, starts=starts, jobs=ctx.jobs, seed=0, options=opts)
     figdir = ctx.figure_dir / "identify_prototype"
-    figs = _rel(ctx, rep.plot(figdir))
+    figs = _rel(ctx, rep.write(figdir))
     try:
         fb = friction_bounds(rep)
     except ValueError:
@@ -61,7 +61,7 @@ def step_identify_prototype(ctx):
     ok = [f for f in rep.fits if f.success]
     lines = [f"Each of the {len(data)} test(s) identified separately by direct collocation "
              f"(Radau, degree {opts.degree}, ≤ {opts.max_intervals} intervals) and IPOPT, "
-             f"{starts} seeded starts each drawn in the SPEC §2 distributor ranges, "
+             f"{starts} seeded starts each drawn in the friction parameters' distributor ranges, "
              f"{len(ok)}/{len(data)} converged (wall times: the run log at the end). "
              f"The objective is the epigraph of max(δ_V, δ_F) with the smooth "
              f"squared errors, plus 0.1 × their mean; δ below are Eq 5 as printed.\n",
@@ -83,11 +83,12 @@ def step_identify_prototype(ctx):
     rel = [f.force_relative_error_percent for f in ok]
     dv_txt = f", δ_V {min(dV):.3f}–{max(dV):.3f}" if dV else " (no voltage)"
     hidden = ", ".join((load_truth(path) or {}).get("effects", {}))
-    tail = ("The data hide backlash (SPEC §8), which the rigid model cannot follow: the "
-            "residual peaks after each reversal (Fig 11) are the paper's finding."
-            if not ctx.custom_data else
-            (f"Hidden effects in the data (truth.toml): {hidden}; the discrepancy step below "
-             "looks for them." if hidden else ""))
+    if "backlash" in hidden and not ctx.custom_data:
+        tail = ("The data hide backlash, which the rigid model cannot follow: the residual "
+                "peaks after each reversal (Fig 11) are the paper's finding.")
+    else:
+        tail = (f"Hidden effects in the data (truth.toml): {hidden}; the discrepancy step "
+                "below looks for them." if hidden else "")
     lines += ["", f"Eq 5 over the tests: δ_F {min(dF):.3f}–{max(dF):.3f}{dv_txt}; force "
               f"relative error {min(rel):.2f}–{max(rel):.2f} %. {tail}\n"]
     ident = rep.identifiable
@@ -228,7 +229,7 @@ def _bounds_markdown(fb, truth: dict) -> list[str]:
             "case) compared two sets in the wrong order there — 'min friction' gave *less* "
             "power than 'max'. Now the order holds everywhere and the spread at road "
             "velocities is the honest extrapolation band, not the accident of a free fit.\n"]
-    out += ["", "Data-supported friction sets (SPEC §7 names; also `friction_sets` in "
+    out += ["", "Data-supported friction sets (parameter names as in the design card; also `friction_sets` in "
             "`identify_prototype.json`, usable as `--friction identify_prototype.json:CASE`):\n",
             "| parameter | min | best | max | paper method: min | paper method: max |",
             "|---|---|---|---|---|---|"]
@@ -243,10 +244,10 @@ def _bounds_markdown(fb, truth: dict) -> list[str]:
 
 
 def step_identify_emps(ctx):
-    """EMPS identification beside the published reference (SPEC §9)."""
+    """EMPS identification beside the published reference (Janot et al. 2019)."""
     from ..datasets.bench_format import load_bench
     from ..datasets.embedded import embedded_data_dir
-    from ..datasets.emps import EMPS_REFERENCE
+    from .paper_reference import EMPS_REFERENCE
     from ..estimation.identify import force_relative_error_percent
     from ..utils.io import atomic_write_json
     from .base import StepOutput
@@ -254,7 +255,7 @@ def step_identify_emps(ctx):
     data = load_bench(embedded_data_dir("emps"))
     rep = identify(data, starts=2 if ctx.quick else 4, jobs=1, seed=0)
     f = rep.fits[0]
-    figs = _rel(ctx, rep.plot(ctx.figure_dir / "identify_emps"))
+    figs = _rel(ctx, rep.write(ctx.figure_dir / "identify_emps"))
     atomic_write_json(ctx.out_dir / "identify_emps.json", rep.to_json())
     if not f.success:
         return StepOutput(f"EMPS identification failed: {f.message}\n", figs, {"success": False})

@@ -65,11 +65,19 @@ def paper_invariants(vehicle: Any, road: Any, harvester: Any, table4: dict,
 
 
 def step_paper_invariants(ctx: Context) -> StepOutput:
-    from .design_report import PAPER_OPTIMUM, PAPER_TABLE4, _cfg
-    from ..vehicle.studies import PAPER_FIG14_RANGES
+    from .design_problem import design_config
+    from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
 
-    cfg = _cfg(ctx)
+    cfg = design_config(ctx)
     inv = paper_invariants(cfg.vehicle, cfg.road, cfg.harvester, PAPER_TABLE4, PAPER_OPTIMUM)
+    return StepOutput(render_invariants(inv, cfg), [], inv)
+
+
+def render_invariants(inv: dict[str, Any], cfg: Any) -> str:
+    """The section's Markdown: the paper's numbers against the invariants of ``inv``
+    (:func:`paper_invariants`), each "consistent?" cell and the road-level sentence
+    decided by the numbers."""
+    from .paper_reference import PAPER_FIG14_RANGES, PAPER_OPTIMUM
     sc_min = PAPER_FIG14_RANGES["short circuit"][0]
     pe = inv["p_over_eta_W"]
     lv = inv["bound_by_level_W"]
@@ -119,4 +127,4 @@ def step_paper_invariants(ctx: Context) -> StepOutput:
         "Table 4 powers of the same design do not scale with speed, its optimum's efficiency "
         "needs a winding resistance other than Table 1's, and its short-circuit minimum is "
         "below the electrical damping its own Table 1 implies.\n")
-    return StepOutput(md, [], inv)
+    return md

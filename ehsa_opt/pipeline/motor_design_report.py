@@ -28,25 +28,26 @@ def _row(name: str, design: dict, obj: dict, extra: str) -> str:
 
 def step_motor_design(ctx: Context) -> StepOutput:
     from ..design.optimize import build_problem, objectives_at, optimize
-    from .design_report import _cfg, _not_applicable
+    from .design_problem import design_config, not_applicable
 
-    if (na := _not_applicable(ctx)) is not None:
+    if (na := not_applicable(ctx)) is not None:
         return na
-    cfg = _cfg(ctx, "scaling")
+    cfg = design_config(ctx, "scaling")
     n_starts = 3 if ctx.quick else cfg.goal_attainment.n_starts
     cfg = dataclasses.replace(cfg, goal_attainment=dataclasses.replace(
         cfg.goal_attainment, n_starts=n_starts))
     paper_cfg = dataclasses.replace(cfg, motor_model="paper")
     paper = optimize(paper_cfg, "goal-attainment", out_dir=ctx.out_dir / "design_motor" / "paper",
-                     check_time_domain=False)
-    ours = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_motor" / "scaling")
+                     check_time_domain=False).record
+    ours = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_motor" / "scaling").record
     scaling_problem = build_problem(cfg)
     paper_in_frame = objectives_at(scaling_problem, paper["design"])
     paper_obj = objectives_at(build_problem(paper_cfg), paper["design"])
     cat_cfg = dataclasses.replace(
         cfg, motor_model="catalogue", catalogue="dc_generators",
         space=_without(cfg.space, "speed_constant_rpm_per_V"))
-    cat = optimize(cat_cfg, "goal-attainment", out_dir=ctx.out_dir / "design_motor" / "catalogue")
+    cat = optimize(cat_cfg, "goal-attainment",
+                   out_dir=ctx.out_dir / "design_motor" / "catalogue").record
     rating = ours["motor"]["rating"]
     head = ("| design | J_t (g cm²) | lead (mm/rev) | k_n (rpm/V) | R_e (Ω) | R_i (Ω) | α | η_rh "
             "| power (W) | efficiency | rms current (A) | 3.5 × rms voltage (V) | limits |\n"

@@ -40,12 +40,8 @@ def _qc_inputs(ctx: Context) -> Any:
 
 
 def _design_steps() -> list[Step]:
-    from .design_report import (
-        design_inputs,
-        step_friction_on_optimum,
-        step_goal_attainment,
-        step_pareto,
-    )
+    from .design_problem import design_inputs
+    from .design_report import (step_friction_on_optimum, step_goal_attainment, step_pareto)
     from .invariants_report import step_paper_invariants
     from .motor_design_report import step_motor_design
     return [
@@ -97,9 +93,9 @@ STEPS: list[Step] = [
          "(paper §3, Table 2, Figs 8–12)",
          lambda ctx: _identify_steps().step_identify_prototype(ctx),
          lambda ctx: data_digest(_data_paths(ctx)[0])),
-    Step("discrepancy", "Model discrepancy: find, name and add the missing effect (SPEC §7–8)",
+    Step("discrepancy", "Model discrepancy: find, name and add the missing effect",
          _step_discrepancy, lambda ctx: data_digest(_data_paths(ctx)[0]), background=True),
-    Step("discrepancy_emps", "Model discrepancy on the real EMPS data (SPEC §9)",
+    Step("discrepancy_emps", "Model discrepancy on the real EMPS data",
          _step_discrepancy_emps, lambda ctx: data_digest(_data_paths(ctx)[1])),
     Step("qc_paths", "Quarter car: W_k, frequency vs time domain, dissipation bound",
          lambda ctx: _quarter_car_step("step_quarter_car_paths", ctx),
@@ -120,7 +116,7 @@ STEPS: list[Step] = [
     Step("qc_fig21", "Power time history of the optimised design (paper Fig 21)",
          lambda ctx: _quarter_car_step("step_fig21", ctx), _qc_inputs,
          depends=("identification", "design")),
-    Step("identify_emps", "Friction identification on the real EMPS data (SPEC §9)",
+    Step("identify_emps", "Friction identification on the real EMPS data",
          lambda ctx: _identify_steps().step_identify_emps(ctx),
          lambda ctx: data_digest(_data_paths(ctx)[1])),
 ]

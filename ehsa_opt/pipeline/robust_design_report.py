@@ -1,11 +1,11 @@
-"""Reproduce-pipeline step: design with friction in the loop (issue 14).
+"""Reproduce-pipeline step: design with friction in the loop.
 
 * the frictionless and the friction-aware (worst of the min/max friction sets)
   NSGA-II fronts, both evaluated with friction, on the same axes;
 * the frictionless and the friction-aware goal-attainment optima re-simulated in
   the time domain with each friction set: the price of ignoring friction;
 * the fast path's (stochastic equivalent linearisation) error table against the
-  time domain on a small validation set (the full set: ``benchmarks/friction_fast_path.py``);
+  time domain on a small validation set (the full set: ``validation/friction_fast_path.py``);
 * the road-class convention (ISO 8608 class mean or upper limit) closer to the
   paper's Table 4 and Fig 19;
 * optimum lead and load against friction level and speed.
@@ -26,7 +26,7 @@ __all__ = ["step_robust_design", "robust_inputs"]
 
 
 def robust_inputs(ctx: Context) -> Any:
-    from .design_report import design_inputs
+    from .design_problem import design_inputs
     return [design_inputs(ctx), ctx.quick, ctx.results.get("identification", {}).get(
         "friction_max")]
 
@@ -41,7 +41,7 @@ def _harvester(cfg: Any, d: dict) -> Any:
 def _road_convention(cfg: Any, sets: dict, paper: dict, table4: dict) -> tuple[str, str]:
     """Table 4 (paper optimum, 100 km/h, none/min/max) and Fig 19 (prototype → optimum
     at 70 km/h) under both class conventions, by the fast path."""
-    from ..vehicle.equivalent import friction_metrics
+    from ..vehicle.fast_path import friction_metrics
     d_paper = {k: paper[k] for k in ("total_inertia_gcm2", "lead_mm_per_rev",
                                      "speed_constant_rpm_per_V", "load_ohm")}
     base = {"internal_resistance_ohm": cfg.harvester.internal_resistance_ohm,
@@ -73,7 +73,7 @@ def _road_convention(cfg: Any, sets: dict, paper: dict, table4: dict) -> tuple[s
 def _convention_statement(cfg: Any, best_level: str) -> str:
     """The road-class statement from the design- and friction-free invariant P/η, not
     from powers that mix our friction with the paper's designs."""
-    from .design_report import PAPER_OPTIMUM, PAPER_TABLE4
+    from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
     from .invariants_report import paper_invariants
     inv = paper_invariants(cfg.vehicle, cfg.road, cfg.harvester, PAPER_TABLE4, PAPER_OPTIMUM)
     lv = inv["bound_by_level_W"]
@@ -99,7 +99,7 @@ def _design_space(cfg: Any, sets: dict, ga_design: dict, speeds: tuple, n_lead: 
     friction level and speed (fast path)."""
     from ..design.problem import OBJECTIVE_NAMES
     from ..design.robust import objectives_from_metrics
-    from ..vehicle.equivalent import friction_metrics
+    from ..vehicle.fast_path import friction_metrics
     leads = np.linspace(5.0, 20.0, n_lead)
     loads = np.logspace(0.0, 4.0, n_load)
     L, R = np.meshgrid(leads, loads, indexing="ij")
@@ -135,12 +135,13 @@ def step_robust_design(ctx: Context) -> StepOutput:
     from ..design.robust import time_domain_objectives
     from ..design.sweep import default_friction_sets
     from ..plots.robust import fronts_with_friction, optimum_vs_friction_and_speed
-    from ..vehicle.fast_path_check import CHECK_METRICS, RoadCase, check_case, summarise
-    from .design_report import PAPER_OPTIMUM, PAPER_TABLE4, _cfg
+    from ..vehicle.fast_path.validation import (CHECK_METRICS, RoadCase, check_case, summarise)
+    from .design_problem import design_config
+    from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
 
     t0 = time.perf_counter()
     quick = ctx.quick
-    cfg = _cfg()
+    cfg = design_config()
     cfg = dataclasses.replace(cfg, n_freq=128 if quick else 512)
     sets, source = default_friction_sets(ctx.results.get("identification"),
                                            ctx.friction_bounds)
@@ -239,7 +240,7 @@ def step_robust_design(ctx: Context) -> StepOutput:
                 f"{d['load_ohm']:.1f} Ω")
     md = (
         f"Friction sets: {source}. Friction-aware objectives: worst of min/max by the fast "
-        f"path (stochastic equivalent linearisation, `ehsa_opt.vehicle.equivalent`, with the "
+        f"path (stochastic equivalent linearisation, `ehsa_opt.vehicle.fast_path.linearisation`, with the "
         f"friction's residual force under Gaussian closure), goals = "
         f"the prototype's objectives under the same friction.\n\n"
         f"- frictionless goal-attainment optimum: {fmt(ga_p.design)} (γ = {ga_p.gamma:+.3f})\n"
@@ -254,7 +255,7 @@ def step_robust_design(ctx: Context) -> StepOutput:
         + ", ".join(f"{c.iso_class} {c.speed_km_per_h:g} km/h ({c.length:.0f} m)"
                     for c in cases)
         + f"; {rate:.0f} pairs; time domain {t_td:.1f} s, fast path {t_fp:.3f} s; the full "
-        f"validation set is `benchmarks/friction_fast_path.py`):\n\n"
+        f"validation set is `validation/friction_fast_path.py`):\n\n"
         + "\n".join(err_lines) + "\n\n"
         "**Road-class convention** (fast path; paper optimum at 100 km/h with no/min/max "
         "friction — our friction sets, not the paper's — and Fig 19's power):\n\n"

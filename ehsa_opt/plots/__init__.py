@@ -1,7 +1,9 @@
 """Figures (matplotlib, Agg backend). Computation modules never import plotting.
 
-Each function returns a :class:`matplotlib.figure.Figure`; :func:`save` writes it
-atomically as PNG.  Topic modules live beside this one (``plots.identify``,
+Each function takes data (results, arrays), draws and returns a
+:class:`matplotlib.figure.Figure`; one-panel figures take ``ax=None`` (draw into that
+axes instead of a new figure).  Nothing here runs a computation of a lower room, and
+only :func:`save` writes a file (atomically, as PNG).  Topic modules live beside this one (``plots.identify``,
 ``plots.quarter_car``, ``plots.design``, ``plots.discrepancy``).
 """
 
@@ -10,18 +12,34 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
 from ..utils.io import current_umask  # noqa: E402
 
-__all__ = ["save", "bench_fit"]
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from ..datasets.bench_format import BenchTest
+    from ..estimation.test_simulation import Prediction
+
+__all__ = ["save", "bench_fit", "axes_or_new"]
 
 
-def save(fig: Any, path: str | Path, dpi: int = 110) -> Path:
+def axes_or_new(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
+    """``ax`` and its figure, or a new figure of ``figsize`` with one axes."""
+    if ax is not None:
+        return ax.get_figure(), ax  # type: ignore[return-value]
+    fig, new = plt.subplots(figsize=figsize)
+    return fig, new
+
+
+def save(fig: Figure, path: str | Path, dpi: int = 110) -> Path:
     """Save ``fig`` as PNG via a temporary file + rename, then close it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -37,7 +55,7 @@ def save(fig: Any, path: str | Path, dpi: int = 110) -> Path:
     return path
 
 
-def bench_fit(test: Any, sim: Any, title: str = "") -> Any:
+def bench_fit(test: BenchTest, sim: Prediction, title: str = "") -> Figure:
     """Measured vs simulated force (and voltage when recorded) of one bench test."""
     rows = 2 if test.voltage_V is not None else 1
     fig, axes = plt.subplots(rows, 1, figsize=(8, 2.6 * rows), sharex=True, squeeze=False)

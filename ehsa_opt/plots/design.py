@@ -5,10 +5,19 @@ optimum (paper Fig 20) and sweeps."""
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
+
+from . import axes_or_new
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from ..design.goal import GoalAttainmentResult
+    from ..design.nsga2 import ParetoResult
 
 __all__ = ["goal_attainment_history", "pareto_projections", "parallel_coordinates",
            "hypervolume_history", "friction_on_optimum", "sweep_lines"]
@@ -34,14 +43,15 @@ def _equivalent_mass(d: Mapping[str, float]) -> float:
     return d["total_inertia_gcm2"] * 1e-7 / r ** 2
 
 
-def goal_attainment_history(res: Any, which: str = "design") -> Any:
+def goal_attainment_history(res: GoalAttainmentResult, which: str = "design",
+                            ax: Axes | None = None) -> Figure:
     """Per SLSQP iteration: ``which='design'`` the design variables (paper Fig 17),
     ``'mass'`` the equivalent mass m_eq (Fig 18), ``'objectives'`` comfort, road
     holding, power and efficiency (Fig 19)."""
     hist = res.history
     it = np.arange(len(hist))
     if which == "mass":
-        fig, ax = plt.subplots(figsize=(5.5, 3.2))
+        fig, ax = axes_or_new(ax, (5.5, 3.2))
         if "total_inertia_gcm2" in hist[0]["design"] and "lead_mm_per_rev" in hist[0]["design"]:
             ax.plot(it, [_equivalent_mass(h["design"]) for h in hist], "o-", ms=3)
         ax.set_xlabel("iteration")
@@ -86,8 +96,8 @@ def goal_attainment_history(res: Any, which: str = "design") -> Any:
     return fig
 
 
-def pareto_projections(pr: Any, ga: Mapping[str, float] | None = None,
-                       prototype: Mapping[str, float] | None = None) -> Any:
+def pareto_projections(pr: ParetoResult, ga: Mapping[str, float] | None = None,
+                       prototype: Mapping[str, float] | None = None) -> Figure:
     """All 2-D projections of the front, with the pick, the goal-attainment point
     and the prototype."""
     names = list(pr.objective_names)
@@ -127,7 +137,8 @@ def pareto_projections(pr: Any, ga: Mapping[str, float] | None = None,
     return fig
 
 
-def parallel_coordinates(pr: Any, ga: Mapping[str, float] | None = None) -> Any:
+def parallel_coordinates(pr: ParetoResult, ga: Mapping[str, float] | None = None,
+                         ax: Axes | None = None) -> Figure:
     """Design variables and objectives of every front point, each axis scaled to
     the front's range (log axes for log-scaled spans)."""
     keys = list(pr.designs) + list(pr.objective_names)
@@ -143,7 +154,7 @@ def parallel_coordinates(pr: Any, ga: Mapping[str, float] | None = None) -> Any:
         l0 = np.where(logs, np.log(np.maximum(lo, 1e-300)), lo)
         h0 = np.where(logs, np.log(np.maximum(hi, 1e-300)), hi)
         return (a - l0) / np.where(h0 > l0, h0 - l0, 1.0)
-    fig, ax = plt.subplots(figsize=(9, 4))
+    fig, ax = axes_or_new(ax, (9, 4))
     x = np.arange(len(keys))
     cmap = plt.get_cmap("viridis")
     c = pr.F[:, 0]
@@ -166,9 +177,10 @@ def parallel_coordinates(pr: Any, ga: Mapping[str, float] | None = None) -> Any:
 
 
 def hypervolume_history(histories: Mapping[str, Sequence[Mapping[str, float]]],
-                        reference: Sequence[float] | None = None) -> Any:
+                        reference: Sequence[float] | None = None,
+                        ax: Axes | None = None) -> Figure:
     """Hypervolume against evaluations, one line per run."""
-    fig, ax = plt.subplots(figsize=(5.5, 3.4))
+    fig, ax = axes_or_new(ax, (5.5, 3.4))
     for name, h in histories.items():
         line, = ax.plot([r["n_eval"] for r in h], [r["hv"] for r in h], "o-", ms=3,
                         label=f"{name}: population front")
@@ -186,7 +198,7 @@ def hypervolume_history(histories: Mapping[str, Sequence[Mapping[str, float]]],
     return fig
 
 
-def friction_on_optimum(rows: Sequence[Mapping[str, Any]]) -> Any:
+def friction_on_optimum(rows: Sequence[Mapping[str, float | str]]) -> Figure:
     """Paper Fig 20: power, comfort change, efficiency and road-holding change
     against speed for each friction case."""
     cases = list(dict.fromkeys(r["friction"] for r in rows))
@@ -209,8 +221,8 @@ def friction_on_optimum(rows: Sequence[Mapping[str, Any]]) -> Any:
     return fig
 
 
-def sweep_lines(rows: Sequence[Mapping[str, Any]], x: str, ys: Sequence[str],
-                hue: Sequence[str]) -> Any:
+def sweep_lines(rows: Sequence[Mapping[str, float | str]], x: str, ys: Sequence[str],
+                hue: Sequence[str]) -> Figure:
     """Metrics ``ys`` against ``x``, one line per combination of the ``hue`` columns."""
     groups: dict[tuple, list] = {}
     for r in rows:

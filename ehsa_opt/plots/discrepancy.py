@@ -4,13 +4,19 @@ the effect lives, per-test errors, candidate ranking)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import plt, save
+from . import axes_or_new, plt, save
 
-__all__ = ["residual_maps", "zoom", "per_test_errors", "ranking", "all_figures"]
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from ..estimation.discrepancy import DiscrepancyResult
+
+__all__ = ["residual_maps", "zoom", "per_test_errors", "ranking", "figures", "all_figures"]
 
 _COORD_LABEL = {"cycle_phase": "cycle phase (rad)", "displacement": "displacement (mm)",
                 "velocity": "velocity (m/s)", "direction": "direction sign(v)",
@@ -18,7 +24,7 @@ _COORD_LABEL = {"cycle_phase": "cycle phase (rad)", "displacement": "displacemen
                 "rotor_angle": "rotor angle mod 2π (rad)", "test": "test index"}
 
 
-def residual_maps(result: Any) -> Any:
+def residual_maps(result: DiscrepancyResult) -> Figure:
     """Binned mean normalised residual against each coordinate, before and after."""
     chans = list(result.loc_before.channels)
     coords = ["cycle_phase", "velocity", "time_since_reversal", "rotor_angle", "displacement",
@@ -51,7 +57,7 @@ def residual_maps(result: Any) -> Any:
     return fig
 
 
-def zoom(result: Any, n_tests: int = 2) -> Any:
+def zoom(result: DiscrepancyResult, n_tests: int = 2) -> Figure:
     """Measured vs simulated force (and voltage) zoomed where the baseline misses most
     (e.g. velocity reversals for backlash), baseline and with the named effect."""
     allp = result.fit_tests + result.heldout_tests
@@ -93,10 +99,10 @@ def zoom(result: Any, n_tests: int = 2) -> Any:
     return fig
 
 
-def per_test_errors(result: Any) -> Any:
+def per_test_errors(result: DiscrepancyResult, ax: Axes | None = None) -> Figure:
     """Relative force error per test before/after, fit and held-out tests marked."""
     rows = result.per_test_errors()
-    fig, ax = plt.subplots(figsize=(max(5, 0.5 * len(rows) + 2), 3))
+    fig, ax = axes_or_new(ax, (max(5, 0.5 * len(rows) + 2), 3))
     x = np.arange(len(rows))
     ax.bar(x - 0.2, [r["error_before"] for r in rows], 0.4, color="C3", label="baseline")
     ax.bar(x + 0.2, [r["error_after"] for r in rows], 0.4, color="C0",
@@ -112,7 +118,7 @@ def per_test_errors(result: Any) -> Any:
     return fig
 
 
-def ranking(result: Any) -> Any:
+def ranking(result: DiscrepancyResult) -> Figure:
     """Signature score and ΔBIC of every candidate."""
     cs = [c for c in result.candidates if c.applicable]
     fig, axes = plt.subplots(1, 2, figsize=(9, 2.8))
@@ -138,10 +144,14 @@ def ranking(result: Any) -> Any:
     return fig
 
 
-def all_figures(result: Any, out_dir: Path) -> list[Path]:
-    """Write every figure of the report; returns their paths."""
-    out = []
-    for name, fn in (("residual_maps", residual_maps), ("zoom", zoom),
-                     ("per_test_errors", per_test_errors), ("ranking", ranking)):
-        out.append(save(fn(result), Path(out_dir) / f"discrepancy_{name}.png"))
-    return out
+def figures(result: DiscrepancyResult) -> dict[str, Figure]:
+    """Every figure of the report, keyed by file name (nothing written)."""
+    return {f"discrepancy_{name}.png": fn(result)
+            for name, fn in (("residual_maps", residual_maps), ("zoom", zoom),
+                             ("per_test_errors", per_test_errors), ("ranking", ranking))}
+
+
+def all_figures(result: DiscrepancyResult, out_dir: Path) -> list[Path]:
+    """Write :func:`figures` into ``out_dir`` (PNG, atomically, through :func:`save`);
+    returns their paths.  The writer behind the discrepancy result's folder."""
+    return [save(fig, Path(out_dir) / name) for name, fig in figures(result).items()]

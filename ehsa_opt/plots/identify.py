@@ -2,23 +2,39 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING
+from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
 
-from . import bench_fit, save
+from . import axes_or_new, bench_fit
 
-__all__ = ["iterations_objective", "iterations_parameters", "objective_vs_parameter",
-           "bounds_figure", "identifiability_figure", "fit_result", "report_figures",
-           "friction_bounds"]
+if TYPE_CHECKING:  # types only: plotting draws results it is given, it runs nothing
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from ..datasets.bench_format import BenchTest
+    from ..estimation.bounds import FrictionBounds
+    from ..estimation.identify_result import FitResult, IdentificationReport, Prediction
+    from ..physics.params import FrictionParams
+
+__all__ = [
+    "bounds_figure",
+    "fit_result",
+    "friction_bounds",
+    "identifiability_figure",
+    "iterations_objective",
+    "iterations_parameters",
+    "objective_vs_parameter",
+    "report_figures",
+]
 
 
-def iterations_objective(result: Any, title: str = "") -> Any:
+def iterations_objective(result: FitResult, title: str = "", ax: Axes | None = None) -> Figure:
     """Fig 8: objective and normalised rms errors per IPOPT iteration (best start)."""
     h = result.history
-    fig, ax = plt.subplots(figsize=(6.5, 3.4))
+    fig, ax = axes_or_new(ax, (6.5, 3.4))
     it = np.arange(len(h["objective"]))
     ax.semilogy(it, h["rms_F"], "o-", ms=3, label="force: normalised rms error")
     if h.get("rms_V") is not None:
@@ -33,7 +49,7 @@ def iterations_objective(result: Any, title: str = "") -> Any:
     return fig
 
 
-def iterations_parameters(result: Any, title: str = "") -> Any:
+def iterations_parameters(result: FitResult, title: str = "") -> Figure:
     """Fig 9: each varied parameter per IPOPT iteration (best start)."""
     pars = result.history["parameters"]
     n = len(pars)
@@ -53,9 +69,11 @@ def iterations_parameters(result: Any, title: str = "") -> Any:
     return fig
 
 
-def objective_vs_parameter(report: Any, name: str = "bearing_viscous_Nms_per_rad") -> Any:
+def objective_vs_parameter(report: IdentificationReport,
+                           name: str = "bearing_viscous_Nms_per_rad",
+                           ax: Axes | None = None) -> Figure:
     """Fig 10: final objective of every start against one parameter, across tests."""
-    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    fig, ax = axes_or_new(ax, (6.5, 3.6))
     cmap = plt.get_cmap("viridis")
     n = max(len(report.fits), 1)
     for k, (t, f) in enumerate(zip(report.data.tests, report.fits)):
@@ -75,7 +93,8 @@ def objective_vs_parameter(report: Any, name: str = "bearing_viscous_Nms_per_rad
     return fig
 
 
-def bounds_figure(report: Any, truth: Any = None) -> Any:
+def bounds_figure(report: IdentificationReport,
+                  truth: Mapping[str, float] | None = None) -> Figure:
     """Fig 12: per-test identified values (x: each test's frequency and load) and the
     per-parameter min/max bounds (the paper's method); ``truth``: a mapping of the true
     values of synthetic data, drawn as a dashed line."""
@@ -111,15 +130,19 @@ def bounds_figure(report: Any, truth: Any = None) -> Any:
     return fig
 
 
-def identifiability_figure(report: Any) -> Any:
-    """Relative Fisher eigenvalues per test, and the rod friction against its split."""
+def identifiability_figure(report: IdentificationReport,
+                           peak_velocity_m_per_s: Sequence[float]) -> Figure:
+    """Relative Fisher eigenvalues per test, and the rod friction against its split, each
+    test drawn up to its own peak rod velocity (``peak_velocity_m_per_s``, per test in
+    file order)."""
     from ..physics.friction import bearing_friction_Nm, nut_friction_N, rod_friction_N
     from ..physics.params import FRICTION_NAMES
 
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 3.8))
-    good = [(t, f) for t, f in zip(report.data.tests, report.fits)
+    good = [(t, f, vp) for t, f, vp in zip(report.data.tests, report.fits,
+                                             peak_velocity_m_per_s)
             if f.success and f.identifiability and "directions" in f.identifiability]
-    for k, (_, f) in enumerate(good):
+    for k, (_, f, _vp) in enumerate(good):
         ev = np.clip(f.identifiability["relative_eigenvalues"], 1e-20, None)
         a1.semilogy(np.full(len(ev), k), ev, "o", ms=3, color="C0")
     if good:
@@ -132,11 +155,10 @@ def identifiability_figure(report: Any) -> Any:
     a1.grid(alpha=0.3, which="both")
     r = report.data.harvester.lead_m_per_rad
     if good and "nut_coulomb_N" in good[0][1].parameters:
-        from ..estimation.bounds import test_peak_velocity_m_per_s
-        for k, (t, f) in enumerate(good):
+        for k, (_t, f, vp) in enumerate(good):
             # each test only up to its own peak velocity: beyond it the curve is an
             # extrapolation no measurement supports
-            v = np.linspace(0.002, max(test_peak_velocity_m_per_s(t), 0.003), 200)
+            v = np.linspace(0.002, max(float(vp), 0.003), 200)
             p = [f.parameters[n] for n in FRICTION_NAMES]
             lab = k == 0
             a2.plot(v, rod_friction_N(v, p, r), color="k", lw=0.8, alpha=0.6,
@@ -155,68 +177,60 @@ def identifiability_figure(report: Any) -> Any:
     return fig
 
 
-def fit_result(result: Any, tests: Sequence[Any] | None = None, harvester: Any = None,
-               **kw: Any) -> list[Any]:
-    """Figures of one :class:`~ehsa_opt.estimation.identify.FitResult`: Figs 8, 9 (and 11 if
-    ``tests`` and ``harvester`` are given)."""
+def fit_result(result: FitResult, test: BenchTest | None = None,
+               prediction: Prediction | None = None) -> list[Figure]:
+    """Figures of one :class:`~ehsa_opt.estimation.identify_result.FitResult`: Figs 8, 9,
+    and 11 when a ``test`` and the model's ``prediction`` of it are given."""
     figs = [iterations_objective(result), iterations_parameters(result)]
-    if tests is not None and harvester is not None and result.success:
-        from ..estimation.identify import simulate_tests
-        preds = simulate_tests(tests[:1], harvester, result.parameters, **kw)
-        figs.append(bench_fit(tests[0], preds[0], title="Measured vs simulated (paper Fig 11)"))
+    if test is not None and prediction is not None:
+        figs.append(bench_fit(test, prediction, title="Measured vs simulated (paper Fig 11)"))
     return figs
 
 
-def report_figures(report: Any, out_dir: Path) -> list[Path]:
-    """All identification figures of an :class:`~ehsa_opt.estimation.identify.IdentificationReport`."""
-    from ..estimation.identify import simulate_tests
+def report_figures(report: IdentificationReport, representative: int,
+                   prediction: Prediction, peak_velocity_m_per_s: Sequence[float],
+                   holdout_prediction: Prediction | None = None,
+                   truth: Mapping[str, float] | None = None) -> dict[str, Figure]:
+    """All identification figures of a report, keyed by file name (nothing written).
 
-    out_dir = Path(out_dir)
-    paths = []
+    ``representative``: index of the test of Figs 8, 9 and 11 and ``prediction`` the
+    model's signals on it at its fit; ``holdout_prediction``: the joint fit's signals on
+    the first held-out test; ``truth``: the true friction of synthetic data (Fig 12)."""
+    figs: dict[str, Figure] = {}
     tests = report.data.tests
     good = [k for k, f in enumerate(report.fits) if f.success]
     if not good:
-        return paths
-    # representative test: the middle one of the matrix (or the only one)
-    k = good[len(good) // 2]
-    f, t = report.fits[k], tests[k]
-    paths.append(save(iterations_objective(f, f"Objective per iteration, {t.label} (paper Fig 8)"),
-                      out_dir / "fig08_objective_iterations.png"))
-    paths.append(save(iterations_parameters(f, f"Parameters per iteration, {t.label} "
-                                               "(paper Fig 9)"),
-                      out_dir / "fig09_parameter_iterations.png"))
+        return figs
+    f, t = report.fits[representative], tests[representative]
+    figs["fig08_objective_iterations.png"] = iterations_objective(
+        f, f"Objective per iteration, {t.label} (paper Fig 8)")
+    figs["fig09_parameter_iterations.png"] = iterations_parameters(
+        f, f"Parameters per iteration, {t.label} (paper Fig 9)")
     name = ("bearing_viscous_Nms_per_rad" if report.data.has_generator
             else "nut_viscous_Ns_per_m")
     several = len(good) >= 2  # Figs 10 and 12 compare tests: not drawn for a single test
     if several:
-        paths.append(save(objective_vs_parameter(report, name),
-                          out_dir / "fig10_objective_vs_tv.png"))
-    pr = simulate_tests([t], report.data.harvester, f.parameters,
-                        has_generator=report.data.has_generator)[0]
-    paths.append(save(bench_fit(t, pr, title=f"Measured vs simulated, {t.label} (paper Fig 11); "
-                                             f"δ_F = {f.delta_F:.3f}"
-                                + (f", δ_V = {f.delta_V:.3f}" if f.delta_V is not None else "")
-                                + f", rel. error {f.force_relative_error_percent:.2f} %"),
-                      out_dir / "fig11_measured_vs_simulated.png"))
+        figs["fig10_objective_vs_tv.png"] = objective_vs_parameter(report, name)
+    figs["fig11_measured_vs_simulated.png"] = bench_fit(
+        t, prediction, title=f"Measured vs simulated, {t.label} (paper Fig 11); "
+                             f"δ_F = {f.delta_F:.3f}"
+        + (f", δ_V = {f.delta_V:.3f}" if f.delta_V is not None else "")
+        + f", rel. error {f.force_relative_error_percent:.2f} %")
     if several:
-        from ..datasets.embedded import load_truth
-        truth = (load_truth(report.data.path) or {}).get("friction") \
-            if getattr(report.data, "path", None) else None
-        paths.append(save(bounds_figure(report, truth), out_dir / "fig12_bounds.png"))
-    paths.append(save(identifiability_figure(report), out_dir / "identifiability.png"))
-    if report.joint is not None and report.joint.success and report.holdout_files:
+        figs["fig12_bounds.png"] = bounds_figure(report, truth)
+    figs["identifiability.png"] = identifiability_figure(report, peak_velocity_m_per_s)
+    if holdout_prediction is not None:
         held = [x for x in tests if x.file == report.holdout_files[0]]
-        pr = simulate_tests(held, report.data.harvester, report.joint.parameters,
-                            has_generator=report.data.has_generator)[0]
         err = report.holdout_errors[0]
-        paths.append(save(bench_fit(held[0], pr, title=f"Joint fit on held-out test "
-                                    f"{held[0].label}: δ_F = {err['delta_F']:.3f}, rel. error "
-                                    f"{err['force_relative_error_percent']:.2f} %"),
-                          out_dir / "joint_fit_holdout.png"))
-    return paths
+        figs["joint_fit_holdout.png"] = bench_fit(
+            held[0], holdout_prediction,
+            title=f"Joint fit on held-out test {held[0].label}: δ_F = {err['delta_F']:.3f}, "
+                  f"rel. error {err['force_relative_error_percent']:.2f} %")
+    return figs
 
 
-def friction_bounds(fb: Any, truth: Any = None, title: str = "") -> Any:
+def friction_bounds(fb: FrictionBounds, truth: FrictionParams | None = None,
+                    title: str = "") -> Figure:
     """Rod friction F_ns(v) + T_b(v/r)/r against velocity.  Left: the sets and the best
     law's band over the whole range (0–3 m/s) with the identified range shaded; right:
     the identified range — per-test fits, the envelope, the sets and the paper's

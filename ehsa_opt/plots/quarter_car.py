@@ -2,19 +2,33 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
+from collections.abc import Mapping
 
 import numpy as np
 
-from . import plt
+from . import axes_or_new, plt
 
-__all__ = ["simulation_overview", "fig13_frequency_response", "fig14_force_velocity",
-           "fig15_road_study", "fig21_power_history", "wk_figure"]
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from ..vehicle.simulate import QuarterCarSimulation
+    from ..vehicle.studies import ForceVelocityStudy, FrequencyResponseStudy, RoadStudy
+
+__all__ = [
+    "fig13_frequency_response",
+    "fig14_force_velocity",
+    "fig15_road_study",
+    "fig21_power_history",
+    "simulation_overview",
+    "wk_figure",
+]
 
 _CASE_COLOURS = {"none": "C0", "min": "C2", "max": "C3"}
 
 
-def simulation_overview(sim: Any, k: int = 0) -> Any:
+def simulation_overview(sim: QuarterCarSimulation, k: int = 0) -> Figure:
     """Road, sprung displacement, load power and force–velocity of design ``k``."""
     s = sim.series
     fig, ax = plt.subplots(2, 2, figsize=(10, 6))
@@ -37,7 +51,7 @@ def simulation_overview(sim: Any, k: int = 0) -> Any:
     return fig
 
 
-def fig13_frequency_response(study: Any) -> Any:
+def fig13_frequency_response(study: FrequencyResponseStudy) -> Figure:
     """Paper Fig 13: generator voltage and sprung-mass transmissibility vs frequency."""
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
     styles = ["-", "--", ":", "-."]
@@ -74,7 +88,7 @@ def fig13_frequency_response(study: Any) -> Any:
     return fig
 
 
-def fig14_force_velocity(study: Any) -> Any:
+def fig14_force_velocity(study: ForceVelocityStudy) -> Figure:
     """Paper Fig 14: force–velocity loops, open and short circuit, min/max friction."""
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
     for i, circuit in enumerate(("open circuit", "short circuit")):
@@ -94,7 +108,7 @@ def fig14_force_velocity(study: Any) -> Any:
     return fig
 
 
-def fig15_road_study(study: Any) -> Any:
+def fig15_road_study(study: RoadStudy) -> Figure:
     """Paper Figs 15/16: road PSD, sprung displacement, power, stroke-velocity PSD, F–v."""
     sim = study.sim
     fig, ax = plt.subplots(3, 2, figsize=(11, 9.5))
@@ -150,10 +164,11 @@ def fig15_road_study(study: Any) -> Any:
     return fig
 
 
-def fig21_power_history(study: Any, seconds: float = 10.0) -> Any:
+def fig21_power_history(study: RoadStudy, seconds: float = 10.0,
+                        ax: Axes | None = None) -> Figure:
     """Paper Fig 21: instantaneous power, no/min/max friction."""
     sim = study.sim
-    fig, ax = plt.subplots(figsize=(10, 3.8))
+    fig, ax = axes_or_new(ax, (10, 3.8))
     p = np.asarray(sim.series["load_power_W"])
     t = np.asarray(sim.time_s)
     # the window contains the largest reported peak (metric window, after settling)
@@ -176,10 +191,10 @@ def fig21_power_history(study: Any, seconds: float = 10.0) -> Any:
     return fig
 
 
-def wk_figure(f_hz: np.ndarray, exact: np.ndarray, fit: np.ndarray, table: dict,
-              label: str) -> Any:
+def wk_figure(f_hz: np.ndarray, exact: np.ndarray, fit: np.ndarray,
+              table: Mapping[float, float], label: str, ax: Axes | None = None) -> Figure:
     """|W_k| exact, its low-order fit, and the standard's table values."""
-    fig, ax = plt.subplots(figsize=(6.5, 3.8))
+    fig, ax = axes_or_new(ax, (6.5, 3.8))
     ax.loglog(f_hz, exact, color="k", lw=1.5, label="exact W_k (H_h·H_l·H_t·H_s)")
     ax.loglog(f_hz, fit, color="C1", ls="--", lw=1.2, label=label)
     ax.loglog(list(table), list(table.values()), "o", ms=4, color="C0",

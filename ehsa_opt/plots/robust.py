@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["fronts_with_friction", "optimum_vs_friction_and_speed"]
 
 
 def fronts_with_friction(fronts: Mapping[str, Mapping[str, np.ndarray]],
-                         points: Mapping[str, Mapping[str, float]] | None = None) -> Any:
+                         points: Mapping[str, Mapping[str, float]] | None = None) -> Figure:
     """Fronts (dict label → {power_W, comfort, road_holding}) on the same axes:
     power against comfort and against road holding; ``points`` marks single designs."""
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
@@ -36,7 +39,7 @@ def fronts_with_friction(fronts: Mapping[str, Mapping[str, np.ndarray]],
     return fig
 
 
-def optimum_vs_friction_and_speed(rows: Sequence[Mapping[str, Any]]) -> Any:
+def optimum_vs_friction_and_speed(rows: Sequence[Mapping[str, float | str]]) -> Figure:
     """Optimum lead and load against speed, one line per friction level
     (rows: friction, speed_km_per_h, lead_mm_per_rev, load_ohm)."""
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))

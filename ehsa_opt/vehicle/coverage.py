@@ -145,15 +145,15 @@ def coverage_warning(cov: Mapping[str, Any], v_max_m_per_s: float,
 def design_coverage(vehicle: Any, road: Any, design: Mapping[str, Any], frictions: Any,
                     v_max_m_per_s: float, base: Any = None) -> dict[str, np.ndarray]:
     """Out-of-range fractions of designs on the fast path: σ_v of the friction-aware
-    equivalent linearisation (:func:`ehsa_opt.vehicle.equivalent.friction_metrics`; the
+    equivalent linearisation (:func:`ehsa_opt.vehicle.fast_path.friction_metrics`; the
     exact linear path when ``frictions`` is empty) and :func:`gaussian_coverage`.
 
-    ``design`` as :func:`ehsa_opt.vehicle.metrics.linear_metrics`; ``frictions`` a
+    ``design`` as :func:`ehsa_opt.vehicle.frequency_path.linear_metrics`; ``frictions`` a
     sequence of FrictionParams (one row of fractions each) or empty.  Returns arrays
     (frictions or 1) × designs.
     """
-    from .equivalent import friction_metrics
-    from .metrics import design_arrays, linear_metrics
+    from .fast_path import friction_metrics
+    from .frequency_path import design_arrays, linear_metrics
     d = design_arrays(design, base)
     lead = np.asarray(d["r_m_per_rad"], dtype=float)
     frs = list(frictions or [])

@@ -1,4 +1,4 @@
-"""ISO 2631-1 frequency weighting W_k (vertical whole-body vibration), SPEC §5.
+"""ISO 2631-1 frequency weighting W_k (vertical whole-body vibration).
 
 The exact weighting is the product of four analogue filters (ISO 2631-1:1997,
 Annex A), with s = j 2π f::

@@ -1,6 +1,6 @@
 """Resource estimate of a time-domain simulation, checked before anything is allocated.
 
-Measured on the compiled batch (``/tmp``-free, 2-core machine, issue 15): peak memory
+Measured on the compiled batch (``/tmp``-free, 2-core machine): peak memory
 ≈ N · (600 + 830 · B) bytes for N steps and B designs simulated together (1341 B/step
 for B = 1, 7168 B/step for B = 8), wall time ≈ 5–10 µs per step and design.  The
 simulation is refused when the memory estimate exceeds the limit (80 % of the

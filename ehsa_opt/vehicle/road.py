@@ -1,4 +1,4 @@
-"""Road input of the quarter car (SPEC §4): ISO 8608 PSD, synthesis, measured profiles.
+"""Road input of the quarter car: ISO 8608 PSD, synthesis, measured profiles.
 
 ISO 8608 displacement PSD (one-sided, in spatial frequency n, cycles/m)::
 

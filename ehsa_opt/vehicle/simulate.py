@@ -1,4 +1,4 @@
-"""Time-domain simulation of the quarter car with harvester and friction (SPEC §4–5).
+"""Time-domain simulation of the quarter car with harvester and friction (paper §4, Eqs 6–9).
 
 Fast path: the step of :class:`~ehsa_opt.physics.quarter_car_model.QuarterCarModel`
 (trapezoidal mechanics + exact exponential electrical update + bracketed Newton
@@ -58,8 +58,8 @@ from ..physics.quarter_car_model import (
     QuarterCarModel,
     param_vector,
 )
+from .frequency_path import G, dimensionless_power
 from .iso2631 import weighted_rms_fft
-from .metrics import G, dimensionless_power
 from .resources import check_simulation_resources
 from .road import RoadProfile, dissipation_bound_W, road_profile
 
@@ -319,7 +319,7 @@ class QuarterCarSimulation:
         All outputs finite.
     message : str
     metrics : dict of ndarray (B,)
-        The keys of :data:`~ehsa_opt.vehicle.metrics.METRIC_KEYS` plus ``energy_residual``
+        The keys of :data:`~ehsa_opt.vehicle.frequency_path.METRIC_KEYS` plus ``energy_residual``
         (relative closure of the energy balance), ``peak_power_W`` and the rms and peak
         of stroke, generator voltage and current (``stroke_rms_m``, ``peak_stroke_m``,
         ``voltage_rms_V``, ``peak_voltage_V``, ``current_rms_A``, ``peak_current_A``).
@@ -355,8 +355,9 @@ class QuarterCarSimulation:
             out[key] = None if math.isnan(val) else val
         return out
 
-    def plot(self, k: int = 0) -> Any:
-        """Road, sprung displacement, power and force–velocity of design ``k``."""
+    def plot(self, ax: Any = None, k: int = 0) -> Any:
+        """Road, sprung displacement, power and force–velocity of design ``k`` (four
+        panels; ``ax`` not used); writes nothing."""
         missing = [n for n in ("x2_m", "load_power_W", "sprung_acc_m_s2",
                                "stroke_velocity_m_s", "damper_force_N") if n not in self.series]
         if missing:

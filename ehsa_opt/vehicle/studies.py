@@ -25,26 +25,18 @@ from ..datasets.embedded import embedded_data_dir, load_truth
 from ..physics.bench_model import BenchModel
 from ..physics.bench_sim import simulate_bench
 from ..physics.motion import SineMotion
-from ..physics.params import (
-    FRICTION_NAMES,
-    ParameterError,
-    FrictionParams,
-    HarvesterParams,
-    RoadParams,
-    VehicleParams,
-)
+from ..physics.params import (FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError,
+                              RoadParams, VehicleParams)
 from ..physics.quarter_car_model import PARAM_NAMES, STATE_NAMES, param_vector
-from .metrics import linear_frequency_response
+from .frequency_path import linear_frequency_response
 from .road import road_psd_m3
 from .simulate import QuarterCarSimulation, simulate_batch, simulate_quarter_car
 
 __all__ = ["FrictionCases", "friction_cases", "paper_optimum_harvester",
            "FrequencyResponseStudy", "stepped_sine_response", "ForceVelocityStudy",
            "force_velocity_loops", "RoadStudy", "road_study", "equivalent_damping_slope",
-           "PAPER_FIG14_RANGES", "MIN_FRICTION_SCALE"]
+           "MIN_FRICTION_SCALE"]
 
-#: The paper's equivalent damping ranges of Fig 14 (min–max friction), N s/m.
-PAPER_FIG14_RANGES = {"open circuit": (293.0, 2306.0), "short circuit": (2862.0, 6208.0)}
 
 #: Scale of the "min" friction when identification results are absent.
 MIN_FRICTION_SCALE = 0.3
@@ -142,7 +134,7 @@ class FrequencyResponseStudy:
     amplitude_change : ndarray (C, L, F)
         That last relative change (the larger of x2 and V_g).
     linear_voltage_amplitude_V, linear_transmissibility : ndarray (L, F)
-        The exact frictionless responses (:func:`~ehsa_opt.vehicle.metrics.linear_frequency_response`),
+        The exact frictionless responses (:func:`~ehsa_opt.vehicle.frequency_path.linear_frequency_response`),
         the check of the simulation: the case "none" must match them.
     tolerance : float
         The settling tolerance on the window-to-window amplitude change.
@@ -177,7 +169,8 @@ class FrequencyResponseStudy:
         dx = np.abs(self.sprung_transmissibility[i] / self.linear_transmissibility - 1.0)
         return float(max(np.max(dv), np.max(dx)))
 
-    def plot(self) -> Any:
+    def plot(self, ax: Any = None) -> Any:
+        """Paper Fig 13 (two panels; ``ax`` not used); writes nothing."""
         from ..plots.quarter_car import fig13_frequency_response
         return fig13_frequency_response(self)
 
@@ -211,7 +204,7 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
 
     Steady state by construction.  For each frequency one compiled batch simulates every
     (friction case, load) pair, starting from the *exact* frictionless steady state
-    (:func:`~ehsa_opt.vehicle.metrics.linear_frequency_response`; with friction this is
+    (:func:`~ehsa_opt.vehicle.frequency_path.linear_frequency_response`; with friction this is
     the best linear guess, and only the friction's correction is a transient).  The
     simulation runs in windows of whole cycles lasting at least ``window_min_s``, the
     fundamental amplitudes of x2 and V_g are measured in each window (least squares), and
@@ -299,7 +292,8 @@ class ForceVelocityStudy:
     frequency_hz: float
     friction_source: str
 
-    def plot(self) -> Any:
+    def plot(self, ax: Any = None) -> Any:
+        """Paper Fig 14 (two panels; ``ax`` not used); writes nothing."""
         from ..plots.quarter_car import fig14_force_velocity
         return fig14_force_velocity(self)
 
@@ -385,13 +379,15 @@ class RoadStudy:
         ref = p[self.cases.index("none")]
         return {c: 100.0 * (p[i] / ref - 1.0) for i, c in enumerate(self.cases)}
 
-    def plot(self) -> Any:
+    def plot(self, ax: Any = None) -> Any:
+        """Paper Figs 15/16 (six panels; ``ax`` not used); writes nothing."""
         from ..plots.quarter_car import fig15_road_study
         return fig15_road_study(self)
 
-    def plot_power(self) -> Any:
+    def plot_power(self, ax: Any = None) -> Any:
+        """Paper Fig 21, into ``ax`` when given; writes nothing."""
         from ..plots.quarter_car import fig21_power_history
-        return fig21_power_history(self)
+        return fig21_power_history(self, ax=ax)
 
 
 def road_study(vehicle: VehicleParams, harvester: HarvesterParams, frictions: FrictionCases,

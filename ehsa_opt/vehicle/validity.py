@@ -39,11 +39,11 @@ __all__ = ["GAUSSIAN_PEAK_FACTOR", "FAST_PATH_MAX_CORRECTION", "FAST_PATH_REGION
 #: Largest sticking correction c_gauss/c_f − 1 of the friction-aware fast path inside its
 #: validated region: on the validation set (19 designs × 4 friction levels × 12 roads)
 #: every metric is within 2.6 % of the time domain below 2 %, and the pairs above it carry
-#: the largest errors (benchmarks/friction_fast_path.py, also its ``--random`` mode).
+#: the largest errors (validation/friction_fast_path.py, also its ``--random`` mode).
 FAST_PATH_MAX_CORRECTION = 0.02
 
 #: Validated region of the friction-aware fast path over the whole design box
-#: (``benchmarks/friction_fast_path.py --random 500``: 500 random designs × one friction
+#: (``validation/friction_fast_path.py --random 500``: 500 random designs × one friction
 #: level ×0.5–×4 × 8 held-out roads): with the design's electrical damping
 #: c_e = K_t K_e/(r² (R_e + R_i)) ≥ 100 N s/m and friction up to ×2 the data's every pair
 #: is within 5 % on all four metrics; below 30 N s/m errors reach 82 % (lightly damped
@@ -159,7 +159,7 @@ def _fast_path_region(metrics: Mapping[str, np.ndarray],
 def _fast_path_indicator(metrics: Mapping[str, np.ndarray],
                          ctx: Mapping[str, Any]) -> list[str | None]:
     """The fast path's own indicator: the sticking correction c_gauss/c_f − 1 of
-    :func:`~ehsa_opt.vehicle.equivalent.friction_metrics` beyond
+    :func:`~ehsa_opt.vehicle.fast_path.friction_metrics` beyond
     :data:`FAST_PATH_MAX_CORRECTION` (the strut sticks for long stretches, the
     Gaussian closure is no longer accurate)."""
     n = _n(metrics)

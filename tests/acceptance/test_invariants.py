@@ -3,7 +3,7 @@
 import pytest
 
 from ehsa_opt.physics.params import HarvesterParams, RoadParams, VehicleParams
-from ehsa_opt.pipeline.design_report import PAPER_OPTIMUM, PAPER_TABLE4
+from ehsa_opt.pipeline.paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
 from ehsa_opt.pipeline.invariants_report import paper_invariants
 from ehsa_opt.vehicle.road import dissipation_bound_W
 

@@ -161,7 +161,7 @@ def test_reproduce_data_designs_from_the_users_harvester(tmp_path):
     """bench.toml's R_i = 2.4 Ω (and L_i, J_m) start the design space, not Table 1's."""
     from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
     from ehsa_opt.pipeline.base import Context
-    from ehsa_opt.pipeline.design_report import _cfg
+    from ehsa_opt.pipeline.design_problem import design_config as _cfg
     user = HarvesterParams(internal_resistance_ohm=2.4, inductance_H=0.9e-3,
                            motor_inertia_gcm2=90.0)
     d = write_synthetic(tmp_path / "d", SyntheticSpec(frequencies_hz=(1.0,), loads_ohm=(47.0,),

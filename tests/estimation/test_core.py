@@ -96,14 +96,14 @@ def backlash_tests():
 def test_backlash_model_refuses_the_rigid_path(backlash_tests):
     with pytest.raises(ValueError, match="rigid"):
         fit_tests(backlash_tests, HarvesterParams(), components=(Backlash(),),
-                  vary=["backlash_gap_m"], options=IdentifyOptions(path="rigid"))
+                  free=["backlash_gap_m"], options=IdentifyOptions(path="rigid"))
 
 
 @pytest.mark.slow
 def test_backlash_model_goes_through_collocation(backlash_tests):
     """Bearing friction drives the rotor states of the elastic transmission: collocation."""
     res = fit_tests(backlash_tests, HarvesterParams(), components=(Backlash(),),
-                    vary=["nut_coulomb_N", "nut_viscous_Ns_per_m", "bearing_coulomb_Nm"],
+                    free=["nut_coulomb_N", "nut_viscous_Ns_per_m", "bearing_coulomb_Nm"],
                     fixed={"nut_breakaway_N": "nut_coulomb_N",
                            "bearing_breakaway_Nm": "bearing_coulomb_Nm"},
                     starts=1, identifiability=False,

@@ -64,3 +64,15 @@ def test_least_squares_recovers_parameters_and_matches_the_nlp(breakaway, monkey
         assert ls.parameters[name] == pytest.approx(nlp.parameters[name], rel=2e-3, abs=1e-6)
         if np.isfinite(sd_nlp[k]) and sd_nlp[k] > 0:
             assert sd_ls[k] == pytest.approx(sd_nlp[k], rel=0.05), name
+
+
+def test_a_number_of_starts_is_drawn_and_reaches_the_given_starts_optimum():
+    truth = {"inertia_kg": 50.0, "offset_N": 2.0, "nut_breakaway_N": 30.0,
+             "nut_coulomb_N": 20.0, "nut_breakaway_velocity_m_per_s": 0.01,
+             "nut_viscous_Ns_per_m": 200.0}
+    pts, rig = _tests(truth, seed=5)
+    given = fit_group(pts, rig, [_start()], free=FREE)
+    drawn = fit_group(pts, rig, 2, free=FREE, seed=1)
+    assert drawn.success and len(drawn.starts) == 2
+    assert drawn.sse <= given.sse * (1 + 1e-6)
+    assert drawn.parameters["nut_coulomb_N"] == pytest.approx(truth["nut_coulomb_N"], rel=0.02)

@@ -129,7 +129,7 @@ def test_fit_with_backlash_component_runs_generic_states():
                          cycles=1.0)
     tests = generate_bench_tests(spec)
     res = fit_tests(tests, HarvesterParams(), components=(Backlash(),),
-                    vary=["nut_coulomb_N", "nut_viscous_Ns_per_m", "backlash_gap_m"],
+                    free=["nut_coulomb_N", "nut_viscous_Ns_per_m", "backlash_gap_m"],
                     fixed={"nut_breakaway_N": "nut_coulomb_N"}, starts=1, identifiability=False,
                     options=IdentifyOptions(max_intervals=40, max_samples=150, max_iter=100))
     assert res.starts[0]["status"]

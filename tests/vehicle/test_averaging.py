@@ -10,8 +10,8 @@ from scipy import integrate
 
 from ehsa_opt.physics.friction import simscape_friction
 from ehsa_opt.physics.params import FrictionParams, RoadParams, VehicleParams
-from ehsa_opt.vehicle.averaging import averaged_damping, harmonic_terms
-from ehsa_opt.vehicle.equivalent import (
+from ehsa_opt.vehicle.fast_path.sticking import averaged_damping, harmonic_terms
+from ehsa_opt.vehicle.fast_path.linearisation import (
     friction_equivalent_damping_Ns_per_m,
     friction_metrics,
     law_equivalent_damping,
@@ -117,7 +117,7 @@ def test_friction_metrics_correction_lowers_damping_and_gaussian_option():
 def test_averaged_fixed_point_holds_on_the_linear_path():
     # c_f returned is a fixed point of the averaged map evaluated with the linear
     # path's own σ_v(0) and σ_v(c_f) (fine grids)
-    from ehsa_opt.vehicle.metrics import linear_metrics
+    from ehsa_opt.vehicle.frequency_path import linear_metrics
     veh, road = VehicleParams(), RoadParams("C", 70.0)
     design = {"load_ohm": np.array([3.0, 47.0, 900.0]),
               "lead_mm_per_rev": np.array([5.0, 12.0, 20.0])}
@@ -137,7 +137,7 @@ def test_tabulated_cycle_averages_match_scipy_and_their_limits():
     # against scipy's i0e/i1e; 0, ∞ and NaN arguments give their limits / NaN, no error
     from scipy.special import i0e, i1e
 
-    from ehsa_opt.vehicle.averaging import _bessel_terms, _t_l
+    from ehsa_opt.vehicle.fast_path.sticking import _bessel_terms, _t_l
     h = np.concatenate([[0.0, 1e-12, 1e-8, 199.99, 200.0, 1e4],
                         np.exp(np.random.default_rng(3).uniform(-20.0, 8.0, 2000))])
     i0, d = _bessel_terms(h)

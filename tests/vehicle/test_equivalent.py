@@ -12,12 +12,12 @@ from scipy import integrate
 from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
 from ehsa_opt.physics.friction import simscape_friction
 from ehsa_opt.physics.params import FrictionParams, ParameterError, RoadParams, VehicleParams
-from ehsa_opt.vehicle.equivalent import (
+from ehsa_opt.vehicle.fast_path.linearisation import (
     friction_equivalent_damping_Ns_per_m,
     friction_metrics,
     law_equivalent_damping,
 )
-from ehsa_opt.vehicle.metrics import METRIC_KEYS, linear_metrics
+from ehsa_opt.vehicle.frequency_path import METRIC_KEYS, linear_metrics
 from tests.paths import PAPER_DESIGN
 
 VEHICLE = VehicleParams()

@@ -8,7 +8,7 @@ import scipy.linalg as sl
 
 from ehsa_opt.vehicle.iso2631 import (ISO2631_WK_TABLE, wk_abs2, wk_exact, wk_exact_tf, wk_fit_error,
                               wk_state_space)
-from ehsa_opt.vehicle.metrics import METRIC_KEYS, linear_metrics
+from ehsa_opt.vehicle.frequency_path import METRIC_KEYS, linear_metrics
 from ehsa_opt.physics.params import HarvesterParams, ParameterError, RoadParams, VehicleParams
 from ehsa_opt.vehicle.road import dissipation_bound_W, road_psd_m3, road_velocity_psd
 
@@ -67,7 +67,7 @@ def test_road_psd_and_bound():
     assert road_psd_m3(0.2, "C") == pytest.approx(64e-6)
     assert road_psd_m3(0.1, 1e-6) == pytest.approx(1e-6)
     bound = dissipation_bound_W(VehicleParams(), RoadParams(iso_class="C", speed_km_per_h=100))
-    assert bound == pytest.approx(140.37, abs=0.05)  # SPEC §4: 140 W
+    assert bound == pytest.approx(140.37, abs=0.05)  # the dissipation bound: 140 W
     assert dissipation_bound_W(VehicleParams(), RoadParams(profile_csv="x.csv")) is None
     with pytest.raises(ParameterError, match="ISO 8608"):
         road_psd_m3(0.1, "Z")
@@ -156,7 +156,7 @@ def test_default_design_values_and_broadcasting():
     m = linear_metrics(vehicle, road)
     assert set(METRIC_KEYS) <= set(m)
     assert all(np.shape(v) == () for v in m.values())
-    # SPEC §4: about 2.7 m/s² for the prototype on the passenger car
+    # about 2.7 m/s² for the prototype on the passenger car
     assert 2.4 < float(m["comfort_weighted_rms_m_s2"]) < 3.0
     assert float(m["comfort"]) == pytest.approx(float(m["comfort_weighted_rms_m_s2"]) / 9.80665)
     assert float(m["power_dimensionless"]) == pytest.approx(

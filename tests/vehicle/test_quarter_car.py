@@ -8,7 +8,7 @@ import pytest
 
 from ehsa_opt.cli import main
 from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
-from ehsa_opt.vehicle.metrics import METRIC_KEYS, linear_metrics
+from ehsa_opt.vehicle.frequency_path import METRIC_KEYS, linear_metrics
 from ehsa_opt.physics.params import FrictionParams, HarvesterParams, ParameterError, RoadParams, \
     VehicleParams
 from ehsa_opt.datasets.problem_file import load_problem

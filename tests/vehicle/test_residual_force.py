@@ -1,4 +1,4 @@
-"""The friction's non-linear residual force under Gaussian closure (issue 14)."""
+"""The friction's non-linear residual force under Gaussian closure."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ import pytest
 from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
 from ehsa_opt.physics.friction import rod_friction_N
 from ehsa_opt.physics.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams
-from ehsa_opt.vehicle.equivalent import friction_array, friction_metrics
-from ehsa_opt.vehicle.fast_path_check import scaled_friction
+from ehsa_opt.vehicle.fast_path.linearisation import friction_array, friction_metrics
+from ehsa_opt.vehicle.fast_path.validation import scaled_friction
 from ehsa_opt.vehicle.iso2631 import wk_abs2
-from ehsa_opt.vehicle.metrics import design_arrays
-from ehsa_opt.vehicle import equivalent as equivalent_module
-from ehsa_opt.vehicle.residual_force import (LagGrid, _power_laplace, hermite_coefficients,
+from ehsa_opt.vehicle.frequency_path import design_arrays
+from ehsa_opt.vehicle.fast_path import linearisation as equivalent_module
+from ehsa_opt.vehicle.fast_path.residual_force import (LagGrid, _power_laplace, hermite_coefficients,
                                              residual_autocovariance, residual_variances)
 from ehsa_opt.vehicle.road import ROAD_BAND_CYCLES_PER_M
 
@@ -117,7 +117,7 @@ def test_added_variances_match_a_frequency_grid():
 
 def test_residual_keeps_the_dissipation_and_lowers_the_friction_power():
     # an internal force does not change what the road puts in (the dissipation bound,
-    # SPEC §4); the residual feeds the motion it drives: E[r v] < 0
+    # the road input power); the residual feeds the motion it drives: E[r v] < 0
     road = RoadParams("C", 50.0)
     design = {"load_ohm": np.array([10.0, 47.0, 300.0]),
               "lead_mm_per_rev": np.array([8.0, 12.0, 16.0])}

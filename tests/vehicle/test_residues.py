@@ -1,4 +1,4 @@
-"""Exact band-limited variances by residues (ehsa_opt.vehicle.residues)."""
+"""Exact band-limited variances by residues (ehsa_opt.vehicle.fast_path.band_variances)."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import pytest
 from scipy import integrate
 
 from ehsa_opt.physics.params import ParameterError, RoadParams, VehicleParams
-from ehsa_opt.vehicle.equivalent import friction_metrics
+from ehsa_opt.vehicle.fast_path.linearisation import friction_metrics
 from ehsa_opt.vehicle.iso2631 import wk_exact
-from ehsa_opt.vehicle.metrics import design_arrays
-from ehsa_opt.vehicle.residues import QuarterCarPolynomials
+from ehsa_opt.vehicle.frequency_path import design_arrays
+from ehsa_opt.vehicle.fast_path.band_variances import QuarterCarPolynomials
 from ehsa_opt.vehicle.road import ROAD_BAND_CYCLES_PER_M, road_velocity_psd
 
 VEHICLE = VehicleParams()
@@ -109,7 +109,7 @@ def test_almost_undamped_design_that_friction_alone_damps():
     # R_e = 23 kΩ, L = 0, k_n = 5500 rpm/V: σ_v(0) of kilometres per second; the fixed
     # point (friction ×34) lies ~1e-6 below it, not a locked strut
     from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
-    from ehsa_opt.vehicle.fast_path_check import scaled_friction
+    from ehsa_opt.vehicle.fast_path.validation import scaled_friction
     truth = load_truth(embedded_data_dir("bench_prototype"))["friction"]
     design = {"total_inertia_gcm2": 17.507, "lead_mm_per_rev": 94.51,
               "speed_constant_rpm_per_V": 5501.5, "load_ohm": 23061.7, "inductance_H": 0.0,

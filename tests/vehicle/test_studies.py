@@ -153,8 +153,8 @@ def test_validity_stroke_limit_fast_path_region_and_joined_flags():
 
 
 def test_validity_flags_the_fast_path_beyond_its_indicator():
-    from ehsa_opt.vehicle.equivalent import friction_metrics
-    from ehsa_opt.vehicle.fast_path_check import scaled_friction
+    from ehsa_opt.vehicle.fast_path.linearisation import friction_metrics
+    from ehsa_opt.vehicle.fast_path.validation import scaled_friction
     from ehsa_opt.vehicle.validity import FAST_PATH_MAX_CORRECTION, check_validity
     data = friction_cases(None).cases["max"]
     # class C at 100 km/h with half the data's friction: the strut hardly sticks;

@@ -123,7 +123,8 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
                   held_pts: Sequence[PreparedTest], rig: Rig, baseline: dict[str, float],
                   max_iter: int, *, shares: Sequence[float] = (0.0,),
                   refine: Sequence[dict] = (), full_refit: str = "collocation",
-                  effect_fit: str = "collocation", log_names: Sequence[str] = ()
+                  effect_fit: str = "collocation", log_names: Sequence[str] = (),
+                  impact_fit: bool = False
                   ) -> tuple[str, FitOutcome, list[np.ndarray], list[np.ndarray]]:
     """Add ``component`` to ``rig`` (which may hold earlier effects) and re-identify.
 
@@ -140,7 +141,10 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
     collocation NLP is degenerate (IPOPT's Hessian regularisation climbs to 1e9 and
     MUMPS re-allocates its factor for tens of minutes), while a few Gauss–Newton
     steps on two parameters from the screened start cost seconds.  ``log_names``
-    are refined in log10 on the simulation (parameters spanning decades).  Returns
+    are refined in log10 on the simulation (parameters spanning decades).
+    ``impact_fit``: a contact effect is fitted on chaos-robust features instead when
+    the data hold impacts the current model has not
+    (:func:`~.impacts.fit_candidate_on_impacts`).  Returns
     the name, the fit and the simulated outputs of the fit and held-out tests
     (empty lists when the fit failed).
     """
@@ -150,6 +154,12 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
                              f"got {v!r}")
     crig = rig.with_components([*rig.components, component])
     defaults = component.defaults()
+    if impact_fit:
+        from .impacts import fit_candidate_on_impacts
+        routed = fit_candidate_on_impacts(name, fit_pts, held_pts, rig, crig,
+                                          {**defaults, **baseline}, split_friction)
+        if routed is not None:
+            return routed
     starts = [{**defaults, **baseline, **s} for s in starts] or [{**defaults, **baseline}]
     if len(starts) > 1 or len(shares) > 1 or refine:
         starts = [screen_starts(fit_pts, rig, crig, starts, shares, refine)]
@@ -356,7 +366,7 @@ def fit_member(a: tuple) -> tuple:
                                  shares=cand.shares, refine=cand.refine,
                                  full_refit="simulation" if on_sim else cand.full_refit,
                                  effect_fit="simulation" if on_sim else cand.effect_fit,
-                                 log_names=cand.log_names)
+                                 log_names=cand.log_names, impact_fit=cand.impact_fit)
     crig = rig.with_components([*rig.components, comp])
     if not res.parameters:
         return name, res, [], [], crig

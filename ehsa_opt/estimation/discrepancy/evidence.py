@@ -38,6 +38,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from .fit import PreparedTest, force_relative_error_percent
+from .impacts import impact_record, judge_on_impacts
 
 __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
            "effective_samples", "delta_bic", "floor_noise_std", "force_noise_floor_percent",
@@ -453,6 +454,8 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     c.earns_by = ("total excess" if by_total else "own evidence") if (by_total or by_own) \
         else ""
     c.earns = bool((by_total or by_own) and c.resolved)
+    if impact_record(res) is not None and cur_ev_pred is not None:
+        judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]

@@ -16,8 +16,8 @@ Euler tracks its slow manifold with the right first-order lag).  The objective i
 the Gaussian log-likelihood of force (and voltage) residuals, each channel
 scaled by its noise level estimated from the measured signal itself
 (:func:`noise_std`).  Parameters are scaled by typical magnitudes; bounds come
-from :data:`~ehsa_opt.physics.params.FRICTION_RANGES` (widened) and each component's
-``ParamSpec``; IPOPT's return status is checked and reported.
+from :data:`BASE_SPECS` (the discrepancy's override of the declared base parameters) and
+each component's ``ParamSpec``; IPOPT's return status is checked and reported.
 
 Forward predictions for held-out tests are true simulations (CVODES, one
 unrecorded warm-up cycle for sine tests), never collocation.
@@ -37,16 +37,18 @@ from ...physics import BenchModel
 from ...physics.bench_sim import simulate_bench
 from ...physics.components import Component, ParamSpec
 from ...physics.motion import FilteredMotion, SineMotion
+from ...physics.base_parameters import Parameter, override
 from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .. import core
 from ..collocation import given_block, theta_block
 from ..given_fit import GivenFit, fit_given
 from ..identify_options import IdentifyOptions, estimate_motion
 from ..identify_result import force_relative_error_percent
+from ..starts import Starts, draw_starts
 
 __all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
            "fit_group", "predict", "FilteredMotion", "force_relative_error_percent",
-           "linear_baseline", "param_scale", "BASE_SPECS"]
+           "linear_baseline", "param_scale", "BASE_SPECS", "DISCREPANCY_PARAMETERS"]
 
 NUT_NAMES = FRICTION_NAMES[:4]
 
@@ -55,24 +57,21 @@ NO_GENERATOR_FIXED: dict[str, float] = {
     "load_ohm": 1.0, "bearing_breakaway_Nm": 0.0, "bearing_coulomb_Nm": 0.0,
     "bearing_breakaway_velocity_rad_per_s": 1.0, "bearing_viscous_Nms_per_rad": 0.0}
 
-#: Bounds and typical scales of the base parameters (bounds wider than the
-#: distributor ranges of :data:`~ehsa_opt.physics.params.FRICTION_RANGES`, which are for
-#: drawing starts, not limits).
-BASE_SPECS: dict[str, ParamSpec] = {
-    "nut_breakaway_N": ParamSpec("nut_breakaway_N", "N", 50.0, 0.0, 2000.0),
-    "nut_coulomb_N": ParamSpec("nut_coulomb_N", "N", 30.0, 0.0, 2000.0),
-    "nut_breakaway_velocity_m_per_s": ParamSpec("nut_breakaway_velocity_m_per_s", "m/s", 0.01,
-                                                2e-4, 0.5),
-    "nut_viscous_Ns_per_m": ParamSpec("nut_viscous_Ns_per_m", "N s/m", 150.0, 0.0, 1e4),
-    "bearing_breakaway_Nm": ParamSpec("bearing_breakaway_Nm", "N m", 0.02, 0.0, 1.0),
-    "bearing_coulomb_Nm": ParamSpec("bearing_coulomb_Nm", "N m", 0.015, 0.0, 1.0),
-    "bearing_breakaway_velocity_rad_per_s": ParamSpec("bearing_breakaway_velocity_rad_per_s",
-                                                      "rad/s", 1.0, 0.01, 50.0),
-    "bearing_viscous_Nms_per_rad": ParamSpec("bearing_viscous_Nms_per_rad", "N m s/rad", 3e-5,
-                                             0.0, 1e-2),
-    "inertia_kg": ParamSpec("inertia_kg", "kg", 50.0, 0.0, 1e4, "moving mass M"),
-    "offset_N": ParamSpec("offset_N", "N", 0.0, -1e3, 1e3, "force offset"),
-}
+#: The base parameters in the discrepancy fit: a named override of
+#: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`.
+DISCREPANCY_PARAMETERS: dict[str, Parameter] = override(
+    "discrepancy",
+    "the likelihood fit also serves rigs other than the prototype (EMPS, other generators), so "
+    "its bounds are wider than the identification's distributor ends, yet finite and well "
+    "inside the physical ones so the scaled NLP stays well conditioned",
+    {"nut_breakaway_N": (0.0, 2000.0), "nut_coulomb_N": (0.0, 2000.0),
+     "nut_breakaway_velocity_m_per_s": (2e-4, 0.5), "nut_viscous_Ns_per_m": (0.0, 1e4),
+     "bearing_breakaway_Nm": (0.0, 1.0), "bearing_coulomb_Nm": (0.0, 1.0),
+     "bearing_breakaway_velocity_rad_per_s": (0.01, 50.0),
+     "bearing_viscous_Nms_per_rad": (0.0, 1e-2), "offset_N": (-1e3, 1e3)})
+#: The same as ``ParamSpec`` (default: the typical value, which also sets :func:`param_scale`).
+BASE_SPECS: dict[str, ParamSpec] = {n: ParamSpec(n, q.unit, q.typical, q.lower, q.upper, q.doc)
+                                    for n, q in DISCREPANCY_PARAMETERS.items()}
 
 
 def param_scale(spec: ParamSpec) -> float:
@@ -113,6 +112,15 @@ class Rig:
     def base_names(self) -> list[str]:
         return list(FRICTION_NAMES) if self.has_generator else ["inertia_kg", "offset_N",
                                                                  *NUT_NAMES]
+
+
+def parallel_filter(time_s: np.ndarray, y: np.ndarray, cutoff_hz: float) -> np.ndarray:
+    """``y`` through the zero-phase 4th-order Butterworth low-pass that
+    :class:`~ehsa_opt.physics.motion.FilteredMotion` applies to the displacement."""
+    from scipy.signal import butter, filtfilt
+    dt = float(np.median(np.diff(np.asarray(time_s, float))))
+    b, a = butter(4, min(2.0 * cutoff_hz * dt, 0.99))
+    return filtfilt(b, a, np.asarray(y, float))
 
 
 def noise_std(y: np.ndarray) -> float:
@@ -194,6 +202,11 @@ def prepare_tests(tests: Sequence[BenchTest], has_generator: bool = True,
         ys = [t.force_N] + ([t.voltage_V] if has_generator and t.voltage_V is not None else [])
         y = np.vstack(ys)
         sig = np.array([noise_std(row) for row in y])
+        if isinstance(motion, FilteredMotion) and not has_generator:
+            # parallel filtering (the inverse-model practice the EMPS reference uses): the
+            # force through the motion's own zero-phase low-pass, so that model and
+            # measurement hold the same band; σ stays the raw force's noise level
+            y = np.vstack([parallel_filter(t.time_s, row, motion.cutoff_hz) for row in y])
         fixed = {"load_ohm": float(t.load_ohm)} if has_generator else dict(NO_GENERATOR_FIXED)
         out.append(PreparedTest(t, motion, t.time_s, u, y, sig, fixed, weight, mass_kg))
     return out
@@ -310,23 +323,19 @@ def _fine_grid(t: np.ndarray, M: int) -> np.ndarray:
 
 
 _ORDER = (("nut_breakaway_N", "nut_coulomb_N"), ("bearing_breakaway_Nm", "bearing_coulomb_Nm"))
-#: Weight, relative to a resolved sample's, of a left-out sample (corner, dwell or end
-#: window of a recorded test) in the collocation objective only.  Zero would leave the
-#: initial states of a record whose first samples are left out undetermined: the
-#: backward-Euler current decays by (1 + h R/L) per sample, so an initial current of
-#: any size is invisible after the end window, and IPOPT diverges along that direction
-#: ("Diverging_Iterates" at the optimum's objective).  At 1e-3 the pull keeps those
-#: states at the measurements' scale and changes the fit by far less than its noise;
-#: the reported SSEs and errors still use the resolved samples only.
+#: Weight of a left-out sample (relative to a resolved one) in the collocation objective
+#: only: at zero the initial current of a record whose first samples are left out is free
+#: and IPOPT diverges along it (docs/recorded_motions.md); errors use resolved samples.
 WINDOW_WEIGHT = 1e-3
 #: IPOPT statuses whose point is kept (an iteration cap still leaves an improved point).
 _USABLE = ("Solve_Succeeded", "Solved_To_Acceptable_Level", "Maximum_Iterations_Exceeded")
 
 
-def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mapping[str, float]],
+def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
               *, free: Sequence[str] | None = None, fixed: Mapping[str, float] | None = None,
               max_iter: int = 300, regularisation: float = 1e-6,
-              max_cpu_s: float | None = None, substeps: int | None = None) -> FitOutcome:
+              max_cpu_s: float | None = None, substeps: int | None = None,
+              seed: int = 0) -> FitOutcome:
     """Fit one parameter set to all ``prepared`` tests: the likelihood objective on the
     estimation core (:mod:`ehsa_opt.estimation.core`, ``theta`` transcription).
 
@@ -334,9 +343,10 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     ----------
     prepared : list of PreparedTest
     rig : Rig
-    starts : list of dict
-        Initial parameter values (missing names: ParamSpec defaults); the best
-        converged start is kept.
+    starts : int or list of dict
+        Start points (missing names: ParamSpec defaults), or a number of points drawn
+        (seeded by ``seed``) in the declared start ranges (:mod:`ehsa_opt.estimation.starts`);
+        the best converged start is kept.
     free : list of str, optional
         Names to fit (default: all base names and all component parameters).
     fixed : dict, optional
@@ -353,6 +363,8 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
         Collocation sub-intervals per sample interval (default 1: at 1 kHz the
         collocation objective at the true backlash parameters matches the CVODES
         simulation's within 1 %).
+    seed : int
+        Seed of the drawn start points (when ``starts`` is a number).
     """
     if max_cpu_s is not None:
         import warnings
@@ -368,6 +380,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     fixed = dict(fixed or {})
     if not rig.has_generator:
         fixed = {**NO_GENERATOR_FIXED, **fixed}
+    starts = draw_starts(model, free, starts, seed, where="fit_group")
     space = core.ParamSpace(tuple(model.param_names), tuple(free),
                             tuple(specs[n].lower for n in free),
                             tuple(specs[n].upper for n in free),
@@ -417,8 +430,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
     usable = [r for r in recs if (r.success or r.status in _USABLE) and np.isfinite(r.objective)]
     if not usable:  # one restart from where the failed solves stopped
         extra = _restart(nlp, blocks, grids, recs, space, model, prepared, z0s[0],
-                         lambda vals: {n: (vals[n] if n in free else default_of(n))
-                                       for n in names})
+                         lambda v: {n: (v[n] if n in free else default_of(n)) for n in names})
         records += [{"status": r.status, "success": r.success, "objective": r.objective,
                      "iterations": r.iterations, "restart": True} for r in extra]
         usable = [r for r in extra if (r.success or r.status in _USABLE)
@@ -439,19 +451,15 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Sequence[Mappi
 
 
 def _nlp_weights(pt: PreparedTest) -> np.ndarray:
-    """(ny, N) residual weights of the collocation objective: the resolved samples over
-    the noise level, the left-out ones at :data:`WINDOW_WEIGHT` of that."""
+    """(ny, N) collocation residual weights (left-out samples at :data:`WINDOW_WEIGHT`)."""
     return np.maximum(pt.weight, WINDOW_WEIGHT)[None, :] / pt.sigma[:, None]
 
 
 def _restart(nlp: core.NLP, blocks: Sequence[Any], grids: Sequence[np.ndarray],
              recs: Sequence[Any], space: core.ParamSpace, model: BenchModel,
              prepared: Sequence[PreparedTest], zref: np.ndarray, values: Any) -> list:
-    """One more IPOPT solve after every start failed: from the failed solves'
-    parameters (:func:`_restart_point`) with states re-simulated from them (a feasible
-    start near where IPOPT stopped).  ``values(dict of varied values)`` gives the model
-    parameters.  Returns the new solve records (empty when there is no finite point or
-    the simulator refuses it)."""
+    """One more IPOPT solve after every start failed, from the failed point
+    (:func:`_restart_point`) with states re-simulated; [] when there is none."""
     z_r = _restart_point(recs, space)
     if z_r is None:
         return []
@@ -466,8 +474,7 @@ def _restart(nlp: core.NLP, blocks: Sequence[Any], grids: Sequence[np.ndarray],
 
 
 def _restart_point(recs: Sequence[Any], space: core.ParamSpace) -> np.ndarray | None:
-    """Scaled parameters to restart from after every start failed: the finite failed
-    point of lowest objective, clipped into the bounds (None if there is none)."""
+    """The finite failed point of lowest objective, clipped into the bounds, or None."""
     pts = [r for r in recs if np.all(np.isfinite(r.w[:space.nv])) and np.isfinite(r.objective)]
     if not pts:
         return None

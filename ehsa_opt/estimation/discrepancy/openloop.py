@@ -49,7 +49,14 @@ def _accel(w: float, u: float, p: Mapping[str, float]) -> float:
 
 def open_loop_position(time_s: np.ndarray, force_N: np.ndarray, q0_m: float,
                        params: Mapping[str, float]) -> np.ndarray:
-    """Position simulated from the measured force (RK4, zero-order hold)."""
+    """Position simulated from the measured force (RK4, zero-order hold); with
+    ``drive_lag_time_constant_s`` (and ``drive_delay_s``) in ``params`` the force is
+    first passed through the drive (:func:`~.candidates.drive_lag.applied_force`)."""
+    if params.get("drive_lag_time_constant_s", 0.0) or params.get("drive_delay_s", 0.0):
+        from .candidates.drive_lag import applied_force
+        force_N = applied_force(time_s, force_N, float(params.get("drive_lag_time_constant_s",
+                                                                  0.0)),
+                                float(params.get("drive_delay_s", 0.0)))
     q, w = float(q0_m), 0.0
     out = np.empty(time_s.size)
     out[0] = q
@@ -120,7 +127,7 @@ def validation_summary(test, base_params: Mapping[str, float], final_params: Map
     per_effect = {}
     for name, params in (effects or {}).items():
         r = open_loop_error(t, F, q, params)
-        r["simulated"] = name == "asymmetric_friction"
+        r["simulated"] = name in ("asymmetric_friction", "drive_lag")
         per_effect[name] = r
     return {"force_error_before": err_before, "force_error_after": err_after,
             "best_published_mm": BEST_PUBLISHED_MM,

@@ -1,7 +1,8 @@
 """Results and settings of the model-discrepancy workflow: :class:`DiscrepancySettings`
 (validated at construction), :class:`CandidateResult` (one candidate's re-identification
 and its evidence) and :class:`DiscrepancyResult` (what :func:`~.workflow.run_discrepancy`
-returns; ``.plot()`` delegates to :mod:`ehsa_opt.plots.discrepancy`)."""
+returns; ``.plot()`` returns the figures and ``.write()`` writes them, both delegating to
+:mod:`ehsa_opt.plots.discrepancy`)."""
 
 from __future__ import annotations
 
@@ -62,7 +63,7 @@ class DiscrepancySettings:
         and the result says where it was cut (``success`` False, ``cut`` the reason).
     """
 
-    candidates: tuple[str, ...] = (*CANDIDATES, "force_lag")
+    candidates: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag")
     top: int = 3
     max_effects: int = 3
     max_tests: int | None = None
@@ -79,10 +80,11 @@ class DiscrepancySettings:
                                               and self.budget_s > 0):
             raise ValueError(f"DiscrepancySettings: budget_s must be None or a number of "
                              f"seconds > 0, got {self.budget_s!r}")
-        unknown = [c for c in self.candidates if c not in CANDIDATES and c != "force_lag"]
+        unknown = [c for c in self.candidates if c not in CANDIDATES
+                   and c not in ("drive_lag", "force_lag")]
         if unknown:
             raise ValueError(f"DiscrepancySettings: unknown candidates {unknown} "
-                             f"(known: {', '.join(CANDIDATES)})")
+                             f"(known: {', '.join((*CANDIDATES, 'drive_lag', 'force_lag'))})")
         for name in ("top", "max_effects", "jobs"):
             v = getattr(self, name)
             if not (isinstance(v, int) and v >= 1):
@@ -266,8 +268,16 @@ class DiscrepancyResult:
                 "candidates": [c.as_dict() for c in self.candidates],
                 "seconds": self.seconds}
 
-    def plot(self, out_dir: str | Path) -> list[Path]:
-        """Write the report's figures into ``out_dir`` (delegates to plots.discrepancy)."""
+    def plot(self, ax=None) -> dict:
+        """The report's figures keyed by file name (residual maps, zoom, per-test errors,
+        ranking), writing nothing; multi-panel figures, so ``ax`` is accepted for the
+        common protocol and not used. Delegates to :mod:`ehsa_opt.plots.discrepancy`."""
+        from ...plots import discrepancy as pd
+        return pd.figures(self)
+
+    def write(self, out_dir: str | Path) -> list[Path]:
+        """Write the report's figures into ``out_dir`` as PNG files (atomically); returns
+        their paths."""
         from ...plots import discrepancy as pd
         return pd.all_figures(self, Path(out_dir))
 

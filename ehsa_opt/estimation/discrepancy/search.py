@@ -30,6 +30,7 @@ from .candidates import (
     compatible,
     components_for,
     fit_flexibility_member,
+    flexibility_refusal,
     signature_scores,
 )
 from .evidence import (
@@ -47,6 +48,7 @@ from .evidence import (
     sse_can_earn,
 )
 from .fit import PreparedTest, Rig
+from .impacts import impact_record
 from .lookahead import (
     confounded,
     confounded_first,
@@ -181,6 +183,10 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         all_cands += [rk.cands[n] for n in rk.order]
         return False, joint
     judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True)
+    if rk.flex_out is not None and not rk.cands["flexibility"].earns:
+        note = flexibility_refusal(rk.cands["flexibility"], rk.flex_out[1], rnd)
+        say(note)
+        notes.append(note)
     earning, first, blocked = widen_round(rnd, rk, tests, state, settings, judge, say)
     all_cands += [rk.cands[n] for n in rk.order]
     if first is not None and not first.earns and (rnd == settings.max_effects
@@ -204,6 +210,13 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         win.earns = False
         return False, joint
     joint = add_winner(rnd, win, first, joint, tests, state, say)
+    if impact_record(win.fit) is not None and state.remaining:
+        note = (f"round {rnd}: {win.effect} was fitted and judged on transient energies and "
+                f"kinematic gaps (a rattling contact): the model's sample-wise residual is "
+                f"not reproducible, so no further effect is searched on it")
+        say(note)
+        notes.append(note)
+        return False, joint
     return bool(state.remaining), joint
 
 
@@ -320,6 +333,10 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
     earning = [c for c in cands.values() if c.earns]
     first = blocked = None
     if state.cut or not should_widen(earning, can_earn(state.error, tests.floor, 0.0, 1.0)):
+        return earning, first, blocked
+    if any(impact_record(c.fit) is not None for c in earning):
+        # a rattling contact earned on its impacts: the sample-wise share of the excess
+        # it removes measures the chaos, not what is left unexplained
         return earning, first, blocked
     more = [n for n in order if n not in rk.chosen and rk.scores[n]["applicable"]
             and n != "flexibility" and compatible(state.rig, rk.comps[n])]

@@ -58,7 +58,7 @@ from typing import Any
 from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
 from ..identify_options import MIN_RESOLVED_SAMPLES
-from .candidates import CANDIDATES, try_lag
+from .candidates import CANDIDATES, try_drive_lag, try_lag
 from .deadline import deadline_set
 from .evidence import effective_samples, force_error_percent, force_noise_floor_percent
 from .fit import FitOutcome, Rig, fit_group, linear_baseline, predict, prepare_tests
@@ -75,7 +75,7 @@ from .split import crop_test, load_split, spread
 from .terms import TermProposal, propose_term
 
 __all__ = ["run_discrepancy", "load_data", "prepare_search_tests", "fit_baseline", "Baseline",
-           "name_force_lag", "assemble_result"]
+           "name_force_lag", "name_drive_lag", "assemble_result"]
 
 
 def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings | None = None,
@@ -106,7 +106,17 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     base = fit_baseline(tests, settings, say)
     state = base.state(settings)
     all_cands: list[CandidateResult] = []
-    if settings.discover and "force_lag" in settings.candidates:
+    # the recorded tests (the open-loop metric's input, whatever the members change)
+    raw = ([pt.test for pt in tests.fit_pts], [pt.test for pt in tests.held_pts])
+    if "drive_lag" in settings.candidates and not tests.rig.has_generator:
+        state = name_drive_lag(tests, base, state, settings, say, all_cands, notes)
+    if "drive_lag" in state.effects and "force_lag" in settings.candidates:
+        # a channel delay would describe the same lead of the recorded force again
+        note = ("force_lag not searched: the drive lag already describes the recorded "
+                "force's lead")
+        say(note)
+        notes.append(note)
+    elif settings.discover and "force_lag" in settings.candidates:
         state = name_force_lag(tests, base, state, settings, say, all_cands)
     state = run_rounds(tests, state, settings, say, notes, all_cands)
     term = None
@@ -119,7 +129,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 f"{term.error_before:.3f} -> {term.error_after:.3f} % "
                 f"({'earns' if term.earns else 'does not earn'})")
     return assemble_result(data, tests, base, state, all_cands, term, notes,
-                           time.perf_counter() - t_start)
+                           time.perf_counter() - t_start, raw)
 
 
 def load_data(data: BenchData | str | Path, say, notes: list[str]) -> BenchData:
@@ -241,11 +251,44 @@ def name_force_lag(tests: SearchTests, base: Baseline, state: SearchState,
     return state
 
 
+def name_drive_lag(tests: SearchTests, base: Baseline, state: SearchState,
+                   settings: DiscrepancySettings, say, all_cands: list,
+                   notes: list[str]) -> SearchState:
+    """The ``drive_lag`` member (:func:`~.candidates.drive_lag.try_drive_lag`, a rig
+    without generator) tried on the baseline; when it earns, the tests' force is the
+    applied force from here on (``tests`` — with its noise floor — and ``base``'s
+    outputs changed in place: later effects are judged on what remains) and the state
+    starts from the baseline refitted on it."""
+    driven = try_drive_lag(tests.fit_pts, tests.held_pts, tests.rig, base.fit, state.fit_pred,
+                           state.held_pred, tests.floor, state.n_eff_fit, state.n_eff_held,
+                           base.error, settings, say)
+    if driven is None:
+        return state
+    fit_pts, held_pts, base_d, cur_fit, cur_held, cur_err, fields, floor, dnotes = driven
+    all_cands.append(CandidateResult(**fields))
+    notes += dnotes
+    tests.fit_pts, tests.held_pts, tests.floor = fit_pts, held_pts, floor
+    state.params = dict(base_d.parameters)
+    state.fit_pred, state.held_pred, state.error = cur_fit, cur_held, cur_err
+    state.effects.append("drive_lag")
+    state.steps.append({"effect": "drive_lag", "error_after": fields["error_after"],
+                        "error_after_on_applied_force": cur_err,
+                        "excess_reduction": fields["excess_reduction"],
+                        "parameters": fields["parameters"]})
+    state.n_eff_fit = effective_samples(fit_pts, cur_fit)
+    state.n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
+    tests.sub_pts = spread(fit_pts, settings.max_fit_tests)
+    base.fit_pred = predict(fit_pts, tests.rig, base.fit.parameters)  # on the applied force
+    base.held_pred = predict(held_pts, tests.rig, base.fit.parameters) if held_pts else []
+    return state
+
+
 def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: SearchState,
                     all_cands: list, term: TermProposal | None, notes: list[str],
-                    seconds: float) -> DiscrepancyResult:
+                    seconds: float, raw: tuple | None = None) -> DiscrepancyResult:
     """The named effect(s), the message, the localisation of the final residual and,
-    on a validation set of a rig without generator, the open-loop validation."""
+    on a validation set of a rig without generator, the open-loop validation
+    (``raw``: the recorded fit and held-out tests, before any member changed them)."""
     fit_pts, held_pts, evaluation, floor = (tests.fit_pts, tests.held_pts, tests.evaluation,
                                             tests.floor)
     effects, err0, cur_err = state.effects, base.error, state.error
@@ -268,7 +311,8 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
         msg += f"; proposed term: {term.description}"
     validation = None
     if evaluation == "validation set" and not tests.rig.has_generator:
-        validation, extra = _open_loop_validation(held_pts, base, state, all_cands)
+        raw = raw or ([pt.test for pt in fit_pts], [pt.test for pt in held_pts])
+        validation, extra = _open_loop_validation(raw, base, state, all_cands)
         msg += extra
     return DiscrepancyResult(
         ok, msg, effect, err0, cur_err, evaluation, all_cands, base.fit, tests.rig, fit_pts,
@@ -278,22 +322,48 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
         state.cut)
 
 
-def _open_loop_validation(held_pts: list, base: Baseline, state: SearchState,
+def _open_loop_validation(raw: tuple, base: Baseline, state: SearchState,
                           all_cands: list) -> tuple[dict, str]:
-    """The open-loop validation of the EMPS benchmark (:mod:`.openloop`) and the
-    sentence the message gains."""
+    """The open-loop validation of the EMPS benchmark (:mod:`.openloop`) on the
+    recorded tests ``raw`` = (fit tests, held-out tests), with the metric after an
+    output-error refit (:mod:`.outputerror`) of the baseline and of the model after
+    each named effect, and the sentence the message gains."""
     from .openloop import BEST_PUBLISHED_MM, direction_dependent, validation_summary
-    fitted = {c.effect: c.fit.parameters for c in all_cands
-              if c.fitted and c.fit is not None and c.fit.parameters and c.round == 1}
-    validation = validation_summary(held_pts[0].test, base.fit.parameters, state.params,
+    from .outputerror import output_error_rows
+    fit_raw, held_raw = raw
+    # a named drive lag acts on the force of every model simulated after it
+    drive = next((dict(c.parameters) for c in all_cands
+                  if c.effect == "drive_lag" and c.earns), {})
+    fitted: dict = {}  # each effect's first fit (on the model before the rounds)
+    for c in all_cands:
+        if c.fitted and c.fit is not None and c.fit.parameters:
+            fitted.setdefault(c.effect, {**drive, **c.fit.parameters})
+    validation = validation_summary(held_raw[0], base.fit.parameters, {**state.params, **drive},
                                     base.error, state.error, fitted)
+    # the metric after an output-error refit on the fit record, for the baseline and the
+    # model after each named effect (parameters started from the inverse model's)
+    named: dict = {}
+    for c in all_cands:
+        if c.earns and c.effect in state.effects and c.fit is not None and c.fit.parameters:
+            named[c.effect] = c
+    models = [("baseline", dict(base.fit.parameters))]
+    for k, name in enumerate(state.effects):
+        if name in named:
+            models.append((" + ".join(state.effects[:k + 1]),
+                           {**drive, **named[name].fit.parameters}))
+    if len(fit_raw) == 1:
+        validation["output_error"] = output_error_rows(fit_raw[0], held_raw[0], models)
     asym = [c for c in all_cands if c.effect == "asymmetric_friction" and c.fitted
             and c.fit is not None and c.fit.parameters]
     if asym:
         validation["direction_dependent"] = direction_dependent(asym[-1].fit)
+    oe = validation.get("output_error") or []
     return validation, (
         f"; open-loop position error on the validation record (the benchmark's "
         f"metric) {validation['open_loop_final']['rms_mm']:.2f} mm "
         f"(reference IDIM-LS parameters "
         f"{validation['open_loop_reference_parameters']['rms_mm']:.2f} mm, best "
-        f"published {BEST_PUBLISHED_MM} mm)")
+        f"published {BEST_PUBLISHED_MM} mm)"
+        + (f"; {oe[-1]['rms_mm']:.2f} mm with the parameters refitted by output error on the "
+           f"fit record ({oe[-1]['model']}; the baseline so refitted {oe[0]['rms_mm']:.2f} mm)"
+           if oe else ""))

@@ -22,3 +22,107 @@ def test_reproducibility_flags_a_rattling_steel_contact(stiffness, gap, rattles)
     rig = Rig(spec.harvester, True, (make_component("backlash"),))
     change = reproducibility(pts, rig, {**spec.friction.as_dict(), **truth})
     assert (change > 3.0) if rattles else (change < 0.01)
+
+
+# ------------------------------------------------------------------ the impact-aware fit
+from ehsa_opt.estimation.discrepancy.fit import predict  # noqa: E402
+from ehsa_opt.estimation.discrepancy.impacts import (  # noqa: E402
+    IMPACT_ENERGY_RATIO,
+    fit_candidate_on_impacts,
+    fit_impacts,
+    impact_energy_ratio,
+    kinematic_gap,
+    transient_energies,
+)
+
+import numpy as np  # noqa: E402
+
+GAP, K, C = ("backlash_gap_m", "backlash_contact_stiffness_N_per_m",
+             "backlash_contact_damping_Ns_per_m")
+
+
+def _campaign(stiffness, gap, frequencies=(2.0, 3.0), loads=(47.0, 109.0), seed=1):
+    truth = {GAP: gap, K: stiffness, C: 8e3}
+    spec = SyntheticSpec(effects={"backlash": truth}, frequencies_hz=frequencies,
+                         loads_ohm=loads, seed=seed)
+    return spec, truth, prepare_tests(generate_bench_tests(spec), True)
+
+
+def test_transient_energies_of_pure_noise_are_zero_within_their_spread():
+    rng = np.random.default_rng(0)
+    y = np.vstack([rng.normal(0, 2.0, 4000), rng.normal(0, 0.05, 4000)])
+    e, s = transient_energies(y, np.array([2.0, 0.05]))
+    assert np.all(np.abs(e) < 4 * s)
+    e_clean, _ = transient_energies(np.zeros((2, 4000)))
+    assert np.all(e_clean == 0)
+
+
+@pytest.mark.parametrize("stiffness,gap", [(1e8, 3e-4), (5e6, 1e-4)])
+def test_kinematic_gap_of_data_and_of_its_simulation_agree(stiffness, gap):
+    """The rotor's travel relative to the rod between fast strokes (from the voltage alone)
+    is the gap plus the contact deflection; the simulation at the truth gives the same."""
+    spec, truth, pts = _campaign(stiffness, gap, frequencies=(2.0,), loads=(47.0,))
+    rig = Rig(spec.harvester, True, (make_component("backlash"),))
+    g_data, se, n = kinematic_gap(pts[0], spec.harvester)
+    g_sim = kinematic_gap(pts[0], spec.harvester,
+                          predict(pts, rig, {**spec.friction.as_dict(), **truth})[0][1])[0]
+    assert n >= 3
+    deflection = 2 * 150.0 / stiffness  # ~150 N through the contact at mid-stroke
+    assert abs(g_data - (gap + deflection)) < 0.1 * gap
+    assert abs(g_sim - g_data) < 3 * se + 0.02 * g_data
+
+
+def test_a_soft_contact_keeps_the_sample_wise_fit():
+    """The prototype's 0.1 mm / 5e6 N/m contact holds no impacts beyond the rigid model's
+    (energy ratio ~2 < threshold): its candidate fit is unchanged (the route declines)."""
+    spec, truth, pts = _campaign(5e6, 1e-4, frequencies=(2.0,), loads=(47.0, 109.0))
+    rig = Rig(spec.harvester, True, ())
+    crig = Rig(spec.harvester, True, (make_component("backlash"),))
+    start = {**make_component("backlash").defaults(), **spec.friction.as_dict()}
+    assert impact_energy_ratio(pts, predict(pts, rig, start)) < IMPACT_ENERGY_RATIO
+    assert fit_candidate_on_impacts("backlash", pts, [], rig, crig, start, None) is None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stiffness,gap", [(1e8, 3e-4), (3e8, 3e-4), (1e9, 3e-4)])
+def test_impact_aware_fit_recovers_a_stiff_contact(stiffness, gap):
+    """Gap within 10 %, contact stiffness within 30 %, from the true friction and the
+    component's default start (5e6 N/m), on four sine tests (2 and 3 Hz, 47 and 109 ohm).
+    (A soft contact is not fitted this way: see test_a_soft_contact_keeps_the_sample_wise_fit.)"""
+    spec, truth, pts = _campaign(stiffness, gap)
+    rig = Rig(spec.harvester, True, (make_component("backlash"),))
+    start = {**make_component("backlash").defaults(), **spec.friction.as_dict()}
+    res = fit_impacts(pts, rig, start)
+    assert res.evaluations <= 48
+    assert abs(res.parameters[GAP] / gap - 1) < 0.10, res.message
+    assert abs(res.parameters[K] / stiffness - 1) < 0.30, res.message
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stiffness", [
+    1e8,
+    # open work: with the rigid baseline's friction the fit settles at 4.0e8 N/m (gap
+    # 0.279 mm) and its held-out feature objective is 11.9 > 10, so nothing is named; with
+    # the true friction the same fit recovers 1e9 N/m (test above)
+    pytest.param(1e9, marks=pytest.mark.xfail(reason="friction from the rigid baseline "
+                                                     "misleads the 1e9 N/m fit", strict=False)),
+])
+def test_discrepancy_names_a_stiff_backlash(stiffness, tmp_path):
+    """The workflow on a nine-test campaign (1, 2, 3 Hz x 15, 47, 109 ohm) with a 0.3 mm
+    gap and a steel-like contact names backlash with the gap within 10 % and the contact
+    stiffness within 30 % (the contact is fitted and judged on impacts)."""
+    import json
+
+    from ehsa_opt.cli import main
+    data = tmp_path / "data"
+    assert main(["bench", "generate", str(data), "--effect", "backlash",
+                 "--effect-param", "backlash_gap_m=3e-4",
+                 "--effect-param", f"backlash_contact_stiffness_N_per_m={stiffness:g}",
+                 "--frequencies-hz", "1,2,3", "--loads-ohm", "15,47,109", "--seed", "1"]) == 0
+    out = tmp_path / "out"
+    main(["discrepancy", str(data), "--out", str(out)])
+    doc = json.loads((out / "discrepancy.json").read_text())
+    assert doc["effect"] == "backlash"
+    win = next(c for c in doc["candidates"] if c["effect"] == "backlash")
+    assert abs(win["parameters"][GAP] / 3e-4 - 1) < 0.10
+    assert abs(win["parameters"][K] / stiffness - 1) < 0.30

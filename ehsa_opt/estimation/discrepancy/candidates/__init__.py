@@ -19,9 +19,10 @@ from .catalogue import (
     components_for,
     signature_scores,
 )
-from .flexibility import fit_flexibility, fit_flexibility_member
+from .drive_lag import try_drive_lag
+from .flexibility import fit_flexibility, fit_flexibility_member, flexibility_refusal
 from .force_lag import try_lag
 
 __all__ = ["CANDIDATES", "Candidate", "absorbed_columns", "candidate_names", "compatible",
            "components_for", "signature_scores", "fit_flexibility", "fit_flexibility_member",
-           "try_lag"]
+           "flexibility_refusal", "try_lag", "try_drive_lag"]

@@ -73,6 +73,10 @@ class Candidate:
         the effect earns only when the ~95 % interval of one of them excludes zero
         (:func:`~ehsa_opt.estimation.discrepancy.evidence.significant`).  Empty for a transmission effect, whose
         absence is a limit (infinite stiffness), not a zero.
+    impact_fit : bool
+        A contact whose impacts the sample-wise fit cannot follow when stiff: when the
+        data's transient energy far exceeds the current model's, it is fitted on
+        transient energies and kinematic gaps (:mod:`..impacts`).
     """
 
     name: str
@@ -87,6 +91,7 @@ class Candidate:
     amplitudes: tuple[str, ...] = ()
     rigid_channels: tuple[int, ...] | None = None
     without_generator_only: bool = False
+    impact_fit: bool = False
 
     def applicable(self, rig: Rig) -> bool:
         if self.without_generator_only and rig.has_generator:
@@ -116,7 +121,7 @@ CANDIDATES: dict[str, Candidate] = {
         # solve on the default data's 6 fit tests (4 tests: 5 s) - IPOPT on a stiff
         # contact's defects; Gauss-Newton from the screened start costs seconds
         effect_fit="simulation", full_refit="simulation",
-        log_names=("backlash_contact_stiffness_N_per_m",)),
+        log_names=("backlash_contact_stiffness_N_per_m",), impact_fit=True),
     "asymmetric_friction": Candidate(
         "asymmetric_friction",
         probes=({"asym_coulomb_N": 5.0}, {"asym_viscous_Ns_per_m": 30.0}),

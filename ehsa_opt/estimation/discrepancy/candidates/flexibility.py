@@ -31,12 +31,17 @@ from ...covariance import hac_covariance
 from ..fit import FitOutcome, PreparedTest, Rig
 from .catalogue import absorbed_columns, compatible
 
-__all__ = ["flexibility_column", "fit_flexibility", "fit_flexibility_member", "FREQUENCIES_HZ",
-           "DAMPING_RATIOS"]
+__all__ = ["flexibility_column", "fit_flexibility", "fit_flexibility_member",
+           "flexibility_refusal", "FREQUENCIES_HZ", "DAMPING_RATIOS"]
 
-#: Resonance grid (Hz) and damping ratios searched.
-FREQUENCIES_HZ = tuple(float(f) for f in np.geomspace(5.0, 450.0, 41))
-DAMPING_RATIOS = (0.02, 0.05, 0.1, 0.2, 0.4, 0.7, 1.0)
+#: Coarse resonance grid (Hz) and damping ratios searched; the best coarse point (and
+#: the residual's spectral peak) are then refined on a finer local grid
+#: (:data:`FINE_STEPS`, :data:`FINE_DAMPING_STEPS`) and by Nelder–Mead.
+FREQUENCIES_HZ = tuple(float(f) for f in np.geomspace(5.0, 450.0, 13))
+DAMPING_RATIOS = (0.03, 0.1, 0.3, 1.0)
+#: Local refinement: frequency factors and damping factors around a coarse point.
+FINE_STEPS = tuple(float(x) for x in np.geomspace(0.75, 1.33, 5))
+FINE_DAMPING_STEPS = (0.5, 1.0, 2.0)
 
 
 def flexibility_column(pt: PreparedTest, frequency_hz: float, damping_ratio: float
@@ -50,12 +55,58 @@ def flexibility_column(pt: PreparedTest, frequency_hz: float, damping_ratio: flo
     return -lfilter(np.ravel(b), a, pt.u[2])
 
 
-def _design(pts: Sequence[PreparedTest], rig: Rig, u_brk: float, f: float, z: float
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """(absorbed columns, flexibility column) of the force channel, σ-normalised."""
-    B = np.vstack([absorbed_columns(pt, rig, u_brk)[:pt.y.shape[1]] for pt in pts])
+def _design(pts: Sequence[PreparedTest], rig: Rig, u_brk: float, f: float, z: float,
+            B: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(absorbed columns, flexibility column) of the force channel, σ-normalised
+    (``B``: the absorbed columns when already built — they do not depend on f, ζ)."""
+    if B is None:
+        B = np.vstack([absorbed_columns(pt, rig, u_brk)[:pt.y.shape[1]] for pt in pts])
     g = np.concatenate([flexibility_column(pt, f, z) / pt.sigma[0] for pt in pts])
     return B, g
+
+
+def _grid_search(fit_pts: Sequence[PreparedTest], B0: np.ndarray, r: np.ndarray,
+                 start_hz: float | None) -> tuple[tuple | None, tuple | None]:
+    """The best physical (m ≥ 0) and the best unconstrained (m < 0) resonance as
+    (SSE, f, ζ, m): a coarse grid and the residual's spectral peak, then a finer grid
+    around each of the two."""
+    # the absorbed columns projected out once: each (f, ζ) is then a one-column fit
+    Qb, _ = np.linalg.qr(B0)
+    r_perp = r - Qb @ (Qb.T @ r)
+    sse_b = float(r_perp @ r_perp)
+    best, best_neg, seen = None, None, set()
+
+    def visit(f: float, z: float) -> None:
+        nonlocal best, best_neg
+        key = (round(f, 6), round(z, 6))
+        if key in seen or not (1.0 <= f <= 2000.0 and 1e-3 <= z <= 5.0):
+            return
+        seen.add(key)
+        g = np.concatenate([flexibility_column(pt, f, z) / pt.sigma[0] for pt in fit_pts])
+        g_perp = g - Qb @ (Qb.T @ g)
+        gg = float(g_perp @ g_perp)
+        if gg <= 0:
+            return
+        m = float(g_perp @ r_perp) / gg
+        sse = sse_b - m * m * gg
+        if m < 0:
+            if best_neg is None or sse < best_neg[0]:
+                best_neg = (sse, f, z, m)
+            return
+        if best is None or sse < best[0]:
+            best = (sse, f, z, m)
+
+    starts = list(FREQUENCIES_HZ)
+    if start_hz is not None and math.isfinite(start_hz):
+        starts.append(float(start_hz))
+    for f in starts:
+        for z in DAMPING_RATIOS:
+            visit(f, z)
+    for anchor in [b for b in (best, best_neg) if b is not None]:
+        for k in FINE_STEPS:
+            for q in FINE_DAMPING_STEPS:
+                visit(anchor[1] * k, anchor[2] * q)
+    return best, best_neg
 
 
 def fit_flexibility(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.ndarray],
@@ -89,22 +140,12 @@ def fit_flexibility(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.ndarr
                          "elastic transmission is the compliance candidate)")
     u_brk = float(params.get("nut_breakaway_velocity_m_per_s", 0.01))
     r = np.concatenate([(pt.y[0] - yp[0]) / pt.sigma[0] for pt, yp in zip(fit_pts, fit_pred)])
-    freqs = list(FREQUENCIES_HZ)
-    if start_hz is not None and math.isfinite(start_hz):
-        freqs += [float(f) for f in start_hz * np.geomspace(0.8, 1.25, 7)]
-    best, best_neg = None, None
-    for f in sorted(set(freqs)):
-        for z in DAMPING_RATIOS:
-            B, g = _design(fit_pts, rig, u_brk, f, z)
-            X = np.column_stack([B, g])
-            coef, *_ = np.linalg.lstsq(X, r, rcond=None)
-            sse = float(np.sum((r - X @ coef) ** 2))
-            if coef[-1] < 0:
-                if best_neg is None or sse < best_neg[0]:
-                    best_neg = (sse, f, z, float(coef[-1]))
-                continue
-            if best is None or sse < best[0]:
-                best = (sse, f, z, coef)
+    B0 = np.vstack([absorbed_columns(pt, rig, u_brk)[:pt.y.shape[1]] for pt in fit_pts])
+    best, best_neg = _grid_search(fit_pts, B0, r, start_hz)
+    if best is not None:
+        B, g = _design(fit_pts, rig, u_brk, best[1], best[2], B0)
+        coef, *_ = np.linalg.lstsq(np.column_stack([B, g]), r, rcond=None)
+        best = (best[0], best[1], best[2], coef)
     if best is None:  # every resonance asks for a negative mass
         return {"parameters": {}, "negative_mass": True,
                 "best_negative": {"flex_frequency_hz": best_neg[1],
@@ -116,7 +157,7 @@ def fit_flexibility(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.ndarr
 
     def vp(q: np.ndarray) -> float:
         f_, z_ = float(np.exp(q[0])), float(np.exp(q[1]))
-        B_, g_ = _design(fit_pts, rig, u_brk, f_, z_)
+        B_, g_ = _design(fit_pts, rig, u_brk, f_, z_, B0)
         X_ = np.column_stack([B_, g_])
         c_, *_ = np.linalg.lstsq(X_, r, rcond=None)
         if c_[-1] < 0:
@@ -124,12 +165,12 @@ def fit_flexibility(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.ndarr
         return float(np.sum((r - X_ @ c_) ** 2))
 
     opt = minimize(vp, np.log([best[1], best[2]]), method="Nelder-Mead",
-                   options={"xatol": 1e-3, "fatol": 1e-9 * best[0], "maxfev": 80})
+                   options={"xatol": 1e-3, "fatol": 1e-9 * best[0], "maxfev": 40})
     f, z = best[1], best[2]
     if opt.fun < best[0]:
         f = float(np.clip(np.exp(opt.x[0]), 1.0, 2000.0))
         z = float(np.clip(np.exp(opt.x[1]), 1e-3, 5.0))
-    B, g = _design(fit_pts, rig, u_brk, f, z)
+    B, g = _design(fit_pts, rig, u_brk, f, z, B0)
     X = np.column_stack([B, g])
     coef, *_ = np.linalg.lstsq(X, r, rcond=None)
     res = r - X @ coef
@@ -212,3 +253,23 @@ def fit_flexibility_member(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_pa
                      out.get("covariance_info"))
     return ("flexibility", res, out["fit_pred"], out["eval_pred"], crig)
 
+
+
+def flexibility_refusal(cand, fit, rnd: int) -> str:
+    """Why the two-mass flexibility (``cand``, its variable-projection ``fit``) is not
+    named, in words."""
+    info = ((fit.starts or [{}])[0] or {}).get("flexibility", {}) if fit is not None else {}
+    neg = info.get("best_negative") or {}
+    p = cand.parameters
+    msg = (f"round {rnd}: the two-mass flexibility is not named — its physical best "
+           + (f"(load mass {p['flex_load_mass_kg']:.3g} kg ≥ 0 at {p['flex_frequency_hz']:.3g} "
+              f"Hz, stiffness {p.get('flex_stiffness_N_per_m', math.nan):.3g} N/m) takes "
+              f"the error {cand.error_before:.3f} -> {cand.error_after:.3f} %"
+              if p else f"does not exist ({fit.message if fit is not None else ''})"))
+    if info.get("negative_mass"):
+        msg += (f"; the unconstrained best asks for a negative load mass "
+                f"({neg.get('flex_load_mass_kg', math.nan):.3g} kg at "
+                f"{neg.get('flex_frequency_hz', math.nan):.3g} Hz): the recorded force leads the "
+                f"measured motion, whereas a load behind a spring, with the position measured "
+                f"on the driven side, makes it lag")
+    return msg

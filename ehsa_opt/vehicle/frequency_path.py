@@ -1,4 +1,4 @@
-"""Quarter-car metrics (SPEC §5) and their exact frequency-domain evaluation.
+"""Quarter-car metrics (paper Eqs 6–9) and their exact frequency-domain evaluation.
 
 Metrics (paper Eqs 6–9)::
 
@@ -8,7 +8,7 @@ Metrics (paper Eqs 6–9)::
     efficiency      η_g  = mean(V_g² / R_e) / mean(f_d v − reversible inertial power)
 
 :func:`linear_metrics` evaluates them exactly for the linear (frictionless)
-quarter car of SPEC §4 with the harvester's complex impedance (paper Eqs 1–3
+quarter car (paper §4) with the harvester's complex impedance (paper Eqs 1–3
 without the ω-freezing: Z(jω) = jω m_eq + K_t K_e / (r² (R + jω L_i))) on the
 ISO 8608 road PSD, vectorised over any number of designs at once.
 
@@ -278,12 +278,12 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
     friction_damping_Ns_per_m : array_like, optional
         Extra viscous damping c_f between the masses (N s/m), broadcast with the
         design: the equivalent damping of the friction
-        (:mod:`ehsa_opt.vehicle.equivalent`).  It joins the damper's force, so
+        (:mod:`ehsa_opt.vehicle.fast_path.linearisation`).  It joins the damper's force, so
         ``dissipated_power_W`` includes c_f σ_v² and ``efficiency`` is the
         generator's share; default 0 (frictionless).
     friction_damping_solver : callable, optional
         ``solver(index, sigma_v_of) -> c_f`` for amplitude-dependent damping
-        (:func:`ehsa_opt.vehicle.equivalent.friction_metrics`): called once per
+        (:func:`ehsa_opt.vehicle.fast_path.friction_metrics`): called once per
         block of designs with their flat ``index`` and a cheap function
         ``sigma_v_of(c_f, rows)`` giving σ_v of the block's ``rows`` for damping
         ``c_f`` on the block's prepared grid (only |det|² depends on c_f); returns

@@ -1,7 +1,7 @@
-"""Per-design fixed point σ = σ_lin(c_f(σ)) by secants of a one-mode model (issue 14).
+"""Per-design fixed point σ = σ_lin(c_f(σ)) by secants of a one-mode model.
 
-Used by the friction-aware fast path (:mod:`ehsa_opt.vehicle.equivalent`) with its
-exact (residue) σ_lin, :mod:`ehsa_opt.vehicle.residues`.  Why a model: an exact
+Used by the friction-aware fast path (:mod:`ehsa_opt.vehicle.fast_path.linearisation`) with its
+exact (residue) σ_lin, :mod:`ehsa_opt.vehicle.fast_path.band_variances`.  Why a model: an exact
 σ_lin evaluation (pole tracking and residues for every design) costs much more
 than the friction law c_f(σ); a lightly damped mode under white excitation has
 1/σ² linear in an added damping c, and the quarter car's 1/σ_lin²(c) is nearly so.

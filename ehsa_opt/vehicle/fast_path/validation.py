@@ -1,11 +1,11 @@
 """Validation of the friction-aware fast path against the time-domain simulation.
 
-The set (issue 14): designs × friction sets × roads.  Each road case (class, speed,
+The set: designs × friction sets × roads.  Each road case (class, speed,
 seed) runs every design–friction pair in one batched time-domain call
 (:func:`~ehsa_opt.vehicle.simulate.simulate_quarter_car`, the reference) and in one
-vectorised fast-path call (:func:`~ehsa_opt.vehicle.equivalent.friction_metrics`);
+vectorised fast-path call (:func:`~ehsa_opt.vehicle.fast_path.friction_metrics`);
 the relative errors of comfort, road holding, power and efficiency are tabulated.
-Used by ``benchmarks/friction_fast_path.py`` and the robust-design report step.
+Used by ``validation/friction_fast_path.py`` and the robust-design report step.
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..physics.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams
-from .equivalent import friction_metrics
-from .simulate import RoadHoldingWarning, simulate_quarter_car
+from ...physics.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams
+from ..simulate import RoadHoldingWarning, simulate_quarter_car
+from .linearisation import friction_metrics
 
 __all__ = ["CHECK_METRICS", "MIN_RECORD_S", "RoadCase", "scaled_friction", "check_case",
            "summarise"]
@@ -83,10 +83,10 @@ def check_case(vehicle: VehicleParams, case: RoadCase, harvesters: Sequence[Harv
         load, which a single call of a few ms is not; the time-domain call lasts
         seconds and is timed once).
     non_gaussian : bool
-        Passed to :func:`~ehsa_opt.vehicle.equivalent.friction_metrics` (False: the
+        Passed to :func:`~ehsa_opt.vehicle.fast_path.friction_metrics` (False: the
         plain Gaussian equivalent linearisation, for comparison).
     residual : bool
-        Passed to :func:`~ehsa_opt.vehicle.equivalent.friction_metrics` (False:
+        Passed to :func:`~ehsa_opt.vehicle.fast_path.friction_metrics` (False:
         without the friction's non-linear residual force).
     threads : int, optional
         Threads of the time-domain simulation (default: two on a machine with two or

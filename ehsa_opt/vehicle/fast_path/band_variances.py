@@ -1,13 +1,13 @@
-"""Exact band-limited variances of the linear quarter car by residues (issue 14).
+"""Exact band-limited variances of the linear quarter car by residues.
 
-Why: the friction-aware fast path (:mod:`ehsa_opt.vehicle.equivalent`) needs the
+Why: the friction-aware fast path (:mod:`ehsa_opt.vehicle.fast_path.linearisation`) needs the
 stroke-velocity variance σ_v²(c) many times while it iterates on the friction's
 equivalent damping c, then the metrics at the fixed point.  A quadrature over a
 few hundred frequencies per design costs far more than the 2-DOF system's five
 poles carry; this module integrates the rational spectra in closed form.
 
-Method.  With the harvester's impedance (SPEC §4, paper Eqs 1–3, as in
-:func:`ehsa_opt.vehicle.metrics.linear_metrics`) and an extra viscous damping c
+Method.  With the harvester's impedance (paper Eqs 1–3, as in
+:func:`ehsa_opt.vehicle.frequency_path.linear_metrics`) and an extra viscous damping c
 between the masses, every output y (stroke velocity, sprung acceleration, tyre
 deflection, current) is y/V0 = H(s) = N(s)/Q(s) with the road velocity V0 as
 input and the degree-5 polynomial (D̃ = (k2 + c s + m_eq s²)(R + L s) + s K_t K_e/r²)::
@@ -46,18 +46,12 @@ from typing import Mapping
 
 import numpy as np
 
-from ..physics.params import VehicleParams
-from .iso2631 import wk_exact_tf
+from ...physics.params import VehicleParams
+from .polynomials import (WK_AT_POLES, WK_DEN2, WK_NUM2, WK_POLES, at_wk, even_square, padd, pder,
+                          peval, peval_d, pmul, rmax, rsum)
 
 __all__ = ["QuarterCarPolynomials"]
 
-_WK_NUM, _WK_DEN = (np.asarray(a, float)[::-1].copy() for a in wk_exact_tf())  # ascending
-_WK_POLES = np.roots(_WK_DEN[::-1])
-_WK_DDEN = _WK_DEN[1:] * np.arange(1, _WK_DEN.size)
-_WK_INV_DDEN = 1.0 / np.polyval(_WK_DDEN[::-1], _WK_POLES)      # 1/Wd'(q) at W_k's poles
-_WK_INV_DEN_NEG = 1.0 / np.polyval(_WK_DEN[::-1], -_WK_POLES)  # 1/Wd(−q)
-_WK_VANDER = _WK_POLES[None, :] ** np.arange(16)[:, None]      # q^j, (16, 8)
-_WK_VANDER_NEG = (-_WK_POLES[None, :]) ** np.arange(16)[:, None]
 
 
 # Newton on a simple root converges quadratically: after a relative step s the error is
@@ -66,85 +60,6 @@ _WK_VANDER_NEG = (-_WK_POLES[None, :]) ** np.arange(16)[:, None]
 _NEWTON_TOL = 1e-9
 _PAIRS = np.triu_indices(5, 1)     # the ten pairs of the five poles
 
-
-def _rsum(a: np.ndarray) -> np.ndarray:
-    """Sum over a short last axis (poles: 5 or 8).  Adding the columns is several times
-    faster than numpy's reduction along so short an axis (measured: 20 µs against 100 µs
-    on 4000 × 5)."""
-    out = a[..., 0] + a[..., 1]
-    for j in range(2, a.shape[-1]):
-        out += a[..., j]
-    return out
-
-
-def _rmax(a: np.ndarray) -> np.ndarray:
-    """Maximum over a short last axis (see :func:`_rsum`)."""
-    out = np.maximum(a[..., 0], a[..., 1])
-    for j in range(2, a.shape[-1]):
-        np.maximum(out, a[..., j], out=out)
-    return out
-
-
-def _pmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Product of batched polynomials (ascending coefficients on the last axis)."""
-    out = np.zeros(np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
-                   + (a.shape[-1] + b.shape[-1] - 1,))
-    for i in range(a.shape[-1]):
-        out[..., i:i + b.shape[-1]] += a[..., i:i + 1] * b
-    return out
-
-
-def _padd(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    k = max(a.shape[-1], b.shape[-1])
-    shape = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
-    out = np.zeros(shape + (k,))
-    out[..., :a.shape[-1]] += a
-    out[..., :b.shape[-1]] += b
-    return out
-
-
-def _peval(c: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """Polynomial with ascending coefficients c (n, k) (or (k,)) at z (n, m) (Horner)."""
-    if c.ndim == 1:
-        c = c[None, :]
-    k = c.shape[-1]
-    if k == 1:
-        return np.broadcast_to(c[:, :1], z.shape).astype(complex)
-    out = z * c[:, -1:]
-    out += c[:, -2:-1]
-    for j in range(k - 3, -1, -1):
-        out *= z
-        out += c[:, j:j + 1]
-    return out
-
-
-def _peval_d(c: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Polynomial (ascending c (n, k), k ≥ 2) and its derivative at z (n, m), one pass."""
-    p = z * c[:, -1:]
-    p += c[:, -2:-1]
-    dp = np.broadcast_to(c[:, -1:], z.shape).astype(z.dtype)
-    for j in range(c.shape[1] - 3, -1, -1):
-        dp *= z
-        dp += p
-        p *= z
-        p += c[:, j:j + 1]
-    return p, dp
-
-
-def _pder(c: np.ndarray) -> np.ndarray:
-    return c[..., 1:] * np.arange(1, c.shape[-1])
-
-
-def _even_square(c: np.ndarray) -> np.ndarray:
-    """N(s) N(−s) as a polynomial in u = s² (ascending coefficients; N ascending c on the
-    last axis): an even polynomial, so one Horner pass at λ² replaces two at ±λ."""
-    return _pmul(c, c * (-1.0) ** np.arange(c.shape[-1]))[..., ::2]
-
-
-def _at_wk(c: np.ndarray, sign: float = 1.0) -> np.ndarray:
-    """Polynomials c (n, k) at ±W_k's poles (fixed points: a product with their
-    Vandermonde matrix), (n, 8)."""
-    return c @ (_WK_VANDER if sign > 0 else _WK_VANDER_NEG)[:c.shape[-1]]
 
 
 def _band_weights(lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
@@ -169,16 +84,16 @@ def _band_weights(lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
 
 def _band_integral(res_h: np.ndarray, lam: np.ndarray, wa: float, wb: float) -> np.ndarray:
     """Σ_k r_k H(−λ_k) · 2 [atan(ωb/μ_k) − atan(ωa/μ_k)]: ∫ |H(jω)|² dω."""
-    return np.real(_rsum(res_h * _band_weights(lam, wa, wb)))
+    return np.real(rsum(res_h * _band_weights(lam, wa, wb)))
 
 
 def _ferrari_roots(qc: np.ndarray, guess: np.ndarray) -> np.ndarray:
     """Approximate roots (m, 5) of the quintics qc (m, 6): a real root by Newton from
     ``guess`` (m,), deflated, then the quartic's four roots by Ferrari's method."""
     x = guess.astype(float).copy()
-    dq = _pder(qc)
+    dq = pder(qc)
     for _ in range(30):
-        step = _peval(qc, x[:, None]).real[:, 0] / _peval(dq, x[:, None]).real[:, 0]
+        step = peval(qc, x[:, None]).real[:, 0] / peval(dq, x[:, None]).real[:, 0]
         x -= step
         if not np.max(np.abs(step) / np.abs(x)) > 1e-15:
             break
@@ -219,12 +134,6 @@ def _ferrari_roots(qc: np.ndarray, guess: np.ndarray) -> np.ndarray:
     return out
 
 
-# W_k(s) W_k(−s) = WN2(s²)/WD2(s²), fixed
-_WK_NUM2, _WK_DEN2 = _even_square(_WK_NUM), _even_square(_WK_DEN)
-# at W_k's poles: Wn(q) Wn(−q) / (Wd'(q) Wd(−q)), the comfort kernel's fixed factor there
-_WK_AT_POLES = (np.polyval(_WK_NUM[::-1], _WK_POLES) * np.polyval(_WK_NUM[::-1], -_WK_POLES)
-                * _WK_INV_DDEN * _WK_INV_DEN_NEG)
-
 
 class QuarterCarPolynomials:
     """The quarter car's transfer functions as polynomials, vectorised over designs.
@@ -233,7 +142,7 @@ class QuarterCarPolynomials:
     ----------
     vehicle : VehicleParams
     design : mapping of 1-D arrays
-        Flat SI arrays of :func:`ehsa_opt.vehicle.metrics.design_arrays`
+        Flat SI arrays of :func:`ehsa_opt.vehicle.frequency_path.design_arrays`
         (``J_kgm2, r_m_per_rad, Ke, Kt, L_H, Ri_ohm, Re_ohm``), one entry per design.
     f_lo, f_hi : float
         Integration band, Hz.
@@ -263,14 +172,14 @@ class QuarterCarPolynomials:
         self.scale = psd / (2.0 * math.pi)
         z = np.zeros(n)
         rl = np.stack([self.R, L], axis=1)                                  # R + L s
-        d0 = _padd(_pmul(np.stack([np.full(n, k2), z, meq], axis=1), rl),
+        d0 = padd(pmul(np.stack([np.full(n, k2), z, meq], axis=1), rl),
                    np.stack([z, kk], axis=1))                                 # D̃ at c = 0
-        d1 = _pmul(np.stack([z, np.ones(n)], axis=1), rl)                     # ∂D̃/∂c = s (R + L s)
+        d1 = pmul(np.stack([z, np.ones(n)], axis=1), rl)                     # ∂D̃/∂c = s (R + L s)
         p2 = np.array([k1, 0.0, m1 + m2])
-        tail = _pmul(rl, np.array([0.0, 0.0, m2 * k1, 0.0, m2 * m1]))
-        self.q0 = _padd(_pmul(d0, p2), tail)                                  # Q at c = 0, (n, 6)
-        self.q1 = _padd(_pmul(d1, p2), np.zeros((n, 6)))                     # ∂Q/∂c, (n, 6)
-        self.d0, self.d1 = d0, _padd(d1, np.zeros((n, 4)))
+        tail = pmul(rl, np.array([0.0, 0.0, m2 * k1, 0.0, m2 * m1]))
+        self.q0 = padd(pmul(d0, p2), tail)                                  # Q at c = 0, (n, 6)
+        self.q1 = padd(pmul(d1, p2), np.zeros((n, 6)))                     # ∂Q/∂c, (n, 6)
+        self.d0, self.d1 = d0, padd(d1, np.zeros((n, 4)))
         self.rl = rl
         self.cur_gain = np.where(self.open, 0.0, ke / r * k1 * m2)
         # s-scale for the companion matrix
@@ -303,7 +212,7 @@ class QuarterCarPolynomials:
         bad = np.flatnonzero(~ok)
         if bad.size:
             lam[bad] = self._eig_roots(qc[bad])
-            dq[bad] = _peval_d(qc[bad], lam[bad])[1]
+            dq[bad] = peval_d(qc[bad], lam[bad])[1]
         return (lam, dq) if return_dq else lam
 
     def _eig_roots(self, qc: np.ndarray) -> np.ndarray:
@@ -334,29 +243,29 @@ class QuarterCarPolynomials:
         todo = None                     # all rows, then only those still moving
         for _ in range(steps):
             if todo is None:
-                p, dq = _peval_d(qc, lam)
+                p, dq = peval_d(qc, lam)
                 corr = p / dq
                 lam -= corr
                 step = np.abs(corr) / np.maximum(np.abs(lam), 1e-300)
-                moving = _rmax(step) > _NEWTON_TOL
+                moving = rmax(step) > _NEWTON_TOL
             else:
                 z = lam[todo]
-                p, dp = _peval_d(qc[todo], z)
+                p, dp = peval_d(qc[todo], z)
                 dq[todo] = dp
                 corr = p / dp
                 lam[todo] = z - corr
                 step[todo] = np.abs(corr) / np.maximum(np.abs(lam[todo]), 1e-300)
                 moving = np.zeros(lam.shape[0], dtype=bool)
-                moving[todo] = _rmax(step[todo]) > _NEWTON_TOL
+                moving[todo] = rmax(step[todo]) > _NEWTON_TOL
             if not np.any(moving):
                 break
             todo = np.flatnonzero(moving)
         lead = qc[:, 5]
-        s_ok = np.abs(_rsum(lam) + qc[:, 4] / lead) <= 1e-9 * _rsum(np.abs(lam))
+        s_ok = np.abs(rsum(lam) + qc[:, 4] / lead) <= 1e-9 * rsum(np.abs(lam))
         with np.errstate(divide="ignore", invalid="ignore"):
             prod = lam[:, 0] * lam[:, 1] * lam[:, 2] * lam[:, 3] * lam[:, 4]
             p_ok = np.abs(prod * lead / -qc[:, 0] - 1.0) <= 1e-9
-        return lam, (_rmax(step) <= _NEWTON_TOL) & s_ok & p_ok, dq
+        return lam, (rmax(step) <= _NEWTON_TOL) & s_ok & p_ok, dq
 
     def follow(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray,
                c_old: np.ndarray, dq_old: np.ndarray | None = None,
@@ -369,13 +278,13 @@ class QuarterCarPolynomials:
         which also returns Q' at the new poles, to the last Newton step's accuracy)."""
         qc = self.q(c, rows)
         if dq_old is None:
-            dq_old = _peval_d(self.q(c_old, rows), lam)[1]
-        lam = lam - (c - c_old)[:, None] * (_peval(self.q1[rows, :5], lam) / dq_old)
+            dq_old = peval_d(self.q(c_old, rows), lam)[1]
+        lam = lam - (c - c_old)[:, None] * (peval(self.q1[rows, :5], lam) / dq_old)
         new, done, dq = self.track(qc, lam, steps=8)
         if not np.all(done):
             bad = np.flatnonzero(~done)
             new[bad] = self.roots(qc[bad])
-            dq[bad] = _peval_d(qc[bad], new[bad])[1]
+            dq[bad] = peval_d(qc[bad], new[bad])[1]
         return (new, dq) if return_dq else new
 
     def check(self, qc: np.ndarray, lam: np.ndarray) -> np.ndarray:
@@ -383,12 +292,12 @@ class QuarterCarPolynomials:
         mag = np.abs(lam)
         i, j = _PAIRS
         own = np.abs(lam[:, i] - lam[:, j]) / np.maximum(mag[:, i], mag[:, j])   # (m, 10)
-        wk = (np.abs(lam[:, :, None] - _WK_POLES) / np.maximum(mag[:, :, None],
-                                                               np.abs(_WK_POLES)))
+        wk = (np.abs(lam[:, :, None] - WK_POLES) / np.maximum(mag[:, :, None],
+                                                               np.abs(WK_POLES)))
         gaps = (np.min(own, axis=1), np.min(wk.reshape(lam.shape[0], -1), axis=1))
-        absq = _peval(np.abs(qc), mag).real
-        resid = _rmax(np.abs(_peval(qc, lam)) / absq)
-        return (np.minimum(*gaps) > 1e-7) & (resid < 1e-9) & (_rmax(lam.real) < 0.0)
+        absq = peval(np.abs(qc), mag).real
+        resid = rmax(np.abs(peval(qc, lam)) / absq)
+        return (np.minimum(*gaps) > 1e-7) & (resid < 1e-9) & (rmax(lam.real) < 0.0)
 
     # ------------------------------------------------------------------ variances
     def var_v(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray,
@@ -403,13 +312,13 @@ class QuarterCarPolynomials:
         nn = (self.k1 * self.m2) ** 2 * (l2 * l2) * (rr * rr - (ll * ll) * l2)
         q_odd = lam * (qc[:, 1:2] + l2 * (qc[:, 3:4] + l2 * qc[:, 5:6]))
         if dq is None:
-            dq = _peval(_pder(qc), lam)
+            dq = peval(pder(qc), lam)
         h = nn / (dq * (-2.0 * q_odd))
         return self.scale * _band_integral(h, lam, self.wa, self.wb)
 
     def _var(self, num: np.ndarray, qc: np.ndarray, lam: np.ndarray) -> np.ndarray:
-        res = _peval(num, lam) / _peval(_pder(qc), lam)
-        h_neg = _peval(num, -lam) / _peval(qc, -lam)
+        res = peval(num, lam) / peval(pder(qc), lam)
+        h_neg = peval(num, -lam) / peval(qc, -lam)
         return _band_integral(res * h_neg, lam, self.wa, self.wb)
 
     def variances(self, c: np.ndarray, rows: np.ndarray, lam: np.ndarray
@@ -429,26 +338,26 @@ class QuarterCarPolynomials:
         # shared by every output: 1/(Q'(λ) Q(−λ)) × the band weights of the poles; each
         # output's N(λ) N(−λ) is an even polynomial, evaluated once at λ²
         u = lam * lam
-        w = self.scale * _band_weights(lam, self.wa, self.wb) / (_peval(_pder(qc), lam)
-                                                                 * _peval(qc, -lam))
+        w = self.scale * _band_weights(lam, self.wa, self.wb) / (peval(pder(qc), lam)
+                                                                 * peval(qc, -lam))
 
         def var(num: np.ndarray) -> np.ndarray:
-            return np.real(_rsum(_peval(_even_square(num), u) * w))
+            return np.real(rsum(peval(even_square(num), u) * w))
 
-        out = {"var_v": var(k1 * m2 * _pmul(rl, s2))}
+        out = {"var_v": var(k1 * m2 * pmul(rl, s2))}
         var_i = var(self.cur_gain[rows, None] * s2)
         out["p_load"] = self.Re[rows] * var_i
         out["p_diss"] = (self.kt_over_ke[rows] * np.where(self.open[rows], 0.0, self.R[rows])
                          * var_i + c * out["var_v"])
         dc = self.d0[rows] + c[:, None] * self.d1[rows]                     # D̃ (m, 4)
-        num_t = _padd(k1 * _padd(dc, m2 * _pmul(rl, s2)), -qc)              # zero at s = 0
+        num_t = padd(k1 * padd(dc, m2 * pmul(rl, s2)), -qc)              # zero at s = 0
         out["var_tyre"] = var(num_t[:, 1:])
         # comfort: ẍ2 = k1 s D̃ / Q times W_k = Wn/Wd; poles of Q and of Wd
         na = k1 * np.concatenate([np.zeros((dc.shape[0], 1)), dc], axis=1)  # k1 s D̃
-        hp = _peval(_even_square(na), u) * (_peval(_WK_NUM2, u) / _peval(_WK_DEN2, u))
-        hw = (_at_wk(na) * _at_wk(na, -1.0) / (_at_wk(qc) * _at_wk(qc, -1.0))
-              * _WK_AT_POLES)
-        out["var_acc_w"] = (np.real(_rsum(hp * w))
-                            + self.scale * np.real(hw @ _band_weights(_WK_POLES, self.wa,
+        hp = peval(even_square(na), u) * (peval(WK_NUM2, u) / peval(WK_DEN2, u))
+        hw = (at_wk(na) * at_wk(na, -1.0) / (at_wk(qc) * at_wk(qc, -1.0))
+              * WK_AT_POLES)
+        out["var_acc_w"] = (np.real(rsum(hp * w))
+                            + self.scale * np.real(hw @ _band_weights(WK_POLES, self.wa,
                                                                       self.wb)))
         return out

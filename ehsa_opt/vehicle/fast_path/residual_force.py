@@ -1,6 +1,6 @@
-"""The friction's non-linear residual force under Gaussian closure (issue 14).
+"""The friction's non-linear residual force under Gaussian closure.
 
-Why: equivalent linearisation (:mod:`ehsa_opt.vehicle.equivalent`) keeps the part
+Why: equivalent linearisation (:mod:`ehsa_opt.vehicle.fast_path.linearisation`) keeps the part
 of the friction force F_f(v) that is correlated with the stroke velocity (c v) and
 drops the rest, r = F_f(v) − c v.  Where Coulomb friction dominates the damper
 (slow, smooth roads, high friction) F_f is nearly a square wave of v and r is large
@@ -29,7 +29,7 @@ acceleration, tyre deflection, current, stroke velocity)
 
 with H_y = N_y/Q the linearised quarter car's response to a force pair between
 body and wheel (added to the damper's force; same Q(s) and poles λ_k as
-:mod:`ehsa_opt.vehicle.residues`, plus W_k's poles for comfort), and
+:mod:`ehsa_opt.vehicle.fast_path.band_variances`, plus W_k's poles for comfort), and
 ρ(τ) = R_v(τ)/R_v(0), R_v(τ) = Σ_k res_k[...] e^{λ_k|τ|} of the road-to-v response
 (white road velocity).  So only the Laplace transforms L_k = ∫₀^∞ R_r(τ) e^{λ_k τ} dτ
 are needed.  The residual's own dissipation is E[r v] = Σ_k Res[H_v]_k L_k (negative:
@@ -54,9 +54,9 @@ Checked: at class B, 30 km/h, friction × 2 (prototype, 2000 m) the closure adds
 −7.2 % → −5.1 %), σ_v 0.0675 → 0.0691 m/s (time domain 0.0697), power 2.209 →
 2.317 W (2.354 W), the friction's power c_f σ_v² + E[r v] 8.01 → 7.88 W (time domain
 E[F v] 7.90 W), and the total dissipation stays the linear system's (the
-dissipation bound of SPEC §4: the road's input power does not depend on an internal
+dissipation bound (``vehicle.road``): the road's input power does not depend on an internal
 force).  What it does not capture: the non-Gaussian part (long stick phases),
-``benchmarks/friction_fast_path.py`` measures the rest.  Cost: about 40 % of the fast
+``validation/friction_fast_path.py`` measures the rest.  Cost: about 40 % of the fast
 path's (4000 designs: ~0.025 s), in blocks of 512 designs that stay in cache.
 """
 
@@ -68,8 +68,9 @@ from functools import cached_property
 
 import numpy as np
 
-from .residues import (_WK_AT_POLES, _WK_DEN2, _WK_NUM2, _WK_POLES, QuarterCarPolynomials,
-                       _at_wk, _even_square, _peval, _pder, _pmul, _rsum)
+from .band_variances import QuarterCarPolynomials
+from .polynomials import (WK_AT_POLES, WK_DEN2, WK_NUM2, WK_POLES, at_wk, even_square, pder, peval,
+                          pmul, rsum)
 
 __all__ = ["residual_autocovariance", "residual_variances", "hermite_coefficients",
            "LagGrid", "DEFAULT_LAGS"]
@@ -118,7 +119,7 @@ class LagGrid:
     @cached_property
     def e_wk(self) -> np.ndarray:
         """e^{q τ_j} at W_k's poles q, (lags, 8)."""
-        return np.exp(_WK_POLES[:, None] * self.tau_s[None, :]).T
+        return np.exp(WK_POLES[:, None] * self.tau_s[None, :]).T
 
     def exponentials(self, lam: np.ndarray) -> np.ndarray:
         """e^{λ τ_j} at every lag, (lags, *lam.shape), by products: with z = e^{λ t0/sub}
@@ -380,7 +381,7 @@ def _closure_transforms(alpha: np.ndarray, lam: np.ndarray, cols: list[int], wei
     dR = _slope_jumps(R, h)
     L[:, 0] = _laplace(R[0], R[-1], np.sum(dR * e_el, axis=0), e_el[-1], lam_el)
     e_wk = lags.e_wk
-    L_w = _laplace(R[0][:, None], R[-1][:, None], dR.T @ e_wk, e_wk[-1], _WK_POLES)
+    L_w = _laplace(R[0][:, None], R[-1][:, None], dR.T @ e_wk, e_wk[-1], WK_POLES)
     return L, L_w
 
 
@@ -420,22 +421,22 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
     n = rows.size
     # the fastest pole first (the electrical one): left out of ρ̃, the analytic part's ρ
     lam = np.take_along_axis(lam, np.argsort(-np.abs(lam), axis=1), axis=1)
-    inv_dq = 1.0 / _peval(_pder(qc), lam)
-    inv_q2 = inv_dq / _peval(qc, -lam)                  # 1/(Q'(λ) Q(−λ))
+    inv_dq = 1.0 / peval(pder(qc), lam)
+    inv_q2 = inv_dq / peval(qc, -lam)                  # 1/(Q'(λ) Q(−λ))
     u = lam * lam
     # numerators for a force pair r between body and wheel (r adds to the damper force)
     nv0 = np.broadcast_to(np.array([0.0, -k1, 0.0, -(m1 + m2)]), (n, 4))
-    n_v = _pmul(nv0, rl)                                          # stroke velocity
-    n_a = _pmul(np.broadcast_to(np.array([0.0, 0.0, -k1, 0.0, -m1]), (n, 5)), rl)
-    n_x1 = _pmul(np.broadcast_to(np.array([0.0, 0.0, m2]), (n, 3)), rl)   # tyre deflection
+    n_v = pmul(nv0, rl)                                          # stroke velocity
+    n_a = pmul(np.broadcast_to(np.array([0.0, 0.0, -k1, 0.0, -m1]), (n, 5)), rl)
+    n_x1 = pmul(np.broadcast_to(np.array([0.0, 0.0, m2]), (n, 3)), rl)   # tyre deflection
     n_i = nv0 * np.where(qp.open[rows], 0.0, qp.cur_gain[rows] / (k1 * m2))[:, None]
-    n_road = _pmul(np.broadcast_to(np.array([0.0, 0.0, k1 * m2]), (n, 3)), rl)
+    n_road = pmul(np.broadcast_to(np.array([0.0, 0.0, k1 * m2]), (n, 3)), rl)
 
     def kernel(num: np.ndarray) -> np.ndarray:  # residues of N(s)N(−s)/(Q(s)Q(−s))
-        return _peval(_even_square(num), u) * inv_q2
+        return peval(even_square(num), u) * inv_q2
 
     a = kernel(n_road)                        # R_v(τ) = Σ_k a_k e^{λ_k τ} (τ ≥ 0), real
-    r0 = np.real(_rsum(a))                     # R_v(0): ρ = R_v/R_v(0)
+    r0 = np.real(rsum(a))                     # R_v(0): ρ = R_v/R_v(0)
     alpha = a / np.where(r0 > 0.0, r0, 1.0)[:, None]
     # the modes: two conjugate pairs (the rule) or not (some overdamped)
     tol = 1e-9 * np.abs(lam[:, 1])
@@ -443,7 +444,7 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
               & (np.abs(lam[:, 4] - np.conj(lam[:, 3])) <= tol)
               & (np.abs(lam[:, 1].imag) > tol) & (np.abs(lam[:, 3].imag) > tol))
     L = np.empty((n, 5), dtype=complex)
-    L_w = np.empty((n, _WK_POLES.size), dtype=complex)
+    L_w = np.empty((n, WK_POLES.size), dtype=complex)
     r = qp.r_m_per_rad[rows]
     for group, cols, weight in ((np.flatnonzero(paired), [1, 3], 2.0),
                                 (np.flatnonzero(~paired), [1, 2, 3, 4], 1.0)):
@@ -451,11 +452,11 @@ def residual_variances(qp: QuarterCarPolynomials, rows: np.ndarray, lam: np.ndar
             L[sel], L_w[sel] = _closure_transforms(alpha[sel], lam[sel], cols, weight,
                                                    sigma_v[sel], fr[sel], r[sel], lags)
     out = {"var_v": kernel(n_v), "var_tyre": kernel(n_x1), "var_i": kernel(n_i)}
-    out = {k: 2.0 * np.real(_rsum(h * L)) for k, h in out.items()}
+    out = {k: 2.0 * np.real(rsum(h * L)) for k, h in out.items()}
     # comfort: (W_k ẍ2)(s) = N_a(s) Wn(s) / (Q(s) Wd(s)): poles of Q and of W_k
-    h_q = kernel(n_a) * (_peval(_WK_NUM2, u) / _peval(_WK_DEN2, u))
-    h_w = _at_wk(n_a) * _at_wk(n_a, -1.0) / (_at_wk(qc) * _at_wk(qc, -1.0)) * _WK_AT_POLES
-    out["var_acc_w"] = 2.0 * np.real(_rsum(h_q * L) + _rsum(h_w * L_w))
-    out["p_residual"] = np.real(_rsum(_peval(n_v, lam) * inv_dq * L))
+    h_q = kernel(n_a) * (peval(WK_NUM2, u) / peval(WK_DEN2, u))
+    h_w = at_wk(n_a) * at_wk(n_a, -1.0) / (at_wk(qc) * at_wk(qc, -1.0)) * WK_AT_POLES
+    out["var_acc_w"] = 2.0 * np.real(rsum(h_q * L) + rsum(h_w * L_w))
+    out["p_residual"] = np.real(rsum(peval(n_v, lam) * inv_dq * L))
     return out
 

@@ -1,6 +1,6 @@
-"""Non-Gaussian friction damping by stochastic (energy-envelope) averaging (issue 14).
+"""Non-Gaussian friction damping by stochastic (energy-envelope) averaging.
 
-Why: the Gaussian equivalent linearisation (:mod:`ehsa_opt.vehicle.equivalent`)
+Why: the Gaussian equivalent linearisation (:mod:`ehsa_opt.vehicle.fast_path.linearisation`)
 takes the stroke velocity v as Gaussian.  With a strong Coulomb friction the strut
 sticks near v = 0 and the true v has excess mass at small |v| (kurtosis 4–5 instead
 of 3); E[F_C sgn(v) v] = F_C E|v| is then smaller than the Gaussian F_C σ√(2/π), so

@@ -1,4 +1,4 @@
-"""Friction-aware fast path: stochastic equivalent linearisation (SPEC §5, issue 14).
+"""Friction-aware fast path: stochastic equivalent linearisation (paper Eqs 6–9).
 
 Under the Gaussian road response the stroke velocity v is (nearly) zero-mean
 Gaussian with rms σ_v.  Statistical linearisation (Kazakov; Atalik & Utku 1976)
@@ -23,7 +23,7 @@ c_b/r².  c_f joins the harvester's damping in the linear quarter car, whose σ_
 depends on c_f: the fixed point σ_v = σ_lin(c_f(σ_v)) is solved per design.
 
 Default (``method="exact"``): the linear quarter car's variances over the road band
-are integrated in closed form by residues (:mod:`ehsa_opt.vehicle.residues`: five
+are integrated in closed form by residues (:mod:`ehsa_opt.vehicle.fast_path.band_variances`: five
 poles per design, no frequency grid, exact to rounding), the poles being tracked by
 Newton steps as c_f changes.  The fixed point is found by secants of the one-mode
 model 1/σ_v² = α + β c (exact for one lightly damped mode under white excitation,
@@ -33,10 +33,10 @@ evaluated) and evaluates σ_lin exactly at its c_f, until |ln σ_lin(c_f(σ)) �
 rtol — typically 2 exact evaluations.  The Coulomb expectation is a univariate
 function of u_c/σ, tabulated once (cubic spline, relative error < 1e-10).  4000
 designs: about 0.1 s with the averaging correction (the time-domain path needs
-20–40 ms per design; ``benchmarks/friction_fast_path.py``).
+20–40 ms per design; ``validation/friction_fast_path.py``).
 
 ``method="quadrature"`` keeps the frequency grid of
-:func:`ehsa_opt.vehicle.metrics.linear_metrics`: a vectorised Illinois (regula
+:func:`ehsa_opt.vehicle.frequency_path.linear_metrics`: a vectorised Illinois (regula
 falsi) iteration on log σ_v, bracketed by the frictionless σ_v (c_f ≥ 0 only lowers
 σ_v) and 10⁻⁴ of it, runs inside ``linear_metrics`` on each block's prepared
 (coarser) grid (only |det|² depends on c_f), then again on the final grid refined
@@ -50,17 +50,17 @@ Sticking: with a strong Coulomb friction v is not Gaussian (excess mass near
 v = 0), E[F_C sgn(v) v] = F_C E|v| falls below F_C σ√(2/π) and the Gaussian c_f
 is too high.  By default the Gaussian fixed point is then corrected by the
 energy-envelope (stochastic-averaging) density of the strut's amplitude
-(:mod:`ehsa_opt.vehicle.averaging`), whose two modal constants come from the
+(:mod:`ehsa_opt.vehicle.fast_path.sticking`), whose two modal constants come from the
 linear path's σ_v(0) and σ_v(c_f) (secant), iterated; it equals the Gaussian value
 for weak or viscous friction.
 
 Residual force: what the linearisation drops, r = F_f(v) − c_f v, is added back as
 a random force between body and wheel whose autocovariance follows from the
-Gaussian closure (:mod:`ehsa_opt.vehicle.residual_force`; ``residual=True``).
+Gaussian closure (:mod:`ehsa_opt.vehicle.fast_path.residual_force`; ``residual=True``).
 
 Validity: the linearisation assumes a Gaussian v; where Coulomb friction makes
 the strut stick for long stretches (slow, smooth roads, high F_C) the true v is
-far from Gaussian and errors grow — ``benchmarks/friction_fast_path.py``
+far from Gaussian and errors grow — ``validation/friction_fast_path.py``
 measures them against :func:`ehsa_opt.vehicle.simulate.simulate_quarter_car`.
 """
 
@@ -73,14 +73,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
-from ..physics.params import FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError, \
-    RoadParams, VehicleParams
-from .averaging import amplitude_terms, averaged_damping
+from ...physics.params import (FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError,
+                               RoadParams, VehicleParams)
+from ..frequency_path import G, design_arrays, dimensionless_power, linear_metrics
+from ..road import ROAD_BAND_CYCLES_PER_M, dissipation_bound_W, road_velocity_psd
+from .band_variances import QuarterCarPolynomials
 from .fixed_point import illinois_update, model_fixed_point
-from .metrics import G, design_arrays, dimensionless_power, linear_metrics
 from .residual_force import residual_variances
-from .residues import QuarterCarPolynomials
-from .road import ROAD_BAND_CYCLES_PER_M, dissipation_bound_W, road_velocity_psd
+from .sticking import amplitude_terms, averaged_damping
 
 __all__ = ["law_equivalent_damping", "friction_equivalent_damping_Ns_per_m", "friction_array",
            "friction_metrics"]
@@ -288,7 +288,7 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
     Parameters
     ----------
     vehicle, road, design, n_freq, base
-        As :func:`ehsa_opt.vehicle.metrics.linear_metrics`.
+        As :func:`ehsa_opt.vehicle.frequency_path.linear_metrics`.
     friction : FrictionParams, sequence of them, or array (..., 8), optional
         Broadcast against the design's shape (the last axis holds the eight
         values); None is frictionless (the linear path exactly).
@@ -303,7 +303,7 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
         poles with c_f).
     non_gaussian : bool
         Correct the Gaussian c_f for the non-Gaussian (sticking) velocity by the
-        energy-envelope density of :mod:`ehsa_opt.vehicle.averaging` (default);
+        energy-envelope density of :mod:`ehsa_opt.vehicle.fast_path.sticking` (default);
         False gives the plain Gaussian equivalent linearisation.
     resolve_on_final_grid : bool
         Solve the fixed point a second time on the final grid (default), refined
@@ -312,7 +312,7 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
         is not grid-converged for weakly damped designs (tens of % on power).
     residual : bool
         Add the response to the friction's non-linear residual force r = F_f(v) − c_f v
-        under Gaussian closure (:mod:`ehsa_opt.vehicle.residual_force`; default): it
+        under Gaussian closure (:mod:`ehsa_opt.vehicle.fast_path.residual_force`; default): it
         raises comfort, road holding and power where Coulomb friction dominates the
         damper (class B at 30 km/h with the friction × 2: comfort −6.6 % → −4.4 % against
         the time domain) and adds about a third to the cost.  ``method="exact"`` only (the
@@ -323,7 +323,7 @@ def friction_metrics(vehicle: VehicleParams, road: RoadParams,
     method : {"exact", "quadrature"}
         How the variances of the linearised quarter car are integrated over the
         road band: "exact" (default) in closed form by residues
-        (:mod:`ehsa_opt.vehicle.residues`; no frequency grid, so ``n_freq``,
+        (:mod:`ehsa_opt.vehicle.fast_path.band_variances`; no frequency grid, so ``n_freq``,
         ``iteration_n_freq`` and ``resolve_on_final_grid`` play no part; designs
         whose poles are not simple fall back to "quadrature"), or "quadrature"
         (the frequency grid of ``linear_metrics``, as before).

@@ -1,0 +1,212 @@
+"""The outcome of ``ehsa-opt optimize``: ``result.json`` as a frozen record, the solver
+results beside it, and what is shown of it (summary lines, figures).
+
+``record`` is exactly the content of ``result.json`` (see :mod:`.optimize` for its keys);
+``result`` is the solver result of the chosen method (goal attainment or the NSGA-II
+front) and ``goal_attainment_result`` the goal-attainment result whenever it was computed
+(also beside an NSGA-II front).  Neither is serialised: an outcome read back with
+:meth:`OptimizeOutcome.from_json` has only its record.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..utils.io import atomic_write_text, json_safe
+from ..utils.limits import parse_json
+from .goal import GoalAttainmentResult
+from .nsga2 import ParetoResult
+
+if TYPE_CHECKING:  # plotting is imported only when a figure is drawn
+    from matplotlib.figure import Figure
+
+__all__ = ["DESIGN_FIGURES", "OptimizeOutcome", "motor_summary", "time_domain_summary"]
+
+#: The figures of an optimisation and their file names under ``write(out_dir)``.
+DESIGN_FIGURES: dict[str, str] = {
+    "ga_design": "ga_design_history.png", "ga_mass": "ga_equivalent_mass.png",
+    "ga_objectives": "ga_objective_history.png", "pareto": "pareto_projections.png",
+    "parallel": "parallel_coordinates.png", "hypervolume": "hypervolume.png"}
+
+
+@dataclass(frozen=True)
+class OptimizeOutcome:
+    """``result.json`` (``record``) with the solver results (not serialised)."""
+
+    record: Mapping[str, Any]
+    result: GoalAttainmentResult | ParetoResult | None = None
+    goal_attainment_result: GoalAttainmentResult | None = None
+
+    # ---------------------------------------------------------------- the record's head
+    @property
+    def success(self) -> bool:
+        return bool(self.record["success"])
+
+    @property
+    def message(self) -> str:
+        return str(self.record["message"])
+
+    @property
+    def method(self) -> str:
+        return str(self.record["method"])
+
+    @property
+    def design(self) -> dict[str, float]:
+        return dict(self.record["design"])
+
+    @property
+    def objectives(self) -> dict[str, float]:
+        return dict(self.record["objectives"])
+
+    @property
+    def metrics(self) -> dict[str, float]:
+        return dict(self.record["metrics"])
+
+    # ---------------------------------------------------------------- saving
+    def to_json(self) -> str:
+        """``result.json`` text: standard JSON (NaN and infinities as ``null``)."""
+        return json.dumps(json_safe(dict(self.record)), indent=2, allow_nan=False)
+
+    @classmethod
+    def from_json(cls, source: str | Path) -> OptimizeOutcome:
+        """An outcome from a ``result.json`` file (a path) or its text; no solver results."""
+        where = "result.json"
+        if isinstance(source, Path) or not source.lstrip().startswith("{"):
+            where = str(source)
+            source = Path(source).read_text(encoding="utf-8")
+        rec = parse_json(source, where)
+        if not isinstance(rec, dict) or not {"method", "design", "objectives"} <= set(rec):
+            raise ValueError(f"{where}: not an optimisation result (needs the keys method, "
+                             f"design, objectives); write it with `ehsa-opt optimize`")
+        return cls(rec)
+
+    # ---------------------------------------------------------------- showing
+    def summary(self) -> str:
+        """The lines ``ehsa-opt optimize`` prints (warnings: :meth:`warnings`)."""
+        from ..vehicle.coverage import out_of_range_lines
+        r, m = self.record, self.metrics
+        lines = [f"{self.method}: {self.message}",
+                 "design: " + ", ".join(f"{k} = {v:.4g}" for k, v in self.design.items()),
+                 "objectives: " + ", ".join(f"{k} = {v:.4g}"
+                                            for k, v in self.objectives.items())]
+        if "power_W" in m:
+            lines.append(f"power {m['power_W']:.1f} W, efficiency {100 * m['efficiency']:.1f} %, "
+                         f"W_k rms {m.get('comfort_weighted_rms_m_s2', float('nan')):.3f} m/s^2")
+        if "gamma" in r:
+            lines.append(f"attainment factor gamma = {r['gamma']:+.4f}")
+        if self.method == "nsga2":
+            hv = r["hypervolume"]["history"]
+            lines.append(f"front: {r['n_front']} designs, hypervolume {hv[-1]['hv']:.4g} after "
+                         f"{hv[-1]['n_eval']} evaluations; vs goal attainment: "
+                         f"{r.get('front_vs_goal_attainment')}")
+        lines += motor_summary(r)
+        lines += [line for line, to_err in out_of_range_lines(r.get("out_of_range"))
+                  if not to_err]
+        if "time_domain_check" in r:
+            lines.append(time_domain_summary(r))
+        return "\n".join(lines)
+
+    def warnings(self) -> list[str]:
+        """Warning lines (the stroke velocity far beyond the friction's identified range)."""
+        from ..vehicle.coverage import out_of_range_lines
+        return [line for line, to_err in out_of_range_lines(self.record.get("out_of_range"))
+                if to_err]
+
+    def figures(self, front_label: str = "NSGA-II") -> dict[str, Figure]:
+        """The figures of this outcome, keyed as :data:`DESIGN_FIGURES`: the goal-attainment
+        histories (paper Figs 17–19) when goal attainment ran, the front's projections,
+        parallel coordinates and hypervolume history for NSGA-II."""
+        from ..plots import design as pd
+        figs: dict[str, Figure] = {}
+        ga = self.goal_attainment_result
+        if ga is not None:
+            for key, which in (("ga_design", "design"), ("ga_mass", "mass"),
+                               ("ga_objectives", "objectives")):
+                figs[key] = pd.goal_attainment_history(ga, which)
+        res = self.result
+        if isinstance(res, ParetoResult) and len(res.F):
+            ga_rec = self.record.get("goal_attainment")
+            ga_pt = ga_rec["objectives"] if ga_rec else None
+            figs["pareto"] = pd.pareto_projections(res, ga_pt,
+                                                   self.record["prototype"]["objectives"])
+            figs["parallel"] = pd.parallel_coordinates(
+                res, None if ga_rec is None else {**ga_rec["design"], **ga_pt})
+            figs["hypervolume"] = pd.hypervolume_history({front_label: res.history},
+                                                         res.hv_reference)
+        return figs
+
+    def plot(self, ax: Any = None) -> Any:
+        """The main figure: the front's projections (NSGA-II) or the objectives per
+        iteration (goal attainment); returns the figure, writes nothing.  ``ax`` is not
+        used (both are multi-panel figures); it is accepted for the common protocol."""
+        key = "pareto" if isinstance(self.result, ParetoResult) else "ga_objectives"
+        figs = self.figures()
+        if key not in figs:
+            raise ValueError("nothing to plot: an outcome read from result.json has no "
+                             "solver results; plot the outcome optimize() returned")
+        import matplotlib.pyplot as plt
+        for k, f in figs.items():
+            if k != key:
+                plt.close(f)
+        return figs[key]
+
+    def write_figures(self, fig_dir: str | Path, names: Mapping[str, str] | None = None,
+                      front_label: str = "NSGA-II") -> list[Path]:
+        """Write the figures (PNG, atomically) into ``fig_dir``; ``names`` maps a figure key
+        to its file name (default :data:`DESIGN_FIGURES`; keys left out of a given mapping
+        are not written).  Returns the paths written."""
+        import matplotlib.pyplot as plt
+
+        from .. import plots
+        names = DESIGN_FIGURES if names is None else names
+        paths = []
+        for key, fig in self.figures(front_label).items():
+            if key in names:
+                paths.append(plots.save(fig, Path(fig_dir) / names[key]))
+            else:
+                plt.close(fig)
+        return paths
+
+    def write(self, out_dir: str | Path) -> list[Path]:
+        """The optimisation's folder: ``result.json`` and ``figures/`` (as
+        :meth:`write_figures`).  Returns the paths written."""
+        out = Path(out_dir)
+        atomic_write_text(out / "result.json", self.to_json())
+        return [out / "result.json", *self.write_figures(out / "figures")]
+
+
+def motor_summary(outcome: Mapping[str, Any]) -> list[str]:
+    """Lines on the motor model, constraint values and active constraints (CLI)."""
+    lines = []
+    if outcome.get("motor"):
+        mb = outcome["motor"]
+        lines.append(f"motor: {mb.get('label', mb.get('chosen', mb['model']))}"
+                     + ("; constraints at the result: " + ", ".join(
+                         f"{k} {v:+.3f}" for k, v in outcome["constraints"].items())
+                        + f" (active: {', '.join(outcome['active_constraints']) or 'none'})"
+                        if outcome.get("constraints") else ""))
+    for row in outcome.get("catalogue", []):
+        lines.append(f"  {row['motor']}: {'feasible' if row['feasible'] else 'INFEASIBLE'}"
+                     + (f", gamma {row['gamma']:+.4f}" if row.get("gamma") is not None else "")
+                     + (f", at or beyond the limit: {', '.join(row['active_constraints'])}"
+                        if row["active_constraints"] else ""))
+    return lines
+
+
+def time_domain_summary(outcome: Mapping[str, Any]) -> str:
+    """One line on the time-domain re-simulation of the result (CLI)."""
+    chk = outcome["time_domain_check"]
+    lim = chk.get("rated_limits")
+    fr = bool(outcome.get("friction"))
+    return (f"time-domain check{' with friction' if fr else ''} ({chk['n_designs']} designs, "
+            f"{chk['road']['length_m']:g} m road): worst |error| of the "
+            f"{'fast' if fr else 'frequency'} path "
+            + ", ".join(f"{k} {100 * v:.2f} %" for k, v in chk["worst_abs_rel_error"].items())
+            + ("" if not lim else "; rated limits in the time domain, worst value/limit - 1: "
+               + ", ".join(f"{k} {v:+.4f}" for k, v in
+                           lim["time_domain_worst_constraint"].items()))
+            + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")
