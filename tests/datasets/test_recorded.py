@@ -162,9 +162,6 @@ def mixed_campaign(tmp_path_factory):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(reason="passed on the recorded-motion branch alone, failed on the merged code "
-                          "(its decision rule and noise floor changed beside it); open work: "
-                          "a clean recorded campaign must get `none`", strict=False)
 def test_clean_mixed_campaign_names_no_effect(mixed_campaign):
     """Sines and constant-velocity strokes of another harvester, nothing hidden: no
     effect is named and the baseline's held-out error is at the noise floor (the

@@ -24,6 +24,7 @@ from typing import Sequence
 import numpy as np
 
 from .candidates import CANDIDATES, absorbed_columns
+from .deadline import past_deadline
 from .evidence import normalised_sse
 from .fit import FitOutcome, PreparedTest, Rig, fit_group, predict
 from .polish import polish
@@ -102,9 +103,15 @@ def screen_starts(fit_pts: Sequence[PreparedTest], rig: Rig, crig: Rig, starts: 
         return screen_sse(fit_pts, rig, predict(fit_pts, crig, st), st)
 
     pool = [split_friction(st, sh, r) if sh > 0 else dict(st) for st in starts for sh in shares]
-    sses = [cost(st) for st in pool]
+    sses = []
+    for st in pool:  # at the run's deadline: the best of those simulated so far
+        sses.append(cost(st))
+        if past_deadline():
+            break
     best, sbest = pool[int(np.nanargmin(sses))], float(np.nanmin(sses))
     for over in refine:
+        if past_deadline():
+            break
         st = {**best, **over}
         c = cost(st)
         if c < sbest:
@@ -307,6 +314,9 @@ def _match_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, res: FitOutcom
     if not sse > MISMATCH_RATIO * res.sse:
         return res, pf
     notes = [f"simulated SSE {sse:.4g} vs collocation {res.sse:.4g}"]
+    if past_deadline():
+        notes.append("not refined: the run's time budget was reached")
+        return replace(res, starts=[*res.starts, {"refinement": notes}]), pf
     fine = fit_group(fit_pts, crig, [res.parameters], free=list(free), fixed=res.parameters,
                      max_iter=max_iter, substeps=REFINE_SUBSTEPS)
     if fine.parameters:

@@ -10,6 +10,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from .deadline import past_deadline
 from .fit import BASE_SPECS, PreparedTest, Rig, param_scale, predict
 
 __all__ = ["PolishOutcome", "polish", "gauss_newton_covariance"]
@@ -97,6 +98,10 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     ub = np.where(is_log, np.log10(np.maximum(hi, 1e-300)), hi / scales)
     base = dict(parameters)
     counter = [0]
+    best: list = [np.inf, None]  # lowest SSE simulated so far and its point
+
+    class _Stop(Exception):
+        pass
 
     def values(z: np.ndarray) -> np.ndarray:
         out = np.asarray(z, dtype=float) * scales   # 10**z only where refined in log10
@@ -104,12 +109,17 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         return out
 
     def resid(z: np.ndarray) -> np.ndarray:
+        if counter[0] and past_deadline():
+            raise _Stop
         counter[0] += 1
         vals = {**base, **{n: float(v) for n, v in zip(free, values(z))}}
         preds = predict(prepared, rig, vals)
         r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
                             for pt, yp in zip(prepared, preds)])
-        return np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=-1e6)
+        r = np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=-1e6)
+        if float(r @ r) < best[0]:
+            best[0], best[1] = float(r @ r), np.array(z, dtype=float)
+        return r
 
     x0 = np.array([base[n] for n in free], dtype=float)
     z0 = np.clip(np.where(is_log, np.log10(np.maximum(x0, 1e-300)), x0 / scales), lb, ub)
@@ -119,6 +129,14 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         sol = least_squares(resid, z0, bounds=(lb, ub), method="trf", x_scale="jac",
                             diff_step=diff_step, max_nfev=max_iter, jac="2-point",
                             ftol=ftol)
+    except _Stop:  # the run's deadline: the best point simulated so far, no covariance
+        msg = f"stopped at the time budget after {counter[0]} simulations"
+        if not best[0] < sse0:
+            return PolishOutcome(True, msg, base, sse0, sse0, counter[0],
+                                 time.perf_counter() - t0, free)
+        out = {**base, **{n: float(v) for n, v in zip(free, values(best[1]))}}
+        return PolishOutcome(True, msg, out, sse0, best[0], counter[0],
+                             time.perf_counter() - t0, free)
     except Exception as exc:  # noqa: BLE001 - a failed polish keeps the collocation fit
         return PolishOutcome(False, f"polish failed: {exc}", base, sse0, sse0, counter[0],
                              time.perf_counter() - t0, free)

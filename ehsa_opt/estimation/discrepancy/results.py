@@ -18,10 +18,13 @@ from .localise import Localisation
 from .evidence import MIN_EXCESS_REDUCTION
 from .terms import TermProposal
 
-__all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "NONE_OF_CATALOGUE"]
+__all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "NONE_OF_CATALOGUE",
+           "UNDECIDED"]
 
 #: The answer when the residual is structured but no catalogue effect earns.
 NONE_OF_CATALOGUE = "none of the catalogue"
+#: The answer of a run cut at its time budget before any effect was named.
+UNDECIDED = "undecided"
 
 
 @dataclass(frozen=True)
@@ -53,6 +56,11 @@ class DiscrepancySettings:
         Parallel processes for the candidate re-identifications.
     discover : bool
         Run the data-driven term discovery on the final residual.
+    budget_s : float or None
+        Wall-time budget of the workflow, s (None: none).  When it is reached no further
+        candidate fit starts: a round in progress is decided on the candidates already
+        re-identified (widening and look-ahead paths are skipped), no new round starts,
+        and the result says where it was cut (``success`` False, ``cut`` the reason).
     """
 
     candidates: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag")
@@ -65,8 +73,13 @@ class DiscrepancySettings:
     seed: int = 0
     jobs: int = 1
     discover: bool = True
+    budget_s: float | None = None
 
     def __post_init__(self) -> None:
+        if self.budget_s is not None and not (isinstance(self.budget_s, (int, float))
+                                              and self.budget_s > 0):
+            raise ValueError(f"DiscrepancySettings: budget_s must be None or a number of "
+                             f"seconds > 0, got {self.budget_s!r}")
         unknown = [c for c in self.candidates if c not in CANDIDATES
                    and c not in ("drive_lag", "force_lag")]
         if unknown:
@@ -161,6 +174,9 @@ class DiscrepancyResult:
     notes : list of str
         Bench checks the data failed (used anyway) and why a round was not run
         (e.g. the residual is already at the noise floor).
+    cut : str
+        Empty, or where the time budget (``settings.budget_s``) cut the run: the answer
+        is then partial (the named effects are those the completed work supports).
     """
 
     success: bool
@@ -186,6 +202,7 @@ class DiscrepancyResult:
     noise_floor: float = math.nan
     validation: dict | None = None
     notes: list[str] = field(default_factory=list)
+    cut: str = ""
 
     @property
     def winner(self) -> CandidateResult | None:
@@ -244,6 +261,7 @@ class DiscrepancyResult:
                 "term": self.term.as_dict() if self.term else None,
                 "validation": self.validation,
                 "notes": self.notes,
+                "partial": bool(self.cut), "cut": self.cut or None,
                 "localisation_before": self.loc_before.as_dict(),
                 "localisation_after": self.loc_after.as_dict() if self.loc_after else None,
                 "per_test": self.per_test_errors(),

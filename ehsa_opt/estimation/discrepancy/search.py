@@ -24,6 +24,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .candidate_fit import fit_members
+from .deadline import past_deadline
 from .candidates import (
     CANDIDATES,
     compatible,
@@ -115,6 +116,8 @@ class SearchState:
     effects: list[str] = field(default_factory=list)
     steps: list[dict] = field(default_factory=list)
     remaining: list[str] = field(default_factory=list)
+    #: where the run's time budget cut the search ("" while it was not reached)
+    cut: str = ""
 
     def snapshot(self) -> SearchState:
         """A copy that later rounds do not change."""
@@ -151,11 +154,17 @@ def run_rounds(tests: SearchTests, state: SearchState, settings: DiscrepancySett
     # (state before the look-ahead first step, its error before) until it is completed
     joint: tuple | None = None
     for rnd in range(1, settings.max_effects + 1):
+        if past_deadline():
+            state.cut = state.cut or (f"time budget {settings.budget_s:g} s reached before "
+                                      f"round {rnd}: no further round run")
+            say(state.cut)
+            break
         go_on, joint = _round(rnd, tests, state, joint, settings, say, notes, all_cands)
         if not go_on:
             break
     if joint is not None:  # the path was not completed: its first step is not named
-        state = joint[0]
+        cut, state = state.cut, joint[0]
+        state.cut = cut
         note = (f"the look-ahead path was not completed: its first step is not named "
                 f"(error back to {state.error:.3f} %)")
         say(note)
@@ -284,10 +293,21 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
     (:func:`~.candidate_fit.fit_members`) and judge each
     (:func:`~.evidence.judge_candidate`); ``with_flexibility``: the flexibility
     member's fit is judged by the same rule too."""
-    args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
-             tests.held_pts, state.rig, state.params, settings.max_iter) for n in names]
-    for out in fit_members(args, settings.jobs):
-        judge_candidate(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
+    names = list(names)
+    # with a time budget the fits go in batches of `jobs`, none started after the deadline
+    step = len(names) if settings.budget_s is None else settings.jobs
+    for a in range(0, len(names), max(step, 1)):
+        if past_deadline():
+            state.cut = (f"time budget {settings.budget_s:g} s reached in the round "
+                         f"in progress: {', '.join(names[a:])} not re-identified; the "
+                         f"round is decided on the candidates fitted before the cut")
+            judge["say"](state.cut)
+            return
+        args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
+                 tests.held_pts, state.rig, state.params, settings.max_iter)
+                for n in names[a:a + step]]
+        for out in fit_members(args, settings.jobs):
+            judge_candidate(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
     if not with_flexibility or rk.flex_out is None:
         return
     # judged by the same rule, fitted by variable projection
@@ -312,7 +332,7 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
     cands, order = rk.cands, rk.order
     earning = [c for c in cands.values() if c.earns]
     first = blocked = None
-    if not should_widen(earning, can_earn(state.error, tests.floor, 0.0, 1.0)):
+    if state.cut or not should_widen(earning, can_earn(state.error, tests.floor, 0.0, 1.0)):
         return earning, first, blocked
     if any(impact_record(c.fit) is not None for c in earning):
         # a rattling contact earned on its impacts: the sample-wise share of the excess
@@ -329,7 +349,8 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
     judge_round(rk, more, tests, state, settings, judge)
     earning = [c for c in cands.values() if c.earns]
     blocked = confounded(list(cands.values()))
-    if blocked is None:
+    if blocked is None or state.cut:  # no look-ahead path after the time budget
+        blocked = None
         return earning, first, blocked
     first = lookahead_winner(
         earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,

@@ -59,11 +59,13 @@ from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
 from ..identify_options import MIN_RESOLVED_SAMPLES
 from .candidates import CANDIDATES, try_drive_lag, try_lag
+from .deadline import deadline_set
 from .evidence import effective_samples, force_error_percent, force_noise_floor_percent
 from .fit import FitOutcome, Rig, fit_group, linear_baseline, predict, prepare_tests
 from .localise import Localisation, localise
 from .results import (
     NONE_OF_CATALOGUE,
+    UNDECIDED,
     CandidateResult,
     DiscrepancyResult,
     DiscrepancySettings,
@@ -87,7 +89,9 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
     log : callable, optional
         Progress messages (e.g. ``print``).
     """
-    with single_threaded_blas():  # process-level parallelism only (see the utility)
+    # process-level parallelism only (see the utility); the time budget is a deadline that
+    # the rounds and the candidate fits inside them check (:mod:`.deadline`)
+    with single_threaded_blas(), deadline_set(settings.budget_s if settings else None):
         return _run_discrepancy(data, settings, log)
 
 
@@ -290,14 +294,19 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
     effects, err0, cur_err = state.effects, base.error, state.error
     if effects:
         effect = " + ".join(effects)
+    elif state.cut:  # nothing named before the time budget: the work done does not say "none"
+        effect = UNDECIDED
     else:
         effect = NONE_OF_CATALOGUE if term is not None and term.earns else "none"
     loc1 = localise(fit_pts + held_pts, state.fit_pred + state.held_pred,
                     lead_m_per_rad=tests.lead_m_per_rad) if effects else None
-    ok = base.fit.success and all(c.fit is not None and c.fit.parameters
-                                  for c in all_cands if c.fitted)
+    ok = base.fit.success and not state.cut and all(c.fit is not None and c.fit.parameters
+                                                    for c in all_cands if c.fitted)
     msg = (f"effect {effect}: relative force error on {evaluation} "
            f"{err0:.3f} % -> {cur_err:.3f} % (noise floor {floor:.3f} %)")
+    if state.cut:
+        msg += f"; partial answer — {state.cut}"
+        notes.append(state.cut)
     if effect == NONE_OF_CATALOGUE:
         msg += f"; proposed term: {term.description}"
     validation = None
@@ -309,7 +318,8 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
         ok, msg, effect, err0, cur_err, evaluation, all_cands, base.fit, tests.rig, fit_pts,
         held_pts, base.fit_pred + base.held_pred, base.localisation, loc1,
         {"fit": state.n_eff_fit, "heldout": state.n_eff_held}, seconds,
-        str(getattr(data, "path", "")), effects, state.steps, term, floor, validation, notes)
+        str(getattr(data, "path", "")), effects, state.steps, term, floor, validation, notes,
+        state.cut)
 
 
 def _open_loop_validation(raw: tuple, base: Baseline, state: SearchState,

@@ -72,3 +72,43 @@ def test_cli_budget_cuts_with_a_stated_partial_answer(tmp_path, capsys):
     doc = json.loads((out / "discrepancy.json").read_text())
     assert doc["partial"] and doc["budget_s"] == 2.0
     assert "time budget of 2 s reached" in capsys.readouterr().out
+
+
+def test_workflow_deadline_gives_a_stated_partial_answer(tmp_path):
+    """The workflow's own deadline (``budget_s``): reached after the baseline, no round
+    starts; the result is decided on what was done and says where it was cut."""
+    from ehsa_opt.estimation.discrepancy import run_discrepancy
+    from ehsa_opt.estimation.discrepancy.results import DiscrepancySettings
+    d = tmp_path / "data"
+    write_synthetic(d, SyntheticSpec(frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(15.0, 109.0),
+                                     cycles=1.0, seed=2))
+    res = run_discrepancy(d, DiscrepancySettings(budget_s=1e-3, discover=False))
+    assert not res.success and res.effect == "undecided" and not res.candidates
+    assert "reached before round 1" in res.cut and "partial answer" in res.message
+    doc = res.as_dict()
+    assert doc["partial"] and doc["cut"] == res.cut
+    try:
+        DiscrepancySettings(budget_s=0)
+    except ValueError as exc:
+        assert "budget_s" in str(exc)
+    else:
+        raise AssertionError("budget_s=0 accepted")
+
+
+def test_simulation_refinement_stops_at_the_deadline():
+    """A candidate fit's Gauss-Newton refinement on the simulation stops at the run's
+    deadline and keeps its start (nothing better simulated), saying so."""
+    from ehsa_opt.datasets.synthetic import generate_bench_tests
+    from ehsa_opt.estimation.discrepancy.deadline import deadline_set
+    from ehsa_opt.estimation.discrepancy.fit import Rig, prepare_tests
+    from ehsa_opt.estimation.discrepancy.polish import polish
+    spec = SyntheticSpec(frequencies_hz=(1.0,), loads_ohm=(15.0,), cycles=1.0, seed=2)
+    pts = prepare_tests(generate_bench_tests(spec))
+    rig = Rig(spec.harvester)
+    start = {**spec.friction.as_dict(), "nut_coulomb_N": 1.2 * spec.friction.nut_coulomb_N}
+    with deadline_set(1e-9):
+        time.sleep(0.01)
+        po = polish(pts, rig, start, ["nut_coulomb_N"], max_iter=3)
+    assert po.nfev == 1 and "time budget" in po.message and po.parameters == start
+    free = polish(pts, rig, start, ["nut_coulomb_N"], max_iter=3)
+    assert free.nfev > 1 and free.sse_after < free.sse_before
