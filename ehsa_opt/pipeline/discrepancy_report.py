@@ -40,37 +40,7 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
              f"({len(res.fit_tests)} fit tests, {len(res.heldout_tests)} held-out)."
              + (f" The true parameters (truth.toml) simulate to {floor:.3f} % on the same "
                 f"tests." if floor is not None else "") + "\n")
-    from ..estimation.discrepancy.evidence import MIN_EXCESS_REDUCTION
-    L.append(f"Decision rule: an effect is named only if its refit removes at least "
-             f"{100 * MIN_EXCESS_REDUCTION:.0f} % of the {res.evaluation} relative force error "
-             f"*above the noise floor* ({_fmt(res.noise_floor, '.3f')} %: what the measurement "
-             "noise alone gives), 1 − √(e₁² − e_n²)/√(e₀² − e_n²), **and** "
-             "ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff < 0 on the fit tests and on the "
-             "held-out tests (N_eff = Σ N/τ discounts autocorrelated residuals); where the force "
-             "is already at its noise floor, or another channel's excess over its noise "
-             "expectation (SSE/N − 1) is larger than the force's, the same test on the SSE of a "
-             "channel that exceeds its noise expectation (a voltage-seen effect), the force error not growing by "
-             "more than the data resolve (the floor's standard error e_n/√(2N), N held-out "
-             "force samples). **Or, on its own evidence**: the same ΔBIC < 0 on both, the "
-             "held-out error not growing, and a median over contiguous blocks of the held-out "
-             "records (8 per test; documented disturbances masked) of the share of each block's "
-             "excess removed of at least the same "
-             f"{100 * MIN_EXCESS_REDUCTION:.0f} % — so that an effect another one dominates in a "
-             "few blocks is not vetoed by a share of the total. An effect's size must be resolved "
-             "(the ≈95 % interval of one of its amplitudes excludes zero; intervals are "
-             "Newey–West sandwich intervals, which respect the residual's autocorrelation). "
-             "A data-driven term is proposed only when the residual is not white (Ljung–Box). "
-             "Effects are added one "
-             "at a time — the earning candidate with the lowest held-out ΔBIC — the rest "
-             "re-ranked and refitted on top, until none earns; a round whose best candidate "
-             "removes less than half of the excess re-identifies every candidate, and an effect "
-             "the fit tests support but the held-out tests refuse is tried in two-step paths "
-             "with the others: a path that earns as a whole is named as **one step** (the pair, "
-             "with the error after both). A catalogue effect is not named when a data-driven "
-             "term leaves less than half its remaining excess error. No catalogue effect "
-             "earning but the term earning → `none of the catalogue`."
-             + (" Too few tests to hold any out: the rule uses all data." if not res.heldout_tests
-                else "") + "\n")
+    L.append(_decision_rule_markdown(res))
     for note in getattr(res, "notes", []):
         L.append(f"- {note[0].upper()}{note[1:]}.")
     if getattr(res, "notes", []):
@@ -112,6 +82,57 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
             L.append(f"| {ch.channel} | {ch.rms_normalised:.2f} | "
                      f"{100 * ch.structured_fraction:.0f} % |")
     L.append(f"\n![residual maps]({fig_prefix}discrepancy_residual_maps.png)\n")
+    L += _candidates_markdown(res, fig_prefix)
+    L.append("### Error per test\n")
+    L.append("| test | set | error before (%) | error after (%) |\n|---|---|---|---|")
+    for r in res.per_test_errors():
+        L.append(f"| {r['test']} | {r['set']} | {r['error_before']:.3f} | {r['error_after']:.3f} |")
+    L.append(f"\n![per-test errors]({fig_prefix}discrepancy_per_test_errors.png)\n")
+    L.append(f"Measured vs simulated, zoomed where the baseline misses most:\n\n"
+             f"![zoom]({fig_prefix}discrepancy_zoom.png)\n")
+    L += _validation_markdown(res)
+    return "\n".join(L)
+
+
+def _decision_rule_markdown(res: DiscrepancyResult) -> str:
+    """The decision rule in words, with the noise floor and the share of this run."""
+    from ..estimation.discrepancy.evidence import MIN_EXCESS_REDUCTION
+    return (f"Decision rule: an effect is named only if its refit removes at least "
+             f"{100 * MIN_EXCESS_REDUCTION:.0f} % of the {res.evaluation} relative force error "
+             f"*above the noise floor* ({_fmt(res.noise_floor, '.3f')} %: what the measurement "
+             "noise alone gives), 1 − √(e₁² − e_n²)/√(e₀² − e_n²), **and** "
+             "ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff < 0 on the fit tests and on the "
+             "held-out tests (N_eff = Σ N/τ discounts autocorrelated residuals); where the force "
+             "is already at its noise floor, or another channel's excess over its noise "
+             "expectation (SSE/N − 1) is larger than the force's, the same test on the SSE of a "
+             "channel that exceeds its noise expectation (a voltage-seen effect), the force error not growing by "
+             "more than the data resolve (the floor's standard error e_n/√(2N), N held-out "
+             "force samples). **Or, on its own evidence**: the same ΔBIC < 0 on both, the "
+             "held-out error not growing, and a median over contiguous blocks of the held-out "
+             "records (8 per test; documented disturbances masked) of the share of each block's "
+             "excess removed of at least the same "
+             f"{100 * MIN_EXCESS_REDUCTION:.0f} % — so that an effect another one dominates in a "
+             "few blocks is not vetoed by a share of the total. An effect's size must be resolved "
+             "(the ≈95 % interval of one of its amplitudes excludes zero; intervals are "
+             "Newey–West sandwich intervals, which respect the residual's autocorrelation). "
+             "A data-driven term is proposed only when the residual is not white (Ljung–Box). "
+             "Effects are added one "
+             "at a time — the earning candidate with the lowest held-out ΔBIC — the rest "
+             "re-ranked and refitted on top, until none earns; a round whose best candidate "
+             "removes less than half of the excess re-identifies every candidate, and an effect "
+             "the fit tests support but the held-out tests refuse is tried in two-step paths "
+             "with the others: a path that earns as a whole is named as **one step** (the pair, "
+             "with the error after both). A catalogue effect is not named when a data-driven "
+             "term leaves less than half its remaining excess error. No catalogue effect "
+             "earning but the term earning → `none of the catalogue`."
+             + (" Too few tests to hold any out: the rule uses all data." if not res.heldout_tests
+                else "") + "\n")
+
+
+def _candidates_markdown(res: DiscrepancyResult, fig_prefix: str) -> list[str]:
+    """The ranking table of every candidate and each named effect's parameters with
+    their intervals."""
+    L: list[str] = []
     L.append("### Ranking of the candidates\n")
     L.append("| round | effect | signature score | χ² | re-identified | ΔBIC fit | ΔBIC held-out | "
              "error before (%) | error after (%) | excess removed: total / median block | earns |"
@@ -143,15 +164,7 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
             iv = w.intervals.get(n)
             L.append(f"| `{n}` | {v:.4g} | {('[' + f'{iv[0]:.4g}, {iv[1]:.4g}' + ']') if iv else '—'} |")
         L.append("")
-    L.append("### Error per test\n")
-    L.append("| test | set | error before (%) | error after (%) |\n|---|---|---|---|")
-    for r in res.per_test_errors():
-        L.append(f"| {r['test']} | {r['set']} | {r['error_before']:.3f} | {r['error_after']:.3f} |")
-    L.append(f"\n![per-test errors]({fig_prefix}discrepancy_per_test_errors.png)\n")
-    L.append(f"Measured vs simulated, zoomed where the baseline misses most:\n\n"
-             f"![zoom]({fig_prefix}discrepancy_zoom.png)\n")
-    L += _validation_markdown(res)
-    return "\n".join(L)
+    return L
 
 
 def _validation_markdown(res: DiscrepancyResult) -> list[str]:
