@@ -157,7 +157,7 @@ def kinematic_gap(pt: PreparedTest, harvester, voltage_V: np.ndarray | None = No
     """
     h = harvester
     V = pt.y[1] if voltage_V is None else np.asarray(voltage_V, dtype=float)
-    t, x, v = pt.time_s, pt.u[0], pt.u[1]
+    t, v = pt.time_s, pt.u[1]
     load = float(pt.fixed["load_ohm"])
     R = load + h.internal_resistance_ohm
     i = V / load

@@ -24,7 +24,6 @@ position, so the Coulomb asymmetry is held at its inverse-model value.
 
 from __future__ import annotations
 
-import math
 from typing import Mapping, Sequence
 
 import numpy as np

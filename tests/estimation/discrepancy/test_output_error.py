@@ -3,7 +3,6 @@ position are recovered from a perturbed start, and bad names are refused."""
 
 from dataclasses import replace
 
-import numpy as np
 import pytest
 
 from ehsa_opt.datasets.bench_format import load_bench
