@@ -15,9 +15,10 @@ from ehsa_opt.estimation.discrepancy.candidates.drive_lag import (
     recorded_from_applied,
     try_drive_lag,
 )
-from ehsa_opt.estimation.discrepancy.fit import Rig, fit_group, linear_baseline, predict, \
+from ehsa_opt.estimation.discrepancy.fit import Rig, predict, \
     prepare_tests
 from ehsa_opt.physics.params import HarvesterParams
+from tests.estimation.discrepancy.emps_piece import emps_piece as piece_of_emps
 
 
 def test_the_inverse_operator_undoes_the_drive():
@@ -33,17 +34,9 @@ def test_the_inverse_operator_undoes_the_drive():
         == pytest.approx(20 / np.sqrt(2) / np.sqrt(1 + w * w), rel=0.01)
 
 
-@pytest.fixture(scope="module")
-def emps_piece():
-    data = load_bench(embedded_data_dir("emps"))
-    t0 = data.tests[0]
-    k = slice(3000, 11000)
-    test = replace(t0, time_s=t0.time_s[k], displacement_m=t0.displacement_m[k],
-                   force_N=t0.force_N[k])
-    rig = Rig(data.harvester, False, ())
-    pt = prepare_tests([test], False)[0]
-    base = dict(fit_group([pt], rig, [linear_baseline([pt], rig)]).parameters)
-    return pt, rig, base
+@pytest.fixture(scope="module", name="emps_piece")
+def emps_piece_for_lag():
+    return piece_of_emps(3000, 11000)
 
 
 @pytest.mark.slow  # ~15 s alone (the rigid fit of an 8 s EMPS piece, two variable projections)

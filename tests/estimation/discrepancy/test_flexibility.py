@@ -6,14 +6,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from ehsa_opt.datasets.bench_format import load_bench
-from ehsa_opt.datasets.embedded import embedded_data_dir
 from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
-from ehsa_opt.estimation.discrepancy.fit import Rig, fit_group, linear_baseline, predict, \
-    prepare_tests
+from ehsa_opt.estimation.discrepancy.fit import Rig, predict
 from ehsa_opt.estimation.discrepancy.candidates.flexibility import fit_flexibility
 from ehsa_opt.physics import BenchModel, Flexibility
 from ehsa_opt.physics.params import HarvesterParams
+from tests.estimation.discrepancy.emps_piece import emps_piece
 
 
 def test_two_mass_energy_balance_closes():
@@ -39,14 +37,7 @@ def test_two_mass_energy_balance_closes():
 
 @pytest.mark.slow  # ~15 s alone (a forward simulation of the two-mass data, the grid)
 def test_flexibility_recovered_on_synthetic_two_mass_data():
-    data = load_bench(embedded_data_dir("emps"))
-    t0 = data.tests[0]
-    k = slice(3000, 9000)
-    test = replace(t0, time_s=t0.time_s[k], displacement_m=t0.displacement_m[k],
-                   force_N=t0.force_N[k])
-    rig = Rig(data.harvester, False, ())
-    pt = prepare_tests([test], False)[0]
-    base = dict(fit_group([pt], rig, [linear_baseline([pt], rig)]).parameters)
+    pt, rig, base = emps_piece(3000, 9000)
     truth = {"flex_load_mass_kg": 30.0, "flex_frequency_hz": 40.0, "flex_damping_ratio": 0.1}
     comp = Flexibility()
     y = predict([pt], rig.with_components([comp]), {**comp.defaults(), **base, **truth})[0]
