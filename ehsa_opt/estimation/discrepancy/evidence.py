@@ -127,8 +127,11 @@ def floor_noise_std(y: np.ndarray) -> float:
 def force_noise_floor_percent(prepared: Sequence[PreparedTest]) -> float:
     """Relative force error (%) that the measurement noise alone gives:
     100 √(Σ σ_i² N_i) / ‖F‖ over the resolved samples (σ_i the noise level of test i's
-    force from its fourth differences, :func:`floor_noise_std`)."""
-    num = sum(floor_noise_std(pt.y[0]) ** 2 * pt.n_resolved for pt in prepared)
+    force from its fourth differences, :func:`floor_noise_std`; for a force through the
+    parallel filter, the raw force's σ times the filter's white-noise gain — the fourth
+    differences of a low-passed record see almost none of its noise)."""
+    num = sum((floor_noise_std(pt.y[0] if pt.raw_force_N is None else pt.raw_force_N)
+               * pt.force_noise_gain) ** 2 * pt.n_resolved for pt in prepared)
     den = float(np.sum(np.concatenate([pt.y[0][pt.weight > 0] for pt in prepared]) ** 2))
     return 100.0 * math.sqrt(num / den) if den > 0 else 0.0
 

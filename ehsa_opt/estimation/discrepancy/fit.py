@@ -32,7 +32,6 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ...datasets.bench_format import BenchTest
 from ...physics import BenchModel
 from ...physics.bench_sim import simulate_bench
 from ...physics.components import Component, ParamSpec
@@ -42,9 +41,9 @@ from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .. import core
 from ..collocation import given_block, theta_block
 from ..given_fit import GivenFit, fit_given
-from ..identify_options import IdentifyOptions, estimate_motion
 from ..identify_result import force_relative_error_percent
 from ..starts import Starts, draw_starts
+from .prepared import NO_GENERATOR_FIXED, PreparedTest, noise_std, prepare_tests
 
 __all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
            "fit_group", "predict", "FilteredMotion", "force_relative_error_percent",
@@ -52,10 +51,6 @@ __all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
 
 NUT_NAMES = FRICTION_NAMES[:4]
 
-#: Values fixed on a rig without generator: no load, no (separable) bearing friction.
-NO_GENERATOR_FIXED: dict[str, float] = {
-    "load_ohm": 1.0, "bearing_breakaway_Nm": 0.0, "bearing_coulomb_Nm": 0.0,
-    "bearing_breakaway_velocity_rad_per_s": 1.0, "bearing_viscous_Nms_per_rad": 0.0}
 
 #: The base parameters in the discrepancy fit: a named override of
 #: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`.
@@ -112,104 +107,6 @@ class Rig:
     def base_names(self) -> list[str]:
         return list(FRICTION_NAMES) if self.has_generator else ["inertia_kg", "offset_N",
                                                                  *NUT_NAMES]
-
-
-def parallel_filter(time_s: np.ndarray, y: np.ndarray, cutoff_hz: float) -> np.ndarray:
-    """``y`` through the zero-phase 4th-order Butterworth low-pass that
-    :class:`~ehsa_opt.physics.motion.FilteredMotion` applies to the displacement."""
-    from scipy.signal import butter, filtfilt
-    dt = float(np.median(np.diff(np.asarray(time_s, float))))
-    b, a = butter(4, min(2.0 * cutoff_hz * dt, 0.99))
-    return filtfilt(b, a, np.asarray(y, float))
-
-
-def noise_std(y: np.ndarray) -> float:
-    """Noise level of a sampled signal from its second differences (robust, model-free).
-
-    For white noise of std σ on a smooth signal, Δ²y has std √6 σ; the median
-    absolute deviation makes it insensitive to short peaks.
-    """
-    d2 = np.diff(np.asarray(y, dtype=float), 2)
-    mad = np.median(np.abs(d2 - np.median(d2)))
-    return float(max(1.4826 * mad / math.sqrt(6.0), 1e-12))
-
-
-@dataclass
-class PreparedTest:
-    """A test with its motion on the sample grid (``u`` = x, v, a) and noise levels."""
-
-    test: BenchTest
-    motion: Any
-    time_s: np.ndarray
-    u: np.ndarray
-    y: np.ndarray  # (ny, N) measured force [, voltage]
-    sigma: np.ndarray  # (ny,)
-    fixed: dict[str, float]
-    #: (N,) 1 where the motion's derivatives are resolved, 0 in windows around corners
-    #: and dwells of recorded tests (left out of every objective and statistic)
-    weight: np.ndarray | None = None
-    #: rod-equivalent inertia the recorded motion's cut-off was chosen with (kg)
-    mass_kg: float | None = None
-
-    def __post_init__(self) -> None:
-        if self.weight is None:
-            self.weight = np.ones(self.time_s.size)
-
-    @property
-    def wnorm(self) -> np.ndarray:
-        """(ny, N) weights of the residuals: resolved samples over the noise level."""
-        return self.weight[None, :] / self.sigma[:, None]
-
-    @property
-    def n_resolved(self) -> int:
-        return int(np.count_nonzero(self.weight))
-
-
-def _sine_motion(test: BenchTest) -> SineMotion:
-    """The sine of the test's frequency fitted (amplitude, phase) to the measured x."""
-    w = 2 * math.pi * float(test.frequency_hz)
-    t = test.time_s
-    A = np.column_stack([np.sin(w * t), np.cos(w * t)])
-    (a, b), *_ = np.linalg.lstsq(A, test.displacement_m, rcond=None)
-    return SineMotion(float(math.hypot(a, b)), float(test.frequency_hz), float(math.atan2(b, a)))
-
-
-def prepare_tests(tests: Sequence[BenchTest], has_generator: bool = True,
-                  derivative_cutoff_hz: float | None = None,
-                  mass_kg: float | None = None) -> list[PreparedTest]:
-    """Motion, measured outputs and noise levels of each test.
-
-    Sine tests: the sine of the test frequency fitted to the measured
-    displacement.  Recorded tests: the identification's motion estimate
-    (:func:`~ehsa_opt.estimation.identify_options.estimate_motion`: smoothing spline,
-    its cut-off from the noise and the rod-equivalent inertia ``mass_kg``, corner and dwell windows
-    weighted out), or :class:`FilteredMotion` with cut-off ``derivative_cutoff_hz``
-    when that is given or the rig has no generator (inverse-model practice, EMPS:
-    a tenth of the sample rate by default).
-    """
-    out = []
-    for t in tests:
-        weight = None
-        if t.excitation == "sine" and t.frequency_hz:
-            motion: Any = _sine_motion(t)
-        elif derivative_cutoff_hz is not None or not has_generator:
-            fs = 1.0 / float(np.median(np.diff(t.time_s)))
-            motion = FilteredMotion(t.time_s, t.displacement_m, derivative_cutoff_hz or fs / 10)
-        else:
-            est = estimate_motion(t, IdentifyOptions.for_rig(has_generator), mass_kg)
-            motion, weight = est.motion, est.resolved.astype(float)
-        u = motion.evaluate(t.time_s)
-        ys = [t.force_N] + ([t.voltage_V] if has_generator and t.voltage_V is not None else [])
-        y = np.vstack(ys)
-        sig = np.array([noise_std(row) for row in y])
-        if isinstance(motion, FilteredMotion) and not has_generator:
-            # parallel filtering (the inverse-model practice the EMPS reference uses): the
-            # force through the motion's own zero-phase low-pass, so that model and
-            # measurement hold the same band; σ stays the raw force's noise level
-            y = np.vstack([parallel_filter(t.time_s, row, motion.cutoff_hz) for row in y])
-        fixed = {"load_ohm": float(t.load_ohm)} if has_generator else dict(NO_GENERATOR_FIXED)
-        out.append(PreparedTest(t, motion, t.time_s, u, y, sig, fixed, weight, mass_kg))
-    return out
 
 
 # ------------------------------------------------------------------ linear baseline

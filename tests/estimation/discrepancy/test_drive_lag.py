@@ -70,7 +70,7 @@ def test_a_generator_bench_gets_no_drive_lag():
 def test_parallel_filtering_only_on_a_rig_without_generator():
     """The force passes through the motion's own low-pass on a rig without generator
     (the inverse-model practice); a generator bench's force is untouched."""
-    from ehsa_opt.estimation.discrepancy.fit import parallel_filter
+    from ehsa_opt.estimation.discrepancy.prepared import parallel_filter
     t0 = load_bench(embedded_data_dir("emps")).tests[0]
     test = replace(t0, time_s=t0.time_s[:3000], displacement_m=t0.displacement_m[:3000],
                    force_N=t0.force_N[:3000])
