@@ -114,3 +114,31 @@ def test_noise_floor_is_not_biased_by_a_fast_curving_signal():
     f2 = np.sqrt(np.mean([noise_std(t.force_N) ** 2 for t in tests]))
     assert f4 == pytest.approx(2.0, rel=0.06)
     assert f2 > 1.05 * 2.0 and f2 > f4 + 0.1
+
+
+def test_noise_floor_of_a_filtered_force_is_the_raw_noise_through_the_filter():
+    """On a rig without generator the force goes through the motion's low-pass: the floor
+    is the raw noise (σ = 0.5 N here) times the filter's white-noise gain, measured on the
+    same filter applied to white noise — not the near-zero noise left visible in the
+    smooth filtered record."""
+    from dataclasses import replace
+
+    from ehsa_opt.datasets.bench_format import load_bench
+    from ehsa_opt.datasets.embedded import embedded_data_dir
+    from ehsa_opt.estimation.discrepancy.evidence import force_noise_floor_percent
+    from ehsa_opt.estimation.discrepancy.prepared import parallel_filter, prepare_tests
+    t0 = load_bench(embedded_data_dir("emps")).tests[0]
+    k = slice(2000, 12000)
+    smooth = parallel_filter(t0.time_s[k], t0.force_N[k], 20.0)
+    noise = np.random.default_rng(3).normal(0.0, 0.5, smooth.size)
+    test = replace(t0, time_s=t0.time_s[k], displacement_m=t0.displacement_m[k],
+                   force_N=smooth + noise)
+    pt = prepare_tests([test], False)[0]
+    cutoff = pt.motion.cutoff_hz
+    white = np.random.default_rng(4).normal(0.0, 1.0, 200_000)
+    gain = np.std(parallel_filter(np.arange(white.size) * 1e-3, white, cutoff)[1000:-1000])
+    assert pt.force_noise_gain == pytest.approx(gain, rel=0.03)
+    expected = 100 * 0.5 * gain * math.sqrt(pt.n_resolved) / np.linalg.norm(pt.y[0])
+    assert force_noise_floor_percent([pt]) == pytest.approx(expected, rel=0.1)
+    pt.raw_force_N, pt.force_noise_gain = None, 1.0  # the filtered record's own noise
+    assert force_noise_floor_percent([pt]) < 0.2 * expected
