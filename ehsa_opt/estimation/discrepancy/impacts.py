@@ -69,7 +69,8 @@ from .fit import PreparedTest, Rig, predict
 __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective",
            "impact_energy_ratio", "fit_impacts", "fit_candidate_on_impacts", "IMPACT_SHARES", "impact_record",
            "impact_verdict", "judge_on_impacts", "IMPACT_EARN_OBJECTIVE", "IMPACT_EARN_SHARE",
-           "IMPACT_EVALUATIONS_WITH_SHARES", 
+           "IMPACT_EVALUATIONS_WITH_SHARES", "IMPACT_FRICTION_SPREAD",
+           "IMPACT_FRICTION_DOMINATED",
            "IMPACT_EVALUATIONS", "IMPACT_ENERGY_RATIO", "GAP", "STIFFNESS",
            "DAMPING"]
 
@@ -94,6 +95,13 @@ _GRID_LOG_C = (3.0, 4.0)
 #: a rigid baseline lumps the friction into the nut, but the bearing's part brakes the
 #: rotor while it coasts through the gap, which sets the impact speeds.
 IMPACT_SHARES = (0.15, 0.3, 0.45)
+#: Relative uncertainty of a rigid baseline's friction levels when the data hold impacts
+#: it does not model (each of the nut's and the bearing's levels moved by ± this share to
+#: see what it does to each test's features; see :func:`fit_impacts`).
+IMPACT_FRICTION_SPREAD = 0.05
+#: A test whose log transient energy that uncertainty alone moves by more than this is
+#: left out of the contact fit (it says more about the friction than about the contact).
+IMPACT_FRICTION_DOMINATED = 1.0
 #: Contact stiffnesses (log10 N/m) at which the friction shares are compared.
 _SHARE_GRID_LOG_K = (7.0, 8.0, 9.0)
 #: Nelder–Mead unit of the bearing share (then a fourth search direction).
@@ -202,6 +210,51 @@ def _data_features(prepared: Sequence[PreparedTest], harvester) -> _Data:
     return _Data([e for e, _ in out], [s for _, s in out], gaps)
 
 
+@dataclass
+class _Mismatch:
+    """Per test: the log-ratios of the simulated to the measured transient energies
+    (ny*2,) and the kinematic gap's difference and standard deviation (m; None when the
+    test has no window pair)."""
+
+    log_ratios: list[np.ndarray]
+    gaps: list[tuple[float, float] | None]
+
+
+def _mismatch(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray], harvester,
+              data: _Data) -> _Mismatch:
+    lrs: list[np.ndarray] = []
+    gaps: list[tuple[float, float] | None] = []
+    for pt, yp, e, s, g in zip(prepared, preds, data.energies, data.spreads, data.gaps):
+        yp = np.asarray(yp)[: pt.y.shape[0]]
+        es, _ = transient_energies(yp, None, pt.weight)
+        floor = np.maximum(s, 1e-300)
+        lrs.append(np.log((np.maximum(es, 0.0) + floor) / (np.maximum(e, 0.0) + floor)).ravel())
+        if g[2] > 0 and yp.shape[0] > 1:
+            gs = kinematic_gap(pt, harvester, yp[1])[0]
+            se = g[1] if math.isfinite(g[1]) else 0.0
+            sd = math.hypot(se, GAP_SPREAD * abs(g[0])) or 1e-9
+            gaps.append((gs - g[0] if math.isfinite(gs) else math.inf, sd))
+        else:
+            gaps.append(None)
+    return _Mismatch(lrs, gaps)
+
+
+def _score(m: _Mismatch, widen: Sequence[tuple[np.ndarray, float]] | None = None) -> float:
+    """Mean squared standardised mismatch; ``widen`` adds, per test, a spread to each log
+    energy (in quadrature with :data:`ENERGY_LOG_SPREAD`) and to the gap (m)."""
+    terms = []
+    for i, (lr, g) in enumerate(zip(m.log_ratios, m.gaps)):
+        we, wg = widen[i] if widen is not None else (0.0, 0.0)
+        if not np.all(np.isfinite(we)):
+            continue  # a test left out (dominated by the friction's uncertainty)
+        terms.append(lr / np.hypot(ENERGY_LOG_SPREAD, we))
+        if g is not None:
+            terms.append(np.array([g[0] / math.hypot(g[1], wg) if math.isfinite(g[0])
+                                   else 1e3]))
+    t = np.concatenate(terms) if terms else np.zeros(0)
+    return float(np.mean(t ** 2)) if t.size else math.nan
+
+
 def impact_objective(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray],
                      harvester, data: _Data | None = None) -> float:
     """Mean squared standardised feature mismatch of a simulation (module docstring):
@@ -209,20 +262,7 @@ def impact_objective(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarra
     over their standard error and :data:`GAP_SPREAD`; ≈ 1 or below where the model
     matches the data within the features' own spread."""
     d = data if data is not None else _data_features(prepared, harvester)
-    terms = []
-    for pt, yp, e, s, g in zip(prepared, preds, d.energies, d.spreads, d.gaps):
-        yp = np.asarray(yp)[: pt.y.shape[0]]
-        es, _ = transient_energies(yp, None, pt.weight)
-        floor = np.maximum(s, 1e-300)
-        lr = np.log((np.maximum(es, 0.0) + floor) / (np.maximum(e, 0.0) + floor))
-        terms.append((lr / ENERGY_LOG_SPREAD).ravel())
-        if g[2] > 0 and yp.shape[0] > 1:
-            gs = kinematic_gap(pt, harvester, yp[1])[0]
-            se = g[1] if math.isfinite(g[1]) else 0.0
-            sd = math.hypot(se, GAP_SPREAD * abs(g[0])) or 1e-9
-            terms.append(np.array([(gs - g[0]) / sd if math.isfinite(gs) else 1e3]))
-    t = np.concatenate(terms) if terms else np.zeros(0)
-    return float(np.mean(t ** 2)) if t.size else math.nan
+    return _score(_mismatch(prepared, preds, harvester, d))
 
 
 def impact_energy_ratio(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> float:
@@ -270,7 +310,8 @@ class ImpactFit:
 
 def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, float], *,
                 max_evaluations: int = IMPACT_EVALUATIONS, shares: Sequence[float] = (),
-                split: Callable | None = None, log: object = None) -> ImpactFit:
+                split: Callable | None = None, friction_spread: float = 0.0,
+                log: object = None) -> ImpactFit:
     """Fit the gap, contact stiffness and damping of a backlash on chaos-robust features
     of the forward simulation (transient energies and kinematic gaps, module docstring).
 
@@ -295,6 +336,17 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     split : callable
         ``split(parameters, share, lead_m_per_rad)`` moving that share of the friction to
         the bearing (:func:`~.candidate_fit.split_friction`); needed when ``shares`` is given.
+    friction_spread : float
+        Relative uncertainty of the start's friction levels (e.g.
+        :data:`IMPACT_FRICTION_SPREAD` for a rigid baseline's friction; 0: the friction
+        is known).  When > 0, each test's features are simulated at the grid's best point
+        with the nut's and the bearing's levels each moved by ± this share (4 more
+        simulations), and the spread that moves each feature by is added (in quadrature)
+        to its allowed spread: a test whose impacts the friction's uncertainty already
+        changes by orders of magnitude (slow strokes on a light load, where whether the
+        rotor leaves its face at all is a balance of friction against the rod's
+        deceleration) then weighs little, instead of pulling the contact to a wrong
+        stiffness.
     log : callable, optional
         Progress messages.
 
@@ -312,6 +364,10 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         g_kin = float(start[GAP])
     history: list[dict] = []
     cache: dict[tuple, float] = {}
+    mism: dict[tuple, _Mismatch] = {}
+    widen: list[tuple[np.ndarray, float]] | None = None
+    extra = 0
+    left_out: list[str] = []
     with_share = bool(shares)
     if with_share and split is None:
         raise ValueError("fit_impacts: shares need split (e.g. candidate_fit.split_friction)")
@@ -330,11 +386,12 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
             raise _Budget
         p = {**friction(float(q[3])), GAP: float(q[0]), STIFFNESS: float(10 ** q[1]),
              DAMPING: float(10 ** q[2])}
-        c = impact_objective(prepared, predict(prepared, rig, p), h, data)
+        mism[key] = _mismatch(prepared, predict(prepared, rig, p), h, data)
+        c = _score(mism[key], widen)
         c = c if math.isfinite(c) else 1e6
         cache[key] = c
         history.append({GAP: p[GAP], STIFFNESS: p[STIFFNESS], DAMPING: p[DAMPING],
-                        "bearing_share": float(q[3]), "objective": c})
+                        "bearing_share": float(q[3]), "objective": c, "_key": key})
         return c
 
     def grid_point(lk: float, lc: float, share: float) -> np.ndarray:
@@ -351,6 +408,64 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     for lk in _GRID_LOG_K:
         for lc in _GRID_LOG_C:
             cost(grid_point(lk, lc, share_best))
+    best = min(history, key=lambda r: r["objective"])
+    if friction_spread > 0.0:
+        # what the friction's own uncertainty does to each test's features, at grid points
+        # across the stiff range (the sensitivity depends on the stiffness: whether the
+        # rotor leaves its face on a slow stroke is a balance of friction against the
+        # rod's deceleration, and a stiffer contact bounces it off harder); then every
+        # objective so far is re-scored with the widened spreads
+        per_k = []
+        for lk in _SPREAD_LOG_K:
+            q = grid_point(lk, 4.0, share_best)
+            cost(q)
+            key = tuple(np.round(np.clip(q, lo4, hi4), 12))
+            p0 = {**friction(share_best), GAP: float(q[0]), STIFFNESS: 10 ** float(q[1]),
+                  DAMPING: 10 ** float(q[2])}
+            members = [_moved_friction(p0, names, 1.0 + sgn * friction_spread)
+                       for names in (_NUT_LEVELS, _BEARING_LEVELS) for sgn in (-1.0, 1.0)]
+            moved = [_mismatch(prepared, predict(prepared, rig, pm), h, data)
+                     for pm in members]
+            extra += len(members)
+            per_k.append(_friction_widening(mism[key], moved))
+        widen = [(np.max([w[i][0] for w in per_k], axis=0), max(w[i][1] for w in per_k))
+                 for i in range(len(prepared))]
+        spread_shown = [w for w, _ in widen]
+        # a test whose transient energy the friction's uncertainty alone moves by more than
+        # a factor e says more about the friction than about the contact: left out (all
+        # kept if that would leave fewer than two)
+        dominated = [i for i, (we, _) in enumerate(widen)
+                     if float(np.max(we)) > IMPACT_FRICTION_DOMINATED]
+        keep = len(prepared) - len(dominated) >= 2
+        widen = [(np.full_like(w[0], np.inf), math.inf) if keep and i in dominated else w
+                 for i, w in enumerate(widen)]
+        left_out = [prepared[i].test.file for i in dominated] if keep else []
+        for r in history:
+            r["objective"] = cache[r["_key"]] = _score(mism[r["_key"]], widen)
+        best = min(history, key=lambda r: r["objective"])
+        say("impact-aware fit: features' spread under ±{:g} % friction levels (log energy, "
+            "per test): {}{}".format(100 * friction_spread, ", ".join(
+                f"{float(np.max(w)):.2g}" for w in spread_shown),
+                f"; left out as friction-dominated: {', '.join(left_out)}" if left_out else ""))
+    # each grid stiffness at the gap whose simulated kinematic gap matches the data's: a
+    # rotor that bounces on its face at mid-stroke biases the kinematic gap low (by up to
+    # 10 % at 1e9 N/m) in the data and in the simulation alike, so the grid's gap (the
+    # data's kinematic gap less the contact deflection) is short there, and the stiff
+    # end of the grid was judged at the wrong gap; one step on the gap per stiffness
+    # (at its better damping) corrects it
+    for lk in _GRID_LOG_K:
+        rows = [r for r in history if abs(math.log10(r[STIFFNESS]) - lk) < 1e-9
+                and abs(r["bearing_share"] - share_best) < 1e-12]
+        if not rows:
+            continue
+        r0 = min(rows, key=lambda r: r["objective"])
+        step = _gap_step(mism[r0["_key"]], widen)
+        if math.isfinite(step) and step != 0.0:
+            try:
+                cost(np.array([max(r0[GAP] + step, 0.2 * g_kin), lk,
+                               math.log10(r0[DAMPING]), share_best]))
+            except _Budget:
+                break
     best = min(history, key=lambda r: r["objective"])
     f_grid = best["objective"]
     q_best = np.array([best[GAP], math.log10(best[STIFFNESS]), math.log10(best[DAMPING]),
@@ -373,14 +488,69 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     share_best = best["bearing_share"]
     params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
               DAMPING: best[DAMPING]}
-    msg = (f"impact-aware fit ({stop}, {len(history)} simulations, bearing share of the "
-           f"friction {share_best:g}): gap "
+    spread_note = (f", features widened by the spread of ±{100 * friction_spread:g} % "
+                   f"friction levels ({extra} simulations)" if extra else "")
+    if left_out:
+        spread_note += (f"; left out as friction-dominated (transient energy moved by more "
+                        f"than a factor e by the friction's uncertainty): {', '.join(left_out)}")
+    msg = (f"impact-aware fit ({stop}, {len(history) + extra} simulations, bearing share of "
+           f"the friction {share_best:g}{spread_note}): gap "
            f"{1e3 * best[GAP]:.4g} mm, contact stiffness {best[STIFFNESS]:.3g} N/m, damping "
            f"{best[DAMPING]:.3g} N s/m; feature objective {f_grid:.3g} (grid) -> "
            f"{best['objective']:.3g}")
     say(msg)
-    return ImpactFit(converged, msg, params, best["objective"], f_grid, len(history),
+    for r in history:
+        r.pop("_key", None)
+    return ImpactFit(converged, msg, params, best["objective"], f_grid, len(history) + extra,
                      time.perf_counter() - t0, history)
+
+
+def _gap_step(m: _Mismatch, widen: Sequence[tuple[np.ndarray, float]] | None) -> float:
+    """The gap change (m) that brings the simulated kinematic gaps onto the data's: minus
+    their mean difference, weighted by the inverse variances (tests left out excluded)."""
+    num = den = 0.0
+    for i, g in enumerate(m.gaps):
+        if g is None or not math.isfinite(g[0]):
+            continue
+        wg = widen[i][1] if widen is not None else 0.0
+        if not math.isfinite(wg):
+            continue
+        var = g[1] ** 2 + wg ** 2
+        num += g[0] / var
+        den += 1.0 / var
+    return -num / den if den > 0 else math.nan
+
+
+#: Contact stiffnesses (log10 N/m) at which the friction's effect on the features is taken.
+_SPREAD_LOG_K = (8.0, 9.0)
+#: Friction levels of the nut and of the bearing (moved by ``friction_spread``).
+_NUT_LEVELS = ("nut_breakaway_N", "nut_coulomb_N", "nut_viscous_Ns_per_m")
+_BEARING_LEVELS = ("bearing_breakaway_Nm", "bearing_coulomb_Nm", "bearing_viscous_Nms_per_rad")
+
+
+def _moved_friction(p: Mapping[str, float], names: Sequence[str], factor: float
+                    ) -> dict[str, float]:
+    out = dict(p)
+    for n in names:
+        out[n] = factor * float(p[n])
+    return out
+
+
+def _friction_widening(centre: _Mismatch, moved: Sequence[_Mismatch]
+                       ) -> list[tuple[np.ndarray, float]]:
+    """Per test: the largest change of each log energy and of the gap (m) between the
+    centre and the moved-friction simulations (the range, not an rms: near a threshold
+    the response to the friction is not Gaussian, and four members undersample it)."""
+    out = []
+    for i, lr0 in enumerate(centre.log_ratios):
+        d = np.array([m.log_ratios[i] - lr0 for m in moved])
+        we = np.max(np.abs(d), axis=0)
+        g0 = centre.gaps[i]
+        dg = [m.gaps[i][0] - g0[0] for m in moved if g0 is not None and m.gaps[i] is not None
+              and math.isfinite(m.gaps[i][0]) and math.isfinite(g0[0])]
+        wg = float(np.max(np.abs(dg))) if dg else 0.0
+        out.append((we, wg))
+    return out
 
 
 def _search_box(prepared: Sequence[PreparedTest], rig: Rig, max_evaluations: int
@@ -443,7 +613,8 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
         return None
     t0 = time.perf_counter()
     res = fit_impacts(fit_pts, crig, start, shares=IMPACT_SHARES, split=split,
-                      max_evaluations=IMPACT_EVALUATIONS_WITH_SHARES, log=log)
+                      max_evaluations=IMPACT_EVALUATIONS_WITH_SHARES,
+                      friction_spread=IMPACT_FRICTION_SPREAD, log=log)
     pf = predict(fit_pts, crig, res.parameters)
     sse = float(sum(np.sum(((pt.y - yp) * pt.wnorm) ** 2) for pt, yp in zip(fit_pts, pf)))
     n_obs = sum(pt.y.size for pt in fit_pts)
