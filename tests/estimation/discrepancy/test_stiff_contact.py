@@ -99,18 +99,13 @@ def test_impact_aware_fit_recovers_a_stiff_contact(stiffness, gap):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("stiffness", [
-    1e8,
-    # open work: with the rigid baseline's friction the fit settles at 4.0e8 N/m (gap
-    # 0.279 mm) and its held-out feature objective is 11.9 > 10, so nothing is named; with
-    # the true friction the same fit recovers 1e9 N/m (test above)
-    pytest.param(1e9, marks=pytest.mark.xfail(reason="friction from the rigid baseline "
-                                                     "misleads the 1e9 N/m fit", strict=False)),
-])
+@pytest.mark.parametrize("stiffness", [1e8, 1e9])
 def test_discrepancy_names_a_stiff_backlash(stiffness, tmp_path):
     """The workflow on a nine-test campaign (1, 2, 3 Hz x 15, 47, 109 ohm) with a 0.3 mm
     gap and a steel-like contact names backlash with the gap within 10 % and the contact
-    stiffness within 30 % (the contact is fitted and judged on impacts)."""
+    stiffness within 30 % (the contact is fitted and judged on impacts; at 1e9 N/m the
+    slow strokes on light loads, whose impacts the rigid baseline's friction cannot
+    predict, are left out of the contact fit as friction-dominated)."""
     import json
 
     from ehsa_opt.cli import main
