@@ -124,3 +124,30 @@ def test_discrepancy_names_a_stiff_backlash(stiffness, tmp_path):
     win = next(c for c in doc["candidates"] if c["effect"] == "backlash")
     assert abs(win["parameters"][GAP] / 3e-4 - 1) < 0.10
     assert abs(win["parameters"][K] / stiffness - 1) < 0.30
+
+
+def test_friction_widening_and_gap_step_are_what_they_say():
+    """The widening is the largest change of each feature over the moved-friction members;
+    a test widened to infinity is left out of the score; the gap step is minus the
+    inverse-variance mean of the simulated-minus-measured kinematic gaps."""
+    from ehsa_opt.estimation.discrepancy.impact_features import (
+        ENERGY_LOG_SPREAD,
+        Mismatch,
+        friction_widening,
+        gap_step,
+        score,
+    )
+    centre = Mismatch([np.zeros(4), np.full(4, 0.4)], [(1e-5, 1e-5), (3e-5, 2e-5)])
+    moved = [Mismatch([np.full(4, 0.3), np.full(4, 2.4)], [(2e-5, 1e-5), (3e-5, 2e-5)]),
+             Mismatch([np.full(4, -0.5), np.full(4, 0.4)], [(1e-5, 1e-5), (0.0, 2e-5)])]
+    w = friction_widening(centre, moved)
+    assert np.allclose(w[0][0], 0.5) and np.isclose(w[0][1], 1e-5)
+    assert np.allclose(w[1][0], 2.0) and np.isclose(w[1][1], 3e-5)
+    # widened in quadrature; a test at infinite spread drops out of the mean
+    only_first = score(centre, [w[0], (np.full(4, np.inf), np.inf)])
+    assert np.isclose(only_first, (0 + 1e-5 ** 2 / (1e-5 ** 2 + 1e-5 ** 2)) / 5)
+    assert score(centre) > only_first
+    assert np.isclose(score(Mismatch([np.full(4, ENERGY_LOG_SPREAD)], [None])), 1.0)
+    # inverse-variance weights 1/1e-10 and 1/4e-10: -(1e-5*4 + 3e-5)/5
+    assert np.isclose(gap_step(centre, None), -(4e-5 + 3e-5) / 5)
+    assert np.isclose(gap_step(centre, [w[0], (np.full(4, np.inf), np.inf)]), -1e-5)
