@@ -73,6 +73,10 @@ def _simulator(n: int):
             ca.Function("dq", [q0, w0, U, D, P], [ca.jacobian(qtraj, P)]))
 
 
+#: simulators by record length (built once: every start and model reuses them)
+_SIMULATORS: dict[int, tuple] = {}
+
+
 class _Record:
     """A record's force (through a named drive lag) and measured position, simulated
     open loop from the measured position at rest (the benchmark's convention, its
@@ -86,12 +90,14 @@ class _Record:
         self.F = applied_force(t, test.force_N, tau, delay) if (tau or delay) else \
             np.asarray(test.force_N, float)
         self.t, self.q = t, np.asarray(test.displacement_m, float)
-        self._sims: dict[int, tuple] = {}
 
-    def _sim(self, n: int):
-        if n not in self._sims:
-            self._sims[n] = _simulator(n)
-        return self._sims[n]
+    @staticmethod
+    def _sim(n: int):
+        if n not in _SIMULATORS:
+            if len(_SIMULATORS) >= 8:
+                _SIMULATORS.pop(next(iter(_SIMULATORS)))
+            _SIMULATORS[n] = _simulator(n)
+        return _SIMULATORS[n]
 
     def _args(self, p: np.ndarray, n: int) -> tuple:
         return (float(self.q[0]), 0.0, self.F[:n - 1][None, :], np.diff(self.t[:n])[None, :], p)
