@@ -13,6 +13,15 @@ reflective, bounds on z) on CasADi residual and Jacobian functions built once pe
 block structure — no ``nlpsol`` (whose symbolic Hessian of a 25 000-sample record
 takes ≈ 2 s to build, more than the whole fit here).
 
+A block may carry a linear filter of the model's output (``block.info["output_filter"]``:
+a function applying it along the sample axis, rows = samples).  The measured output
+of such a block is already filtered (the parallel filtering of a rig without
+generator); the model's output is then passed through the same filter, so that the
+residual compares consistently filtered sides — the benchmark's IDIM filters every
+column of its observation matrix, i.e. the model.  The filter is linear, so the
+residual and its Jacobian are filtered in place: with r = w (y − ŷ),
+r_H = w (H y − ŷ) = w H(r / w) + w (H ŷ − ŷ).
+
 The core's order constraints (breakaway ≥ Coulomb friction) become bounds by a
 linear change of variables (the excess of the breakaway over the Coulomb level,
 ≥ 0), so the constrained optimum is the one found — on EMPS the constraint is
@@ -131,6 +140,19 @@ def _order_map(space: ParamSpace, pbase: np.ndarray
     return T, lo, hi
 
 
+def _output_filter(model: BenchModel, space: ParamSpace, block: Block) -> tuple | None:
+    """(H, w, w (H ŷ − ŷ)) of a block with ``info["output_filter"]`` (H along axis 0),
+    None without; a filter needs every weight > 0 (r / w recovers the model's output)."""
+    H = block.info.get("output_filter")
+    if H is None:
+        return None
+    _, _, _, ym, wy = _unpack(model, space, block)
+    if not np.all(wy > 0):
+        raise ValueError("fit_given: a block with an output filter needs every sample's "
+                         "weight > 0 (weighted-out samples cannot be filtered consistently)")
+    return H, wy, wy * (H(ym.T).T - ym)
+
+
 def fit_given(model: BenchModel, space: ParamSpace, blocks: Sequence[Block],
               starts: Sequence[np.ndarray], *, zref: np.ndarray, regularisation: float,
               max_nfev: int = 300) -> list[GivenFit] | None:
@@ -167,6 +189,7 @@ def fit_given(model: BenchModel, space: ParamSpace, blocks: Sequence[Block],
     nv = space.nv
     mapped = [([f.map(b.n_obs) for f in _functions(model, space, b.ny)],
                [ca.DM(a) for a in _unpack(model, space, b)]) for b in blocks]  # DM once
+    filters = [_output_filter(model, space, b) for b in blocks]
     n_tot = float(sum(b.n_obs * b.ny for b in blocks))
     root_n, root_rho = np.sqrt(n_tot), np.sqrt(regularisation)
     zref = np.asarray(zref, float)
@@ -180,15 +203,24 @@ def fit_given(model: BenchModel, space: ParamSpace, blocks: Sequence[Block],
         if k not in cache or (with_jac and cache[k][1] is None):
             cache.clear()
             rs, js = [], []
-            for (f_r, f_rj), (X, u, pb, ym, wy) in mapped:
+            for ((f_r, f_rj), (X, u, pb, ym, wy)), filt in zip(mapped, filters):
                 ny, n = ym.shape
                 if with_jac:
                     r, j = f_rj(z, X, u, pb, ym, wy)
                     # j: (ny, n·nv), sample i's (ny × nv) block in columns i·nv … i·nv + nv − 1
-                    js.append(np.asarray(j).reshape(ny, n, nv).reshape(-1, nv))
+                    j = np.asarray(j).reshape(ny, n, nv)
+                    if filt is not None:
+                        H, w, _ = filt
+                        j = np.stack([w[c][:, None] * H(j[c] / w[c][:, None])
+                                      for c in range(ny)])
+                    js.append(j.reshape(-1, nv))
                 else:
                     r = f_r(z, X, u, pb, ym, wy)
-                rs.append(np.asarray(r).ravel())  # (ny, n) row-major: channel by channel
+                r = np.asarray(r).reshape(ny, n)
+                if filt is not None:
+                    H, w, c0 = filt
+                    r = w * H((r / w).T).T + c0
+                rs.append(r.ravel())  # (ny, n) row-major: channel by channel
             cache[k] = (np.concatenate(rs), np.vstack(js) if with_jac else None)
         return cache[k]
 

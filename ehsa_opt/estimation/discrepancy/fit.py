@@ -25,6 +25,8 @@ unrecorded warm-up cycle for sine tests), never collocation.
 
 from __future__ import annotations
 
+from functools import partial
+
 import math
 import time
 from dataclasses import dataclass, field
@@ -299,6 +301,8 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
         else:
             blocks.append(given_block(model, np.zeros((0, pt.time_s.size)), pt.u, pt.y, w,
                                       pbase))
+            if pt.output_filter_hz is not None:  # the model through the measurement's filter
+                blocks[-1].info["output_filter"] = partial(pt.filter_output, axis=0)
     z0s = []
     for st in starts:
         vals = {n: float(st.get(n, fixed.get(n, specs[n].default))) for n in free}
@@ -446,12 +450,14 @@ def _covariance(nlp: core.NLP, w: np.ndarray, p: np.ndarray, blocks: Sequence[An
 
 # ------------------------------------------------------------------ predictions
 def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
-            rtol: float = 1e-7) -> list[np.ndarray]:
+            rtol: float = 1e-7, filtered: bool = True) -> list[np.ndarray]:
     """Simulated outputs (ny, N) of each test with the given parameters.
 
     Models with states are integrated by CVODES (relative tolerance ``rtol``) from
     rest-consistent initial states, one unrecorded warm-up cycle before the record for
-    sine tests.
+    sine tests.  A test whose measured output went through the parallel low-pass of a
+    rig without generator gets its outputs through the same filter (``filtered``;
+    False: the model's own output, e.g. to synthesise a record).
     """
     model = rig.model()
     out = []
@@ -462,10 +468,11 @@ def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str,
         if model.n_states == 0:  # algebraic model: evaluate on the samples
             y = np.array(model.outputs.map(pt.time_s.size)(np.zeros((0, pt.time_s.size)),
                                                           pt.u, p))
-            out.append(y[:ny])
+            out.append(pt.filter_output(y[:ny]) if filtered else y[:ny])
             continue
         sim = _simulate(model, pt, vals, rtol=rtol)
-        out.append(np.vstack([sim.force_N, sim.voltage_V])[:ny])
+        y = np.vstack([sim.force_N, sim.voltage_V])[:ny]
+        out.append(pt.filter_output(y) if filtered else y)
     return out
 
 

@@ -26,7 +26,8 @@ from typing import Mapping
 import numpy as np
 
 __all__ = ["open_loop_position", "open_loop_error", "validation_summary", "SKIP_SAMPLES",
-           "EMPS_REFERENCE_PARAMETERS", "BEST_PUBLISHED_MM", "direction_dependent"]
+           "EMPS_REFERENCE_PARAMETERS", "EMPS_REFERENCE_DIRECTION_DEPENDENT",
+           "BEST_PUBLISHED_MM", "direction_dependent"]
 
 #: Best published open-loop RMS position error on the pulses record we know, mm
 #: (continuous-time subspace encoder, black box; Beintema et al. 2023).
@@ -35,6 +36,12 @@ BEST_PUBLISHED_MM = 4.61
 #: Published EMPS reference (symmetric friction, Janot et al. 2019).
 EMPS_REFERENCE_PARAMETERS = {"inertia_kg": 95.11, "nut_viscous_Ns_per_m": 203.5,
                              "nut_coulomb_N": 20.39, "offset_N": -3.16}
+
+#: Published direction-dependent IDIM values (Janot et al. 2019: F_v± 166.7 / 240.4 N s/m,
+#: F_C± 20.14 / 20.63 N) as the open-loop port's base and direction-dependent parts.
+EMPS_REFERENCE_DIRECTION_DEPENDENT = {
+    "nut_viscous_Ns_per_m": (166.7 + 240.4) / 2, "asym_viscous_Ns_per_m": (166.7 - 240.4) / 2,
+    "nut_coulomb_N": (20.14 + 20.63) / 2, "asym_coulomb_N": (20.14 - 20.63) / 2}
 
 #: Samples skipped at the start of the record (the benchmark's convention).
 SKIP_SAMPLES = 20

@@ -29,13 +29,15 @@ NO_GENERATOR_FIXED: dict[str, float] = {
     "bearing_breakaway_velocity_rad_per_s": 1.0, "bearing_viscous_Nms_per_rad": 0.0}
 
 
-def parallel_filter(time_s: np.ndarray, y: np.ndarray, cutoff_hz: float) -> np.ndarray:
+def parallel_filter(time_s: np.ndarray, y: np.ndarray, cutoff_hz: float, axis: int = -1
+                    ) -> np.ndarray:
     """``y`` through the zero-phase 4th-order Butterworth low-pass that
-    :class:`~ehsa_opt.physics.motion.FilteredMotion` applies to the displacement."""
+    :class:`~ehsa_opt.physics.motion.FilteredMotion` applies to the displacement
+    (along ``axis``)."""
     from scipy.signal import butter, filtfilt
     dt = float(np.median(np.diff(np.asarray(time_s, float))))
     b, a = butter(4, min(2.0 * cutoff_hz * dt, 0.99))
-    return filtfilt(b, a, np.asarray(y, float))
+    return filtfilt(b, a, np.asarray(y, float), axis=axis)
 
 
 def filtered_noise_gain(time_s: np.ndarray, cutoff_hz: float) -> float:
@@ -81,6 +83,9 @@ class PreparedTest:
     raw_force_N: np.ndarray | None = None
     #: the filter's white-noise gain (std out / std in; 1 when ``y`` is not filtered)
     force_noise_gain: float = 1.0
+    #: cut-off (Hz) of the parallel low-pass ``y`` went through, which the model's
+    #: output goes through too (:meth:`filter_output`); None when ``y`` is not filtered
+    output_filter_hz: float | None = None
 
     def __post_init__(self) -> None:
         if self.weight is None:
@@ -90,6 +95,14 @@ class PreparedTest:
     def wnorm(self) -> np.ndarray:
         """(ny, N) weights of the residuals: resolved samples over the noise level."""
         return self.weight[None, :] / self.sigma[:, None]
+
+    def filter_output(self, y: np.ndarray, axis: int = -1) -> np.ndarray:
+        """A model output (or columns of one) through the parallel low-pass the measured
+        ``y`` went through (unchanged when ``y`` is not filtered), along ``axis``: so
+        model and measurement are compared consistently filtered."""
+        if self.output_filter_hz is None:
+            return np.asarray(y, float)
+        return parallel_filter(self.time_s, y, self.output_filter_hz, axis=axis)
 
     @property
     def n_resolved(self) -> int:
@@ -138,10 +151,11 @@ def prepare_tests(tests: Sequence[BenchTest], has_generator: bool = True,
             # force through the motion's own zero-phase low-pass, so that model and
             # measurement hold the same band; σ stays the raw force's noise level
             y = np.vstack([parallel_filter(t.time_s, row, motion.cutoff_hz) for row in y])
-        raw, gain = None, 1.0
+        raw, gain, fhz = None, 1.0, None
         if isinstance(motion, FilteredMotion) and not has_generator:
             raw, gain = ys[0], filtered_noise_gain(t.time_s, motion.cutoff_hz)
+            fhz = float(motion.cutoff_hz)
         fixed = {"load_ohm": float(t.load_ohm)} if has_generator else dict(NO_GENERATOR_FIXED)
         out.append(PreparedTest(t, motion, t.time_s, u, y, sig, fixed, weight, mass_kg,
-                                raw, gain))
+                                raw, gain, fhz))
     return out

@@ -365,5 +365,6 @@ def _open_loop_validation(raw: tuple, base: Baseline, state: SearchState,
         f"{validation['open_loop_reference_parameters']['rms_mm']:.2f} mm, best "
         f"published {BEST_PUBLISHED_MM} mm)"
         + (f"; {oe[-1]['rms_mm']:.2f} mm with the parameters refitted by output error on the "
-           f"fit record ({oe[-1]['model']}; the baseline so refitted {oe[0]['rms_mm']:.2f} mm)"
+           f"fit record, the start chosen by blocked cross-validation there "
+           f"({oe[-1]['model']}; the baseline so refitted {oe[0]['rms_mm']:.2f} mm)"
            if oe else ""))

@@ -168,6 +168,20 @@ def test_emps_validated_on_the_pulses_record():
     assert dd["viscous_pos_ci95"][0] < 166.7 < dd["viscous_pos_ci95"][1] + 2.0
     assert dd["viscous_neg_ci95"][0] - 2.0 < 240.4 < dd["viscous_neg_ci95"][1]
     assert v["best_published_mm"] == 4.61 and v["open_loop_final"]["rms_mm"] > 0
+    # the output-error rows: the start chosen by cross-validation on the estimation
+    # record (the smallest CV error), intervals with N_eff, F_v± with the asymmetry
+    oe = v["output_error"]
+    assert [r["model"] for r in oe] == ["baseline", "drive_lag",
+                                         "drive_lag + asymmetric_friction"]
+    for row in oe:
+        chosen = next(st for st in row["starts"] if st["label"] == row["chosen_start"])
+        assert chosen["cv_rms_mm"] == min(st["cv_rms_mm"] for st in row["starts"])
+        assert {st["label"] for st in row["starts"]} >= {"inverse model", "published IDIM-LS"}
+        assert row["rms_mm"] == pytest.approx(chosen["eval_rms_mm"])
+        assert 0 < row["covariance_info"]["n_eff"] < row["covariance_info"]["n"]
+        for name, (lo, hi) in row["intervals"].items():
+            assert lo < row["parameters"][name] < hi, name
+    assert "viscous_pos_ci95" in oe[-1]["direction_dependent"]
     flex = next(c for c in res.candidates if c.effect == "flexibility")
     assert flex.fitted and not flex.earns
     assert "frequency" in res.loc_before.as_dict()["force"]

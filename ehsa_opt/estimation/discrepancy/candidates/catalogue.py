@@ -205,7 +205,9 @@ def absorbed_columns(pt: PreparedTest, rig: Rig, u_brk: float) -> np.ndarray:
     cols = [np.tanh(v / uc), np.exp(-(v / ust) ** 2) * v / ust, v]
     if not rig.has_generator:
         cols += [a, np.ones(N)]
-    F = np.column_stack(cols) * pt.wnorm[0][:, None]
+    # through the measurement's parallel low-pass, as the model's output (a rig
+    # without generator; unchanged otherwise)
+    F = pt.filter_output(np.column_stack(cols), axis=0) * pt.wnorm[0][:, None]
     ny = pt.y.shape[0]
     return np.vstack([F] + [np.zeros_like(F)] * (ny - 1))
 

@@ -47,12 +47,13 @@ FINE_DAMPING_STEPS = (0.5, 1.0, 2.0)
 def flexibility_column(pt: PreparedTest, frequency_hz: float, damping_ratio: float
                        ) -> np.ndarray:
     """F_extra per kg of load mass: −s²/(s² + 2ζωs + ω²) of the test's acceleration
-    (zero-order hold on the sample grid, from rest), N/kg."""
+    (zero-order hold on the sample grid, from rest; through the measurement's parallel
+    low-pass, as every model output), N/kg."""
     dt = float(np.median(np.diff(pt.time_s)))
     w = 2 * math.pi * frequency_hz
     num, den = [1.0, 0.0, 0.0], [1.0, 2 * damping_ratio * w, w * w]
     b, a, _ = cont2discrete((num, den), dt, method="zoh")
-    return -lfilter(np.ravel(b), a, pt.u[2])
+    return -pt.filter_output(lfilter(np.ravel(b), a, pt.u[2]))
 
 
 def _design(pts: Sequence[PreparedTest], rig: Rig, u_brk: float, f: float, z: float,
