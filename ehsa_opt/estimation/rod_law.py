@@ -82,7 +82,9 @@ class FrictionSamples:
 def friction_samples(data: Any, parameters: Mapping[str, float] | None = None,
                      options: Any = None, tests: Sequence[Any] | None = None
                      ) -> FrictionSamples:
-    """Friction samples of a bench campaign on the rigid model.
+    """Friction samples of a bench campaign on the rigid model: every sample of a sine
+    test (ends trimmed), the resolved samples of a recorded motion (outside its reversal
+    and dwell windows, :func:`~ehsa_opt.estimation.identify_options.estimate_motion`).
 
     Parameters
     ----------
@@ -96,18 +98,28 @@ def friction_samples(data: Any, parameters: Mapping[str, float] | None = None,
         A subset (default every test).
     """
     from .test_simulation import simulate_tests
-    from .identify_options import IdentifyOptions, test_motion
+    from .identify_options import IdentifyOptions, estimate_motion, test_motion
     opt = options or IdentifyOptions.for_rig(data.has_generator)
     tests = list(tests if tests is not None else data.tests)
     other = {k: float(v) for k, v in (parameters or {}).items()
              if k not in FRICTION_NAMES and k != "load_ohm" and v is not None}
     preds = simulate_tests(tests, data.harvester, other, has_generator=data.has_generator,
                            options=opt)
+    mass = data.harvester.equivalent_mass_kg() if data.has_generator else None
     vs, ys, acc = [], [], []
     for test, pr in zip(tests, preds):
         n = test.n_samples
         k = int(round(opt.trim_fraction * n))
-        keep = slice(k, n - k)
+        keep = np.zeros(n, bool)
+        keep[k:n - k] = True
+        if getattr(test, "excitation", "sine") != "sine":
+            # a recorded motion's reversal (corner) and dwell windows are not resolved:
+            # there the force is the corner's inertia and impacts, which no function of
+            # the velocity gives (the fits weight them out too); a stroke with no resolved
+            # sample keeps them rather than nothing
+            resolved = estimate_motion(test, opt, mass).resolved
+            if np.count_nonzero(keep & resolved) >= 10:
+                keep &= resolved
         _, v, a = test_motion(test, opt).evaluate(test.time_s)[:3]
         vs.append(np.asarray(v[keep], dtype=float))
         acc.append(np.asarray(a[keep], dtype=float))
