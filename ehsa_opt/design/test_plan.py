@@ -214,7 +214,7 @@ def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
                     kinds: Sequence[str] = _KINDS, n_freq: int = 24, n_amp: int = 6
                     ) -> list[Candidate]:
     """Sines (log-spaced frequencies × amplitudes up to half the stroke) and triangle
-    strokes (log-spaced velocities over the full stroke), at every load, that stay within
+    strokes (``n_freq`` log-spaced velocities over the full stroke), at every load, that stay within
     the rig's velocity, force and power (peak force ≈ m_eq a + c_eq(ω) v + F_rod(v),
     each at its peak)."""
     for k in kinds:
@@ -238,7 +238,7 @@ def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
         if "triangle" in kinds:
             ceq = float(equivalent_damping_Ns_per_m(h, 0.0))
             a = 0.5 * rig.stroke_m
-            for v in np.geomspace(0.02, rig.peak_velocity_m_per_s, 12):
+            for v in np.geomspace(0.02, rig.peak_velocity_m_per_s, n_freq):
                 if 2 * a / v <= 2 * rig.reversal_s:
                     continue
                 F = meq * v / rig.reversal_s + ceq * v + float(law.rod_N(v))
