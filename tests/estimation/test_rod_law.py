@@ -125,3 +125,34 @@ def test_cluster_covariance_corrects_for_a_test_that_owns_a_direction() -> None:
     for lev in (False, True):
         c = cluster_covariance(Jb, eb, leverage=lev)
         assert np.allclose(np.diag(c), np.diag(classic), rtol=0.35)
+
+
+def test_weighted_law_shows_a_bias_the_hard_driven_tests_share() -> None:
+    """Five tests fit alike: the weighted law is the law and adds (almost) nothing to the
+    band.  The two fastest carry an error repeated in every cycle that grows with the
+    stroke (a hidden play): they fit worse, the weighted law trusts the others, and the
+    band at 1 m/s holds the distance — with the truth inside it where the plain
+    spread-based band misses it."""
+    def campaign(bias: bool):
+        rng = np.random.default_rng(8)
+        vs, ys = [], []
+        for f in (0.5, 1.0, 2.0, 3.0, 3.5):
+            tt = np.arange(0, 2 / f, 1e-3)
+            v = 2 * np.pi * f * 0.015 * np.cos(2 * np.pi * f * tt)
+            y = np.asarray(rod_friction_N(v, TRUTH, LEAD)) + _ar1(rng, v.size, 0.8, 2.0)
+            if bias and f >= 3.0:
+                y = y + 60.0 * v / 0.33 + 40.0 * np.sin(4 * np.pi * f * tt)
+            vs.append(v)
+            ys.append(y)
+        return rod_law_fit(FrictionSamples(list("abcde"), vs, ys), TRUTH.as_dict(), LEAD,
+                           refit=True)
+    truth_1 = float(rod_friction_N(1.0, TRUTH, LEAD))
+    clean = campaign(False)
+    assert clean.weighted is not None
+    assert clean.model_error_N(1.0)[0] < 0.5 * (clean.half_width_N(1.0)[0]
+                                                - clean.model_error_N(1.0)[0])
+    biased = campaign(True)
+    err = biased.model_error_N(1.0)[0]
+    spread = biased.half_width_N(1.0)[0] - err
+    assert abs(float(biased.rod_N(1.0)) - truth_1) > spread      # the spread misses it
+    assert abs(float(biased.rod_N(1.0)) - truth_1) <= spread + err  # the band holds it
