@@ -103,7 +103,8 @@ def _band(data, truth_1: float) -> tuple[float, float, RodLawFit, object, dict]:
     hi = float(np.interp(1.0, fb.velocity_m_per_s, fb.law_band_N[1]))
     info = {"best_N": a["best_N"], "law_N": float(law.rod_N(1.0)), "truth_N": truth_1,
             "inside": lo <= truth_1 <= hi,
-            "statistical_N": float(law.half_width_N(1.0)[0])}
+            "statistical_N": float(law.half_width_N(1.0)[0]),
+            "model_error_N": float(law.model_error_N(1.0)[0])}
     return 0.5 * (hi - lo), a["max_N"] - a["min_N"], law, fb, info
 
 
@@ -146,7 +147,8 @@ def run_truth(name: str, friction: FrictionParams | None, seed: int, root: Path)
 def _print(r: dict) -> bool:
     p = r["plan"]
     print(f"{r['name']}: road sigma_v {r['sigma']:.3f} m/s; proposed: "
-          + "; ".join(c.label() for c in p.proposed) + f" ({r['seconds']:.0f} s)")
+          + "; ".join(f"{c.label()} [expected residual {st['predicted_residual_rms_N']:.0f} N]"
+                      for c, st in zip(p.proposed, p.steps)) + f" ({r['seconds']:.0f} s)")
     print(f"  predicted band at 1 m/s: +-{p.band_before_N[1]:.1f} -> +-{p.band_after_N[1]:.1f} N")
     n_p = r["band0"] - r["planned"][0]
     n_g = r["band0"] - r["grid"][0]
@@ -159,7 +161,8 @@ def _print(r: dict) -> bool:
     for tag, info in (("before", r["info0"]), ("planned", r["planned"][2]),
                       ("grid", r["grid"][2])):
         print(f"    {tag:8s}: best {info['best_N']:.1f}, least-squares law {info['law_N']:.1f}"
-              f" (+-{info['statistical_N']:.1f} statistical), truth {info['truth_N']:.1f} N "
+              f" (+-{info['statistical_N']:.1f}, of which {info['model_error_N']:.1f} the "
+              f"weighted law's distance), truth {info['truth_N']:.1f} N "
               f"-> truth {'inside' if info['inside'] else 'OUTSIDE'} the band")
     print(f"  min-max sets at 1 m/s: {r['sets0']:.1f} -> planned {r['planned'][1]:.1f}"
           f", grid {r['grid'][1]:.1f} N")
