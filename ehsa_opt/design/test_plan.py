@@ -366,6 +366,37 @@ def residual_model(law: RodLawFit) -> tuple[float, float]:
     return max(s0, 1e-12), float(coef[1])
 
 
+def _candidate_information(cands: list[Candidate], rig: RigLimits, law: RodLawFit,
+                           d: np.ndarray, tau: float, kappa: float
+                           ) -> tuple[list[Candidate], list[np.ndarray], list[float]]:
+    """The candidates that keep resolved samples, the Fisher information of each (in the
+    coordinates scaled by ``d``) and its expected residual rms (N): the campaign's error
+    at the candidate's stroke acceleration (:func:`residual_model`), inflated by the
+    autocorrelation ``tau`` and deflated by the cluster factor ``kappa``."""
+    s0, beta = residual_model(law)
+    p, names, lead = law.parameters, law.varied, law.lead_m_per_rad
+    infos, kept, sig = [], [], []
+    tri_v: dict[float, np.ndarray] = {}
+    for c in cands:
+        if c.kind == "triangle":
+            if c.velocity_m_per_s not in tri_v:  # the same stroke at every load
+                tri_v[c.velocity_m_per_s] = c.velocity_samples(rig)
+            v = tri_v[c.velocity_m_per_s]
+        else:
+            v = c.velocity_samples(rig)
+        if v.size < _MIN_RESOLVED:
+            continue  # all reversal: nothing a fit would use
+        s2 = (s0 + beta * c.acceleration_m_per_s2(rig) ** 2) * tau
+        # the information is n × the mean of g gᵀ over the samples: 400 evenly spaced ones
+        # give the mean of these smooth periodic records to well below a per cent
+        sub = v[np.unique(np.linspace(0, v.size - 1, min(v.size, 400)).astype(int))]
+        G = rod_gradient(sub, p, names, lead) * d
+        infos.append(v.size * (G.T @ G) / sub.size / (s2 / kappa))
+        kept.append(c)
+        sig.append(math.sqrt(s2 / tau))
+    return kept, infos, sig
+
+
 def _pinv(A: np.ndarray, rcond: float = 1e-9) -> np.ndarray:
     ev, V = np.linalg.eigh(0.5 * (A + A.T))
     keep = ev > rcond * max(float(ev.max()), 1e-300)
@@ -410,8 +441,6 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
                         math.nan, math.nan, [], 0, rig, law.velocity_range_m_per_s[1])
     names, p, lead = law.varied, law.parameters, law.lead_m_per_rad
     tau = law.n_samples / max(law.n_effective, 1.0)
-    # a candidate's residual level: the campaign's error at that stroke acceleration
-    s0, beta = residual_model(law)
     # road weight: |v| half-normal, Gauss-Legendre on [0, 5 sigma]
     x, wq = np.polynomial.legendre.leggauss(64)
     vr = 2.5 * sigma_v_m_per_s * (x + 1.0)
@@ -436,26 +465,7 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
     J0 = _pinv(cov0 / np.outer(d, d))
     Gr = Graw * d
     W = (Gr * wr[:, None]).T @ Gr
-    infos, kept, sig = [], [], []
-    tri_v: dict[float, np.ndarray] = {}
-    for c in cands:
-        if c.kind == "triangle":
-            if c.velocity_m_per_s not in tri_v:  # the same stroke at every load
-                tri_v[c.velocity_m_per_s] = c.velocity_samples(rig)
-            v = tri_v[c.velocity_m_per_s]
-        else:
-            v = c.velocity_samples(rig)
-        if v.size < _MIN_RESOLVED:
-            continue  # all reversal: nothing a fit would use
-        s2 = (s0 + beta * c.acceleration_m_per_s2(rig) ** 2) * tau
-        # the information is n × the mean of g gᵀ over the samples: 400 evenly spaced ones
-        # give the mean of these smooth periodic records to well below a per cent
-        sub = v[np.unique(np.linspace(0, v.size - 1, min(v.size, 400)).astype(int))]
-        G = rod_gradient(sub, p, names, lead) * d
-        infos.append(v.size * (G.T @ G) / sub.size / (s2 / kappa))
-        kept.append(c)
-        sig.append(math.sqrt(s2 / tau))
-    cands = kept
+    cands, infos, sig = _candidate_information(cands, rig, law, d, tau, kappa)
     if not cands:
         return TestPlan(False, "no candidate test keeps resolved samples within the rig's "
                         "limits: raise stroke_m or peak_velocity_m_per_s in [rig]", [],
