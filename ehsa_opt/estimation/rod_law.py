@@ -293,7 +293,8 @@ class RodLawFit:
         tests fit alike it is the law; where a model error grows in some tests (a hidden
         backlash in the hard-driven ones) the two part, and the band holds their distance:
         an error a test repeats in every cycle biases the law, which no spread-based
-        covariance sees.
+        covariance sees.  The band is at least that distance (within the statistical
+        band the two differ by noise alone).
     """
 
     parameters: dict[str, float]
@@ -335,8 +336,9 @@ class RodLawFit:
         one (normal quantile) and the cluster-robust one (Student t, tests − 1 degrees
         of freedom), so neither the autocorrelation within a test nor an error shared
         by the cycles of a test makes it too narrow; plus the largest distance of an
-        equally good alternative law (:attr:`alternatives`) and the distance of the
-        weighted law (:meth:`model_error_N`)."""
+        equally good alternative law (:attr:`alternatives`); at least the distance of the
+        weighted law (:meth:`model_error_N`), which differs from the law by noise alone
+        within that band and by a model error beyond it."""
         from scipy import stats
         hw = stats.norm.ppf(0.5 + level / 2) * self.std_N(v_m_per_s, "hac")
         if self.covariance_cluster is not None:
@@ -348,7 +350,9 @@ class RodLawFit:
             hw = hw + np.max([np.abs(np.asarray(rod_friction_N(
                 v, [a[n] for n in FRICTION_NAMES], self.lead_m_per_rad)) - f)
                 for a in self.alternatives], axis=0)
-        return hw + self.model_error_N(v_m_per_s)
+        # the weighted law differs from the law by noise alone within the statistical
+        # band; where it lies beyond, the band reaches it
+        return np.fmax(hw, self.model_error_N(v_m_per_s))
 
     def model_error_N(self, v_m_per_s: Any) -> np.ndarray:
         """|F_rod(v; weighted) − F_rod(v; law)| (:attr:`weighted`; zero without it): how
