@@ -1,5 +1,5 @@
 """Friction bounds the data support (estimation/bounds.py) and identification feeding
-simulate (issue 13 items 1–2)."""
+simulate."""
 
 from __future__ import annotations
 
