@@ -138,8 +138,8 @@ def evaluate(name: str, case: tuple, root: Path) -> dict:
           f"-> {'MET' if in_sets >= 0.9 else 'NOT met'} (>= 90 %)")
     from ehsa_opt.estimation.rod_law import RodLawFit
     law = RodLawFit.from_json(fb.law)
-    print(f"  best law's half-width at 1 m/s {float(law.half_width_N(1.0)[0]):.1f} N, of which "
-          f"the weighted law's distance (model-error term) {float(law.model_error_N(1.0)[0]):.1f} N")
+    print(f"  best law's half-width at 1 m/s {float(law.half_width_N(1.0)[0]):.1f} N; "
+          f"the weighted law's distance (model-error term, a floor of it) {float(law.model_error_N(1.0)[0]):.1f} N")
     for v in (0.5, 1.0, 1.5, 3.0):
         a = fb.at(v)
         print(f"    v = {v:3.1f} m/s: min {a['min_N']:7.1f}  best {a['best_N']:7.1f}  max "

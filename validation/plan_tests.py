@@ -161,8 +161,8 @@ def _print(r: dict) -> bool:
     for tag, info in (("before", r["info0"]), ("planned", r["planned"][2]),
                       ("grid", r["grid"][2])):
         print(f"    {tag:8s}: best {info['best_N']:.1f}, least-squares law {info['law_N']:.1f}"
-              f" (+-{info['statistical_N']:.1f}, of which {info['model_error_N']:.1f} the "
-              f"weighted law's distance), truth {info['truth_N']:.1f} N "
+              f" (+-{info['statistical_N']:.1f}; the weighted law's distance "
+              f"{info['model_error_N']:.1f}), truth {info['truth_N']:.1f} N "
               f"-> truth {'inside' if info['inside'] else 'OUTSIDE'} the band")
     print(f"  min-max sets at 1 m/s: {r['sets0']:.1f} -> planned {r['planned'][1]:.1f}"
           f", grid {r['grid'][1]:.1f} N")
