@@ -375,11 +375,6 @@ def _candidate_information(cands: list[Candidate], rig: RigLimits, law: RodLawFi
     autocorrelation ``tau`` and deflated by the cluster factor ``kappa``."""
     s0, beta = residual_model(law)
     p, names, lead = law.parameters, law.varied, law.lead_m_per_rad
-    # a test is one unit of the cluster-robust band: an error it repeats in every cycle
-    # does not average out over a longer record, so a candidate counts at most as many
-    # samples as the campaign's tests hold on average (a 20 s record of a 0.1 Hz sine is
-    # not worth ten 2 s records)
-    n_cap = law.n_samples / max(law.n_tests, 1) if kappa < 1.0 else math.inf
     infos, kept, sig = [], [], []
     tri_v: dict[float, np.ndarray] = {}
     for c in cands:
@@ -396,7 +391,7 @@ def _candidate_information(cands: list[Candidate], rig: RigLimits, law: RodLawFi
         # give the mean of these smooth periodic records to well below a per cent
         sub = v[np.unique(np.linspace(0, v.size - 1, min(v.size, 400)).astype(int))]
         G = rod_gradient(sub, p, names, lead) * d
-        infos.append(min(v.size, n_cap) * (G.T @ G) / sub.size / (s2 / kappa))
+        infos.append(v.size * (G.T @ G) / sub.size / (s2 / kappa))
         kept.append(c)
         sig.append(math.sqrt(s2 / tau))
     return kept, infos, sig
