@@ -136,6 +136,10 @@ def evaluate(name: str, case: tuple, root: Path) -> dict:
     print(f"  beyond it up to 1.5 m/s: truth between the sets at {100 * in_sets:.0f} % of "
           f"velocities, in the best law's 95 % band at {100 * in_law:.0f} % "
           f"-> {'MET' if in_sets >= 0.9 else 'NOT met'} (>= 90 %)")
+    from ehsa_opt.estimation.rod_law import RodLawFit
+    law = RodLawFit.from_json(fb.law)
+    print(f"  best law's half-width at 1 m/s {float(law.half_width_N(1.0)[0]):.1f} N; "
+          f"the weighted law's distance (model-error term, a floor of it) {float(law.model_error_N(1.0)[0]):.1f} N")
     for v in (0.5, 1.0, 1.5, 3.0):
         a = fb.at(v)
         print(f"    v = {v:3.1f} m/s: min {a['min_N']:7.1f}  best {a['best_N']:7.1f}  max "

@@ -8,10 +8,12 @@ four other friction truths on the same grid, hidden effects and noise:
    half-width plus the best set's distance to that law);
 2. ``plan_tests`` for the passenger car on class C at 100 km/h (problem
    ``quarter_car_class_c``) on an MTS 835-like rig (stroke 100 mm, 1.5 m/s, 10 kN,
-   6 kW, the paper's three loads), sines only — triangle strokes cannot yet be fed to
-   the identification on equal terms;
+   6 kW, the paper's three loads, reversals of 50 ms): sines and constant-velocity
+   triangle strokes (``sines`` on the command line: sines only), each weighted by the
+   residual level the campaign's tests show at its stroke acceleration;
 3. arm PLANNED: the 3 proposed tests simulated with the truth (generator, same hidden
-   effects and noise, fresh seed) added to the campaign; arm GRID: 3 more tests of the
+   effects and noise, fresh seed; triangle strokes as recorded motions with the rig's
+   reversal) added to the campaign; arm GRID: 3 more tests of the
    paper's grid added instead — its fastest tests (3.5 Hz x 15 mm at the three loads,
    fresh noise), the grid tests that carry most about high velocities;
 4. identify each augmented campaign again and print the band at 1 m/s before and after,
@@ -22,7 +24,7 @@ TUNING truths (the embedded data, T1, T2: the planner and band were revised afte
 looking at them) and HELD-OUT truths (T3, T4: fixed before the revised code first ran,
 never used to choose anything) are printed and judged separately.
 
-    python validation/plan_tests.py [tuning] [held-out]
+    python validation/plan_tests.py [tuning] [held-out] [sines]
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from pathlib import Path
 from ehsa_opt.datasets.bench_format import load_bench, write_bench
 from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
 from ehsa_opt.datasets.problem_file import load_problem
+from ehsa_opt.datasets.protocols import Protocol
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
 from ehsa_opt.design.test_plan import RigLimits, plan_tests, road_velocity_sigma
 from ehsa_opt.estimation.bounds import friction_bounds
@@ -60,18 +63,29 @@ HELD_OUT = {"held-out T3 (bearing-heavy)": (FrictionParams(30.0, 20.0, 0.01, 120
                 110.0, 60.0, 0.03, 150.0, 0.02, 0.015, 3.0, 2e-5), 658)}
 RIG = RigLimits(stroke_m=0.1, peak_velocity_m_per_s=1.5, force_N=10_000.0,
                 actuator_power_W=6_000.0, loads_ohm=(15.0, 47.0, 109.0))
+#: Test kinds the planner may propose (``sines`` on the command line: sines only)
+KINDS = ("sine", "triangle")
 
 
 def _tests(truth: dict, friction: FrictionParams, harvester, items, seed: int, prefix: str):
+    """Simulate tests with the truth: (frequency, amplitude, load) of a sine, or
+    ("triangle", velocity, amplitude, load) of constant-velocity strokes (reversal as the
+    rig's)."""
     out = []
-    for k, (f, a, r) in enumerate(items):
-        spec = SyntheticSpec(harvester=harvester, friction=friction,
-                             effects=truth.get("effects", {}), frequencies_hz=(f,),
-                             loads_ohm=(r,), amplitude_m=a,
-                             noise_force_N=truth["noise"]["force_N"],
-                             noise_voltage_V=truth["noise"]["voltage_V"],
-                             noise_displacement_m=truth["noise"]["displacement_m"],
-                             seed=seed + k)
+    for k, item in enumerate(items):
+        common = dict(harvester=harvester, friction=friction,
+                      effects=truth.get("effects", {}),
+                      noise_force_N=truth["noise"]["force_N"],
+                      noise_voltage_V=truth["noise"]["voltage_V"],
+                      noise_displacement_m=truth["noise"]["displacement_m"], seed=seed + k)
+        if item[0] == "triangle":
+            _, v, a, r = item
+            proto = Protocol("triangle", r, amplitude_m=a, velocity_m_per_s=v,
+                             corner_s=0.5 * RIG.reversal_s)
+            spec = SyntheticSpec(frequencies_hz=(), protocols=(proto,), **common)
+        else:
+            f, a, r = item
+            spec = SyntheticSpec(frequencies_hz=(f,), loads_ohm=(r,), amplitude_m=a, **common)
         t = generate_bench_tests(spec)[0]
         out.append(dataclasses.replace(t, file=f"{prefix}{k}_{t.file}"))
     return out
@@ -89,7 +103,8 @@ def _band(data, truth_1: float) -> tuple[float, float, RodLawFit, object, dict]:
     hi = float(np.interp(1.0, fb.velocity_m_per_s, fb.law_band_N[1]))
     info = {"best_N": a["best_N"], "law_N": float(law.rod_N(1.0)), "truth_N": truth_1,
             "inside": lo <= truth_1 <= hi,
-            "statistical_N": float(law.half_width_N(1.0)[0])}
+            "statistical_N": float(law.half_width_N(1.0)[0]),
+            "model_error_N": float(law.model_error_N(1.0)[0])}
     return 0.5 * (hi - lo), a["max_N"] - a["min_N"], law, fb, info
 
 
@@ -112,8 +127,10 @@ def run_truth(name: str, friction: FrictionParams | None, seed: int, root: Path)
     hw0, sets0, law, fb, info0 = _band(base, truth_1)
     prob = load_problem("quarter_car_class_c")
     sigma = road_velocity_sigma(prob, fb.sets["best"])
-    plan = plan_tests(law, RIG, base.harvester, sigma, n_tests=3, kinds=("sine",))
-    planned = [(c.frequency_hz, c.amplitude_m, c.load_ohm) for c in plan.proposed]
+    plan = plan_tests(law, RIG, base.harvester, sigma, n_tests=3, kinds=KINDS)
+    planned = [(c.frequency_hz, c.amplitude_m, c.load_ohm) if c.kind == "sine" else
+               ("triangle", c.velocity_m_per_s, c.amplitude_m, c.load_ohm)
+               for c in plan.proposed]
     grid = [(3.5, 0.015, r) for r in (15.0, 47.0, 109.0)]
     out = {"name": name, "band0": hw0, "sets0": sets0, "plan": plan, "sigma": sigma,
            "info0": info0}
@@ -130,7 +147,8 @@ def run_truth(name: str, friction: FrictionParams | None, seed: int, root: Path)
 def _print(r: dict) -> bool:
     p = r["plan"]
     print(f"{r['name']}: road sigma_v {r['sigma']:.3f} m/s; proposed: "
-          + "; ".join(c.label() for c in p.proposed) + f" ({r['seconds']:.0f} s)")
+          + "; ".join(f"{c.label()} [expected residual {st['predicted_residual_rms_N']:.0f} N]"
+                      for c, st in zip(p.proposed, p.steps)) + f" ({r['seconds']:.0f} s)")
     print(f"  predicted band at 1 m/s: +-{p.band_before_N[1]:.1f} -> +-{p.band_after_N[1]:.1f} N")
     n_p = r["band0"] - r["planned"][0]
     n_g = r["band0"] - r["grid"][0]
@@ -143,7 +161,8 @@ def _print(r: dict) -> bool:
     for tag, info in (("before", r["info0"]), ("planned", r["planned"][2]),
                       ("grid", r["grid"][2])):
         print(f"    {tag:8s}: best {info['best_N']:.1f}, least-squares law {info['law_N']:.1f}"
-              f" (+-{info['statistical_N']:.1f} statistical), truth {info['truth_N']:.1f} N "
+              f" (+-{info['statistical_N']:.1f}; the weighted law's distance "
+              f"{info['model_error_N']:.1f}), truth {info['truth_N']:.1f} N "
               f"-> truth {'inside' if info['inside'] else 'OUTSIDE'} the band")
     print(f"  min-max sets at 1 m/s: {r['sets0']:.1f} -> planned {r['planned'][1]:.1f}"
           f", grid {r['grid'][1]:.1f} N")
@@ -152,7 +171,10 @@ def _print(r: dict) -> bool:
 
 def main() -> None:
     import sys
-    only = sys.argv[1:]
+    global KINDS
+    only = [a for a in sys.argv[1:] if a != "sines"]
+    if "sines" in sys.argv[1:]:
+        KINDS = ("sine",)
     groups = {"TUNING": [("embedded data (generator's truth)", None, 0),
                          *((n, f, sd) for n, (f, sd) in TUNING.items())],
               "HELD-OUT": [(n, f, sd) for n, (f, sd) in HELD_OUT.items()]}

@@ -45,9 +45,12 @@ from ..physics.harvester import equivalent_damping_Ns_per_m, equivalent_mass_kg
 from ..physics.params import HarvesterParams, ParameterError, load_toml, nearest_name
 
 __all__ = ["RigLimits", "load_rig", "Candidate", "candidate_tests", "TestPlan", "plan_tests",
-           "road_velocity_sigma", "plan_from_files"]
+           "road_velocity_sigma", "plan_from_files", "triangle_resolved_velocity",
+           "residual_model"]
 
 _KINDS = ("sine", "triangle")
+#: Fewest resolved samples a triangle candidate must keep (as a recorded test to be fitted).
+_MIN_RESOLVED = 20
 
 
 @dataclass(frozen=True)
@@ -162,25 +165,56 @@ class Candidate:
                 f" mm, R_e {self.load_ohm:g} ohm")
 
     def velocity_samples(self, rig: RigLimits) -> np.ndarray:
-        """Stroke velocity at the recorded samples (m/s)."""
+        """Stroke velocity (m/s) at the recorded samples that give friction samples: every
+        sample of a sine; of a triangle stroke only those outside the reversal windows
+        (:func:`triangle_resolved_velocity`)."""
         fs = rig.sample_rate_hz
         if self.kind == "sine":
             n = max(int(round(rig.cycles * fs / self.frequency_hz)), 8)
             t = np.arange(n) / fs
             return self.peak_velocity_m_per_s * np.cos(2 * math.pi * self.frequency_hz * t)
-        v, a = self.velocity_m_per_s, self.amplitude_m
-        ramp = max(int(round(rig.reversal_s * fs)), 1)
-        flat = max(int(round((2 * a / v - rig.reversal_s) * fs)), 1)
-        one = np.concatenate([np.full(flat, v), np.linspace(v, -v, ramp),
-                              np.full(flat, -v), np.linspace(-v, v, ramp)])
-        return np.tile(one, max(int(round(rig.cycles)), 1))
+        return triangle_resolved_velocity(self.velocity_m_per_s, self.amplitude_m, rig)
+
+    def acceleration_m_per_s2(self, rig: RigLimits) -> float:
+        """Peak stroke acceleration at the samples that give friction samples (m/s²): ω²A
+        for a sine, ≈ 0 on a triangle's plateaus (its reversals are left out)."""
+        if self.kind == "sine":
+            return float((2 * math.pi * self.frequency_hz) ** 2 * self.amplitude_m)
+        return 0.0
+
+
+def triangle_resolved_velocity(velocity_m_per_s: float, amplitude_m: float, rig: RigLimits
+                               ) -> np.ndarray:
+    """Stroke velocity (m/s) at the resolved samples of a constant-velocity triangle
+    stroke over ±``amplitude_m`` recorded on ``rig``: the stroke (reversal ``reversal_s``,
+    :class:`~ehsa_opt.datasets.protocols.Protocol` with corners of half that) is sampled,
+    and the identification's motion estimate
+    (:func:`~ehsa_opt.estimation.identify_options.estimate_motion`) leaves out the
+    reversal windows, where the force is the corner's inertia and impacts.  Empty when
+    nothing is resolved (a stroke too short for its speed)."""
+    from ..datasets.bench_format import BenchTest
+    from ..datasets.protocols import Protocol
+    from ..estimation.identify_options import IdentifyOptions, estimate_motion
+    import dataclasses
+    proto = Protocol("triangle", 1.0, amplitude_m=float(amplitude_m),
+                     velocity_m_per_s=float(velocity_m_per_s), corner_s=0.5 * rig.reversal_s)
+    proto = dataclasses.replace(proto, duration_s=rig.cycles * proto.cycle_s)
+    dt = 1.0 / rig.sample_rate_hz
+    t = np.arange(int(round(proto.record_s / dt)) + 1) * dt
+    x, v = proto.motion().evaluate(t)[:2]
+    test = BenchTest("plan.csv", None, None, 1.0, "recorded", t, np.asarray(x, dtype=float),
+                     np.zeros(t.size))
+    resolved = estimate_motion(test, IdentifyOptions()).resolved
+    if resolved.sum() < _MIN_RESOLVED:
+        return np.zeros(0)
+    return np.asarray(v, dtype=float)[resolved]
 
 
 def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
                     kinds: Sequence[str] = _KINDS, n_freq: int = 24, n_amp: int = 6
                     ) -> list[Candidate]:
     """Sines (log-spaced frequencies × amplitudes up to half the stroke) and triangle
-    strokes (log-spaced velocities over the full stroke), at every load, that stay within
+    strokes (``n_freq`` log-spaced velocities over the full stroke), at every load, that stay within
     the rig's velocity, force and power (peak force ≈ m_eq a + c_eq(ω) v + F_rod(v),
     each at its peak)."""
     for k in kinds:
@@ -204,7 +238,7 @@ def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
         if "triangle" in kinds:
             ceq = float(equivalent_damping_Ns_per_m(h, 0.0))
             a = 0.5 * rig.stroke_m
-            for v in np.geomspace(0.02, rig.peak_velocity_m_per_s, 12):
+            for v in np.geomspace(0.02, rig.peak_velocity_m_per_s, n_freq):
                 if 2 * a / v <= 2 * rig.reversal_s:
                     continue
                 F = meq * v / rig.reversal_s + ceq * v + float(law.rod_N(v))
@@ -250,8 +284,11 @@ class TestPlan:
                f"{self.n_candidates} candidate tests within the rig's limits; "
                f"{self.criterion}-optimal greedy choice:"]
         for k, (c, st) in enumerate(zip(self.proposed, self.steps), 1):
+            res = st.get("predicted_residual_rms_N")
             out.append(f"  {k}. {c.label()}: peak force {c.peak_force_N:.0f} N, power "
-                       f"{c.peak_power_W:.0f} W -> road-weighted band +-{st['road_band_N']:.1f} N")
+                       f"{c.peak_power_W:.0f} W"
+                       + (f", expected residual {res:.0f} N rms" if res is not None else "")
+                       + f" -> road-weighted band +-{st['road_band_N']:.1f} N")
         out.append("predicted 95 % band of the rod friction (+- N), before -> after:")
         for v, b, a in zip(self.velocities_m_per_s, self.band_before_N, self.band_after_N):
             out.append(f"  at {v:4.2f} m/s: {b:7.1f} -> {a:7.1f}")
@@ -307,6 +344,59 @@ class TestPlan:
                 "road_band_after_N": self.road_band_after_N, "rig": asdict(self.rig)}
 
 
+def residual_model(law: RodLawFit) -> tuple[float, float]:
+    """How the campaign's model error grows with a test's stroke acceleration: the
+    friction samples' residual variance of every test, σ_g² = σ₀² + β a_g² (a_g its peak
+    acceleration), fitted by non-negative least squares over the tests.  A hidden
+    backlash or compliance adds force in proportion to how hard the stroke is driven;
+    the noise floor σ₀ is what a test at no acceleration keeps.  Returns (σ₀², β) in N²
+    and N² s⁴/m²; (residual_rms², 0) when the tests' accelerations are not known."""
+    from scipy.optimize import nnls
+    r = np.asarray(law.test_residual_rms_N, dtype=float)
+    a = np.asarray(law.test_peak_acceleration_m_per_s2, dtype=float)
+    ok = np.isfinite(r) & np.isfinite(a)
+    flat = (max(law.residual_rms_N, 1e-9) ** 2, 0.0)
+    if r.size != a.size or ok.sum() < 3 or np.ptp(a[ok]) <= 0:
+        return flat
+    A = np.column_stack([np.ones(ok.sum()), a[ok] ** 2])
+    # relative errors (each test's variance known to a factor): rows scaled by 1/σ_g²
+    w = 1.0 / np.maximum(r[ok] ** 2, 1e-12)
+    coef, _ = nnls(A * w[:, None], r[ok] ** 2 * w)
+    s0 = float(coef[0]) if coef[0] > 0 else float(np.min(r[ok] ** 2))
+    return max(s0, 1e-12), float(coef[1])
+
+
+def _candidate_information(cands: list[Candidate], rig: RigLimits, law: RodLawFit,
+                           d: np.ndarray, tau: float, kappa: float
+                           ) -> tuple[list[Candidate], list[np.ndarray], list[float]]:
+    """The candidates that keep resolved samples, the Fisher information of each (in the
+    coordinates scaled by ``d``) and its expected residual rms (N): the campaign's error
+    at the candidate's stroke acceleration (:func:`residual_model`), inflated by the
+    autocorrelation ``tau`` and deflated by the cluster factor ``kappa``."""
+    s0, beta = residual_model(law)
+    p, names, lead = law.parameters, law.varied, law.lead_m_per_rad
+    infos, kept, sig = [], [], []
+    tri_v: dict[float, np.ndarray] = {}
+    for c in cands:
+        if c.kind == "triangle":
+            if c.velocity_m_per_s not in tri_v:  # the same stroke at every load
+                tri_v[c.velocity_m_per_s] = c.velocity_samples(rig)
+            v = tri_v[c.velocity_m_per_s]
+        else:
+            v = c.velocity_samples(rig)
+        if v.size < _MIN_RESOLVED:
+            continue  # all reversal: nothing a fit would use
+        s2 = (s0 + beta * c.acceleration_m_per_s2(rig) ** 2) * tau
+        # the information is n × the mean of g gᵀ over the samples: 400 evenly spaced ones
+        # give the mean of these smooth periodic records to well below a per cent
+        sub = v[np.unique(np.linspace(0, v.size - 1, min(v.size, 400)).astype(int))]
+        G = rod_gradient(sub, p, names, lead) * d
+        infos.append(v.size * (G.T @ G) / sub.size / (s2 / kappa))
+        kept.append(c)
+        sig.append(math.sqrt(s2 / tau))
+    return kept, infos, sig
+
+
 def _pinv(A: np.ndarray, rcond: float = 1e-9) -> np.ndarray:
     ev, V = np.linalg.eigh(0.5 * (A + A.T))
     keep = ev > rcond * max(float(ev.max()), 1e-300)
@@ -351,7 +441,6 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
                         math.nan, math.nan, [], 0, rig, law.velocity_range_m_per_s[1])
     names, p, lead = law.varied, law.parameters, law.lead_m_per_rad
     tau = law.n_samples / max(law.n_effective, 1.0)
-    s2 = max(law.residual_rms_N, 1e-9) ** 2 * tau
     # road weight: |v| half-normal, Gauss-Legendre on [0, 5 sigma]
     x, wq = np.polynomial.legendre.leggauss(64)
     vr = 2.5 * sigma_v_m_per_s * (x + 1.0)
@@ -376,14 +465,12 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
     J0 = _pinv(cov0 / np.outer(d, d))
     Gr = Graw * d
     W = (Gr * wr[:, None]).T @ Gr
-    infos = []
-    for c in cands:
-        v = c.velocity_samples(rig)
-        # the information is n × the mean of g gᵀ over the samples: 400 evenly spaced ones
-        # give the mean of these smooth periodic records to well below a per cent
-        sub = v[np.unique(np.linspace(0, v.size - 1, min(v.size, 400)).astype(int))]
-        G = rod_gradient(sub, p, names, lead) * d
-        infos.append(v.size * (G.T @ G) / sub.size / (s2 / kappa))
+    cands, infos, sig = _candidate_information(cands, rig, law, d, tau, kappa)
+    if not cands:
+        return TestPlan(False, "no candidate test keeps resolved samples within the rig's "
+                        "limits: raise stroke_m or peak_velocity_m_per_s in [rig]", [],
+                        criterion, sigma_v_m_per_s, list(velocities_m_per_s), [], [],
+                        math.nan, math.nan, [], 0, rig, law.velocity_range_m_per_s[1])
 
     def score(J: np.ndarray) -> float:
         if criterion == "A":
@@ -404,7 +491,8 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
                            for c, I in zip(cands, infos)]))
         J = J + infos[k]
         chosen.append(cands[k])
-        steps.append({"file": cands[k].file, "criterion": score(J), "road_band_N": road_band(J)})
+        steps.append({"file": cands[k].file, "criterion": score(J), "road_band_N": road_band(J),
+                      "predicted_residual_rms_N": sig[k]})
     Gv = rod_gradient(np.asarray(velocities_m_per_s, dtype=float), p, names, lead) * d
 
     def band(Jm: np.ndarray) -> list[float]:

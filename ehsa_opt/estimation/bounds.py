@@ -4,8 +4,9 @@ friction and the ``min`` / ``best`` / ``max`` friction sets of every vehicle stu
 A rigid bench determines only the friction *at the rod*,
 F_rod(v) = F_ns(v) + T_b(v/r)/r (the nut/bearing split is not identifiable), and only at the velocities a
 test actually reaches.  For every successful per-test fit the rod friction is evaluated on
-a velocity grid (from 10 % of the slowest test's peak velocity, where the Fisher analysis
-starts) up to the test's peak velocity; the **envelope** is the pointwise minimum and
+a velocity grid from the lowest speed any test covers by its protocol (a sine from 10 % of
+its peak velocity, where the Fisher analysis starts; a constant-velocity stroke or another
+recorded motion from its lowest resolved speed) up to each test's peak velocity; the **envelope** is the pointwise minimum and
 maximum over the tests that reach that velocity (the spread of per-test estimates holds
 their own estimation noise; ``per_test_bands=True`` widens each by its own band first).
 The across-test mean with its Student-t 95 % interval is reported beside it.  Beyond the
@@ -63,6 +64,7 @@ from .test_velocity import test_peak_velocity_m_per_s, test_velocity_range_m_per
 
 __all__ = ["FrictionBounds", "friction_bounds", "paper_friction_sets", "velocity_grid",
            "test_peak_velocity_m_per_s", "test_velocity_range_m_per_s",
+           "covered_low_m_per_s", "campaign_low_m_per_s", "SINE_LOW_FRACTION",
            "identification_json", "DATA_METHOD", "PAPER_METHOD",
            "fit_envelope", "ordered_set", "ENVELOPE_PARAMETERS", "V_MAX_M_PER_S", "envelope_lines"]
 
@@ -71,7 +73,8 @@ V_MAX_M_PER_S = 3.0
 
 DATA_METHOD = ("data-supported: envelope of the identifiable rod friction "
                "F_ns(v) + T_b(v/r)/r over the per-test fits, each used only up to the "
-               "test's peak velocity (grid from 10 % of the slowest test's peak velocity), "
+               "test's peak velocity (grid from the lowest speed a test covers: 10 % of a "
+               "sine's peak velocity, a recorded motion's lowest resolved speed), "
                "united with the best law's 95 % sandwich band (Newey-West / cluster-robust: "
                "effective sample size), which alone continues beyond the data to 3 m/s; "
                "min/max = the best set minus/plus non-negative amounts of its own Coulomb, "
@@ -166,8 +169,11 @@ class FrictionBounds:
         lo, hi = self.data_range_m_per_s
         return {"description": "stroke velocities the bench data cover: each test up to its "
                                "peak |v| (2 pi f A for a sine, the 99th percentile of |v| "
-                               "otherwise); the campaign from the envelope grid's lower end "
-                               "(10 % of the slowest test's peak) to the fastest test's peak; "
+                               "otherwise); the campaign from the lowest speed a test covers by its "
+                               "protocol (a sine from 10 % of its peak, a recorded motion such "
+                               "as constant-velocity strokes from its lowest resolved speed, "
+                               "the 1st percentile outside the reversals) to the fastest "
+                               "test's peak; "
                                "friction above the campaign's peak is extrapolated",
                 "campaign_m_per_s": [float(lo), float(hi)],
                 "tests_peak_m_per_s": {k: float(x) for k, x in self.test_peak_m_per_s.items()}}
@@ -326,16 +332,35 @@ def _bounds_grid(vrange: np.ndarray, v_max_m_per_s: float, n_grid: int
     """The velocity grid of the bounds, its lower end and the data's largest velocity."""
     vpeak, vlow = vrange[:, 1], vrange[:, 0]
     v_data = float(vpeak.max())
-    # from 10 % of the slowest test's peak velocity (the lowest velocity at which the
-    # Fisher analysis evaluates the rod friction): below it a sine test spends too little
-    # time for the data to determine the friction, and one test's Stribeck spike there
-    # would set the bounds of every set
-    v_lo = max(1e-3, 0.1 * float(vpeak.min()))
+    v_lo = campaign_low_m_per_s(vrange)
     v = _campaign_grid(v_lo, v_data, max(float(v_max_m_per_s), v_data), n_grid)
     # every recorded test's own speeds on the grid (a plateau speed between grid points
     # would otherwise reach no grid point)
     v = np.unique(np.concatenate([v, vrange[vlow > 0].ravel()]))
     return v, v_lo, v_data
+
+
+#: A sine test covers its speeds from this fraction of its peak velocity (below it, the
+#: lowest velocity at which the Fisher analysis evaluates the rod friction, a sine spends
+#: too little time for its data to determine the friction).
+SINE_LOW_FRACTION = 0.1
+
+
+def covered_low_m_per_s(v_low_m_per_s: float, v_peak_m_per_s: float) -> float:
+    """The lowest speed a test covers, by its protocol: a sine (lowest resolved speed 0)
+    from :data:`SINE_LOW_FRACTION` of its peak; a recorded motion (constant-velocity
+    strokes, trapezoids, ...) from its lowest resolved speed — a constant-velocity stroke
+    holds its plateau speed and crosses the lower speeds only inside its reversals."""
+    if v_low_m_per_s > 0:
+        return float(v_low_m_per_s)
+    return SINE_LOW_FRACTION * float(v_peak_m_per_s)
+
+
+def campaign_low_m_per_s(vrange: np.ndarray) -> float:
+    """Lower end of the campaign's bench range (m/s): the lowest speed any test covers
+    (:func:`covered_low_m_per_s`), at least 1 mm/s."""
+    lows = [covered_low_m_per_s(lo, hi) for lo, hi in np.asarray(vrange, dtype=float)]
+    return max(1e-3, min(lows))
 
 
 def _per_test_half_widths(data: Any, good: list, frs: list[FrictionParams], samples_all: Any,

@@ -82,7 +82,9 @@ class FrictionSamples:
 def friction_samples(data: Any, parameters: Mapping[str, float] | None = None,
                      options: Any = None, tests: Sequence[Any] | None = None
                      ) -> FrictionSamples:
-    """Friction samples of a bench campaign on the rigid model.
+    """Friction samples of a bench campaign on the rigid model: every sample of a sine
+    test (ends trimmed), the resolved samples of a recorded motion (outside its reversal
+    and dwell windows, :func:`~ehsa_opt.estimation.identify_options.estimate_motion`).
 
     Parameters
     ----------
@@ -96,18 +98,28 @@ def friction_samples(data: Any, parameters: Mapping[str, float] | None = None,
         A subset (default every test).
     """
     from .test_simulation import simulate_tests
-    from .identify_options import IdentifyOptions, test_motion
+    from .identify_options import IdentifyOptions, estimate_motion, test_motion
     opt = options or IdentifyOptions.for_rig(data.has_generator)
     tests = list(tests if tests is not None else data.tests)
     other = {k: float(v) for k, v in (parameters or {}).items()
              if k not in FRICTION_NAMES and k != "load_ohm" and v is not None}
     preds = simulate_tests(tests, data.harvester, other, has_generator=data.has_generator,
                            options=opt)
+    mass = data.harvester.equivalent_mass_kg() if data.has_generator else None
     vs, ys, acc = [], [], []
     for test, pr in zip(tests, preds):
         n = test.n_samples
         k = int(round(opt.trim_fraction * n))
-        keep = slice(k, n - k)
+        keep = np.zeros(n, bool)
+        keep[k:n - k] = True
+        if getattr(test, "excitation", "sine") != "sine":
+            # a recorded motion's reversal (corner) and dwell windows are not resolved:
+            # there the force is the corner's inertia and impacts, which no function of
+            # the velocity gives (the fits weight them out too); a stroke with no resolved
+            # sample keeps them rather than nothing
+            resolved = estimate_motion(test, opt, mass).resolved
+            if np.count_nonzero(keep & resolved) >= 10:
+                keep &= resolved
         _, v, a = test_motion(test, opt).evaluate(test.time_s)[:3]
         vs.append(np.asarray(v[keep], dtype=float))
         acc.append(np.asarray(a[keep], dtype=float))
@@ -275,6 +287,14 @@ class RodLawFit:
         Other least-squares laws (from the refit's other starting points) that fit the
         samples equally well (likelihood ratio on the effective sample size, 95 %); the
         band holds their distance to the law (they extrapolate differently).
+    weighted : dict or None
+        The law refitted with every test weighted by the inverse of its residual variance
+        (feasible weighted least squares, tests as the units of error level).  Where the
+        tests fit alike it is the law; where a model error grows in some tests (a hidden
+        backlash in the hard-driven ones) the two part, and the band holds their distance:
+        an error a test repeats in every cycle biases the law, which no spread-based
+        covariance sees.  The band is at least that distance (within the statistical
+        band the two differ by noise alone).
     """
 
     parameters: dict[str, float]
@@ -292,6 +312,7 @@ class RodLawFit:
     test_residual_rms_N: list[float] = field(default_factory=list)
     test_peak_acceleration_m_per_s2: list[float] = field(default_factory=list)
     alternatives: list[dict[str, float]] = field(default_factory=list)
+    weighted: dict[str, float] | None = None
 
     def rod_N(self, v_m_per_s: Any) -> np.ndarray:
         """F_rod of the law at ``v_m_per_s``."""
@@ -315,7 +336,9 @@ class RodLawFit:
         one (normal quantile) and the cluster-robust one (Student t, tests − 1 degrees
         of freedom), so neither the autocorrelation within a test nor an error shared
         by the cycles of a test makes it too narrow; plus the largest distance of an
-        equally good alternative law (:attr:`alternatives`)."""
+        equally good alternative law (:attr:`alternatives`); at least the distance of the
+        weighted law (:meth:`model_error_N`), which differs from the law by noise alone
+        within that band and by a model error beyond it."""
         from scipy import stats
         hw = stats.norm.ppf(0.5 + level / 2) * self.std_N(v_m_per_s, "hac")
         if self.covariance_cluster is not None:
@@ -327,7 +350,19 @@ class RodLawFit:
             hw = hw + np.max([np.abs(np.asarray(rod_friction_N(
                 v, [a[n] for n in FRICTION_NAMES], self.lead_m_per_rad)) - f)
                 for a in self.alternatives], axis=0)
-        return hw
+        # the weighted law differs from the law by noise alone within the statistical
+        # band; where it lies beyond, the band reaches it
+        return np.fmax(hw, self.model_error_N(v_m_per_s))
+
+    def model_error_N(self, v_m_per_s: Any) -> np.ndarray:
+        """|F_rod(v; weighted) − F_rod(v; law)| (:attr:`weighted`; zero without it): how
+        far the law moves when the tests are weighted by how well they fit."""
+        v = np.atleast_1d(np.asarray(v_m_per_s, dtype=float))
+        if not self.weighted:
+            return np.zeros(v.shape)
+        return np.abs(np.asarray(rod_friction_N(
+            v, [self.weighted[n] for n in FRICTION_NAMES], self.lead_m_per_rad))
+            - self.rod_N(v))
 
     def band_N(self, v_m_per_s: Any, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper ``level`` band of F_rod(v) (:meth:`half_width_N`)."""
@@ -350,6 +385,7 @@ class RodLawFit:
                     None if not math.isfinite(x) else float(x)
                     for x in self.test_peak_acceleration_m_per_s2],
                 "alternatives": [dict(a) for a in self.alternatives],
+                "weighted": None if self.weighted is None else dict(self.weighted),
                 "covariance": np.asarray(self.covariance).tolist(),
                 "covariance_iid": np.asarray(self.covariance_iid).tolist(),
                 "covariance_cluster": (None if self.covariance_cluster is None else
@@ -370,7 +406,9 @@ class RodLawFit:
                    [float(x) for x in d.get("test_residual_rms_N", [])],
                    [math.nan if x is None else float(x)
                     for x in d.get("test_peak_acceleration_m_per_s2", [])],
-                   [{k: float(v) for k, v in a.items()} for a in d.get("alternatives", [])])
+                   [{k: float(v) for k, v in a.items()} for a in d.get("alternatives", [])],
+                   None if not d.get("weighted") else
+                   {k: float(v) for k, v in d["weighted"].items()})
 
 
 def _varied(params: Mapping[str, float], has_generator: bool) -> list[str]:
@@ -392,6 +430,7 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
     """
     from scipy import optimize
     lead = float(lead_m_per_rad)
+    weighted = None
     p0 = {n: float(parameters.get(n, 0.0) or 0.0) for n in FRICTION_NAMES}
     if p0["nut_breakaway_velocity_m_per_s"] <= 0:
         p0["nut_breakaway_velocity_m_per_s"] = 0.01
@@ -429,6 +468,19 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
             fits.append((2.0 * float(res.cost), to_law(unpack(res.x))))
         fits.sort(key=lambda f: f[0])
         p0 = dict(zip(FRICTION_NAMES, fits[0][1]))
+        # feasible weighted least squares: every test weighted by the inverse of its
+        # residual variance at the law (floored at a hundredth of the median variance, so
+        # one test that happens to fit exactly does not own the fit)
+        if len(vs) > 1:
+            law0 = [p0[n] for n in FRICTION_NAMES]
+            var = np.array([float(np.mean((np.asarray(rod_friction_N(v, law0, lead)) - y) ** 2))
+                            for v, y in zip(vs, ys)])
+            var = np.maximum(var, 1e-2 * float(np.median(var)) + 1e-12)
+            wcat = np.concatenate([np.full(v.size, 1.0 / math.sqrt(g)) for v, g in zip(vs, var)])
+            q0 = np.clip(np.array([p0[n] / _SCALE[n] for n in names]), lo, np.inf)
+            res = optimize.least_squares(lambda q: resid(q) * wcat, q0, bounds=(lo, np.inf),
+                                         x_scale="jac")
+            weighted = dict(zip(FRICTION_NAMES, to_law(unpack(res.x))))
     Js, es = [], []
     for v, y in zip(vs, ys):
         Js.append(rod_gradient(v, p0, names, lead))
@@ -450,7 +502,8 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
                      float(np.sqrt(np.mean(ecat ** 2))),
                      (float(peaks.min()), float(peaks.max())), cov_cl, len(Js),
                      [float(np.sqrt(np.mean(e ** 2))) for e in es],
-                     [float(x) for x in samples.peak_acceleration_m_per_s2()], alternatives)
+                     [float(x) for x in samples.peak_acceleration_m_per_s2()], alternatives,
+                     weighted)
 
 
 def _refit_starts(p: Mapping[str, float], lead: float, names: Sequence[str]

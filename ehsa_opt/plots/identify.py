@@ -241,8 +241,8 @@ def friction_bounds(fb: FrictionBounds, truth: FrictionParams | None = None,
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.0))
     tr = (np.asarray(rod_friction_N(v, truth, fb.lead_m_per_rad), dtype=float)
           if truth is not None else None)
-    ax.axvspan(0.0, hi, color="0.85", alpha=0.6, lw=0,
-               label=f"identified range (0–{hi:.2f} m/s)")
+    ax.axvspan(lo, hi, color="0.85", alpha=0.6, lw=0,
+               label=f"identified range ({lo:.3g}–{hi:.2f} m/s)")
     if getattr(fb, "law_band_N", None) is not None:
         ax.fill_between(v, fb.law_band_N[0], fb.law_band_N[1], color="C2", alpha=0.25,
                         label="best law's 95 % band (sandwich)")

@@ -9,7 +9,14 @@ import numpy as np
 import pytest
 
 from ehsa_opt.cli import main
-from ehsa_opt.design.test_plan import RigLimits, candidate_tests, load_rig, plan_tests
+from ehsa_opt.design.test_plan import (
+    RigLimits,
+    candidate_tests,
+    load_rig,
+    plan_tests,
+    residual_model,
+    triangle_resolved_velocity,
+)
 from ehsa_opt.estimation.rod_law import FrictionSamples, rod_law_fit
 from ehsa_opt.physics.friction import rod_friction_N
 from ehsa_opt.physics.params import FrictionParams, HarvesterParams, ParameterError
@@ -116,3 +123,42 @@ def test_road_weight_by_friction_energy_reaches_further_than_by_time(law) -> Non
     assert e.band_after_N[1] <= t.band_after_N[1] * (1 + 1e-9)
     with pytest.raises(ParameterError, match="'energy' or 'time'"):
         plan_tests(law, rig, HarvesterParams(), 0.4, weight="power")
+
+
+def test_triangle_strokes_keep_only_their_plateaus() -> None:
+    """A constant-velocity stroke gives friction samples at its speed, outside the reversal
+    windows; a stroke too short for its speed gives none."""
+    rig = RigLimits(stroke_m=0.1, peak_velocity_m_per_s=1.5, reversal_s=0.05)
+    v = triangle_resolved_velocity(0.5, 0.05, rig)
+    assert v.size > 100 and np.allclose(np.abs(v), 0.5, rtol=0.01)
+    assert triangle_resolved_velocity(1.4, 0.05, rig).size == 0
+
+
+def test_an_error_growing_with_acceleration_steers_the_plan_to_plateaus() -> None:
+    """Five slow sines whose residuals carry an error growing as the acceleration squared
+    (a hidden backlash or compliance does): the residual model finds the growth, and the
+    planner prefers constant-velocity strokes (no acceleration on their plateaus) to the
+    fast sines it proposes when every test is expected to fit alike."""
+    import dataclasses
+    rng = np.random.default_rng(2)
+    vs, ys, acc = [], [], []
+    for f in (0.5, 1.0, 2.0, 3.0, 3.5):
+        w = 2 * math.pi * f
+        t = np.arange(0, 2 / f, 1e-3)
+        v, a = w * 0.015 * np.cos(w * t), -w * w * 0.015 * np.sin(w * t)
+        e = np.zeros(v.size)
+        for k in range(1, v.size):
+            e[k] = 0.8 * e[k - 1] + rng.normal(0, 2.0)
+        vs.append(v)
+        acc.append(a)
+        ys.append(np.asarray(rod_friction_N(v, TRUTH, LEAD)) + e + 3.0 * a * a)
+    law = rod_law_fit(FrictionSamples(list("abcde"), vs, ys, acc), TRUTH.as_dict(), LEAD)
+    s0, beta = residual_model(law)
+    assert beta > 1.0 and s0 < 5.0 ** 2
+    rig = RigLimits(peak_velocity_m_per_s=1.5)
+    plan = plan_tests(law, rig, HarvesterParams(), 0.5, n_tests=2)
+    assert all(c.kind == "triangle" for c in plan.proposed)
+    assert all(st["predicted_residual_rms_N"] < 5.0 for st in plan.steps)
+    flat = dataclasses.replace(law, test_residual_rms_N=[], test_peak_acceleration_m_per_s2=[])
+    assert residual_model(flat)[1] == 0.0
+    assert plan_tests(flat, rig, HarvesterParams(), 0.5, n_tests=1).proposed[0].kind == "sine"

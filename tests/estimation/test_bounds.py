@@ -1,5 +1,5 @@
 """Friction bounds the data support (estimation/bounds.py) and identification feeding
-simulate (issue 13 items 1–2)."""
+simulate."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from ehsa_opt.cli import main
 from ehsa_opt.datasets.friction_source import load_friction_sets
 from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
 from ehsa_opt.estimation.bounds import (
+    campaign_low_m_per_s,
     fit_envelope,
     friction_bounds,
     identification_json,
@@ -87,6 +88,17 @@ def test_identification_json_round_trip(clean, tmp_path) -> None:
     fb = friction_bounds(rep)
     for case in ("min", "best", "max"):
         assert sets[case] == fb.sets[case]
+
+
+def test_campaign_range_starts_where_a_test_covers_by_its_protocol() -> None:
+    # (lowest resolved speed, peak) per test: a sine resolves from 0 and covers from 10 %
+    # of its peak; a constant-velocity stroke holds its plateau speed and covers from it
+    sines = np.array([[0.0, 0.05], [0.0, 0.33]])
+    strokes = np.array([[0.029, 0.031], [0.098, 0.102], [0.39, 0.41]])
+    assert campaign_low_m_per_s(sines) == pytest.approx(0.005)
+    assert campaign_low_m_per_s(strokes) == pytest.approx(0.029)
+    assert campaign_low_m_per_s(np.vstack([sines, strokes])) == pytest.approx(0.005)
+    assert campaign_low_m_per_s(np.array([[0.0, 0.002]])) == pytest.approx(1e-3)
 
 
 def test_fit_envelope_follows_a_simscape_curve_and_refuses_bad_input() -> None:
