@@ -349,7 +349,7 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
                         "peak_velocity_m_per_s, force_N or actuator_power_W in [rig]", [],
                         criterion, sigma_v_m_per_s, list(velocities_m_per_s), [], [],
                         math.nan, math.nan, [], 0, rig, law.velocity_range_m_per_s[1])
-    names, p, lead = law.varied, law.parameters, law.lead_m_per_rad
+    names, p, lead = law.free, law.parameters, law.lead_m_per_rad
     tau = law.n_samples / max(law.n_effective, 1.0)
     s2 = max(law.residual_rms_N, 1e-9) ** 2 * tau
     # road weight: |v| half-normal, Gauss-Legendre on [0, 5 sigma]
@@ -436,7 +436,7 @@ def plan_from_files(ident_path: str | Path, vehicle_path: str | Path, rig_path: 
     if not isinstance(law_doc, Mapping) or "covariance" not in law_doc:
         raise ParameterError(f"{ident_path}: no friction_envelope.extrapolation_band.law "
                              f"(written by an older ehsa_opt); re-run `ehsa-opt identify`")
-    law = RodLawFit.from_json(law_doc)
+    law = RodLawFit.from_dict(law_doc)
     harv_tab: dict = {}
     bench = Path(str(doc.get("data_dir", ""))) / "bench.toml"
     if bench.is_file():

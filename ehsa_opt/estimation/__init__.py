@@ -11,7 +11,8 @@ from __future__ import annotations
 from ..utils.lazy import lazy_exports
 
 _EXPORTS = {
-    **dict.fromkeys(["fit_tests", "IdentifyOptions", "FitResult", "Prediction",
+    **dict.fromkeys(["FitResult"], ".fit_result"),
+    **dict.fromkeys(["fit_tests", "IdentifyOptions", "Prediction",
                      "IdentificationReport", "PARAMETER_BOUNDS", "START_RANGES"], ".identify"),
     **dict.fromkeys(["simulate_tests"], ".test_simulation"),
     **dict.fromkeys(["fisher_identifiability"], ".identifiability"),

@@ -301,7 +301,7 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
                           np.vstack([rod_best - stat, rod_best + stat]),
                           np.vstack([rod_best - lo_m, rod_best + hi_m]),
                           (v_lo, v_data), dict(zip([t.file for t, _ in good], vpeak.tolist())),
-                          law.summary(), level)
+                          law.to_dict(), level)
 
 
 def _usable_fits(report: Any) -> tuple[list, np.ndarray]:

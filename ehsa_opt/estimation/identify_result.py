@@ -1,6 +1,7 @@
-"""Result types of the identification (:mod:`ehsa_opt.estimation.identify`): the fit of
-a group of tests (:class:`FitResult`), simulated signals (:class:`Prediction`) and the
-whole procedure's report (:class:`IdentificationReport`), plus the Eq 5 metrics."""
+"""Result types of the identification (:mod:`ehsa_opt.estimation.identify`): simulated
+signals (:class:`Prediction`) and the whole procedure's report
+(:class:`IdentificationReport`, of one :class:`~ehsa_opt.estimation.fit_result.FitResult`
+per test), plus the Eq 5 metrics."""
 
 from __future__ import annotations
 
@@ -14,13 +15,14 @@ import numpy as np
 from ..datasets.bench_format import BenchData, BenchTest
 from ..physics.friction import rod_friction_N
 from ..physics.params import FRICTION_NAMES
+from .fit_result import FitResult, jsonable
 from .test_simulation import Prediction, simulate_tests
 from .test_velocity import test_peak_velocity_m_per_s
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["Prediction", "FitResult", "IdentificationReport", "eq5_delta",
+__all__ = ["Prediction", "IdentificationReport", "eq5_delta",
            "force_relative_error_percent", "test_errors", "summarise_identifiability"]
 
 _BEARING = FRICTION_NAMES[4:]
@@ -43,85 +45,6 @@ def force_relative_error_percent(simulated: Any, measured: Any) -> float:
 
 
 # ====================================================================== results
-@dataclass
-class FitResult:
-    """Result of :func:`fit_tests` (mirrors ``scipy.optimize.OptimizeResult``).
-
-    Attributes
-    ----------
-    success : bool
-        True if at least one start converged (IPOPT success).
-    message : str
-    status : str
-        IPOPT ``return_status`` of the kept start.
-    parameters : dict[str, float]
-        Every model parameter except ``load_ohm`` (NaN if no start succeeded).
-    delta_F, delta_V : float or None
-        Paper Eq 5 (as printed) over all the fitted tests' samples (δ_V None
-        without voltage); max over tests.
-    force_relative_error_percent : float or None
-    per_test : list[dict]
-        file, delta_F, delta_V, force_relative_error_percent per test.
-    starts : list[dict]
-        Every start: initial, final, objective, success, status, iterations, seconds.
-    history : dict
-        Best start per iteration: ``objective``, ``rms_F``, ``rms_V`` (lists),
-        ``parameters`` (name → list).
-    nit : int
-    free : list[str]
-        The fitted names (as :attr:`FitOutcome.free <ehsa_opt.estimation.discrepancy.fit.FitOutcome>`).
-    identifiability : dict or None
-        See :func:`~ehsa_opt.estimation.identifiability.fisher_identifiability`.
-    path : str
-        ``"rigid"`` (states integrated once, parameters-only NLP) or
-        ``"collocation"`` (states are collocation unknowns).
-    """
-
-    success: bool
-    message: str
-    status: str
-    parameters: dict[str, float]
-    delta_F: float | None
-    delta_V: float | None
-    force_relative_error_percent: float | None
-    per_test: list[dict]
-    starts: list[dict]
-    history: dict
-    nit: int
-    free: list[str] = field(default_factory=list)
-    identifiability: dict | None = None
-    objective: float = math.nan
-    seconds: float = 0.0
-    path: str = "collocation"
-
-    def __getitem__(self, key: str) -> Any:  # OptimizeResult-like access
-        return getattr(self, key)
-
-    def summary(self) -> str:
-        """Status, Eq 5 δ and force error, and the parameters found."""
-        if not self.success:
-            return f"fit FAILED ({self.status}): {self.message}"
-        dv = f"{self.delta_V:.4f}" if self.delta_V is not None else "—"
-        return "\n".join(
-            [f"fit converged ({self.status}, {self.nit} iterations, {self.path}): δ_F "
-             f"{self.delta_F:.4f}, δ_V {dv}, force error "
-             f"{self.force_relative_error_percent:.2f} %"]
-            + [f"  {k} = {v:.6g}" for k, v in self.parameters.items()])
-
-    def plot(self, ax: Any = None, tests: Sequence[BenchTest] | None = None,
-             harvester: Any = None, **kw: Any) -> list[Figure]:
-        """Figures 8–9 (and 11 when ``tests`` and ``harvester`` are given: the first test
-        simulated at these parameters, ``kw`` to
-        :func:`~ehsa_opt.estimation.test_simulation.simulate_tests`); writes nothing.
-        ``ax`` is not used (several figures); it is accepted for the common protocol."""
-        from ..plots import identify as P
-        test = pred = None
-        if tests is not None and harvester is not None and self.success:
-            test = tests[0]
-            pred = simulate_tests(tests[:1], harvester, self.parameters, **kw)[0]
-        return P.fit_result(self, test, pred)
-
-
 @dataclass
 class IdentificationReport:
     """Result of :func:`identify`: per-test fits, bounds, identifiability, joint fit.
@@ -175,7 +98,7 @@ class IdentificationReport:
             joint = {"success": self.joint.success, "parameters": self.joint.parameters,
                      "train_files": [r["file"] for r in self.joint.per_test],
                      "train": self.joint.per_test, "holdout": self.holdout_errors}
-        return _jsonable({"data_dir": str(self.data.path), "rig": self.data.rig_name,
+        return jsonable({"data_dir": str(self.data.path), "rig": self.data.rig_name,
                           "has_generator": gen, "tests": tests, "bounds": self.bounds,
                           "identifiable": self.identifiable, "joint_fit": joint,
                           "seconds": self.seconds})
@@ -231,22 +154,6 @@ class IdentificationReport:
         """Write the figures of :meth:`figures` to ``out_dir`` (PNG, atomically)."""
         from .. import plots
         return [plots.save(fig, Path(out_dir) / name) for name, fig in self.figures().items()]
-
-
-def _jsonable(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
-
 
 
 def test_errors(tests: Sequence[BenchTest], preds: Sequence[Prediction],

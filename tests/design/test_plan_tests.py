@@ -88,7 +88,7 @@ def test_cli_plan_tests_writes_the_skeleton(law, tmp_path, capsys) -> None:
     sets = {c: TRUTH.as_dict() for c in ("min", "best", "max")}
     ident.write_text(json.dumps({"data_dir": str(tmp_path / "none"), "friction_sets": sets,
                                  "friction_envelope": {"extrapolation_band": {
-                                     "law": law.summary()}}}))
+                                     "law": law.to_dict()}}}))
     rig = tmp_path / "rig.toml"
     rig.write_text("[rig]\nstroke_m = 0.1\npeak_velocity_m_per_s = 1.5\n")
     out = tmp_path / "plan"

@@ -41,11 +41,12 @@ from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .. import core
 from ..collocation import given_block, theta_block
 from ..given_fit import GivenFit, fit_given
+from ..fit_result import FitResult
 from ..identify_result import force_relative_error_percent
 from ..starts import Starts, draw_starts
 from .prepared import NO_GENERATOR_FIXED, PreparedTest, noise_std, prepare_tests
 
-__all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
+__all__ = ["Rig", "PreparedTest", "FitResult", "prepare_tests", "noise_std",
            "fit_group", "predict", "FilteredMotion", "force_relative_error_percent",
            "linear_baseline", "param_scale", "BASE_SPECS", "DISCREPANCY_PARAMETERS"]
 
@@ -156,60 +157,6 @@ def linear_baseline(prepared: Sequence[PreparedTest], rig: Rig,
 
 
 # ------------------------------------------------------------------ the NLP
-@dataclass
-class FitOutcome:
-    """Result of :func:`fit_group` (mirrors ``scipy.optimize.OptimizeResult``).
-
-    Attributes
-    ----------
-    success : bool
-    message : str
-        IPOPT return status of the best start.
-    parameters : dict[str, float]
-        All base and component parameters (fitted and fixed).
-    free : list[str]
-        The fitted names.
-    objective : float
-        Mean squared noise-normalised residual on the fitted tests.
-    sse : float
-        Sum of squared noise-normalised residuals; ``n_obs`` observations.
-    n_obs : int
-    starts : list[dict]
-        Per start: status, objective, iterations.
-    seconds : float
-    covariance : ndarray or None
-        Covariance of the free parameters: Newey–West sandwich on the Gauss–Newton
-        Jacobian (autocorrelated residuals; :mod:`ehsa_opt.estimation.covariance`).
-    covariance_info : dict or None
-        How it was computed: method, N_eff, bandwidth, inflation over the
-        independent-samples covariance.
-    """
-
-    success: bool
-    message: str
-    parameters: dict[str, float]
-    free: list[str]
-    objective: float
-    sse: float
-    n_obs: int
-    starts: list[dict] = field(default_factory=list)
-    seconds: float = 0.0
-    covariance: np.ndarray | None = None
-    covariance_info: dict | None = None
-
-    def interval(self, name: str, z: float = 1.96) -> tuple[float, float] | None:
-        """~95 % interval of a fitted parameter (None if not fitted or unavailable)."""
-        if self.covariance is None or name not in self.free:
-            return None
-        k = self.free.index(name)
-        var = float(self.covariance[k, k])
-        if not math.isfinite(var):
-            return None  # not determined by the data
-        sd = math.sqrt(max(var, 0.0))
-        v = self.parameters[name]
-        return (v - z * sd, v + z * sd)
-
-
 def _fine_grid(t: np.ndarray, M: int) -> np.ndarray:
     """``M`` equal sub-intervals in every sample interval (samples at every M-th node)."""
     if M == 1:
@@ -232,7 +179,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
               *, free: Sequence[str] | None = None, fixed: Mapping[str, float] | None = None,
               max_iter: int = 300, regularisation: float = 1e-6,
               max_cpu_s: float | None = None, substeps: int | None = None,
-              seed: int = 0) -> FitOutcome:
+              seed: int = 0) -> FitResult:
     """Fit one parameter set to all ``prepared`` tests: the likelihood objective on the
     estimation core (:mod:`ehsa_opt.estimation.core`, ``theta`` transcription).
 
@@ -333,9 +280,10 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
         usable = [r for r in extra if (r.success or r.status in _USABLE)
                   and np.isfinite(r.objective)]
     if not usable:
-        return FitOutcome(False, "IPOPT failed from every start (" + "; ".join(
-            r["status"] for r in records) + ")", {}, free, math.inf, math.inf, n_obs, records,
-            time.perf_counter() - t0)
+        return FitResult(success=False, message="IPOPT failed from every start (" + "; ".join(
+            r["status"] for r in records) + ")", free=free, objective=math.inf,
+            starts=records, seconds=time.perf_counter() - t0, path="collocation",
+            sse=math.inf, n_obs=n_obs)
     best = min(usable, key=lambda r: r.objective)
     p = nlp.data(blocks, z0s[0])
     params = {n: default_of(n) for n in names}
@@ -343,8 +291,10 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
     params.update({n: vals[n] for n in free})
     sse = float(nlp.ssefun(best.w, p))
     cov, hac = _covariance(nlp, best.w, p, blocks, len(free), prepared)
-    return FitOutcome(best.success, best.status, params, free, sse / n_obs, sse, n_obs, records,
-                      time.perf_counter() - t0, cov, hac)
+    return FitResult(success=best.success, message=best.status, status=best.status,
+                     parameters=params, free=free, objective=sse / n_obs, nit=best.iterations,
+                     starts=records, seconds=time.perf_counter() - t0, path="collocation",
+                     sse=sse, n_obs=n_obs, covariance=cov, covariance_info=hac)
 
 
 def _nlp_weights(pt: PreparedTest) -> np.ndarray:
@@ -394,7 +344,7 @@ def _fit_given(model: BenchModel, space: core.ParamSpace, blocks: Sequence[Any],
 
 def _outcome_given(fits: list[GivenFit], space: core.ParamSpace, blocks: Sequence[Any],
                    free: list[str], names: list[str], default_of: Any, n_obs: int,
-                   t0: float) -> FitOutcome:
+                   t0: float) -> FitResult:
     records = [{"status": f.status, "success": f.success, "objective": f.objective,
                 "iterations": f.iterations} for f in fits]
     best = min((f for f in fits if np.isfinite(f.objective)), key=lambda f: f.objective)
@@ -403,8 +353,11 @@ def _outcome_given(fits: list[GivenFit], space: core.ParamSpace, blocks: Sequenc
     params.update({n: vals[n] for n in free})
     S = best.jacobian / np.array(space.scale)  # d(weighted residuals)/d(physical values)
     cov, hac = _hac(S, best.residual, [b.n_obs for b in blocks for _ in range(b.ny)])
-    return FitOutcome(best.success, best.status, params, free, best.sse / n_obs, best.sse,
-                      n_obs, records, time.perf_counter() - t0, cov, hac)
+    return FitResult(success=best.success, message=best.status, status=best.status,
+                     parameters=params, free=free, objective=best.sse / n_obs,
+                     nit=best.iterations, starts=records, seconds=time.perf_counter() - t0,
+                     path="rigid", sse=best.sse, n_obs=n_obs, covariance=cov,
+                     covariance_info=hac)
 
 
 def _hac(S: np.ndarray, r: np.ndarray | None, groups: list[int], n_nuisance: int = 0

@@ -67,7 +67,7 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     prepared : list of PreparedTest
     rig : Rig
     parameters : dict
-        Start (all model parameters, e.g. ``FitOutcome.parameters``).
+        Start (all model parameters, e.g. ``FitResult.parameters``).
     free : list of str
         Names refined (the rest stay fixed).
     max_iter : int
