@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -291,11 +291,16 @@ class TestPlan:
             return []
         out = Path(out_dir)
         atomic_write_text(out / "bench.toml", self.bench_toml(harvester))
-        atomic_write_json(out / "plan.json", self.to_json())
+        atomic_write_json(out / "plan.json", self.to_dict())
         return [f"wrote {out / 'bench.toml'} (skeleton for the rig operator) and "
                 f"{out / 'plan.json'}"]
 
-    def to_json(self) -> dict:
+    def summary(self) -> str:
+        """The printed report (:meth:`lines`) as one text."""
+        return "\n".join(self.lines())
+
+    def to_dict(self) -> dict:
+        """plan.json as standard-JSON types (:meth:`from_dict` reloads it)."""
         return {"success": self.success, "message": self.message, "criterion": self.criterion,
                 "sigma_v_m_per_s": self.sigma_v_m_per_s,
                 "identified_range_m_per_s": self.identified_range_m_per_s,
@@ -305,6 +310,30 @@ class TestPlan:
                 "band_before_N": self.band_before_N, "band_after_N": self.band_after_N,
                 "road_band_before_N": self.road_band_before_N,
                 "road_band_after_N": self.road_band_after_N, "rig": asdict(self.rig)}
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as JSON text (reloaded by :meth:`from_json`)."""
+        from ..utils.io import json_safe
+        return json.dumps(json_safe(self.to_dict()), indent=1, allow_nan=False)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "TestPlan":
+        """Reload a plan from :meth:`to_dict` (a plan.json)."""
+        fields_ = {f.name for f in fields(Candidate)}
+        return cls(bool(d["success"]), str(d["message"]),
+                   [Candidate(**{k: v for k, v in c.items() if k in fields_})
+                    for c in d["proposed"]], str(d["criterion"]), float(d["sigma_v_m_per_s"]),
+                   list(d["velocities_m_per_s"]), list(d["band_before_N"]),
+                   list(d["band_after_N"]), float(d["road_band_before_N"]),
+                   float(d["road_band_after_N"]), list(d.get("steps", [])),
+                   int(d.get("n_candidates", 0)),
+                   RigLimits(**{**d["rig"], "loads_ohm": tuple(d["rig"]["loads_ohm"])}),
+                   float(d.get("identified_range_m_per_s") or math.nan))
+
+    @classmethod
+    def from_json(cls, text: str) -> "TestPlan":
+        """Reload a plan written by :meth:`to_json`."""
+        return cls.from_dict(json.loads(text))
 
 
 def _pinv(A: np.ndarray, rcond: float = 1e-9) -> np.ndarray:

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
+from ..utils.io import json_safe
 from .test_simulation import simulate_tests
 
 if TYPE_CHECKING:
@@ -25,7 +26,7 @@ if TYPE_CHECKING:
 
     from ..datasets.bench_format import BenchTest
 
-__all__ = ["FitResult", "jsonable"]
+__all__ = ["FitResult"]
 
 
 @dataclass(kw_only=True)
@@ -155,10 +156,7 @@ class FitResult:
     def to_dict(self) -> dict:
         """Every attribute as standard-JSON types (arrays as nested lists, NaN and inf as
         None); :meth:`from_dict` reloads it."""
-        d = {f.name: getattr(self, f.name) for f in fields(self)}
-        if self.covariance is not None:
-            d["covariance"] = np.asarray(self.covariance, dtype=float).tolist()
-        return jsonable(d)
+        return json_safe({f.name: getattr(self, f.name) for f in fields(self)})
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "FitResult":
@@ -205,21 +203,3 @@ class FitResult:
             pred = simulate_tests(tests[:1], harvester, self.parameters, **kw)[0]
         return P.fit_result(self, test, pred)
 
-
-def jsonable(obj: Any) -> Any:
-    """``obj`` with numpy scalars as Python numbers, tuples as lists, keys as strings and
-    non-finite floats as None (standard JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return jsonable(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj

@@ -5,17 +5,19 @@ per test), plus the Eq 5 metrics."""
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
-from ..datasets.bench_format import BenchData, BenchTest
+from ..datasets.bench_format import BenchData, BenchDataError, BenchTest, load_bench
 from ..physics.friction import rod_friction_N
 from ..physics.params import FRICTION_NAMES
-from .fit_result import FitResult, jsonable
+from ..utils.io import json_safe
+from .fit_result import FitResult
 from .test_simulation import Prediction, simulate_tests
 from .test_velocity import test_peak_velocity_m_per_s
 
@@ -26,6 +28,10 @@ __all__ = ["Prediction", "IdentificationReport", "eq5_delta",
            "force_relative_error_percent", "test_errors", "summarise_identifiability"]
 
 _BEARING = FRICTION_NAMES[4:]
+#: FitResult fields stored per test beyond the table's columns, so a report reloads whole.
+_RELOAD = ("free", "objective", "seconds", "per_test", "history", "identifiability")
+#: The joint fit's fields stored beside its table.
+_JOINT_RELOAD = ("status", "message", "free", "objective", "nit", "seconds", "path")
 
 
 def eq5_delta(simulated: Any, measured: Any) -> float:
@@ -80,8 +86,10 @@ class IdentificationReport:
     def success(self) -> bool:
         return any(f.success for f in self.fits)
 
-    def to_json(self) -> dict:
-        """The CLI contract: ``{"tests": [...], "bounds": {...}, "identifiable": {...}}``."""
+    def to_dict(self) -> dict:
+        """The file ``ehsa-opt identify`` writes, as standard-JSON types:
+        ``{"tests": [...], "bounds": {...}, "identifiable": {...}, "joint_fit": ...}``
+        (every key: the formats page); :meth:`from_dict` reloads it."""
         tests = []
         gen = self.data.has_generator
         for t, f in zip(self.data.tests, self.fits):
@@ -92,16 +100,59 @@ class IdentificationReport:
                           "delta_F": f.delta_F, "delta_V": f.delta_V,
                           "force_relative_error_percent": f.force_relative_error_percent,
                           "success": f.success, "status": f.status, "message": f.message,
-                          "nit": f.nit, "starts": f.starts, "path": f.path})
+                          "nit": f.nit, "starts": f.starts, "path": f.path,
+                          **{k: getattr(f, k) for k in _RELOAD}})
         joint = None
         if self.joint is not None:
-            joint = {"success": self.joint.success, "parameters": self.joint.parameters,
-                     "train_files": [r["file"] for r in self.joint.per_test],
-                     "train": self.joint.per_test, "holdout": self.holdout_errors}
-        return jsonable({"data_dir": str(self.data.path), "rig": self.data.rig_name,
+            j = self.joint
+            joint = {"success": j.success, "parameters": j.parameters,
+                     "train_files": [r["file"] for r in j.per_test],
+                     "train": j.per_test, "holdout": self.holdout_errors,
+                     "holdout_files": list(self.holdout_files),
+                     **{k: getattr(j, k) for k in _JOINT_RELOAD}}
+        return json_safe({"data_dir": str(self.data.path), "rig": self.data.rig_name,
                           "has_generator": gen, "tests": tests, "bounds": self.bounds,
                           "identifiable": self.identifiable, "joint_fit": joint,
-                          "seconds": self.seconds})
+                          "seconds": self.seconds, "starts_per_test": self.starts})
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as JSON text (reloaded by :meth:`from_json`)."""
+        return json.dumps(self.to_dict(), indent=1, allow_nan=False)
+
+    @classmethod
+    def from_dict(cls, doc: Mapping[str, Any], data: BenchData | None = None
+                  ) -> "IdentificationReport":
+        """Reload a report from :meth:`to_dict` (or an identification.json) to inspect or
+        plot it.  ``data``: the bench data it was identified on (default: loaded from
+        the file's ``data_dir``); its tests must be the file's ``tests[].file``."""
+        for key in ("data_dir", "tests", "bounds", "identifiable"):
+            if key not in doc:
+                raise BenchDataError(f"identification result: no key '{key}'; it was not "
+                                     f"written by IdentificationReport.to_json / ehsa-opt "
+                                     f"identify")
+        if data is None:
+            data = load_bench(doc["data_dir"])
+        files = [t["file"] for t in doc["tests"]]
+        if [t.file for t in data.tests] != files:
+            raise BenchDataError(f"identification result: its tests {files} are not the tests "
+                                 f"of {data.path} ({[t.file for t in data.tests]}); pass the "
+                                 f"bench data it was identified on as data=")
+        fits = [_fit_of(t) for t in doc["tests"]]
+        j = doc.get("joint_fit")
+        joint = None if j is None else FitResult(
+            success=bool(j["success"]), parameters=_floats(j["parameters"]),
+            per_test=list(j.get("train", [])),
+            **{"message": "", **{k: j[k] for k in _JOINT_RELOAD if j.get(k) is not None}})
+        held = list(j.get("holdout", [])) if j is not None else []
+        return cls(data, fits, {k: [float(x) for x in v] for k, v in doc["bounds"].items()},
+                   joint, list(j.get("holdout_files", [r["file"] for r in held]))
+                   if j is not None else [], held, dict(doc["identifiable"]),
+                   float(doc.get("seconds") or 0.0), int(doc.get("starts_per_test", 0)))
+
+    @classmethod
+    def from_json(cls, text: str, data: BenchData | None = None) -> "IdentificationReport":
+        """Reload a report written by :meth:`to_json` (see :meth:`from_dict`)."""
+        return cls.from_dict(json.loads(text), data)
 
     def summary(self, json_path: str | Path = "identification.json") -> str:
         """The lines ``ehsa-opt identify`` prints: tests converged, per-test Eq 5 δ and
@@ -154,6 +205,23 @@ class IdentificationReport:
         """Write the figures of :meth:`figures` to ``out_dir`` (PNG, atomically)."""
         from .. import plots
         return [plots.save(fig, Path(out_dir) / name) for name, fig in self.figures().items()]
+
+
+def _floats(d: Mapping[str, Any] | None) -> dict[str, float]:
+    return {k: (math.nan if v is None else float(v)) for k, v in (d or {}).items()}
+
+
+def _fit_of(t: Mapping[str, Any]) -> FitResult:
+    """One test's :class:`FitResult` from its ``tests[]`` entry."""
+    extra = {k: t[k] for k in _RELOAD if t.get(k) is not None}
+    if "objective" in extra:
+        extra["objective"] = float(extra["objective"])
+    return FitResult(success=bool(t["success"]), message=t.get("message", ""),
+                     status=t.get("status", ""), parameters=_floats(t.get("parameters")),
+                     nit=int(t.get("nit") or 0), starts=list(t.get("starts", [])),
+                     delta_F=t.get("delta_F"), delta_V=t.get("delta_V"),
+                     force_relative_error_percent=t.get("force_relative_error_percent"),
+                     path=t.get("path", "collocation"), **extra)
 
 
 def test_errors(tests: Sequence[BenchTest], preds: Sequence[Prediction],

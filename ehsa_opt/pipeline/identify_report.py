@@ -171,9 +171,9 @@ def step_identify_prototype(ctx):
         fb = friction_bounds(rep)
     except ValueError:
         fb = None
-    doc = rep.to_json()
+    doc = rep.to_dict()
     if fb is not None:
-        doc.update(fb.to_json())
+        doc.update(fb.to_dict())
         from .. import plots
         rel_b = "figures/identify_prototype/friction_bounds.png"
         plots.save(fb.plot(truth=_truth_params(truth)), ctx.out_dir / rel_b)
@@ -282,7 +282,7 @@ def step_identify_emps(ctx):
     rep = identify(data, starts=2 if ctx.quick else 4, jobs=1, seed=0)
     f = rep.fits[0]
     figs = _rel(ctx, rep.write(ctx.figure_dir / "identify_emps"))
-    atomic_write_json(ctx.out_dir / "identify_emps.json", rep.to_json())
+    atomic_write_json(ctx.out_dir / "identify_emps.json", rep.to_dict())
     if not f.success:
         return StepOutput(f"EMPS identification failed: {f.message}\n", figs, {"success": False})
     p = f.parameters

@@ -9,7 +9,13 @@ import numpy as np
 import pytest
 
 from ehsa_opt.cli import main
-from ehsa_opt.design.test_plan import RigLimits, candidate_tests, load_rig, plan_tests
+from ehsa_opt.design import test_plan
+from ehsa_opt.design.test_plan import (
+    RigLimits,
+    candidate_tests,
+    load_rig,
+    plan_tests,
+)
 from ehsa_opt.estimation.rod_law import FrictionSamples, rod_law_fit
 from ehsa_opt.physics.friction import rod_friction_N
 from ehsa_opt.physics.params import FrictionParams, HarvesterParams, ParameterError
@@ -97,7 +103,12 @@ def test_cli_plan_tests_writes_the_skeleton(law, tmp_path, capsys) -> None:
     text = capsys.readouterr().out
     assert "before -> after" in text and "at 1.00 m/s" in text
     assert (out / "bench.toml").read_text().count("[[test]]") == 3
-    assert json.loads((out / "plan.json").read_text())["success"] is True
+    saved = (out / "plan.json").read_text()
+    assert json.loads(saved)["success"] is True
+    # plan.json reloads into the plan the command printed; to_json / from_json round-trip
+    plan = test_plan.TestPlan.from_json(saved)
+    assert plan.summary() in text and len(plan.proposed) == 3
+    assert test_plan.TestPlan.from_json(plan.to_json()).to_dict() == plan.to_dict()
     rig.write_text("[rig]\nstroke = 0.1\n")
     assert main(["plan-tests", str(ident), "--vehicle", "quarter_car_class_c", "--rig",
                  str(rig), "--out", str(tmp_path / "p2")]) == 2
