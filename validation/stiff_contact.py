@@ -21,7 +21,8 @@ import sys
 import time
 
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
-from ehsa_opt.estimation.discrepancy.fit import Rig, prepare_tests
+from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+from ehsa_opt.estimation.discrepancy.rig import Rig
 from ehsa_opt.estimation.discrepancy.impacts import fit_impacts
 from ehsa_opt.physics import make_component
 

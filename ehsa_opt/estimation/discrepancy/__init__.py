@@ -23,7 +23,9 @@ Modules, one concept each:
 
 from .candidates import CANDIDATES, Candidate, signature_scores
 from ..fit_result import FitResult
-from .fit import Rig, fit_group, predict, prepare_tests
+from .fit import fit_group
+from .prepared import prepare_tests
+from .rig import Rig, predict
 from .localise import Localisation, localise
 from .results import (
     NONE_OF_CATALOGUE,

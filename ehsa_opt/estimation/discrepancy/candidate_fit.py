@@ -27,7 +27,9 @@ from .candidates import CANDIDATES, absorbed_columns
 from .deadline import past_deadline
 from .evidence import normalised_sse
 from ..fit_result import FitResult
-from .fit import PreparedTest, Rig, fit_group, predict
+from .fit import fit_group
+from .prepared import PreparedTest
+from .rig import Rig, predict
 from .polish import polish
 
 __all__ = ["fit_candidate", "screen_starts", "screen_sse", "split_friction",

@@ -37,7 +37,8 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.stats import chi2
 
-from .fit import PreparedTest, force_relative_error_percent
+from ..identify_result import force_relative_error_percent
+from .prepared import PreparedTest
 from .impacts import impact_record, judge_on_impacts
 
 __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",

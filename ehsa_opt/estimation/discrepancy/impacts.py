@@ -64,7 +64,8 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 from scipy.optimize import minimize
 
-from .fit import PreparedTest, Rig, predict
+from .prepared import PreparedTest
+from .rig import Rig, predict
 
 __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective",
            "impact_energy_ratio", "fit_impacts", "fit_candidate_on_impacts", "IMPACT_SHARES", "impact_record",

@@ -11,7 +11,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .deadline import past_deadline
-from .fit import BASE_SPECS, PreparedTest, Rig, param_scale, predict
+from .prepared import PreparedTest
+from .rig import BASE_SPECS, Rig, param_scale, predict
 
 __all__ = ["PolishOutcome", "polish", "gauss_newton_covariance"]
 

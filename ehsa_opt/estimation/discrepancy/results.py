@@ -14,7 +14,9 @@ import numpy as np
 
 from .candidates import CANDIDATES
 from ..fit_result import FitResult
-from .fit import PreparedTest, Rig, force_relative_error_percent
+from ..identify_result import force_relative_error_percent
+from .prepared import PreparedTest
+from .rig import Rig
 from .localise import Localisation
 from .evidence import MIN_EXCESS_REDUCTION
 from .terms import TermProposal

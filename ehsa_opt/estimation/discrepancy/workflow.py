@@ -62,7 +62,9 @@ from .candidates import CANDIDATES, try_drive_lag, try_lag
 from .deadline import deadline_set
 from .evidence import effective_samples, force_error_percent, force_noise_floor_percent
 from ..fit_result import FitResult
-from .fit import Rig, fit_group, linear_baseline, predict, prepare_tests
+from .fit import fit_group
+from .prepared import prepare_tests
+from .rig import Rig, linear_baseline, predict
 from .localise import Localisation, localise
 from .results import (
     NONE_OF_CATALOGUE,

@@ -29,7 +29,8 @@ from scipy.signal import cont2discrete, lfilter
 
 from ...covariance import hac_covariance
 from ...fit_result import FitResult
-from ..fit import PreparedTest, Rig
+from ..prepared import PreparedTest
+from ..rig import Rig
 from .catalogue import absorbed_columns, compatible
 
 __all__ = ["flexibility_column", "fit_flexibility", "fit_flexibility_member",
