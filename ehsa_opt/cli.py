@@ -148,7 +148,7 @@ def _friction_file(spec: str | None) -> str | None:
 # ------------------------------------------------------------------ identify
 def _cmd_identify(args: argparse.Namespace) -> int:
     from .datasets.bench_format import load_bench
-    from .estimation.bounds import envelope_lines, identification_json
+    from .estimation.bounds import envelope_lines, identification_dict
     from .estimation.identify import identify
     from .utils.io import atomic_write_json
     from .utils.progress import progress_bar
@@ -160,7 +160,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                        progress=lambda k: bar.update(1))
     out.mkdir(parents=True, exist_ok=True)
     rep.write(out)
-    doc = identification_json(rep)
+    doc = identification_dict(rep)
     atomic_write_json(out / "identification.json", doc)
     print(rep.summary(out / "identification.json"))
     for line in envelope_lines(doc, out / "identification.json"):

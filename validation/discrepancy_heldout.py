@@ -247,7 +247,7 @@ def oracle(res, effects: dict, post: tuple | None, friction) -> dict:
     the workflow's baseline.  A catalogue case whose truth does not pass is below
     what the held-out data can show (the detection limit): no method could name it
     by this rule.  Not defined for the force-channel lag (not a model component)."""
-    from ehsa_opt.estimation.discrepancy.fit import predict
+    from ehsa_opt.estimation.discrepancy.rig import predict
     from ehsa_opt.estimation.discrepancy.evidence import earns, force_error_percent
     from ehsa_opt.physics import make_component
     if post and post[0] == "lag_s" or not res.heldout_tests:

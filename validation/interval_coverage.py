@@ -29,8 +29,9 @@ from scipy.signal import lfilter
 
 from ehsa_opt.datasets.bench_format import load_bench
 from ehsa_opt.datasets.embedded import embedded_data_dir
-from ehsa_opt.estimation.discrepancy.fit import Rig, fit_group, linear_baseline, predict, \
-    prepare_tests
+from ehsa_opt.estimation.discrepancy.fit import fit_group
+from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+from ehsa_opt.estimation.discrepancy.rig import Rig, linear_baseline, predict
 
 NAMES = ("inertia_kg", "nut_viscous_Ns_per_m", "nut_coulomb_N", "offset_N")
 

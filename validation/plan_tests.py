@@ -97,7 +97,7 @@ def _band(data, truth_1: float) -> tuple[float, float, RodLawFit, object, dict]:
     there, the law, the bounds, and where the truth lies."""
     rep = identify(data, starts=2, seed=0)
     fb = friction_bounds(rep)
-    law = RodLawFit.from_json(fb.law)
+    law = RodLawFit.from_dict(fb.law)
     a = fb.at(1.0)
     lo = float(np.interp(1.0, fb.velocity_m_per_s, fb.law_band_N[0]))
     hi = float(np.interp(1.0, fb.velocity_m_per_s, fb.law_band_N[1]))

@@ -25,7 +25,9 @@ import time
 
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.discrepancy.candidate_fit import split_friction
-from ehsa_opt.estimation.discrepancy.fit import Rig, fit_group, linear_baseline, prepare_tests
+from ehsa_opt.estimation.discrepancy.fit import fit_group
+from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+from ehsa_opt.estimation.discrepancy.rig import Rig, linear_baseline
 from ehsa_opt.estimation.discrepancy.impacts import (
     IMPACT_EVALUATIONS_WITH_SHARES,
     IMPACT_FRICTION_SPREAD,

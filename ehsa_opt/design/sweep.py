@@ -36,6 +36,7 @@ from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
+from ..datasets.friction_source import FrictionSets
 from ..physics.params import (
     FrictionParams,
     HarvesterParams,
@@ -65,7 +66,7 @@ DESIGN_KEYS: tuple[str, ...] = tuple(
 _CASE_KEYS = ("vehicle", "iso_class", "speed_km_per_h", "friction")
 
 
-def default_friction_sets(identification: Mapping[str, Any] | None = None,
+def default_friction_sets(identification: FrictionSets | None = None,
                           method: str = "data") -> tuple[dict[str, FrictionParams], str]:
     """Friction sets 'min' and 'max' and a note on where they come from
     (:func:`ehsa_opt.vehicle.studies.friction_cases`: the identification step's bounds
@@ -424,7 +425,7 @@ def _list(table: Mapping[str, Any], key: str, default: list, where: str) -> list
 
 
 def parse_sweep(doc: Mapping[str, Any], path: str = "problem",
-                identification: Mapping[str, Any] | None = None,
+                identification: FrictionSets | None = None,
                 friction_from: str | None = None) -> SweepSpec:
     """The :class:`SweepSpec` of a problem file's ``[sweep]`` table (the
     ``[harvester]`` table is the base design, ``[road]`` gives length and seed).

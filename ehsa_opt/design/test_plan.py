@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -328,11 +328,16 @@ class TestPlan:
             return []
         out = Path(out_dir)
         atomic_write_text(out / "bench.toml", self.bench_toml(harvester))
-        atomic_write_json(out / "plan.json", self.to_json())
+        atomic_write_json(out / "plan.json", self.to_dict())
         return [f"wrote {out / 'bench.toml'} (skeleton for the rig operator) and "
                 f"{out / 'plan.json'}"]
 
-    def to_json(self) -> dict:
+    def summary(self) -> str:
+        """The printed report (:meth:`lines`) as one text."""
+        return "\n".join(self.lines())
+
+    def to_dict(self) -> dict:
+        """plan.json as standard-JSON types (:meth:`from_dict` reloads it)."""
         return {"success": self.success, "message": self.message, "criterion": self.criterion,
                 "sigma_v_m_per_s": self.sigma_v_m_per_s,
                 "identified_range_m_per_s": self.identified_range_m_per_s,
@@ -342,6 +347,30 @@ class TestPlan:
                 "band_before_N": self.band_before_N, "band_after_N": self.band_after_N,
                 "road_band_before_N": self.road_band_before_N,
                 "road_band_after_N": self.road_band_after_N, "rig": asdict(self.rig)}
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as JSON text (reloaded by :meth:`from_json`)."""
+        from ..utils.io import json_safe
+        return json.dumps(json_safe(self.to_dict()), indent=1, allow_nan=False)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "TestPlan":
+        """Reload a plan from :meth:`to_dict` (a plan.json)."""
+        fields_ = {f.name for f in fields(Candidate)}
+        return cls(bool(d["success"]), str(d["message"]),
+                   [Candidate(**{k: v for k, v in c.items() if k in fields_})
+                    for c in d["proposed"]], str(d["criterion"]), float(d["sigma_v_m_per_s"]),
+                   list(d["velocities_m_per_s"]), list(d["band_before_N"]),
+                   list(d["band_after_N"]), float(d["road_band_before_N"]),
+                   float(d["road_band_after_N"]), list(d.get("steps", [])),
+                   int(d.get("n_candidates", 0)),
+                   RigLimits(**{**d["rig"], "loads_ohm": tuple(d["rig"]["loads_ohm"])}),
+                   float(d.get("identified_range_m_per_s") or math.nan))
+
+    @classmethod
+    def from_json(cls, text: str) -> "TestPlan":
+        """Reload a plan written by :meth:`to_json`."""
+        return cls.from_dict(json.loads(text))
 
 
 def residual_model(law: RodLawFit) -> tuple[float, float]:
@@ -374,7 +403,7 @@ def _candidate_information(cands: list[Candidate], rig: RigLimits, law: RodLawFi
     at the candidate's stroke acceleration (:func:`residual_model`), inflated by the
     autocorrelation ``tau`` and deflated by the cluster factor ``kappa``."""
     s0, beta = residual_model(law)
-    p, names, lead = law.parameters, law.varied, law.lead_m_per_rad
+    p, names, lead = law.parameters, law.free, law.lead_m_per_rad
     infos, kept, sig = [], [], []
     tri_v: dict[float, np.ndarray] = {}
     for c in cands:
@@ -439,7 +468,7 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
                         "peak_velocity_m_per_s, force_N or actuator_power_W in [rig]", [],
                         criterion, sigma_v_m_per_s, list(velocities_m_per_s), [], [],
                         math.nan, math.nan, [], 0, rig, law.velocity_range_m_per_s[1])
-    names, p, lead = law.varied, law.parameters, law.lead_m_per_rad
+    names, p, lead = law.free, law.parameters, law.lead_m_per_rad
     tau = law.n_samples / max(law.n_effective, 1.0)
     # road weight: |v| half-normal, Gauss-Legendre on [0, 5 sigma]
     x, wq = np.polynomial.legendre.leggauss(64)
@@ -524,7 +553,7 @@ def plan_from_files(ident_path: str | Path, vehicle_path: str | Path, rig_path: 
     if not isinstance(law_doc, Mapping) or "covariance" not in law_doc:
         raise ParameterError(f"{ident_path}: no friction_envelope.extrapolation_band.law "
                              f"(written by an older ehsa_opt); re-run `ehsa-opt identify`")
-    law = RodLawFit.from_json(law_doc)
+    law = RodLawFit.from_dict(law_doc)
     harv_tab: dict = {}
     bench = Path(str(doc.get("data_dir", ""))) / "bench.toml"
     if bench.is_file():

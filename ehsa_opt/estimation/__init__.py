@@ -11,12 +11,13 @@ from __future__ import annotations
 from ..utils.lazy import lazy_exports
 
 _EXPORTS = {
-    **dict.fromkeys(["fit_tests", "IdentifyOptions", "FitResult", "Prediction",
+    **dict.fromkeys(["FitResult"], ".fit_result"),
+    **dict.fromkeys(["fit_tests", "IdentifyOptions", "Prediction",
                      "IdentificationReport", "PARAMETER_BOUNDS", "START_RANGES"], ".identify"),
     **dict.fromkeys(["simulate_tests"], ".test_simulation"),
     **dict.fromkeys(["fisher_identifiability"], ".identifiability"),
     **dict.fromkeys(["FrictionBounds", "friction_bounds", "paper_friction_sets",
-                     "identification_json"], ".bounds"),
+                     "identification_dict", "identification_json"], ".bounds"),
     **dict.fromkeys(["FrictionSamples", "RodLawFit", "friction_samples", "rod_law_fit"],
                     ".rod_law"),
     **dict.fromkeys(["HAC", "hac_covariance", "effective_sample_size"], ".covariance"),
@@ -28,7 +29,7 @@ __all__ = ["HAC", "PARAMETER_BOUNDS", "START_RANGES", "DiscrepancyResult", "Disc
            "FitResult", "FrictionBounds", "FrictionSamples", "IdentificationReport",
            "IdentifyOptions", "Prediction", "RodLawFit", "effective_sample_size",
            "fisher_identifiability", "fit_tests", "friction_bounds", "friction_samples",
-           "hac_covariance", "identification_json", "paper_friction_sets", "rod_law_fit",
+           "hac_covariance", "identification_dict", "identification_json", "paper_friction_sets", "rod_law_fit",
            "run_discrepancy", "simulate_tests"]
 assert set(__all__) == set(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -51,6 +51,7 @@ largest breakaway force makes a Stribeck hump no test shows.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
@@ -59,13 +60,14 @@ import numpy as np
 from scipy import stats
 
 from ..physics.params import FRICTION_NAMES, FrictionParams
+from ..utils.io import json_safe
 from .ordered_sets import ENVELOPE_PARAMETERS, fit_envelope, friction_set, ordered_set, rod_curve_N
 from .test_velocity import test_peak_velocity_m_per_s, test_velocity_range_m_per_s
 
 __all__ = ["FrictionBounds", "friction_bounds", "paper_friction_sets", "velocity_grid",
            "test_peak_velocity_m_per_s", "test_velocity_range_m_per_s",
            "covered_low_m_per_s", "campaign_low_m_per_s", "SINE_LOW_FRACTION",
-           "identification_json", "DATA_METHOD", "PAPER_METHOD",
+           "identification_dict", "identification_json", "DATA_METHOD", "PAPER_METHOD",
            "fit_envelope", "ordered_set", "ENVELOPE_PARAMETERS", "V_MAX_M_PER_S", "envelope_lines"]
 
 #: Velocity up to which the sets are ordered and banded (the vehicle studies' largest).
@@ -189,8 +191,9 @@ class FrictionBounds:
                                                     self.lead_m_per_rad)[0])
         return out
 
-    def to_json(self) -> dict:
-        """``friction_sets`` and ``friction_envelope`` tables of identification.json."""
+    def to_dict(self) -> dict:
+        """``friction_sets``, ``friction_envelope`` and ``velocity_range`` tables of
+        identification.json (standard-JSON types; :meth:`from_dict` reloads them)."""
         def arr(a: np.ndarray) -> list:
             return [None if not np.isfinite(x) else float(x) for x in np.asarray(a).ravel()]
         sets = {c: fr.as_dict() for c, fr in self.sets.items()}
@@ -214,12 +217,63 @@ class FrictionBounds:
                                     if self.margin_band_N is not None else None),
                    "margin_high_N": (arr(self.margin_band_N[1])
                                      if self.margin_band_N is not None else None),
-                   "law": self.law},
+                   "law": self.law, "level": self.level},
                "paper_method": {"description": PAPER_METHOD,
                                 **{c: fr.as_dict() for c, fr in self.paper_sets.items()},
                                 "rod_N": {c: arr(a) for c, a in self.paper_rod_N.items()}}}
         return {"friction_sets": sets, "friction_envelope": env,
                 "velocity_range": self.velocity_range_json()}
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as JSON text (reloaded by :meth:`from_json`)."""
+        return json.dumps(json_safe(self.to_dict()), indent=1, allow_nan=False)
+
+    @classmethod
+    def from_dict(cls, doc: Mapping[str, Any]) -> "FrictionBounds":
+        """Reload the bounds from :meth:`to_dict`, or from an identification.json as
+        ``ehsa-opt identify`` writes it (its ``friction_sets`` / ``friction_envelope`` /
+        ``velocity_range`` tables), to inspect or plot them."""
+        if "friction_envelope" not in doc or "friction_sets" not in doc:
+            note = doc.get("friction_sets_note")
+            raise ValueError("friction bounds: no friction_sets / friction_envelope tables"
+                             + (f" ({note})" if note else "; identify the data first"))
+        env, sets = doc["friction_envelope"], doc["friction_sets"]
+        band = env.get("extrapolation_band") or {}
+        paper = env.get("paper_method") or {}
+
+        def arr(x: Any) -> np.ndarray:
+            return np.array([math.nan if v is None else v for v in x], dtype=float)
+
+        def pair(lo: Any, hi: Any) -> np.ndarray | None:
+            return None if lo is None or hi is None else np.vstack([arr(lo), arr(hi)])
+
+        def params(d: Mapping[str, Any]) -> FrictionParams:
+            return FrictionParams(**{n: float(d[n]) for n in FRICTION_NAMES})
+
+        cases = [c for c in sets if c != "method"]
+        per = env.get("per_test_N") or {}
+        v = arr(env["velocity_m_per_s"])
+        peaks = (doc.get("velocity_range") or {}).get("tests_peak_m_per_s") or {}
+        return cls(v, np.array([arr(r) for r in per.values()]).reshape(len(per), v.size),
+                   arr(env["lower_N"]), arr(env["upper_N"]), arr(env["mean_N"]),
+                   pair(env["mean_ci95_low_N"], env["mean_ci95_high_N"]),
+                   {c: params(sets[c]) for c in cases},
+                   {c: arr(x) for c, x in env["sets_rod_N"].items()},
+                   {c: params(paper[c]) for c in ("min", "max") if c in paper},
+                   {c: arr(x) for c, x in (paper.get("rod_N") or {}).items()},
+                   float(env["lead_m_per_rad"]), list(per), env.get("band", ""),
+                   sets.get("method", DATA_METHOD),
+                   pair(band.get("law_low_N"), band.get("law_high_N")),
+                   pair(band.get("margin_low_N"), band.get("margin_high_N")),
+                   tuple(float(x) for x in env.get("identified_range_m_per_s",
+                                                   (math.nan, math.nan))),
+                   {k: float(x) for k, x in peaks.items()}, dict(band.get("law") or {}),
+                   float(band.get("level", 0.95)))
+
+    @classmethod
+    def from_json(cls, text: str) -> "FrictionBounds":
+        """Reload bounds written by :meth:`to_json` (or an identification.json's text)."""
+        return cls.from_dict(json.loads(text))
 
     def plot(self, ax: Any = None, **kw: Any) -> Any:
         """Envelope, sets and paper bounds against velocity (two panels, ``ax`` not used;
@@ -307,7 +361,7 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
                           np.vstack([rod_best - stat, rod_best + stat]),
                           np.vstack([rod_best - lo_m, rod_best + hi_m]),
                           (v_lo, v_data), dict(zip([t.file for t, _ in good], vpeak.tolist())),
-                          law.summary(), level)
+                          law.to_dict(), level)
 
 
 def _usable_fits(report: Any) -> tuple[list, np.ndarray]:
@@ -450,18 +504,26 @@ def _set_margins(v: np.ndarray, env: _Envelope, v_data: float, rod_best: np.ndar
     return lo_m, hi_m
 
 
-def identification_json(report: Any) -> dict:
-    """``report.to_json()`` plus ``friction_sets`` and ``friction_envelope`` (the file
+def identification_dict(report: Any) -> dict:
+    """``report.to_dict()`` plus ``friction_sets`` and ``friction_envelope`` (the file
     ``ehsa-opt identify`` writes; read back by
-    :func:`ehsa_opt.datasets.friction_source.load_friction_sets`)."""
-    doc = report.to_json()
+    :func:`ehsa_opt.datasets.friction_source.load_friction_sets`,
+    :meth:`IdentificationReport.from_dict
+    <ehsa_opt.estimation.identify_result.IdentificationReport.from_dict>` and
+    :meth:`FrictionBounds.from_dict`)."""
+    doc = report.to_dict()
     try:
         fb = friction_bounds(report)
     except ValueError as exc:
         doc["friction_sets_note"] = str(exc)
         return doc
-    doc.update(fb.to_json())
+    doc.update(fb.to_dict())
     return doc
+
+
+def identification_json(report: Any) -> str:
+    """:func:`identification_dict` as JSON text (the content of identification.json)."""
+    return json.dumps(json_safe(identification_dict(report)), indent=1, allow_nan=False)
 
 
 def envelope_lines(doc: Mapping[str, Any], path: Any) -> list[str]:

@@ -22,7 +22,7 @@ not depend on friction at all.  The reported errors are Eq 5 *as printed*,
 force relative error ‖F_s − F_e‖/‖F_e‖ (EMPS reference).
 
 Two paths (chosen automatically, :attr:`IdentifyOptions.path`): when no state
-of the model depends on a varied parameter (rigid bench: the winding current is
+of the model depends on a free parameter (rigid bench: the winding current is
 fixed by the prescribed motion and the load), the **rigid path** integrates the
 states once per test (:func:`~ehsa_opt.estimation.collocation.integrate_states`)
 and IPOPT solves the same epigraph problem in the parameters only; otherwise
@@ -36,7 +36,7 @@ their ParamSpec bounds), or given start points (:mod:`ehsa_opt.estimation.starts
 in parallel processes; the best successful start is kept, every start recorded.
 
 Identifiability: at the optimum the Gauss–Newton Fisher information of the
-varied parameters (the collocation states eliminated through the sensitivity
+free parameters (the collocation states eliminated through the sensitivity
 of the collocation equations, the initial states treated as nuisance
 parameters and marginalised) is eigen-decomposed in scaled coordinates;
 directions with relative eigenvalue below :attr:`IdentifyOptions.identifiable_rtol`
@@ -85,8 +85,8 @@ from .identify_options import (
     unresolved_tests,
 )
 from .starts import Starts, draw_starts
+from .fit_result import FitResult
 from .identify_result import (
-    FitResult,
     IdentificationReport,
     Prediction,
     eq5_delta,
@@ -114,7 +114,7 @@ def _bounds(model: BenchModel, name: str) -> tuple[float, float, float]:
 
 
 # ====================================================================== fit
-def _default_vary(model: BenchModel, has_generator: bool, fixed: Mapping[str, Any]) -> list[str]:
+def _default_free(model: BenchModel, has_generator: bool, fixed: Mapping[str, Any]) -> list[str]:
     names = [n for n in model.param_names if n != "load_ohm"]
     if not has_generator:  # friction reported under the nut_* names; no bearings
         names = [n for n in names if n not in _BEARING]
@@ -145,18 +145,18 @@ class _Setup:
                           self.blocks)
 
 
-def _setup(tests: list[BenchTest], model: BenchModel, has_generator: bool, varied: list[str],
+def _setup(tests: list[BenchTest], model: BenchModel, has_generator: bool, free_names: list[str],
            fixed: Mapping[str, Any], options: IdentifyOptions) -> _Setup:
     names = list(model.param_names)
     defaults = model_defaults(model)
     ties = tuple((n, v) for n, v in fixed.items() if isinstance(v, str))
-    bnd = [_bounds(model, n) for n in varied]
-    space = core.ParamSpace(tuple(names), tuple(varied), tuple(b[0] for b in bnd),
+    bnd = [_bounds(model, n) for n in free_names]
+    space = core.ParamSpace(tuple(names), tuple(free_names), tuple(b[0] for b in bnd),
                             tuple(b[1] for b in bnd), tuple(b[2] for b in bnd), ties,
                             tuple(_TIES.items()))
-    driven = states_depend_on(model, list(varied) + [o for _, o in ties])
+    driven = states_depend_on(model, list(free_names) + [o for _, o in ties])
     if options.path == "rigid" and driven:
-        raise ValueError("fit_tests: path='rigid' needs states that no varied parameter "
+        raise ValueError("fit_tests: path='rigid' needs states that no free parameter "
                          "drives (rigid bench); use path='auto' or 'collocation'")
     path = "collocation" if (options.path == "collocation" or driven) else "rigid"
     if model.n_states == 0:
@@ -236,7 +236,7 @@ def _fisher(su: _Setup, nlp: core.NLP, p: np.ndarray, w: np.ndarray) -> dict:
     method = None
     if su.path == "rigid":
         method = ("Gauss-Newton Fisher information; states fixed by the prescribed motion "
-                  "(rigid path: no state depends on a varied parameter); scaled coordinates")
+                  "(rigid path: no state depends on a free parameter); scaled coordinates")
     return fisher_identifiability(dy, y, su.y_meas, su.space.values_of(w, su.pbases[0]),
                                   su.space.free, su.space.scale,
                                   su.model.harvester.lead_m_per_rad, vmax,
@@ -309,16 +309,16 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
     if not has_generator:
         for n in _BEARING:
             fixed.setdefault(n, 1.0 if "velocity" in n else 0.0)
-    varied = list(free) if free is not None else _default_vary(model, has_generator, fixed)
-    unknown = [n for n in varied if n not in known]
+    free_names = list(free) if free is not None else _default_free(model, has_generator, fixed)
+    unknown = [n for n in free_names if n not in known]
     if unknown:
         raise ValueError(f"fit_tests: cannot fit unknown free parameter '{unknown[0]}' "
                          f"(known: {', '.join(known)})")
-    clash = [n for n in varied if n in fixed]
+    clash = [n for n in free_names if n in fixed]
     if clash:
         raise ValueError(f"fit_tests: {', '.join(clash)} both free and fixed")
-    draws = draw_starts(model, varied, starts, seed, where="fit_tests")
-    missing = sorted({n for d in draws for n in varied if n not in d})
+    draws = draw_starts(model, free_names, starts, seed, where="fit_tests")
+    missing = sorted({n for d in draws for n in free_names if n not in d})
     if missing:
         raise ValueError(f"fit_tests: a start point leaves out {', '.join(missing)}; give every "
                          f"free parameter a start value, or pass starts as a number to draw")
@@ -329,10 +329,10 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
         names = [n for n in model.param_names if n != "load_ohm"]
         msg = ("no fit: " + "; ".join(short) + " — the motion's derivatives are not resolved "
                "there (corners, dwells, ends); record longer strokes or slower reversals")
-        return FitResult(False, msg, "not_resolved", {n: math.nan for n in names}, None, None,
-                         None, [], [], {}, 0, list(varied), None, math.nan,
-                         time.perf_counter() - t0, "none")
-    su = _setup(tests, model, has_generator, varied, fixed, options)
+        return FitResult(success=False, message=msg, status="not_resolved",
+                         parameters={n: math.nan for n in names}, free=list(free_names),
+                         seconds=time.perf_counter() - t0, path="none")
+    su = _setup(tests, model, has_generator, free_names, fixed, options)
     if jobs == 1 or starts == 1:
         records = _run_starts(su, draws, identifiability)
     else:
@@ -377,11 +377,11 @@ def _finish(su: _Setup, records: list[dict], seconds: float,
     if not ok:
         best = min(records, key=lambda r: r["objective"] if math.isfinite(r["objective"])
                    else math.inf)
-        return FitResult(False, f"all {len(records)} IPOPT starts failed (statuses: "
-                         f"{sorted({r['status'] for r in records})})", best["status"],
-                         {n: math.nan for n in names}, None, None, None, [], starts_out,
-                         best["history"], best["iterations"], list(su.space.free), None,
-                         math.nan, seconds, su.path)
+        return FitResult(success=False, message=f"all {len(records)} IPOPT starts failed "
+                         f"(statuses: {sorted({r['status'] for r in records})})",
+                         status=best["status"], parameters={n: math.nan for n in names},
+                         free=list(su.space.free), nit=best["iterations"], starts=starts_out,
+                         seconds=seconds, history=best["history"], path=su.path)
     best = min(ok, key=lambda r: r["objective"])
     params = {n: best["final"][n] for n in names}
     preds = _predictions(su, params)
@@ -394,9 +394,11 @@ def _finish(su: _Setup, records: list[dict], seconds: float,
     ident = best.get("ident") if identifiability else None
     msg = (f"{len(ok)}/{len(records)} starts converged; best objective {best['objective']:.6g} "
            f"({best['status']}; {su.path} path)")
-    return FitResult(True, msg, best["status"], params, dF, dV, rel, per, starts_out,
-                     best["history"], best["iterations"], list(su.space.free), ident,
-                     best["objective"], seconds, su.path)
+    return FitResult(success=True, message=msg, status=best["status"], parameters=params,
+                     free=list(su.space.free), objective=best["objective"],
+                     nit=best["iterations"], starts=starts_out, seconds=seconds, delta_F=dF,
+                     delta_V=dV, force_relative_error_percent=rel, per_test=per,
+                     history=best["history"], identifiability=ident, path=su.path)
 
 
 # ====================================================================== identify

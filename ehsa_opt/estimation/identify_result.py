@@ -1,29 +1,37 @@
-"""Result types of the identification (:mod:`ehsa_opt.estimation.identify`): the fit of
-a group of tests (:class:`FitResult`), simulated signals (:class:`Prediction`) and the
-whole procedure's report (:class:`IdentificationReport`), plus the Eq 5 metrics."""
+"""Result types of the identification (:mod:`ehsa_opt.estimation.identify`): simulated
+signals (:class:`Prediction`) and the whole procedure's report
+(:class:`IdentificationReport`, of one :class:`~ehsa_opt.estimation.fit_result.FitResult`
+per test), plus the Eq 5 metrics."""
 
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
-from ..datasets.bench_format import BenchData, BenchTest
+from ..datasets.bench_format import BenchData, BenchDataError, BenchTest, load_bench
 from ..physics.friction import rod_friction_N
 from ..physics.params import FRICTION_NAMES
+from ..utils.io import json_safe
+from .fit_result import FitResult
 from .test_simulation import Prediction, simulate_tests
 from .test_velocity import test_peak_velocity_m_per_s
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["Prediction", "FitResult", "IdentificationReport", "eq5_delta",
+__all__ = ["Prediction", "IdentificationReport", "eq5_delta",
            "force_relative_error_percent", "test_errors", "summarise_identifiability"]
 
 _BEARING = FRICTION_NAMES[4:]
+#: FitResult fields stored per test beyond the table's columns, so a report reloads whole.
+_RELOAD = ("free", "objective", "seconds", "per_test", "history", "identifiability")
+#: The joint fit's fields stored beside its table.
+_JOINT_RELOAD = ("status", "message", "free", "objective", "nit", "seconds", "path")
 
 
 def eq5_delta(simulated: Any, measured: Any) -> float:
@@ -43,85 +51,6 @@ def force_relative_error_percent(simulated: Any, measured: Any) -> float:
 
 
 # ====================================================================== results
-@dataclass
-class FitResult:
-    """Result of :func:`fit_tests` (mirrors ``scipy.optimize.OptimizeResult``).
-
-    Attributes
-    ----------
-    success : bool
-        True if at least one start converged (IPOPT success).
-    message : str
-    status : str
-        IPOPT ``return_status`` of the kept start.
-    parameters : dict[str, float]
-        Every model parameter except ``load_ohm`` (NaN if no start succeeded).
-    delta_F, delta_V : float or None
-        Paper Eq 5 (as printed) over all the fitted tests' samples (δ_V None
-        without voltage); max over tests.
-    force_relative_error_percent : float or None
-    per_test : list[dict]
-        file, delta_F, delta_V, force_relative_error_percent per test.
-    starts : list[dict]
-        Every start: initial, final, objective, success, status, iterations, seconds.
-    history : dict
-        Best start per iteration: ``objective``, ``rms_F``, ``rms_V`` (lists),
-        ``parameters`` (name → list).
-    nit : int
-    free : list[str]
-        The fitted names (as :attr:`FitOutcome.free <ehsa_opt.estimation.discrepancy.fit.FitOutcome>`).
-    identifiability : dict or None
-        See :func:`~ehsa_opt.estimation.identifiability.fisher_identifiability`.
-    path : str
-        ``"rigid"`` (states integrated once, parameters-only NLP) or
-        ``"collocation"`` (states are collocation unknowns).
-    """
-
-    success: bool
-    message: str
-    status: str
-    parameters: dict[str, float]
-    delta_F: float | None
-    delta_V: float | None
-    force_relative_error_percent: float | None
-    per_test: list[dict]
-    starts: list[dict]
-    history: dict
-    nit: int
-    free: list[str] = field(default_factory=list)
-    identifiability: dict | None = None
-    objective: float = math.nan
-    seconds: float = 0.0
-    path: str = "collocation"
-
-    def __getitem__(self, key: str) -> Any:  # OptimizeResult-like access
-        return getattr(self, key)
-
-    def summary(self) -> str:
-        """Status, Eq 5 δ and force error, and the parameters found."""
-        if not self.success:
-            return f"fit FAILED ({self.status}): {self.message}"
-        dv = f"{self.delta_V:.4f}" if self.delta_V is not None else "—"
-        return "\n".join(
-            [f"fit converged ({self.status}, {self.nit} iterations, {self.path}): δ_F "
-             f"{self.delta_F:.4f}, δ_V {dv}, force error "
-             f"{self.force_relative_error_percent:.2f} %"]
-            + [f"  {k} = {v:.6g}" for k, v in self.parameters.items()])
-
-    def plot(self, ax: Any = None, tests: Sequence[BenchTest] | None = None,
-             harvester: Any = None, **kw: Any) -> list[Figure]:
-        """Figures 8–9 (and 11 when ``tests`` and ``harvester`` are given: the first test
-        simulated at these parameters, ``kw`` to
-        :func:`~ehsa_opt.estimation.test_simulation.simulate_tests`); writes nothing.
-        ``ax`` is not used (several figures); it is accepted for the common protocol."""
-        from ..plots import identify as P
-        test = pred = None
-        if tests is not None and harvester is not None and self.success:
-            test = tests[0]
-            pred = simulate_tests(tests[:1], harvester, self.parameters, **kw)[0]
-        return P.fit_result(self, test, pred)
-
-
 @dataclass
 class IdentificationReport:
     """Result of :func:`identify`: per-test fits, bounds, identifiability, joint fit.
@@ -157,8 +86,10 @@ class IdentificationReport:
     def success(self) -> bool:
         return any(f.success for f in self.fits)
 
-    def to_json(self) -> dict:
-        """The CLI contract: ``{"tests": [...], "bounds": {...}, "identifiable": {...}}``."""
+    def to_dict(self) -> dict:
+        """The file ``ehsa-opt identify`` writes, as standard-JSON types:
+        ``{"tests": [...], "bounds": {...}, "identifiable": {...}, "joint_fit": ...}``
+        (every key: the formats page); :meth:`from_dict` reloads it."""
         tests = []
         gen = self.data.has_generator
         for t, f in zip(self.data.tests, self.fits):
@@ -169,16 +100,59 @@ class IdentificationReport:
                           "delta_F": f.delta_F, "delta_V": f.delta_V,
                           "force_relative_error_percent": f.force_relative_error_percent,
                           "success": f.success, "status": f.status, "message": f.message,
-                          "nit": f.nit, "starts": f.starts, "path": f.path})
+                          "nit": f.nit, "starts": f.starts, "path": f.path,
+                          **{k: getattr(f, k) for k in _RELOAD}})
         joint = None
         if self.joint is not None:
-            joint = {"success": self.joint.success, "parameters": self.joint.parameters,
-                     "train_files": [r["file"] for r in self.joint.per_test],
-                     "train": self.joint.per_test, "holdout": self.holdout_errors}
-        return _jsonable({"data_dir": str(self.data.path), "rig": self.data.rig_name,
+            j = self.joint
+            joint = {"success": j.success, "parameters": j.parameters,
+                     "train_files": [r["file"] for r in j.per_test],
+                     "train": j.per_test, "holdout": self.holdout_errors,
+                     "holdout_files": list(self.holdout_files),
+                     **{k: getattr(j, k) for k in _JOINT_RELOAD}}
+        return json_safe({"data_dir": str(self.data.path), "rig": self.data.rig_name,
                           "has_generator": gen, "tests": tests, "bounds": self.bounds,
                           "identifiable": self.identifiable, "joint_fit": joint,
-                          "seconds": self.seconds})
+                          "seconds": self.seconds, "starts_per_test": self.starts})
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as JSON text (reloaded by :meth:`from_json`)."""
+        return json.dumps(self.to_dict(), indent=1, allow_nan=False)
+
+    @classmethod
+    def from_dict(cls, doc: Mapping[str, Any], data: BenchData | None = None
+                  ) -> "IdentificationReport":
+        """Reload a report from :meth:`to_dict` (or an identification.json) to inspect or
+        plot it.  ``data``: the bench data it was identified on (default: loaded from
+        the file's ``data_dir``); its tests must be the file's ``tests[].file``."""
+        for key in ("data_dir", "tests", "bounds", "identifiable"):
+            if key not in doc:
+                raise BenchDataError(f"identification result: no key '{key}'; it was not "
+                                     f"written by IdentificationReport.to_json / ehsa-opt "
+                                     f"identify")
+        if data is None:
+            data = load_bench(doc["data_dir"])
+        files = [t["file"] for t in doc["tests"]]
+        if [t.file for t in data.tests] != files:
+            raise BenchDataError(f"identification result: its tests {files} are not the tests "
+                                 f"of {data.path} ({[t.file for t in data.tests]}); pass the "
+                                 f"bench data it was identified on as data=")
+        fits = [_fit_of(t) for t in doc["tests"]]
+        j = doc.get("joint_fit")
+        joint = None if j is None else FitResult(
+            success=bool(j["success"]), parameters=_floats(j["parameters"]),
+            per_test=list(j.get("train", [])),
+            **{"message": "", **{k: j[k] for k in _JOINT_RELOAD if j.get(k) is not None}})
+        held = list(j.get("holdout", [])) if j is not None else []
+        return cls(data, fits, {k: [float(x) for x in v] for k, v in doc["bounds"].items()},
+                   joint, list(j.get("holdout_files", [r["file"] for r in held]))
+                   if j is not None else [], held, dict(doc["identifiable"]),
+                   float(doc.get("seconds") or 0.0), int(doc.get("starts_per_test", 0)))
+
+    @classmethod
+    def from_json(cls, text: str, data: BenchData | None = None) -> "IdentificationReport":
+        """Reload a report written by :meth:`to_json` (see :meth:`from_dict`)."""
+        return cls.from_dict(json.loads(text), data)
 
     def summary(self, json_path: str | Path = "identification.json") -> str:
         """The lines ``ehsa-opt identify`` prints: tests converged, per-test Eq 5 δ and
@@ -233,20 +207,21 @@ class IdentificationReport:
         return [plots.save(fig, Path(out_dir) / name) for name, fig in self.figures().items()]
 
 
-def _jsonable(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
+def _floats(d: Mapping[str, Any] | None) -> dict[str, float]:
+    return {k: (math.nan if v is None else float(v)) for k, v in (d or {}).items()}
 
+
+def _fit_of(t: Mapping[str, Any]) -> FitResult:
+    """One test's :class:`FitResult` from its ``tests[]`` entry."""
+    extra = {k: t[k] for k in _RELOAD if t.get(k) is not None}
+    if "objective" in extra:
+        extra["objective"] = float(extra["objective"])
+    return FitResult(success=bool(t["success"]), message=t.get("message", ""),
+                     status=t.get("status", ""), parameters=_floats(t.get("parameters")),
+                     nit=int(t.get("nit") or 0), starts=list(t.get("starts", [])),
+                     delta_F=t.get("delta_F"), delta_V=t.get("delta_V"),
+                     force_relative_error_percent=t.get("force_relative_error_percent"),
+                     path=t.get("path", "collocation"), **extra)
 
 
 def test_errors(tests: Sequence[BenchTest], preds: Sequence[Prediction],

@@ -30,6 +30,7 @@ coefficient and the Coulomb level) does.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
@@ -264,10 +265,10 @@ class RodLawFit:
     ----------
     parameters : dict
         The eight friction values (the fitted law).
-    varied : list of str
-        The parameters the covariance is over.
+    free : list of str
+        The parameters the covariance is over (the free ones of the law).
     covariance, covariance_iid : ndarray
-        HAC and i.i.d. covariance of ``varied``.
+        HAC and i.i.d. covariance of ``free`` (their units squared).
     lead_m_per_rad : float
     n_samples, n_effective : int, float
         Samples used and the effective sample size (sum over the tests).
@@ -298,7 +299,7 @@ class RodLawFit:
     """
 
     parameters: dict[str, float]
-    varied: list[str]
+    free: list[str]
     covariance: np.ndarray
     covariance_iid: np.ndarray
     lead_m_per_rad: float
@@ -328,7 +329,7 @@ class RodLawFit:
              "cluster": self.covariance_cluster}[kind]
         if C is None:
             return np.full(v.shape, np.nan)
-        G = rod_gradient(v, self.parameters, self.varied, self.lead_m_per_rad)
+        G = rod_gradient(v, self.parameters, self.free, self.lead_m_per_rad)
         return np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", G, C, G), 0.0))
 
     def half_width_N(self, v_m_per_s: Any, level: float = 0.95) -> np.ndarray:
@@ -369,7 +370,18 @@ class RodLawFit:
         f, h = self.rod_N(v_m_per_s), self.half_width_N(v_m_per_s, level)
         return f - h, f + h
 
-    def summary(self) -> dict:
+    def summary(self) -> str:
+        """The law's fit in a few lines: samples, effective samples, residual, the free
+        parameters with their Newey–West standard errors."""
+        sd = np.sqrt(np.maximum(np.diag(np.asarray(self.covariance, dtype=float)), 0.0))
+        lines = [f"rod-friction law on {self.n_samples} samples of {self.n_tests} tests "
+                 f"(effective {self.n_effective:.0f}), residual rms {self.residual_rms_N:.3g} N"]
+        lines += [f"  {n} = {self.parameters[n]:.6g} ± {s:.2g}" for n, s in zip(self.free, sd)]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """The law, its covariances and statistics as standard-JSON types
+        (identification.json ``friction_envelope.extrapolation_band.law``)."""
         return {"method": "sandwich covariance of the rod-friction regression on the "
                           "friction samples F_e - F_0 at the measured stroke velocity: the "
                           "larger of Newey-West (Bartlett kernel, Andrews AR(1) bandwidth per "
@@ -377,7 +389,7 @@ class RodLawFit:
                 "n_tests": self.n_tests,
                 "n_samples": self.n_samples, "n_effective": self.n_effective,
                 "bandwidths": self.bandwidths, "residual_rms_N": self.residual_rms_N,
-                "varied": self.varied, "parameters": dict(self.parameters),
+                "free": self.free, "parameters": dict(self.parameters),
                 "lead_m_per_rad": self.lead_m_per_rad,
                 "velocity_range_m_per_s": list(self.velocity_range_m_per_s),
                 "test_residual_rms_N": [float(x) for x in self.test_residual_rms_N],
@@ -391,11 +403,23 @@ class RodLawFit:
                 "covariance_cluster": (None if self.covariance_cluster is None else
                                        np.asarray(self.covariance_cluster).tolist())}
 
+    def to_json(self) -> str:
+        """:meth:`to_dict` as JSON text."""
+        return json.dumps(self.to_dict(), indent=1)
+
     @classmethod
-    def from_json(cls, d: Mapping[str, Any]) -> "RodLawFit":
-        """Inverse of :meth:`summary` (identification.json ``extrapolation_band.law``)."""
+    def from_json(cls, text: str) -> "RodLawFit":
+        """Reload a law written by :meth:`to_json`."""
+        return cls.from_dict(json.loads(text))
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "RodLawFit":
+        """Inverse of :meth:`to_dict` (identification.json ``extrapolation_band.law``;
+        the list of free names is read from ``free``, or ``varied`` in files written by
+        earlier versions)."""
         cl = d.get("covariance_cluster")
-        return cls({k: float(v) for k, v in d["parameters"].items()}, list(d["varied"]),
+        free = d["free"] if "free" in d else d["varied"]
+        return cls({k: float(v) for k, v in d["parameters"].items()}, list(free),
                    np.asarray(d["covariance"], dtype=float),
                    np.asarray(d["covariance_iid"], dtype=float), float(d["lead_m_per_rad"]),
                    int(d["n_samples"]), float(d["n_effective"]), list(d.get("bandwidths", [])),
@@ -411,19 +435,19 @@ class RodLawFit:
                    {k: float(v) for k, v in d["weighted"].items()})
 
 
-def _varied(params: Mapping[str, float], has_generator: bool) -> list[str]:
+def _free_names(params: Mapping[str, float], has_generator: bool) -> list[str]:
     names = list(FRICTION_NAMES if has_generator else FRICTION_NAMES[:4])
     return [n for n in names if n in params]
 
 
 def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
                 lead_m_per_rad: float, *, has_generator: bool = True,
-                varied: Sequence[str] | None = None, refit: bool = False,
+                free: Sequence[str] | None = None, refit: bool = False,
                 rcond: float = 1e-6, max_samples_per_test: int = 4000) -> RodLawFit:
     """The law ``parameters`` (or its least-squares refit on the samples when ``refit``)
     with its HAC covariance on ``samples``.
 
-    ``refit`` fits the varied parameters by bounded least squares
+    ``refit`` fits the free parameters by bounded least squares
     (``scipy.optimize.least_squares``) from ``parameters`` — the estimator whose sandwich
     the covariance is; without it the covariance is evaluated at the given law (the
     identification's minimax fit, close to the least-squares one on noise-dominated data).
@@ -436,7 +460,7 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
         p0["nut_breakaway_velocity_m_per_s"] = 0.01
     if p0["bearing_breakaway_velocity_rad_per_s"] <= 0:
         p0["bearing_breakaway_velocity_rad_per_s"] = 1.0
-    names = list(varied) if varied is not None else _varied(p0, has_generator)
+    names = list(free) if free is not None else _free_names(p0, has_generator)
     vs, ys = [], []
     for v, y in zip(samples.velocity_m_per_s, samples.friction_N):
         step = max(1, int(math.ceil(v.size / max_samples_per_test)))

@@ -10,7 +10,7 @@ A procedure that needs narrower (or other) limits does not keep a table of its o
 names an override of the one declaration, with the reason, through
 :meth:`Parameter.with_bounds` or :func:`override` (e.g. the identification's bounds in
 :data:`ehsa_opt.estimation.identify_options.IDENTIFY_PARAMETERS`, the discrepancy fit's
-in :data:`ehsa_opt.estimation.discrepancy.fit.DISCREPANCY_PARAMETERS`).
+in :data:`ehsa_opt.estimation.discrepancy.rig.DISCREPANCY_PARAMETERS`).
 """
 
 from __future__ import annotations

@@ -108,6 +108,19 @@ class Context:
             f"vehicle of {Path(self.vehicle_file).name}"
         return prob.vehicle, name
 
+    def identification(self) -> Any:
+        """The identification step's typed result
+        (:class:`~ehsa_opt.pipeline.step_results.IdentificationStepResult`), or None when
+        the run has none yet."""
+        from .step_results import IdentificationStepResult
+        return IdentificationStepResult.from_dict(self.results.get("identification"))
+
+    def friction_sets(self) -> Any:
+        """The identified :class:`~ehsa_opt.datasets.friction_source.FrictionSets` of the
+        run, or None (no identification step, or no bounds from it)."""
+        ident = self.identification()
+        return None if ident is None else ident.friction_sets
+
     def harvester(self, **changes: Any) -> Any:
         """The harvester of the bench data (its bench.toml ``[harvester]``), with changes."""
         import dataclasses

@@ -24,8 +24,8 @@ RANGE_HEADER = "beyond identified friction range: time / friction energy"
 def identified_range(ctx: Any) -> tuple[float, str]:
     """The identification step's campaign range (m/s) and where it comes from."""
     from ..datasets.friction_source import RANGE_SOURCE_EMBEDDED, embedded_range_m_per_s
-    ident = ctx.results.get("identification") or {}
-    v = ident.get("identified_range_m_per_s")
+    ident = ctx.identification()
+    v = ident.identified_range_m_per_s if ident is not None else None
     if v:
         return float(v), "the identified bench campaign"
     return embedded_range_m_per_s(), RANGE_SOURCE_EMBEDDED

@@ -24,6 +24,7 @@ from ..design import OBJECTIVE_NAMES
 from .base import Context, StepOutput
 from .design_problem import design_config, not_applicable
 from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
+from .step_results import DesignStepResult
 
 __all__ = ["step_goal_attainment", "step_pareto", "step_friction_on_optimum"]
 
@@ -187,15 +188,12 @@ def step_goal_attainment(ctx: Context) -> StepOutput:
     binding = [k for k, g, w in zip(OBJECTIVE_NAMES, ga.goals, ga.weights)
                if w > 0 and abs((ga.objectives[k] - g) / w - ga.gamma) < 1e-5]
     md = _goal_attainment_markdown(cfg, ga, out, at_lower, pd_out, gamma_paper, binding, figs)
-    from dataclasses import asdict
     h_opt = HarvesterParams.from_design(d["total_inertia_gcm2"], d["lead_mm_per_rev"],
                                         d["speed_constant_rpm_per_V"], d["load_ohm"],
                                         base=cfg.harvester)
-    res = {"design": d, "objectives": out["objectives"], "metrics": om, "gamma": ga.gamma,
-           "optimum_harvester": asdict(h_opt),
-           "prototype": {"objectives": proto, "metrics": pm}, "success": ga.success,
-           "at_lower_bound": at_lower, "binding": binding, "paper_design_in_our_model": pd_out}
-    return StepOutput(md, figs, res)
+    res = DesignStepResult(d, h_opt, ga.gamma, ga.success, out["objectives"], om,
+                           {"objectives": proto, "metrics": pm}, at_lower, binding, pd_out)
+    return StepOutput(md, figs, res.to_dict())
 
 
 def step_pareto(ctx: Context) -> StepOutput:
@@ -387,11 +385,12 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
     if (na := not_applicable(ctx)) is not None:
         return na
     cfg = design_config(ctx)
-    ga = ctx.results.get("design", {}).get("design")  # the goal-attainment step
+    step = DesignStepResult.from_dict(ctx.results.get("design"))  # the goal attainment
+    ga = step.design if step is not None else None
     if ga is None:
         from ..design.optimize import optimize
         ga = optimize(cfg, "goal-attainment", out_dir=ctx.out_dir / "design_ga").design
-    sets, source = default_friction_sets(ctx.results.get("identification"),
+    sets, source = default_friction_sets(ctx.friction_sets(),
                                            ctx.friction_bounds)
     speeds = (30.0, 70.0, 100.0, 130.0) if ctx.quick else (30.0, 50.0, 70.0, 90.0, 100.0,
                                                             110.0, 130.0)

@@ -395,7 +395,7 @@ def truth_error(res: DiscrepancyResult, truth: dict | None) -> float | None:
     for measured data."""
     if not truth or "friction" not in truth:
         return None
-    from ..estimation.discrepancy.fit import predict
+    from ..estimation.discrepancy.rig import predict
     from ..estimation.discrepancy.evidence import force_error_percent
     from ..physics import make_component
     effects = truth.get("effects", {})

@@ -15,6 +15,7 @@ import numpy as np
 from ..estimation.identify import IdentifyOptions, identify, simulate_tests
 from ..physics.friction import rod_friction_N
 from ..physics.params import FRICTION_NAMES, FrictionParams
+from .step_results import IdentificationStepResult
 
 __all__ = ["step_identify_prototype", "step_identify_emps"]
 
@@ -128,25 +129,19 @@ def _identifiability_lines(ctx, rep, ok: list, opts) -> list[str]:
 
 
 def _prototype_results(data, rep, ok: list, fb) -> dict:
-    """Results of the prototype identification: convergence, rod friction, friction sets."""
+    """Results of the prototype identification (:class:`IdentificationStepResult`):
+    convergence, rod friction, the friction sets of the §4 studies and the design."""
+    from ..datasets.friction_source import FrictionSets
     rod = rep.identifiable.get("rod_friction_spread_by_velocity_m_per_s", {})
-    r = data.harvester.lead_m_per_rad
-    rod_at = {v: d["mean_N"] for v, d in rod.items()}
-    res = {"converged": len(ok), "tests": len(data), "rod_friction_mean_N": rod_at,
-           "seconds": rep.seconds, "lead_m_per_rad": r, "has_generator": data.has_generator}
+    sets = None
     if fb is not None:
-        # the §4 studies' friction cases: the data-supported sets (friction_min/max);
-        # the paper's per-parameter sets under paper_friction_min/max
-        res.update({"identified_range_m_per_s": float(fb.data_range_m_per_s[1]),
-                    "friction_min": fb.sets["min"].as_dict(),
-                    "friction_best": fb.sets["best"].as_dict(),
-                    "friction_max": fb.sets["max"].as_dict(),
-                    "friction_method": fb.method,
-                    "paper_friction_min": fb.paper_sets["min"].as_dict()
-                    if fb.paper_sets else None,
-                    "paper_friction_max": fb.paper_sets["max"].as_dict()
-                    if fb.paper_sets else None})
-    return res
+        paper = fb.paper_sets or {}
+        sets = FrictionSets(fb.sets["min"], fb.sets["best"], fb.sets["max"], fb.method,
+                            paper.get("min"), paper.get("max"))
+    return IdentificationStepResult(
+        len(ok), len(data), rep.seconds, data.harvester.lead_m_per_rad, data.has_generator,
+        {v: d["mean_N"] for v, d in rod.items()},
+        None if fb is None else float(fb.data_range_m_per_s[1]), sets).to_dict()
 
 
 def step_identify_prototype(ctx):
@@ -171,9 +166,9 @@ def step_identify_prototype(ctx):
         fb = friction_bounds(rep)
     except ValueError:
         fb = None
-    doc = rep.to_json()
+    doc = rep.to_dict()
     if fb is not None:
-        doc.update(fb.to_json())
+        doc.update(fb.to_dict())
         from .. import plots
         rel_b = "figures/identify_prototype/friction_bounds.png"
         plots.save(fb.plot(truth=_truth_params(truth)), ctx.out_dir / rel_b)
@@ -183,7 +178,7 @@ def step_identify_prototype(ctx):
     lines = _prototype_table2_lines(data, opts, starts, rep, truth)
     if not ok:
         return StepOutput("\n".join(lines[:1]) + "\nNo test converged: no bounds.\n", figs,
-                          {"converged": 0, "tests": len(data)})
+                          IdentificationStepResult(0, len(data)).to_dict())
     lines += _fit_quality_lines(ctx, ok, path)
     lines += _identifiability_lines(ctx, rep, ok, opts)
     if fb is not None:
@@ -282,7 +277,7 @@ def step_identify_emps(ctx):
     rep = identify(data, starts=2 if ctx.quick else 4, jobs=1, seed=0)
     f = rep.fits[0]
     figs = _rel(ctx, rep.write(ctx.figure_dir / "identify_emps"))
-    atomic_write_json(ctx.out_dir / "identify_emps.json", rep.to_json())
+    atomic_write_json(ctx.out_dir / "identify_emps.json", rep.to_dict())
     if not f.success:
         return StepOutput(f"EMPS identification failed: {f.message}\n", figs, {"success": False})
     p = f.parameters

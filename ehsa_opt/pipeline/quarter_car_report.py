@@ -21,6 +21,7 @@ from ..vehicle.studies import (force_velocity_loops, friction_cases, paper_optim
                                road_study, stepped_sine_response)
 from ..vehicle.validity import check_validity
 from .base import Context, StepOutput
+from .step_results import DesignStepResult
 from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
 from .paper_reference import (EXPECTED_DISSIPATION_BOUND_W, PAPER_FIG14_RANGES, PAPER_FIG21,
                               PAPER_OPTIMUM, PAPER_ROAD_STUDY)
@@ -31,9 +32,9 @@ __all__ = ["step_quarter_car_paths", "step_fig13", "step_fig14", "step_fig15_16"
 
 def friction_inputs(ctx: Context) -> Any:
     """What the friction cases depend on (for the step cache)."""
-    ident = ctx.results.get("identification", {})
-    return {"quick": ctx.quick, "friction_min": ident.get("friction_min"),
-            "friction_max": ident.get("friction_max"), "context": ctx.inputs()}
+    sets = ctx.friction_sets()
+    return {"quick": ctx.quick, "friction_min": sets and sets.min.as_dict(),
+            "friction_max": sets and sets.max.as_dict(), "context": ctx.inputs()}
 
 
 def _not_applicable(ctx: Context) -> StepOutput | None:
@@ -109,7 +110,7 @@ def step_quarter_car_paths(ctx: Context) -> StepOutput:
 def step_fig13(ctx: Context) -> StepOutput:
     if (na := _not_applicable(ctx)) is not None:
         return na
-    fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
+    fc = friction_cases(ctx.friction_sets(), ctx.friction_bounds)
     loads = [15.0, 47.0, 109.0]
     v_road = 2.0 * np.pi * 0.01  # 10 mm at 1 Hz, falling as 1/f
     # log grid plus the exact frictionless peaks of x2 and V_g per load, plus points around the body (~1.1 Hz) and wheel-hop (~8 Hz) modes, so the
@@ -228,7 +229,7 @@ def _exact_peaks(vehicle: VehicleParams, harvester: HarvesterParams,
 def step_fig14(ctx: Context) -> StepOutput:
     if (na := _not_applicable(ctx)) is not None:
         return na
-    fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
+    fc = friction_cases(ctx.friction_sets(), ctx.friction_bounds)
     v_ident, v_source = identified_range(ctx)
     study = force_velocity_loops(ctx.harvester(), fc, identified_range_m_per_s=v_ident)
     rel = "figures/fig14_force_velocity.png"
@@ -282,7 +283,7 @@ def _compare_ranges(res: dict) -> str:
 
 
 def _road_step(ctx: Context, preset: str, fig: str, load: float) -> tuple[str, list[str], dict]:
-    fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
+    fc = friction_cases(ctx.friction_sets(), ctx.friction_bounds)
     vehicle, preset = ((VehicleParams.preset(preset), preset) if preset != "user"
                        else ctx.vehicle())
     preset = preset.replace(" ", "_").replace(".", "_")
@@ -419,10 +420,10 @@ def render_fig21(source: str, road: RoadParams, friction_source: str, rows: list
 def step_fig21(ctx: Context) -> StepOutput:
     if (na := _not_applicable(ctx)) is not None:
         return na
-    fc = friction_cases(ctx.results.get("identification"), ctx.friction_bounds)
-    design = ctx.results.get("design", {}).get("optimum_harvester")
-    if design:
-        h = HarvesterParams(**design)
+    fc = friction_cases(ctx.friction_sets(), ctx.friction_bounds)
+    design = DesignStepResult.from_dict(ctx.results.get("design"))
+    if design is not None:
+        h = design.optimum_harvester
         src = "the design step's optimum"
     else:
         h = paper_optimum_harvester()

@@ -27,8 +27,8 @@ __all__ = ["step_robust_design", "robust_inputs"]
 
 def robust_inputs(ctx: Context) -> Any:
     from .design_problem import design_inputs
-    return [design_inputs(ctx), ctx.quick, ctx.results.get("identification", {}).get(
-        "friction_max")]
+    sets = ctx.friction_sets()
+    return [design_inputs(ctx), ctx.quick, sets and sets.max.as_dict()]
 
 
 def _harvester(cfg: Any, d: dict) -> Any:
@@ -269,7 +269,7 @@ def step_robust_design(ctx: Context) -> StepOutput:
     quick = ctx.quick
     cfg = design_config()
     cfg = dataclasses.replace(cfg, n_freq=128 if quick else 512)
-    sets, source = default_friction_sets(ctx.results.get("identification"),
+    sets, source = default_friction_sets(ctx.friction_sets(),
                                            ctx.friction_bounds)
     frictions = (sets["min"], sets["max"])
     plain = build_problem(cfg)

@@ -16,7 +16,8 @@ if TYPE_CHECKING:  # types only: plotting draws results it is given, it runs not
 
     from ..datasets.bench_format import BenchTest
     from ..estimation.bounds import FrictionBounds
-    from ..estimation.identify_result import FitResult, IdentificationReport, Prediction
+    from ..estimation.fit_result import FitResult
+    from ..estimation.identify_result import IdentificationReport, Prediction
     from ..physics.params import FrictionParams
 
 __all__ = [
@@ -50,7 +51,7 @@ def iterations_objective(result: FitResult, title: str = "", ax: Axes | None = N
 
 
 def iterations_parameters(result: FitResult, title: str = "") -> Figure:
-    """Fig 9: each varied parameter per IPOPT iteration (best start)."""
+    """Fig 9: each free parameter per IPOPT iteration (best start)."""
     pars = result.history["parameters"]
     n = len(pars)
     cols = 4 if n > 4 else n
@@ -179,7 +180,7 @@ def identifiability_figure(report: IdentificationReport,
 
 def fit_result(result: FitResult, test: BenchTest | None = None,
                prediction: Prediction | None = None) -> list[Figure]:
-    """Figures of one :class:`~ehsa_opt.estimation.identify_result.FitResult`: Figs 8, 9,
+    """Figures of one :class:`~ehsa_opt.estimation.fit_result.FitResult`: Figs 8, 9,
     and 11 when a ``test`` and the model's ``prediction`` of it are given."""
     figs = [iterations_objective(result), iterations_parameters(result)]
     if test is not None and prediction is not None:

@@ -16,16 +16,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 from scipy import signal
 
 from ..datasets.embedded import embedded_data_dir, load_truth
+from ..datasets.friction_source import FrictionSets
 from ..physics.bench_model import BenchModel
 from ..physics.bench_sim import simulate_bench
 from ..physics.motion import SineMotion
-from ..physics.params import (FRICTION_NAMES, FrictionParams, HarvesterParams, ParameterError,
+from ..physics.params import (FrictionParams, HarvesterParams, ParameterError,
                               RoadParams, VehicleParams)
 from ..physics.friction import rod_friction_N
 from ..physics.quarter_car_model import PARAM_NAMES, STATE_NAMES, param_vector
@@ -52,37 +53,32 @@ class FrictionCases:
     source: str
 
 
-def friction_cases(identification: Mapping[str, Any] | None = None,
+def friction_cases(identification: FrictionSets | None = None,
                    method: str = "data") -> FrictionCases:
     """The study's friction cases.
 
     Parameters
     ----------
-    identification : mapping, optional
-        ``ctx.results["identification"]``; used when it has ``friction_min`` and
-        ``friction_max`` (mappings of the eight friction names, or sequences in
-        :data:`~ehsa_opt.physics.params.FRICTION_NAMES` order): the data-supported sets
-        of :mod:`ehsa_opt.estimation.bounds`.
+    identification : FrictionSets, optional
+        The identified sets (:class:`~ehsa_opt.datasets.friction_source.FrictionSets`, as
+        the identification step gives them): ``min`` and ``max`` are the data-supported
+        sets of :mod:`ehsa_opt.estimation.bounds`.  None: the embedded data set's true
+        friction as ``max`` and a scaled copy as ``min``, labelled so.
     method : {"data", "paper"}
-        "paper": the per-parameter min/max over the tests (``paper_friction_min`` /
-        ``paper_friction_max``), the paper's method, which over-states the spread.
+        "paper": the per-parameter min/max over the tests (``paper_min`` /
+        ``paper_max``), the paper's method, which over-states the spread.
     """
     if method not in ("data", "paper"):
         raise ValueError(f"friction_cases: method must be 'data' or 'paper', got {method!r}")
-    lo, hi = (("friction_min", "friction_max") if method == "data"
-              else ("paper_friction_min", "paper_friction_max"))
-    if identification and identification.get(lo) and identification.get(hi):
-        def build(values: Any) -> FrictionParams:
-            if isinstance(values, Mapping):
-                return FrictionParams(**{k: float(values[k]) for k in FRICTION_NAMES})
-            return FrictionParams.from_array(values)  # sequence in FRICTION_NAMES order
+    if identification is not None and (method == "data"
+                                       or identification.paper_min is not None):
+        lo, hi = identification.bounds(method)
         label = ("identified, data-supported: ordered sets min <= best <= max at every "
                  "velocity, enclosing the tests' envelope and beyond the bench the best law's "
                  "95 % band (ehsa_opt.estimation.bounds)"
-                 if method == "data" and "friction_method" in identification else
+                 if method == "data" else
                  "identified, paper's method: per-parameter min/max over the bench tests")
-        return FrictionCases({"none": None, "min": build(identification[lo]),
-                              "max": build(identification[hi])}, label)
+        return FrictionCases({"none": None, "min": lo, "max": hi}, label)
     truth = FrictionParams(**load_truth(embedded_data_dir())["friction"])
     scaled = {k: (v if "velocity" in k else MIN_FRICTION_SCALE * v)
               for k, v in truth.as_dict().items()}

@@ -7,6 +7,7 @@ import pytest
 
 from ehsa_opt.design.config import load_design_config
 from ehsa_opt.design.friction_optimum import friction_on_optimum
+from ehsa_opt.datasets.friction_source import FrictionSets
 from ehsa_opt.physics.params import FrictionParams
 from ehsa_opt.design.sweep import default_friction_sets, parse_sweep, rows_to_csv, run_sweep
 from tests.paths import PAPER_DESIGN
@@ -34,8 +35,8 @@ def test_friction_lowers_power_and_efficiency_and_frictionless_matches_linear():
 
 
 def test_identified_bounds_take_precedence():
-    ident = {"friction_min": FrictionParams(nut_breakaway_N=5.0, nut_coulomb_N=1.0).as_dict(),
-             "friction_max": FrictionParams(nut_breakaway_N=50.0, nut_coulomb_N=10.0).as_dict()}
+    lo = FrictionParams(nut_breakaway_N=5.0, nut_coulomb_N=1.0)
+    ident = FrictionSets(lo, lo, FrictionParams(nut_breakaway_N=50.0, nut_coulomb_N=10.0))
     sets, source = default_friction_sets(ident)
     assert source.startswith("identified")
     assert sets["max"].nut_breakaway_N == 50.0

@@ -57,7 +57,7 @@ def test_every_result_summarises_itself() -> None:
 
     from ehsa_opt.design.goal import GoalAttainmentResult
     from ehsa_opt.design.nsga2 import ParetoResult
-    from ehsa_opt.estimation.identify_result import FitResult
+    from ehsa_opt.estimation.fit_result import FitResult
     names = ("comfort", "road_holding")
     ga = GoalAttainmentResult(True, "ok", -0.25, {"load_ohm": 40.0},
                               {"comfort": 0.5, "road_holding": 0.75}, np.ones(2), np.ones(2),
@@ -68,9 +68,9 @@ def test_every_result_summarises_itself() -> None:
                       [{"n_eval": 40, "hv": 0.5}], np.ones(2), np.ones(2), {})
     text = pr.summary()
     assert "front: 2 designs, hypervolume 0.5 after 40" in text and "load_ohm = 20" in text
-    fit = FitResult(True, "ok", "Solve_Succeeded", {"nut_coulomb_N": 40.0}, 0.1, None, 2.5,
-                    [], [], {}, 12)
+    fit = FitResult(success=True, message="ok", status="Solve_Succeeded",
+                    parameters={"nut_coulomb_N": 40.0}, nit=12, delta_F=0.1,
+                    force_relative_error_percent=2.5)
     assert "δ_V —" in fit.summary() and "nut_coulomb_N = 40" in fit.summary()
-    failed = FitResult(False, "no start converged", "Infeasible", {}, None, None, None,
-                       [], [], {}, 0)
+    failed = FitResult(success=False, message="no start converged", status="Infeasible")
     assert failed.summary() == "fit FAILED (Infeasible): no start converged"

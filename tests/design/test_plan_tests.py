@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from ehsa_opt.cli import main
+from ehsa_opt.design import test_plan
 from ehsa_opt.design.test_plan import (
     RigLimits,
     candidate_tests,
@@ -95,7 +96,7 @@ def test_cli_plan_tests_writes_the_skeleton(law, tmp_path, capsys) -> None:
     sets = {c: TRUTH.as_dict() for c in ("min", "best", "max")}
     ident.write_text(json.dumps({"data_dir": str(tmp_path / "none"), "friction_sets": sets,
                                  "friction_envelope": {"extrapolation_band": {
-                                     "law": law.summary()}}}))
+                                     "law": law.to_dict()}}}))
     rig = tmp_path / "rig.toml"
     rig.write_text("[rig]\nstroke_m = 0.1\npeak_velocity_m_per_s = 1.5\n")
     out = tmp_path / "plan"
@@ -104,7 +105,12 @@ def test_cli_plan_tests_writes_the_skeleton(law, tmp_path, capsys) -> None:
     text = capsys.readouterr().out
     assert "before -> after" in text and "at 1.00 m/s" in text
     assert (out / "bench.toml").read_text().count("[[test]]") == 3
-    assert json.loads((out / "plan.json").read_text())["success"] is True
+    saved = (out / "plan.json").read_text()
+    assert json.loads(saved)["success"] is True
+    # plan.json reloads into the plan the command printed; to_json / from_json round-trip
+    plan = test_plan.TestPlan.from_json(saved)
+    assert plan.summary() in text and len(plan.proposed) == 3
+    assert test_plan.TestPlan.from_json(plan.to_json()).to_dict() == plan.to_dict()
     rig.write_text("[rig]\nstroke = 0.1\n")
     assert main(["plan-tests", str(ident), "--vehicle", "quarter_car_class_c", "--rig",
                  str(rig), "--out", str(tmp_path / "p2")]) == 2

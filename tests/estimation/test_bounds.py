@@ -13,11 +13,15 @@ from ehsa_opt.datasets.friction_source import load_friction_sets
 from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
 from ehsa_opt.estimation.bounds import (
     campaign_low_m_per_s,
+    FrictionBounds,
     fit_envelope,
     friction_bounds,
+    identification_dict,
     identification_json,
     velocity_grid,
 )
+from ehsa_opt.estimation.identify_result import IdentificationReport
+from ehsa_opt.utils.io import json_safe
 from ehsa_opt.estimation.identify import identify
 from ehsa_opt.physics.friction import rod_friction_N
 from ehsa_opt.physics.params import FrictionParams, load_toml
@@ -70,7 +74,9 @@ def test_sets_bracket_the_truth_within_25_percent(clean) -> None:
 
 def test_identification_json_round_trip(clean, tmp_path) -> None:
     _, rep, _ = clean
-    doc = identification_json(rep)
+    text = identification_json(rep)
+    doc = json.loads(text)
+    assert doc == json_safe(identification_dict(rep))
     env = doc["friction_envelope"]
     assert len(env["velocity_m_per_s"]) == len(env["lower_N"]) == len(env["upper_N"])
     rng = doc["velocity_range"]
@@ -88,6 +94,18 @@ def test_identification_json_round_trip(clean, tmp_path) -> None:
     fb = friction_bounds(rep)
     for case in ("min", "best", "max"):
         assert sets[case] == fb.sets[case]
+    # the file reloads into results one can inspect and plot: the same report and bounds
+    back = IdentificationReport.from_json(text)
+    assert back.summary() == rep.summary()
+    assert [f.parameters for f in back.fits] == [f.parameters for f in rep.fits]
+    assert back.fits[0].history["objective"] == pytest.approx(rep.fits[0].history["objective"])
+    assert back.to_dict() == rep.to_dict()
+    assert sorted(back.figures()) == sorted(rep.figures())
+    fb2 = FrictionBounds.from_json(text)
+    assert json.loads(fb2.to_json()) == json.loads(fb.to_json())
+    assert fb2.ordered() and len(fb2.plot().axes) == 2
+    with pytest.raises(ValueError, match="friction_envelope"):
+        FrictionBounds.from_dict({"tests": []})
 
 
 def test_campaign_range_starts_where_a_test_covers_by_its_protocol() -> None:

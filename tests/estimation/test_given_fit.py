@@ -6,7 +6,9 @@ import pytest
 
 from ehsa_opt.datasets.bench_format import BenchTest
 from ehsa_opt.estimation.discrepancy import fit as fitmod
-from ehsa_opt.estimation.discrepancy.fit import Rig, fit_group, predict, prepare_tests
+from ehsa_opt.estimation.discrepancy.fit import fit_group
+from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+from ehsa_opt.estimation.discrepancy.rig import Rig, predict
 from ehsa_opt.physics.params import HarvesterParams
 
 FREE = ["inertia_kg", "offset_N", "nut_breakaway_N", "nut_coulomb_N",

@@ -118,7 +118,7 @@ def test_emps_matches_published_reference():
                                                       rel=0.10)
     assert p["nut_coulomb_N"] == pytest.approx(EMPS_REFERENCE["coulomb_N"], rel=0.15)
     assert 3.0 < f.force_relative_error_percent < 6.0
-    js = rep.to_json()
+    js = rep.to_dict()
     assert set(js["tests"][0]["parameters"]) == {
         "nut_breakaway_N", "nut_coulomb_N", "nut_breakaway_velocity_m_per_s",
         "nut_viscous_Ns_per_m", "inertia_kg", "offset_N"}

@@ -10,6 +10,7 @@ import pytest
 from ehsa_opt.estimation.bounds import ordered_set
 from ehsa_opt.estimation.rod_law import (
     FrictionSamples,
+    RodLawFit,
     andrews_bandwidth,
     hac_covariance,
     rod_law_fit,
@@ -84,6 +85,13 @@ def test_rod_law_refit_recovers_the_rod_friction_and_bands_widen_beyond_the_data
     assert hw[0] < hw[1] < hw[2]
     assert np.all(fit.std_N(v, "hac") > fit.std_N(v, "iid"))
     assert fit.covariance_cluster is None  # three tests: too few clusters
+    # saved as text and reloaded: the same law and band; files that say "varied" still load
+    back = RodLawFit.from_json(fit.to_json())
+    assert back.free == fit.free and np.allclose(back.half_width_N(v), fit.half_width_N(v))
+    older = fit.to_dict()
+    older["varied"] = older.pop("free")
+    assert RodLawFit.from_dict(older).free == fit.free
+    assert "nut_coulomb_N = " in fit.summary()
 
 
 @pytest.mark.parametrize("side", ["below", "above"])

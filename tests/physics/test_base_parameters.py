@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ehsa_opt.estimation.bounds import ENVELOPE_PARAMETERS
-from ehsa_opt.estimation.discrepancy.fit import BASE_SPECS, DISCREPANCY_PARAMETERS
+from ehsa_opt.estimation.discrepancy.rig import BASE_SPECS, DISCREPANCY_PARAMETERS
 from ehsa_opt.estimation.identify_options import IDENTIFY_PARAMETERS, PARAMETER_BOUNDS, START_RANGES
 from ehsa_opt.estimation.starts import draw_starts
 from ehsa_opt.physics.base_parameters import PARAMETERS, override

@@ -3,7 +3,14 @@
 import numpy as np
 import pytest
 
-from ehsa_opt.physics.params import FRICTION_NAMES, HarvesterParams, RoadParams, VehicleParams
+from ehsa_opt.datasets.friction_source import FrictionSets
+from ehsa_opt.physics.params import (
+    FRICTION_NAMES,
+    FrictionParams,
+    HarvesterParams,
+    RoadParams,
+    VehicleParams,
+)
 from ehsa_opt.vehicle.studies import (force_velocity_loops, friction_cases, paper_optimum_harvester,
                               road_study, stepped_sine_response)
 
@@ -14,15 +21,23 @@ def test_friction_cases_use_identification_when_given():
     assert default.cases["min"].nut_coulomb_N == pytest.approx(
         0.3 * default.cases["max"].nut_coulomb_N)
     assert "TRUE friction" in default.source
-    ident = {"friction_min": {k: getattr(default.cases["min"], k) for k in FRICTION_NAMES},
-             "friction_max": {k: getattr(default.cases["max"], k) * (2 if "velocity" not in k
-                                                                     else 1)
-                              for k in FRICTION_NAMES}}
-    got = friction_cases(ident)
-    assert "identified" in got.source
-    as_lists = friction_cases({k: [v[n] for n in FRICTION_NAMES] for k, v in ident.items()})
-    assert as_lists.cases["max"] == got.cases["max"]
+    lo = default.cases["min"]
+    hi = FrictionParams(**{k: getattr(default.cases["max"], k) * (2 if "velocity" not in k
+                                                                  else 1)
+                           for k in FRICTION_NAMES})
+    sets = FrictionSets(lo, default.cases["max"], hi, "data-supported")
+    got = friction_cases(sets)
+    assert got.source.startswith("identified, data-supported")
     assert got.cases["max"].nut_coulomb_N == pytest.approx(2 * default.cases["max"].nut_coulomb_N)
+    # the step cache's dict gives the same cases back
+    again = friction_cases(FrictionSets.from_dict(sets.to_dict()))
+    assert again.cases == got.cases
+    # the paper's per-parameter sets only when asked for, and only when they exist
+    assert friction_cases(sets, "paper").source == default.source
+    paper = FrictionSets(lo, lo, hi, "data-supported", paper_min=hi, paper_max=hi)
+    assert friction_cases(paper, "paper").cases["min"] == hi
+    with pytest.raises(ValueError, match="'data' or 'paper'"):
+        friction_cases(sets, "both")
 
 
 def test_force_velocity_equivalent_damping():

@@ -22,7 +22,10 @@ Modules, one concept each:
 """
 
 from .candidates import CANDIDATES, Candidate, signature_scores
-from .fit import FitOutcome, Rig, fit_group, predict, prepare_tests
+from ..fit_result import FitResult
+from .fit import fit_group
+from .prepared import prepare_tests
+from .rig import Rig, predict
 from .localise import Localisation, localise
 from .results import (
     NONE_OF_CATALOGUE,
@@ -34,7 +37,7 @@ from .split import split_tests
 from .terms import TermProposal, discover_term
 from .workflow import run_discrepancy
 
-__all__ = ["CANDIDATES", "Candidate", "signature_scores", "FitOutcome", "Rig", "fit_group",
+__all__ = ["CANDIDATES", "Candidate", "signature_scores", "FitResult", "Rig", "fit_group",
            "predict", "prepare_tests", "Localisation", "localise", "CandidateResult",
            "DiscrepancyResult", "DiscrepancySettings", "run_discrepancy", "split_tests",
            "NONE_OF_CATALOGUE", "TermProposal", "discover_term"]

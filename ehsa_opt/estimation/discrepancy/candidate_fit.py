@@ -26,7 +26,10 @@ import numpy as np
 from .candidates import CANDIDATES, absorbed_columns
 from .deadline import past_deadline
 from .evidence import normalised_sse
-from .fit import FitOutcome, PreparedTest, Rig, fit_group, predict
+from ..fit_result import FitResult
+from .fit import fit_group
+from .prepared import PreparedTest
+from .rig import Rig, predict
 from .polish import polish
 
 __all__ = ["fit_candidate", "screen_starts", "screen_sse", "split_friction",
@@ -125,7 +128,7 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
                   refine: Sequence[dict] = (), full_refit: str = "collocation",
                   effect_fit: str = "collocation", log_names: Sequence[str] = (),
                   impact_fit: bool = False
-                  ) -> tuple[str, FitOutcome, list[np.ndarray], list[np.ndarray]]:
+                  ) -> tuple[str, FitResult, list[np.ndarray], list[np.ndarray]]:
     """Add ``component`` to ``rig`` (which may hold earlier effects) and re-identify.
 
     Starts (effect parameters) are screened by forward simulation (each at every
@@ -165,7 +168,7 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
         starts = [screen_starts(fit_pts, rig, crig, starts, shares, refine)]
     eff = [q.name for q in component.parameters]
 
-    def stage1(start: dict) -> FitOutcome:
+    def stage1(start: dict) -> FitResult:
         if effect_fit == "simulation":
             return _effect_fit_on_simulation(fit_pts, crig, start, eff, log_names)
         return fit_group(fit_pts, crig, [start], free=eff, fixed=start, max_iter=max_iter)
@@ -231,25 +234,28 @@ SIMULATION_REFIT_ITER = 8
 
 def _effect_fit_on_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, start: dict,
                               eff: Sequence[str], log_names: Sequence[str] = ()
-                              ) -> FitOutcome:
+                              ) -> FitResult:
     """Stage 1 on the forward simulation: the effect parameters ``eff`` refined from
     the screened ``start`` by :func:`polish` (everything else fixed at the start),
-    returned as a :class:`FitOutcome` (covariance from the final Jacobian)."""
+    returned as a :class:`FitResult` (covariance from the final Jacobian)."""
     t0 = time.perf_counter()
     po = polish(fit_pts, crig, start, list(eff), max_iter=SIMULATION_REFIT_ITER,
                 log_names=[n for n in log_names if n in eff])
     n_obs = sum(pt.y.size for pt in fit_pts)
-    return FitOutcome(po.success, f"effect fitted on simulation: {po.message}",
-                      dict(po.parameters), list(eff), po.sse_after / n_obs, po.sse_after, n_obs,
-                      [{"simulation_fit": {"sse_before": po.sse_before,
-                                           "sse_after": po.sse_after, "simulations": po.nfev}}],
-                      time.perf_counter() - t0, po.covariance)
+    return FitResult(success=po.success, message=f"effect fitted on simulation: {po.message}",
+                     status=po.message, parameters=dict(po.parameters), free=list(eff),
+                     objective=po.sse_after / n_obs,
+                     starts=[{"simulation_fit": {"sse_before": po.sse_before,
+                                                 "sse_after": po.sse_after,
+                                                 "simulations": po.nfev}}],
+                     seconds=time.perf_counter() - t0, path="simulation", sse=po.sse_after,
+                     n_obs=n_obs, covariance=po.covariance)
 
 
 def _refit_on_simulation(name: str, fit_pts: Sequence[PreparedTest],
-                         held_pts: Sequence[PreparedTest], crig: Rig, first: FitOutcome,
+                         held_pts: Sequence[PreparedTest], crig: Rig, first: FitResult,
                          free: Sequence[str], log_names: Sequence[str] = ()
-                         ) -> tuple[str, FitOutcome, list[np.ndarray], list[np.ndarray]]:
+                         ) -> tuple[str, FitResult, list[np.ndarray], list[np.ndarray]]:
     """Stage 2 on the forward simulation: all ``free`` parameters refined from the
     effect-only collocation fit ``first`` by :func:`polish` (trust-region
     Gauss-Newton on the CVODES residuals, :data:`SIMULATION_REFIT_ITER` iterations).
@@ -295,9 +301,9 @@ MISMATCH_RATIO = 1.15
 REFINE_SUBSTEPS = 3
 
 
-def _match_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, res: FitOutcome,
+def _match_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, res: FitResult,
                       pf: list[np.ndarray], free: Sequence[str], max_iter: int
-                      ) -> tuple[FitOutcome, list[np.ndarray]]:
+                      ) -> tuple[FitResult, list[np.ndarray]]:
     """Make the reported fit one whose *forward simulation* fits.
 
     The one-step collocation rule on the 1 kHz sample grid is accurate for a soft
@@ -356,7 +362,7 @@ def fit_member(a: tuple) -> tuple:
     subset and simulated on all tests.
 
     ``a`` = (name, component, starts, fit-test subset, fit tests, held-out tests, rig,
-    current parameters, IPOPT iterations).  Returns (name, FitOutcome, fit outputs,
+    current parameters, IPOPT iterations).  Returns (name, FitResult, fit outputs,
     held-out outputs, rig with the member); empty outputs when the fit failed.
     """
     name, comp, starts, sub_pts, fit_pts, held_pts, rig, params, max_iter = a

@@ -37,7 +37,8 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.stats import chi2
 
-from .fit import PreparedTest, force_relative_error_percent
+from ..identify_result import force_relative_error_percent
+from .prepared import PreparedTest
 from .impacts import impact_record, judge_on_impacts
 
 __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
@@ -256,7 +257,7 @@ def significant(intervals: dict, amplitudes: Sequence[str]) -> bool:
     Parameters
     ----------
     intervals : dict
-        Parameter name → (low, high) or None (:meth:`FitOutcome.interval`), in the
+        Parameter name → (low, high) or None (:meth:`FitResult.interval`), in the
         parameter's units.
     amplitudes : sequence of str
         The effect's amplitude parameters (:attr:`~.candidates.Candidate.amplitudes`).
@@ -405,7 +406,7 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
                     n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say,
                     cur_ev_pred=None, masks=None) -> None:
     """Fill the :class:`~.results.CandidateResult` ``c`` from one re-identification
-    ``out`` (``(name, FitOutcome, fit outputs, held-out outputs, rig)``,
+    ``out`` (``(name, FitResult, fit outputs, held-out outputs, rig)``,
     :func:`~.candidate_fit.fit_member`) and judge it by :func:`earns` (force error,
     ΔBIC on the fit and held-out tests, SSE alternative per channel,
     :func:`channel_sse_excess_reduction`) or by its own evidence per block.

@@ -1,11 +1,5 @@
-"""Re-identification for the discrepancy workflow: one parameter set for a group of
-tests, generic over the bench model's components, by direct collocation + IPOPT.
-
-The model is the :class:`~ehsa_opt.physics.bench_model.BenchModel` (``generator=False``
-for rigs without generator, e.g. EMPS: ``M a + friction(v) + offset``), so any
-registered :class:`~ehsa_opt.physics.components.Component` plugs in without a copy
-of the model.  Without a generator the bearing friction is fixed at zero (it is
-indistinguishable from the nut friction at the rod).
+"""The likelihood fit of one parameter set to a group of tests (:func:`fit_group`), generic
+over the rig's components (:mod:`.rig`), by direct collocation + IPOPT.
 
 The fit is the likelihood objective on the estimation core
 (:mod:`ehsa_opt.estimation.core`; the NLP is built once per structure and reused).
@@ -15,12 +9,12 @@ backward Euler for the stiff winding current (L/R ≪ the sample step; backward
 Euler tracks its slow manifold with the right first-order lag).  The objective is
 the Gaussian log-likelihood of force (and voltage) residuals, each channel
 scaled by its noise level estimated from the measured signal itself
-(:func:`noise_std`).  Parameters are scaled by typical magnitudes; bounds come
-from :data:`BASE_SPECS` (the discrepancy's override of the declared base parameters) and
-each component's ``ParamSpec``; IPOPT's return status is checked and reported.
-
-Forward predictions for held-out tests are true simulations (CVODES, one
-unrecorded warm-up cycle for sine tests), never collocation.
+(:func:`~ehsa_opt.estimation.discrepancy.prepared.noise_std`).  Parameters are scaled by
+typical magnitudes; bounds come from :data:`~ehsa_opt.estimation.discrepancy.rig.BASE_SPECS`
+(the discrepancy's override of the declared base parameters) and each component's
+``ParamSpec``; IPOPT's return status is checked and reported.  A model without state is
+fitted by least squares instead (:mod:`ehsa_opt.estimation.given_fit`).  The result is
+the room's :class:`~ehsa_opt.estimation.fit_result.FitResult`.
 """
 
 from __future__ import annotations
@@ -29,189 +23,23 @@ from functools import partial
 
 import math
 import time
-from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from ...physics import BenchModel
-from ...physics.bench_sim import simulate_bench
-from ...physics.components import Component, ParamSpec
-from ...physics.motion import FilteredMotion, SineMotion
-from ...physics.base_parameters import Parameter, override
-from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .. import core
 from ..collocation import given_block, theta_block
+from ..fit_result import FitResult
 from ..given_fit import GivenFit, fit_given
-from ..identify_result import force_relative_error_percent
 from ..starts import Starts, draw_starts
-from .prepared import NO_GENERATOR_FIXED, PreparedTest, noise_std, prepare_tests
+from .prepared import NO_GENERATOR_FIXED, PreparedTest
+from .rig import BASE_SPECS, Rig, param_scale, simulate_test
 
-__all__ = ["Rig", "PreparedTest", "FitOutcome", "prepare_tests", "noise_std",
-           "fit_group", "predict", "FilteredMotion", "force_relative_error_percent",
-           "linear_baseline", "param_scale", "BASE_SPECS", "DISCREPANCY_PARAMETERS"]
-
-NUT_NAMES = FRICTION_NAMES[:4]
-
-
-#: The base parameters in the discrepancy fit: a named override of
-#: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`.
-DISCREPANCY_PARAMETERS: dict[str, Parameter] = override(
-    "discrepancy",
-    "the likelihood fit also serves rigs other than the prototype (EMPS, other generators), so "
-    "its bounds are wider than the identification's distributor ends, yet finite and well "
-    "inside the physical ones so the scaled NLP stays well conditioned",
-    {"nut_breakaway_N": (0.0, 2000.0), "nut_coulomb_N": (0.0, 2000.0),
-     "nut_breakaway_velocity_m_per_s": (2e-4, 0.5), "nut_viscous_Ns_per_m": (0.0, 1e4),
-     "bearing_breakaway_Nm": (0.0, 1.0), "bearing_coulomb_Nm": (0.0, 1.0),
-     "bearing_breakaway_velocity_rad_per_s": (0.01, 50.0),
-     "bearing_viscous_Nms_per_rad": (0.0, 1e-2), "offset_N": (-1e3, 1e3)})
-#: The same as ``ParamSpec`` (default: the typical value, which also sets :func:`param_scale`).
-BASE_SPECS: dict[str, ParamSpec] = {n: ParamSpec(n, q.unit, q.typical, q.lower, q.upper, q.doc)
-                                    for n, q in DISCREPANCY_PARAMETERS.items()}
-
-
-def param_scale(spec: ParamSpec) -> float:
-    """Typical magnitude of a parameter (its default, else a twentieth of its bound):
-    the scale the decision variables are divided by."""
-    if spec.default != 0.0:
-        return abs(spec.default)
-    return max(abs(spec.lower), abs(spec.upper)) / 20.0 or 1.0
-
-
-_MODELS: dict[tuple, Any] = {}
-
-
-@dataclass(frozen=True)
-class Rig:
-    """What is fitted: harvester constants, rig kind and the model's components."""
-
-    harvester: HarvesterParams
-    has_generator: bool = True
-    components: tuple[Component, ...] = ()
-
-    def model(self) -> BenchModel:
-        """The rig's model (cached: one model object per distinct rig, kept alive —
-        :func:`~ehsa_opt.physics.bench_sim.simulate_bench` caches integrators by model identity)."""
-        key = (self.has_generator, self.harvester,
-               tuple((type(c).__name__, tuple(sorted((k, v) for k, v in vars(c).items()
-                                                     if k not in c.start_attributes)))
-                     for c in self.components))
-        if key not in _MODELS:
-            _MODELS[key] = BenchModel(self.harvester, self.components,
-                                      generator=self.has_generator)
-        return _MODELS[key]
-
-    def with_components(self, components: Sequence[Component]) -> "Rig":
-        return Rig(self.harvester, self.has_generator, tuple(components))
-
-    @property
-    def base_names(self) -> list[str]:
-        return list(FRICTION_NAMES) if self.has_generator else ["inertia_kg", "offset_N",
-                                                                 *NUT_NAMES]
-
-
-# ------------------------------------------------------------------ linear baseline
-def linear_baseline(prepared: Sequence[PreparedTest], rig: Rig,
-                    breakaway_velocities: Sequence[float] = (0.003, 0.01, 0.03)
-                    ) -> dict[str, float]:
-    """Quick least-squares friction (rigid, quasi-static current): the force is linear
-    in (F_C, F_brk − F_C, f_v[, M, offset]) for a fixed breakaway velocity, tried on
-    a small grid.  Used as the IPOPT initial point; bearing friction starts at zero
-    (its split from the nut friction is not identifiable on a rigid bench)."""
-    h = rig.harvester
-    r = h.lead_m_per_rad
-    best: tuple[float, dict[str, float]] | None = None
-    for ub in breakaway_velocities:
-        rows, rhs = [], []
-        for pt in prepared:
-            x, v, a = pt.u
-            F = pt.y[0]
-            ust, uc = math.sqrt(2) * ub, ub / 10
-            cols = [np.tanh(v / uc), math.sqrt(2 * math.e) * np.exp(-(v / ust) ** 2) * v / ust, v]
-            if rig.has_generator:
-                R = pt.fixed["load_ohm"] + h.internal_resistance_ohm
-                known = h.equivalent_mass_kg() * a + h.torque_constant_Nm_per_A * \
-                    h.voltage_constant_Vs_per_rad * v / (r * r * R)
-            else:
-                known = 0.0 * v
-                cols += [a, np.ones_like(v)]
-            w = pt.wnorm[0][:, None]
-            rows.append(np.column_stack(cols) * w)
-            rhs.append((F - known) * w[:, 0])
-        A, b = np.vstack(rows), np.concatenate(rhs)
-        coef, *_ = np.linalg.lstsq(A, b, rcond=None)
-        sse = float(np.sum((A @ coef - b) ** 2))
-        Fc, dF, fv = max(coef[0], 0.0), max(coef[1], 0.0), max(coef[2], 0.0)
-        vals = {"nut_coulomb_N": Fc, "nut_breakaway_N": Fc + dF,
-                "nut_breakaway_velocity_m_per_s": ub, "nut_viscous_Ns_per_m": fv}
-        if rig.has_generator:
-            vals.update({"bearing_breakaway_Nm": 1e-3, "bearing_coulomb_Nm": 1e-3,
-                         "bearing_breakaway_velocity_rad_per_s": 1.0,
-                         "bearing_viscous_Nms_per_rad": 1e-6})
-        else:
-            vals.update({"inertia_kg": float(coef[3]), "offset_N": float(coef[4])})
-        if best is None or sse < best[0]:
-            best = (sse, vals)
-    assert best is not None
-    return best[1]
+__all__ = ["fit_group", "WINDOW_WEIGHT"]
 
 
 # ------------------------------------------------------------------ the NLP
-@dataclass
-class FitOutcome:
-    """Result of :func:`fit_group` (mirrors ``scipy.optimize.OptimizeResult``).
-
-    Attributes
-    ----------
-    success : bool
-    message : str
-        IPOPT return status of the best start.
-    parameters : dict[str, float]
-        All base and component parameters (fitted and fixed).
-    free : list[str]
-        The fitted names.
-    objective : float
-        Mean squared noise-normalised residual on the fitted tests.
-    sse : float
-        Sum of squared noise-normalised residuals; ``n_obs`` observations.
-    n_obs : int
-    starts : list[dict]
-        Per start: status, objective, iterations.
-    seconds : float
-    covariance : ndarray or None
-        Covariance of the free parameters: Newey–West sandwich on the Gauss–Newton
-        Jacobian (autocorrelated residuals; :mod:`ehsa_opt.estimation.covariance`).
-    covariance_info : dict or None
-        How it was computed: method, N_eff, bandwidth, inflation over the
-        independent-samples covariance.
-    """
-
-    success: bool
-    message: str
-    parameters: dict[str, float]
-    free: list[str]
-    objective: float
-    sse: float
-    n_obs: int
-    starts: list[dict] = field(default_factory=list)
-    seconds: float = 0.0
-    covariance: np.ndarray | None = None
-    covariance_info: dict | None = None
-
-    def interval(self, name: str, z: float = 1.96) -> tuple[float, float] | None:
-        """~95 % interval of a fitted parameter (None if not fitted or unavailable)."""
-        if self.covariance is None or name not in self.free:
-            return None
-        k = self.free.index(name)
-        var = float(self.covariance[k, k])
-        if not math.isfinite(var):
-            return None  # not determined by the data
-        sd = math.sqrt(max(var, 0.0))
-        v = self.parameters[name]
-        return (v - z * sd, v + z * sd)
-
-
 def _fine_grid(t: np.ndarray, M: int) -> np.ndarray:
     """``M`` equal sub-intervals in every sample interval (samples at every M-th node)."""
     if M == 1:
@@ -234,7 +62,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
               *, free: Sequence[str] | None = None, fixed: Mapping[str, float] | None = None,
               max_iter: int = 300, regularisation: float = 1e-6,
               max_cpu_s: float | None = None, substeps: int | None = None,
-              seed: int = 0) -> FitOutcome:
+              seed: int = 0) -> FitResult:
     """Fit one parameter set to all ``prepared`` tests: the likelihood objective on the
     estimation core (:mod:`ehsa_opt.estimation.core`, ``theta`` transcription).
 
@@ -288,21 +116,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
     def default_of(n: str) -> float:
         return float(fixed.get(n, specs[n].default))
 
-    blocks, grids = [], []
-    for pt in prepared:
-        pbase = np.array([pt.fixed[n] if n in pt.fixed else default_of(n)
-                          for n in model.param_names])
-        w = _nlp_weights(pt) if model.n_states else pt.wnorm
-        if model.n_states:
-            tf = _fine_grid(pt.time_s, M)
-            uf = pt.motion.evaluate(tf) if M > 1 else pt.u
-            blocks.append(theta_block(model, tf, uf, M, pt.y, w, pbase))
-            grids.append(tf)
-        else:
-            blocks.append(given_block(model, np.zeros((0, pt.time_s.size)), pt.u, pt.y, w,
-                                      pbase))
-            if pt.output_filter_hz is not None:  # the model through the measurement's filter
-                blocks[-1].info["output_filter"] = partial(pt.filter_output, axis=0)
+    blocks, grids = _blocks(prepared, model, M, default_of)
     z0s = []
     for st in starts:
         vals = {n: float(st.get(n, fixed.get(n, specs[n].default))) for n in free}
@@ -315,7 +129,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
         for z0 in z0s:
             zvals = space.values_of(z0, np.zeros(len(model.param_names)))
             pstart = {n: (zvals[n] if n in free else default_of(n)) for n in names}
-            guesses.append([((_simulate(model, pt, pstart, tf).states - b.info["off"])
+            guesses.append([((simulate_test(model, pt, pstart, tf).states - b.info["off"])
                              / b.info["sx"][:, None]).ravel(order="F")
                             for pt, b, tf in zip(prepared, blocks, grids)])
     n_obs = sum(b.n_obs * b.ny for b in blocks)
@@ -337,9 +151,10 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
         usable = [r for r in extra if (r.success or r.status in _USABLE)
                   and np.isfinite(r.objective)]
     if not usable:
-        return FitOutcome(False, "IPOPT failed from every start (" + "; ".join(
-            r["status"] for r in records) + ")", {}, free, math.inf, math.inf, n_obs, records,
-            time.perf_counter() - t0)
+        return FitResult(success=False, message="IPOPT failed from every start (" + "; ".join(
+            r["status"] for r in records) + ")", free=free, objective=math.inf,
+            starts=records, seconds=time.perf_counter() - t0, path="collocation",
+            sse=math.inf, n_obs=n_obs)
     best = min(usable, key=lambda r: r.objective)
     p = nlp.data(blocks, z0s[0])
     params = {n: default_of(n) for n in names}
@@ -347,8 +162,33 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
     params.update({n: vals[n] for n in free})
     sse = float(nlp.ssefun(best.w, p))
     cov, hac = _covariance(nlp, best.w, p, blocks, len(free), prepared)
-    return FitOutcome(best.success, best.status, params, free, sse / n_obs, sse, n_obs, records,
-                      time.perf_counter() - t0, cov, hac)
+    return FitResult(success=best.success, message=best.status, status=best.status,
+                     parameters=params, free=free, objective=sse / n_obs, nit=best.iterations,
+                     starts=records, seconds=time.perf_counter() - t0, path="collocation",
+                     sse=sse, n_obs=n_obs, covariance=cov, covariance_info=hac)
+
+
+def _blocks(prepared: Sequence[PreparedTest], model: BenchModel, substeps: int,
+            default_of: Any) -> tuple[list[Any], list[np.ndarray]]:
+    """One estimation-core block per test (``theta`` collocation on the test's grid refined
+    ``substeps`` times for models with states, the algebraic block otherwise) and the
+    collocation grids."""
+    blocks, grids = [], []
+    for pt in prepared:
+        pbase = np.array([pt.fixed[n] if n in pt.fixed else default_of(n)
+                          for n in model.param_names])
+        w = _nlp_weights(pt) if model.n_states else pt.wnorm
+        if model.n_states:
+            tf = _fine_grid(pt.time_s, substeps)
+            uf = pt.motion.evaluate(tf) if substeps > 1 else pt.u
+            blocks.append(theta_block(model, tf, uf, substeps, pt.y, w, pbase))
+            grids.append(tf)
+        else:
+            blocks.append(given_block(model, np.zeros((0, pt.time_s.size)), pt.u, pt.y, w,
+                                      pbase))
+            if pt.output_filter_hz is not None:  # the model through the measurement's filter
+                blocks[-1].info["output_filter"] = partial(pt.filter_output, axis=0)
+    return blocks, grids
 
 
 def _nlp_weights(pt: PreparedTest) -> np.ndarray:
@@ -366,7 +206,7 @@ def _restart(nlp: core.NLP, blocks: Sequence[Any], grids: Sequence[np.ndarray],
         return []
     pr = values(space.values_of(z_r, np.zeros(len(model.param_names))))
     try:
-        g_r = [((_simulate(model, pt, pr, tf).states - b.info["off"])
+        g_r = [((simulate_test(model, pt, pr, tf).states - b.info["off"])
                 / b.info["sx"][:, None]).ravel(order="F")
                for pt, b, tf in zip(prepared, blocks, grids)]
     except Exception:  # noqa: BLE001 - a start the simulator refuses: no restart
@@ -398,7 +238,7 @@ def _fit_given(model: BenchModel, space: core.ParamSpace, blocks: Sequence[Any],
 
 def _outcome_given(fits: list[GivenFit], space: core.ParamSpace, blocks: Sequence[Any],
                    free: list[str], names: list[str], default_of: Any, n_obs: int,
-                   t0: float) -> FitOutcome:
+                   t0: float) -> FitResult:
     records = [{"status": f.status, "success": f.success, "objective": f.objective,
                 "iterations": f.iterations} for f in fits]
     best = min((f for f in fits if np.isfinite(f.objective)), key=lambda f: f.objective)
@@ -407,8 +247,11 @@ def _outcome_given(fits: list[GivenFit], space: core.ParamSpace, blocks: Sequenc
     params.update({n: vals[n] for n in free})
     S = best.jacobian / np.array(space.scale)  # d(weighted residuals)/d(physical values)
     cov, hac = _hac(S, best.residual, [b.n_obs for b in blocks for _ in range(b.ny)])
-    return FitOutcome(best.success, best.status, params, free, best.sse / n_obs, best.sse,
-                      n_obs, records, time.perf_counter() - t0, cov, hac)
+    return FitResult(success=best.success, message=best.status, status=best.status,
+                     parameters=params, free=free, objective=best.sse / n_obs,
+                     nit=best.iterations, starts=records, seconds=time.perf_counter() - t0,
+                     path="rigid", sse=best.sse, n_obs=n_obs, covariance=cov,
+                     covariance_info=hac)
 
 
 def _hac(S: np.ndarray, r: np.ndarray | None, groups: list[int], n_nuisance: int = 0
@@ -446,59 +289,3 @@ def _covariance(nlp: core.NLP, w: np.ndarray, p: np.ndarray, blocks: Sequence[An
         return None, None
     return _hac(S, r, [b.n_obs for b in blocks for _ in range(b.ny)],
                 n_nuisance=S.shape[1] - nz)
-
-
-# ------------------------------------------------------------------ predictions
-def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
-            rtol: float = 1e-7, filtered: bool = True) -> list[np.ndarray]:
-    """Simulated outputs (ny, N) of each test with the given parameters.
-
-    Models with states are integrated by CVODES (relative tolerance ``rtol``) from
-    rest-consistent initial states, one unrecorded warm-up cycle before the record for
-    sine tests.  A test whose measured output went through the parallel low-pass of a
-    rig without generator gets its outputs through the same filter (``filtered``;
-    False: the model's own output, e.g. to synthesise a record).
-    """
-    model = rig.model()
-    out = []
-    for pt in prepared:
-        vals = {**pt.fixed, **parameters}
-        p = np.array([float(vals[n]) for n in model.param_names])
-        ny = pt.y.shape[0]
-        if model.n_states == 0:  # algebraic model: evaluate on the samples
-            y = np.array(model.outputs.map(pt.time_s.size)(np.zeros((0, pt.time_s.size)),
-                                                          pt.u, p))
-            out.append(pt.filter_output(y[:ny]) if filtered else y[:ny])
-            continue
-        sim = _simulate(model, pt, vals, rtol=rtol)
-        y = np.vstack([sim.force_N, sim.voltage_V])[:ny]
-        out.append(pt.filter_output(y) if filtered else y)
-    return out
-
-
-@dataclass
-class _Sim:
-    force_N: np.ndarray
-    voltage_V: np.ndarray
-    states: np.ndarray
-
-
-def _simulate(model: BenchModel, pt: PreparedTest, values: Mapping[str, float],
-              grid: np.ndarray | None = None, rtol: float = 1e-7) -> _Sim:
-    """CVODES simulation on the test's grid (or ``grid``; one warm-up cycle before
-    sine records)."""
-    vals = {**pt.fixed, **values}
-    p = np.array([float(vals[n]) for n in model.param_names])
-    t = pt.time_s if grid is None else grid
-    if isinstance(pt.motion, SineMotion):
-        period = 1.0 / pt.motion.frequency_hz
-        dt = float(np.median(np.diff(t)))
-        nw = int(round(period / dt))
-        grid = np.concatenate([t[0] - dt * np.arange(nw, 0, -1), t])
-        sim = simulate_bench(model, pt.motion, p, grid, rtol=rtol, atol=rtol * 1e-2)
-        keep = slice(nw, None)
-    else:
-        motion = pt.motion.sampled() if isinstance(pt.motion, FilteredMotion) else pt.motion
-        sim = simulate_bench(model, motion, p, t, rtol=rtol, atol=rtol * 1e-2)
-        keep = slice(None)
-    return _Sim(sim.force_N[keep], sim.voltage_V[keep], sim.states[:, keep])

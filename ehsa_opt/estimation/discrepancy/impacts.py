@@ -66,7 +66,8 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 from scipy.optimize import minimize
 
-from .fit import PreparedTest, Rig, predict
+from .prepared import PreparedTest
+from .rig import Rig, predict
 from .impact_features import (
     BEARING_LEVELS,
     NUT_LEVELS,
@@ -426,12 +427,12 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     the current model has not (:func:`impact_energy_ratio` of the current model ``rig``
     at ``start`` above :data:`IMPACT_ENERGY_RATIO`); None otherwise (the sample-wise fit
     then applies).  Returns what :func:`~.candidate_fit.fit_candidate` returns: the name, a
-    :class:`~.fit.FitOutcome` (free: gap, stiffness, damping; friction and earlier
+    :class:`~.fit.FitResult` (free: gap, stiffness, damping; friction and earlier
     effects at ``start``, its friction split by ``split`` at the best of
     :data:`IMPACT_SHARES`; no covariance) and the simulated outputs of the fit and
     held-out tests.  The message states the features' objective and how reproducible
     the sample-wise response is (:func:`~.candidate_fit.reproducibility`)."""
-    from .fit import FitOutcome
+    from ..fit_result import FitResult
     if not rig.has_generator or any(pt.y.shape[0] < 2 for pt in fit_pts):
         return None
     ratio = impact_energy_ratio(fit_pts, predict(fit_pts, rig, start))
@@ -454,14 +455,15 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
             f"between tolerances 1e-7 and 1e-9"
             + (" (a rattling contact: fitted on transient energies and kinematic gaps, not "
                "sample by sample)" if chaos > 1.0 else ""))
-    out = FitOutcome(True, note, dict(res.parameters), [GAP, STIFFNESS, DAMPING], sse / n_obs,
-                     sse, n_obs, [{"impact_fit": {"energy_ratio": ratio,
-                                                  "objective": res.objective,
-                                                  "objective_grid": res.objective_start,
-                                                  "simulations": res.evaluations,
-                                                  "converged": res.success,
-                                                  "tolerance_change_rms_sigma": chaos}}],
-                     time.perf_counter() - t0, None, None)
+    out = FitResult(success=True, message=note, parameters=dict(res.parameters),
+                    free=[GAP, STIFFNESS, DAMPING], objective=sse / n_obs,
+                    starts=[{"impact_fit": {"energy_ratio": ratio,
+                                            "objective": res.objective,
+                                            "objective_grid": res.objective_start,
+                                            "simulations": res.evaluations,
+                                            "converged": res.success,
+                                            "tolerance_change_rms_sigma": chaos}}],
+                    seconds=time.perf_counter() - t0, path="impacts", sse=sse, n_obs=n_obs)
     return name, out, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
 
 

@@ -2,7 +2,7 @@
 that say where a residual is structured rather than noise.
 
 Residuals are normalised by each channel's noise level (estimated from the
-measured signal, :func:`~ehsa_opt.estimation.discrepancy.fit.noise_std`), so pure
+measured signal, :func:`~ehsa_opt.estimation.discrepancy.prepared.noise_std`), so pure
 measurement noise has unit variance.  For each coordinate c (cycle phase,
 displacement, velocity, direction, time since the last velocity reversal, rotor
 angle, test) the residual is binned on c and
@@ -25,7 +25,7 @@ import numpy as np
 from scipy import stats
 
 from ...physics.motion import SineMotion
-from .fit import PreparedTest
+from .prepared import PreparedTest
 
 __all__ = ["residual_spectrum", "CoordinateStat", "ChannelMap", "Localisation", "localise", "reversal_times",
            "COORDINATES", "stroke_window"]
@@ -221,7 +221,7 @@ def localise(prepared: Sequence[PreparedTest], predictions: Sequence[np.ndarray]
     ----------
     prepared : list of PreparedTest
     predictions : list of ndarray (ny, N)
-        Simulated outputs of each test (e.g. :func:`~ehsa_opt.estimation.discrepancy.fit.predict`).
+        Simulated outputs of each test (e.g. :func:`~ehsa_opt.estimation.discrepancy.rig.predict`).
     lead_m_per_rad : float
         r, to form the rotor angle θ = x/r.
     bins : int

@@ -98,7 +98,7 @@ def direction_dependent(fit) -> dict[str, list[float] | float]:
 
     Parameters
     ----------
-    fit : FitOutcome
+    fit : FitResult
         With free ``nut_viscous_Ns_per_m``, ``asym_viscous_Ns_per_m`` (and the
         Coulomb pair).
     """

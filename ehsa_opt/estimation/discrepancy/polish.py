@@ -11,7 +11,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .deadline import past_deadline
-from .fit import BASE_SPECS, PreparedTest, Rig, param_scale, predict
+from .prepared import PreparedTest
+from .rig import BASE_SPECS, Rig, param_scale, predict
 
 __all__ = ["PolishOutcome", "polish", "gauss_newton_covariance"]
 
@@ -67,7 +68,7 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     prepared : list of PreparedTest
     rig : Rig
     parameters : dict
-        Start (all model parameters, e.g. ``FitOutcome.parameters``).
+        Start (all model parameters, e.g. ``FitResult.parameters``).
     free : list of str
         Names refined (the rest stay fixed).
     max_iter : int

@@ -13,7 +13,10 @@ from pathlib import Path
 import numpy as np
 
 from .candidates import CANDIDATES
-from .fit import FitOutcome, PreparedTest, Rig, force_relative_error_percent
+from ..fit_result import FitResult
+from ..identify_result import force_relative_error_percent
+from .prepared import PreparedTest
+from .rig import Rig
 from .localise import Localisation
 from .evidence import MIN_EXCESS_REDUCTION
 from .terms import TermProposal
@@ -109,7 +112,7 @@ class CandidateResult:
     chi2: float
     round: int = 1
     fitted: bool = False
-    fit: FitOutcome | None = None
+    fit: FitResult | None = None
     error_before: float = math.nan  # relative force error, % (evaluation set)
     error_after: float = math.nan
     excess_reduction: float = math.nan
@@ -186,7 +189,7 @@ class DiscrepancyResult:
     error_after: float
     evaluation: str
     candidates: list[CandidateResult]
-    baseline: FitOutcome
+    baseline: FitResult
     rig: Rig
     fit_tests: list[PreparedTest]
     heldout_tests: list[PreparedTest]

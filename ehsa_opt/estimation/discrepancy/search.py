@@ -47,7 +47,8 @@ from .evidence import (
     normalised_sse,
     sse_can_earn,
 )
-from .fit import PreparedTest, Rig
+from .prepared import PreparedTest
+from .rig import Rig
 from .impacts import impact_record
 from .lookahead import (
     confounded,

@@ -41,7 +41,8 @@ from typing import Sequence
 import numpy as np
 
 from .evidence import WHITE_P, delta_bic, earns, residual_is_white
-from .fit import PreparedTest, force_relative_error_percent
+from ..identify_result import force_relative_error_percent
+from .prepared import PreparedTest
 
 __all__ = ["TermProposal", "feature_library", "discover_term", "propose_term", "shift_lag",
            "GROUPS", "LAG_GRID_S", "TERM_PREFERENCE"]

@@ -61,7 +61,10 @@ from ..identify_options import MIN_RESOLVED_SAMPLES
 from .candidates import CANDIDATES, try_drive_lag, try_lag
 from .deadline import deadline_set
 from .evidence import effective_samples, force_error_percent, force_noise_floor_percent
-from .fit import FitOutcome, Rig, fit_group, linear_baseline, predict, prepare_tests
+from ..fit_result import FitResult
+from .fit import fit_group
+from .prepared import prepare_tests
+from .rig import Rig, linear_baseline, predict
 from .localise import Localisation, localise
 from .results import (
     NONE_OF_CATALOGUE,
@@ -187,7 +190,7 @@ class Baseline:
     tests, effective sample sizes, the localisation of its residual and its
     relative force error on the evaluation tests (%)."""
 
-    fit: FitOutcome
+    fit: FitResult
     rig: Rig
     fit_pred: list
     held_pred: list

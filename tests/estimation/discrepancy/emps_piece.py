@@ -5,7 +5,9 @@ from dataclasses import replace
 
 from ehsa_opt.datasets.bench_format import load_bench
 from ehsa_opt.datasets.embedded import embedded_data_dir
-from ehsa_opt.estimation.discrepancy.fit import Rig, fit_group, linear_baseline, prepare_tests
+from ehsa_opt.estimation.discrepancy.fit import fit_group
+from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+from ehsa_opt.estimation.discrepancy.rig import Rig, linear_baseline
 
 
 def emps_piece(start: int, stop: int):

@@ -100,7 +100,8 @@ def test_simulation_refinement_stops_at_the_deadline():
     deadline and keeps its start (nothing better simulated), saying so."""
     from ehsa_opt.datasets.synthetic import generate_bench_tests
     from ehsa_opt.estimation.discrepancy.deadline import deadline_set
-    from ehsa_opt.estimation.discrepancy.fit import Rig, prepare_tests
+    from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+    from ehsa_opt.estimation.discrepancy.rig import Rig
     from ehsa_opt.estimation.discrepancy.polish import polish
     spec = SyntheticSpec(frequencies_hz=(1.0,), loads_ohm=(15.0,), cycles=1.0, seed=2)
     pts = prepare_tests(generate_bench_tests(spec))

@@ -9,7 +9,8 @@ from ehsa_opt.cli import main
 from ehsa_opt.estimation.discrepancy import (CANDIDATES, DiscrepancySettings, Rig, fit_group, localise,
                                   predict, prepare_tests, run_discrepancy, signature_scores,
                                   split_tests)
-from ehsa_opt.estimation.discrepancy.fit import linear_baseline, noise_std
+from ehsa_opt.estimation.discrepancy.prepared import noise_std
+from ehsa_opt.estimation.discrepancy.rig import linear_baseline
 from ehsa_opt.estimation.discrepancy.localise import reversal_times
 from ehsa_opt.physics import COMPONENTS
 from ehsa_opt.physics.params import HarvesterParams

@@ -15,8 +15,8 @@ from ehsa_opt.estimation.discrepancy.candidates.drive_lag import (
     recorded_from_applied,
     try_drive_lag,
 )
-from ehsa_opt.estimation.discrepancy.fit import Rig, predict, \
-    prepare_tests
+from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+from ehsa_opt.estimation.discrepancy.rig import Rig, predict
 from ehsa_opt.physics.params import HarvesterParams
 from tests.estimation.discrepancy.emps_piece import emps_piece as piece_of_emps
 
@@ -78,7 +78,7 @@ def test_parallel_filtering_only_on_a_rig_without_generator():
     assert np.allclose(pt.y[0], parallel_filter(test.time_s, test.force_N, pt.motion.cutoff_hz))
     assert not np.allclose(pt.y[0], test.force_N)
     # σ is the raw force's noise level, not the filtered one's
-    from ehsa_opt.estimation.discrepancy.fit import noise_std
+    from ehsa_opt.estimation.discrepancy.prepared import noise_std
     assert pt.sigma[0] == pytest.approx(noise_std(test.force_N))
     pg = prepare_tests([replace(test, load_ohm=10.0)], True, derivative_cutoff_hz=100.0)[0]
     assert np.array_equal(pg.y[0], test.force_N)

@@ -83,7 +83,7 @@ def test_documented_pulse_edges_are_masked(tmp_path):
 
 def test_a_white_residual_gives_no_term():
     from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
-    from ehsa_opt.estimation.discrepancy.fit import prepare_tests
+    from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
     from ehsa_opt.estimation.discrepancy.terms import propose_term
     tests = generate_bench_tests(SyntheticSpec(frequencies_hz=(0.8, 2.0, 3.2),
                                                loads_ohm=(22.0, 100.0), cycles=1.0, seed=4,
@@ -105,7 +105,7 @@ def test_noise_floor_is_not_biased_by_a_fast_curving_signal():
     floor's fourth-difference estimate is within 6 %, the second difference is not."""
     from ehsa_opt.datasets.bench_format import load_bench
     from ehsa_opt.datasets.embedded import embedded_data_dir
-    from ehsa_opt.estimation.discrepancy.fit import noise_std
+    from ehsa_opt.estimation.discrepancy.prepared import noise_std
     from ehsa_opt.estimation.discrepancy.evidence import floor_noise_std
     tests = [t for t in load_bench(embedded_data_dir("bench_prototype")).tests
              if t.frequency_hz >= 3.0]

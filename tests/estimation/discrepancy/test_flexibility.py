@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
-from ehsa_opt.estimation.discrepancy.fit import Rig, predict
+from ehsa_opt.estimation.discrepancy.rig import Rig, predict
 from ehsa_opt.estimation.discrepancy.candidates.flexibility import fit_flexibility
 from ehsa_opt.physics import BenchModel, Flexibility
 from ehsa_opt.physics.params import HarvesterParams

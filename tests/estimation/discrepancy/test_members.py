@@ -12,7 +12,8 @@ from ehsa_opt.datasets.synthetic import (PROTOTYPE_FRICTION, SyntheticSpec, gene
                                          write_synthetic)
 from ehsa_opt.estimation.discrepancy import (CANDIDATES, DiscrepancySettings, Rig, fit_group,
                                              run_discrepancy)
-from ehsa_opt.estimation.discrepancy.fit import linear_baseline, predict, prepare_tests
+from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+from ehsa_opt.estimation.discrepancy.rig import linear_baseline, predict
 from ehsa_opt.estimation.discrepancy.localise import stroke_window
 from ehsa_opt.physics import COMPONENTS, BenchModel, make_component
 from ehsa_opt.physics.bench_sim import simulate_bench

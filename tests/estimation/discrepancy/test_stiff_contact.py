@@ -3,7 +3,8 @@
 import pytest
 
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
-from ehsa_opt.estimation.discrepancy.fit import Rig, prepare_tests
+from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+from ehsa_opt.estimation.discrepancy.rig import Rig
 from ehsa_opt.estimation.discrepancy.candidate_fit import reproducibility
 from ehsa_opt.physics import make_component
 
@@ -25,7 +26,7 @@ def test_reproducibility_flags_a_rattling_steel_contact(stiffness, gap, rattles)
 
 
 # ------------------------------------------------------------------ the impact-aware fit
-from ehsa_opt.estimation.discrepancy.fit import predict  # noqa: E402
+from ehsa_opt.estimation.discrepancy.rig import predict  # noqa: E402
 from ehsa_opt.estimation.discrepancy.impacts import (  # noqa: E402
     IMPACT_ENERGY_RATIO,
     fit_candidate_on_impacts,

@@ -22,7 +22,8 @@ from typing import Sequence
 import numpy as np
 
 from ....physics import COMPONENTS, make_component
-from ..fit import PreparedTest, Rig, predict
+from ..prepared import PreparedTest
+from ..rig import Rig, predict
 from ..localise import best_rotor_period, stroke_window
 
 __all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for",

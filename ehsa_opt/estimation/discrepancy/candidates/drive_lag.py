@@ -47,7 +47,9 @@ from ..evidence import (
     force_noise_floor_percent,
     normalised_sse,
 )
-from ..fit import PreparedTest, Rig, fit_group, predict, prepare_tests
+from ..fit import fit_group
+from ..prepared import PreparedTest, prepare_tests
+from ..rig import Rig, predict
 from .catalogue import absorbed_columns
 
 __all__ = ["applied_force", "recorded_from_applied", "fit_drive_lag", "try_drive_lag",

@@ -28,7 +28,9 @@ import numpy as np
 from scipy.signal import cont2discrete, lfilter
 
 from ...covariance import hac_covariance
-from ..fit import FitOutcome, PreparedTest, Rig
+from ...fit_result import FitResult
+from ..prepared import PreparedTest
+from ..rig import Rig
 from .catalogue import absorbed_columns, compatible
 
 __all__ = ["flexibility_column", "fit_flexibility", "fit_flexibility_member",
@@ -211,7 +213,7 @@ def fit_flexibility(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.ndarr
 def fit_flexibility_member(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_params, comps,
                            scores) -> tuple | None:
     """The flexibility of a rig without generator fitted by variable projection
-    (:func:`fit_flexibility`), as the ``(name, FitOutcome, fit outputs, held-out outputs,
+    (:func:`fit_flexibility`), as the ``(name, FitResult, fit outputs, held-out outputs,
     rig)`` a generic re-identification returns; its score (share of the fit residual
     explained) set in ``scores``.  None when it cannot join the rig."""
     comp = comps["flexibility"]
@@ -227,10 +229,12 @@ def fit_flexibility_member(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_pa
     if not out["parameters"]:
         neg = out.get("best_negative") or {}
         scores["flexibility"] = {"score": 0.0, "chi2": 0.0, "columns": 1, "applicable": True}
-        res = FitOutcome(False, "variable projection: every resonance asks for a negative load "
-                         f"mass (best {neg.get('flex_load_mass_kg', math.nan):.3g} kg at "
-                         f"{neg.get('flex_frequency_hz', math.nan):.3g} Hz): no flexibility",
-                         {}, [], math.inf, math.inf, n_obs, [], time.perf_counter() - t0)
+        res = FitResult(success=False, message="variable projection: every resonance asks "
+                        f"for a negative load mass (best "
+                        f"{neg.get('flex_load_mass_kg', math.nan):.3g} kg at "
+                        f"{neg.get('flex_frequency_hz', math.nan):.3g} Hz): no flexibility",
+                        objective=math.inf, seconds=time.perf_counter() - t0,
+                        path="variable_projection", sse=math.inf, n_obs=n_obs)
         return ("flexibility", res, [], [], crig)
     r1 = sum(float(np.sum(((pt.y[0] - yp[0]) / pt.sigma[0]) ** 2))
              for pt, yp in zip(fit_pts, out["fit_pred"]))
@@ -247,11 +251,13 @@ def fit_flexibility_member(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_pa
                f"({out['best_negative']['flex_load_mass_kg']:.3g} kg at "
                f"{out['best_negative']['flex_frequency_hz']:.3g} Hz)"
                if out.get("negative_mass") else ""))
-    res = FitOutcome(True, note, params, ["flex_load_mass_kg"], r1 / n_obs, r1, n_obs,
-                     [{"flexibility": {k: v for k, v in out.items()
-                                       if k not in ("fit_pred", "eval_pred")}}],
-                     time.perf_counter() - t0, np.array([[sd * sd]]),
-                     out.get("covariance_info"))
+    res = FitResult(success=True, message=note, parameters=params,
+                    free=["flex_load_mass_kg"], objective=r1 / n_obs,
+                    starts=[{"flexibility": {k: v for k, v in out.items()
+                                             if k not in ("fit_pred", "eval_pred")}}],
+                    seconds=time.perf_counter() - t0, path="variable_projection", sse=r1,
+                    n_obs=n_obs, covariance=np.array([[sd * sd]]),
+                    covariance_info=out.get("covariance_info"))
     return ("flexibility", res, out["fit_pred"], out["eval_pred"], crig)
 
 

@@ -23,7 +23,9 @@ from ..evidence import (
     force_error_percent,
     normalised_sse,
 )
-from ..fit import PreparedTest, fit_group, predict, prepare_tests
+from ..fit import fit_group
+from ..prepared import PreparedTest, prepare_tests
+from ..rig import predict
 from ..terms import shift_lag
 
 __all__ = ["try_lag"]

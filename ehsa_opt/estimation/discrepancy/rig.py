@@ -1,0 +1,199 @@
+"""The rig the discrepancy workflow fits: what is fitted (:class:`Rig`: harvester constants,
+rig kind and the model's components, one cached :class:`~ehsa_opt.physics.bench_model.BenchModel`
+per distinct rig), the base parameters' bounds in this workflow
+(:data:`DISCREPANCY_PARAMETERS`, a named override of the declared base parameters, and
+:func:`param_scale`), a quick linear least-squares friction (:func:`linear_baseline`) and
+the forward simulation of the tests (:func:`predict`, :func:`simulate_test`).
+
+The model is the bench model (``generator=False`` for rigs without generator, e.g. EMPS:
+``M a + friction(v) + offset``), so any registered
+:class:`~ehsa_opt.physics.components.Component` plugs in without a copy of the model.
+Without a generator the bearing friction is fixed at zero (it is indistinguishable from
+the nut friction at the rod).
+
+Forward predictions for held-out tests are true simulations (CVODES, one unrecorded
+warm-up cycle for sine tests), never collocation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from ...physics import BenchModel
+from ...physics.base_parameters import Parameter, override
+from ...physics.bench_sim import simulate_bench
+from ...physics.components import Component, ParamSpec
+from ...physics.motion import FilteredMotion, SineMotion
+from ...physics.params import FRICTION_NAMES, HarvesterParams
+from .prepared import PreparedTest
+
+__all__ = ["Rig", "RigSimulation", "linear_baseline", "param_scale", "predict", "simulate_test",
+           "BASE_SPECS", "DISCREPANCY_PARAMETERS", "NUT_NAMES"]
+
+NUT_NAMES = FRICTION_NAMES[:4]
+
+
+#: The base parameters in the discrepancy fit: a named override of
+#: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`.
+DISCREPANCY_PARAMETERS: dict[str, Parameter] = override(
+    "discrepancy",
+    "the likelihood fit also serves rigs other than the prototype (EMPS, other generators), so "
+    "its bounds are wider than the identification's distributor ends, yet finite and well "
+    "inside the physical ones so the scaled NLP stays well conditioned",
+    {"nut_breakaway_N": (0.0, 2000.0), "nut_coulomb_N": (0.0, 2000.0),
+     "nut_breakaway_velocity_m_per_s": (2e-4, 0.5), "nut_viscous_Ns_per_m": (0.0, 1e4),
+     "bearing_breakaway_Nm": (0.0, 1.0), "bearing_coulomb_Nm": (0.0, 1.0),
+     "bearing_breakaway_velocity_rad_per_s": (0.01, 50.0),
+     "bearing_viscous_Nms_per_rad": (0.0, 1e-2), "offset_N": (-1e3, 1e3)})
+#: The same as ``ParamSpec`` (default: the typical value, which also sets :func:`param_scale`).
+BASE_SPECS: dict[str, ParamSpec] = {n: ParamSpec(n, q.unit, q.typical, q.lower, q.upper, q.doc)
+                                    for n, q in DISCREPANCY_PARAMETERS.items()}
+
+
+def param_scale(spec: ParamSpec) -> float:
+    """Typical magnitude of a parameter (its default, else a twentieth of its bound):
+    the scale the decision variables are divided by."""
+    if spec.default != 0.0:
+        return abs(spec.default)
+    return max(abs(spec.lower), abs(spec.upper)) / 20.0 or 1.0
+
+
+_MODELS: dict[tuple, Any] = {}
+
+
+@dataclass(frozen=True)
+class Rig:
+    """What is fitted: harvester constants, rig kind and the model's components."""
+
+    harvester: HarvesterParams
+    has_generator: bool = True
+    components: tuple[Component, ...] = ()
+
+    def model(self) -> BenchModel:
+        """The rig's model (cached: one model object per distinct rig, kept alive —
+        :func:`~ehsa_opt.physics.bench_sim.simulate_bench` caches integrators by model identity)."""
+        key = (self.has_generator, self.harvester,
+               tuple((type(c).__name__, tuple(sorted((k, v) for k, v in vars(c).items()
+                                                     if k not in c.start_attributes)))
+                     for c in self.components))
+        if key not in _MODELS:
+            _MODELS[key] = BenchModel(self.harvester, self.components,
+                                      generator=self.has_generator)
+        return _MODELS[key]
+
+    def with_components(self, components: Sequence[Component]) -> "Rig":
+        return Rig(self.harvester, self.has_generator, tuple(components))
+
+    @property
+    def base_names(self) -> list[str]:
+        return list(FRICTION_NAMES) if self.has_generator else ["inertia_kg", "offset_N",
+                                                                 *NUT_NAMES]
+
+
+# ------------------------------------------------------------------ linear baseline
+def linear_baseline(prepared: Sequence[PreparedTest], rig: Rig,
+                    breakaway_velocities: Sequence[float] = (0.003, 0.01, 0.03)
+                    ) -> dict[str, float]:
+    """Quick least-squares friction (rigid, quasi-static current): the force is linear
+    in (F_C, F_brk − F_C, f_v[, M, offset]) for a fixed breakaway velocity, tried on
+    a small grid.  Used as the IPOPT initial point; bearing friction starts at zero
+    (its split from the nut friction is not identifiable on a rigid bench)."""
+    h = rig.harvester
+    r = h.lead_m_per_rad
+    best: tuple[float, dict[str, float]] | None = None
+    for ub in breakaway_velocities:
+        rows, rhs = [], []
+        for pt in prepared:
+            x, v, a = pt.u
+            F = pt.y[0]
+            ust, uc = math.sqrt(2) * ub, ub / 10
+            cols = [np.tanh(v / uc), math.sqrt(2 * math.e) * np.exp(-(v / ust) ** 2) * v / ust, v]
+            if rig.has_generator:
+                R = pt.fixed["load_ohm"] + h.internal_resistance_ohm
+                known = h.equivalent_mass_kg() * a + h.torque_constant_Nm_per_A * \
+                    h.voltage_constant_Vs_per_rad * v / (r * r * R)
+            else:
+                known = 0.0 * v
+                cols += [a, np.ones_like(v)]
+            w = pt.wnorm[0][:, None]
+            rows.append(np.column_stack(cols) * w)
+            rhs.append((F - known) * w[:, 0])
+        A, b = np.vstack(rows), np.concatenate(rhs)
+        coef, *_ = np.linalg.lstsq(A, b, rcond=None)
+        sse = float(np.sum((A @ coef - b) ** 2))
+        Fc, dF, fv = max(coef[0], 0.0), max(coef[1], 0.0), max(coef[2], 0.0)
+        vals = {"nut_coulomb_N": Fc, "nut_breakaway_N": Fc + dF,
+                "nut_breakaway_velocity_m_per_s": ub, "nut_viscous_Ns_per_m": fv}
+        if rig.has_generator:
+            vals.update({"bearing_breakaway_Nm": 1e-3, "bearing_coulomb_Nm": 1e-3,
+                         "bearing_breakaway_velocity_rad_per_s": 1.0,
+                         "bearing_viscous_Nms_per_rad": 1e-6})
+        else:
+            vals.update({"inertia_kg": float(coef[3]), "offset_N": float(coef[4])})
+        if best is None or sse < best[0]:
+            best = (sse, vals)
+    assert best is not None
+    return best[1]
+
+
+# ------------------------------------------------------------------ predictions
+def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
+            rtol: float = 1e-7, filtered: bool = True) -> list[np.ndarray]:
+    """Simulated outputs (ny, N) of each test with the given parameters.
+
+    Models with states are integrated by CVODES (relative tolerance ``rtol``) from
+    rest-consistent initial states, one unrecorded warm-up cycle before the record for
+    sine tests.  A test whose measured output went through the parallel low-pass of a
+    rig without generator gets its outputs through the same filter (``filtered``;
+    False: the model's own output, e.g. to synthesise a record).
+    """
+    model = rig.model()
+    out = []
+    for pt in prepared:
+        vals = {**pt.fixed, **parameters}
+        p = np.array([float(vals[n]) for n in model.param_names])
+        ny = pt.y.shape[0]
+        if model.n_states == 0:  # algebraic model: evaluate on the samples
+            y = np.array(model.outputs.map(pt.time_s.size)(np.zeros((0, pt.time_s.size)),
+                                                          pt.u, p))
+            out.append(pt.filter_output(y[:ny]) if filtered else y[:ny])
+            continue
+        sim = simulate_test(model, pt, vals, rtol=rtol)
+        y = np.vstack([sim.force_N, sim.voltage_V])[:ny]
+        out.append(pt.filter_output(y) if filtered else y)
+    return out
+
+
+@dataclass
+class RigSimulation:
+    """One test simulated on its grid: the force (N), the voltage (V) and the states
+    (rows: the model's states, columns: the samples)."""
+
+    force_N: np.ndarray
+    voltage_V: np.ndarray
+    states: np.ndarray
+
+
+def simulate_test(model: BenchModel, pt: PreparedTest, values: Mapping[str, float],
+              grid: np.ndarray | None = None, rtol: float = 1e-7) -> RigSimulation:
+    """CVODES simulation on the test's grid (or ``grid``; one warm-up cycle before
+    sine records)."""
+    vals = {**pt.fixed, **values}
+    p = np.array([float(vals[n]) for n in model.param_names])
+    t = pt.time_s if grid is None else grid
+    if isinstance(pt.motion, SineMotion):
+        period = 1.0 / pt.motion.frequency_hz
+        dt = float(np.median(np.diff(t)))
+        nw = int(round(period / dt))
+        grid = np.concatenate([t[0] - dt * np.arange(nw, 0, -1), t])
+        sim = simulate_bench(model, pt.motion, p, grid, rtol=rtol, atol=rtol * 1e-2)
+        keep = slice(nw, None)
+    else:
+        motion = pt.motion.sampled() if isinstance(pt.motion, FilteredMotion) else pt.motion
+        sim = simulate_bench(model, motion, p, t, rtol=rtol, atol=rtol * 1e-2)
+        keep = slice(None)
+    return RigSimulation(sim.force_N[keep], sim.voltage_V[keep], sim.states[:, keep])
