@@ -72,12 +72,12 @@ from .results import (
     DiscrepancySettings,
 )
 from .search import SearchState, SearchTests, run_rounds
-from .split import crop_test, load_split, spread
+from .split import crop_test, load_split, spread_within
 from .terms import TermProposal, propose_term
 
 __all__ = ["run_discrepancy", "load_data", "prepare_search_tests", "fit_baseline", "Baseline",
            "name_force_lag", "name_drive_lag", "assemble_result", "BASELINE_MAX_SAMPLES",
-           "baseline_decimation"]
+           "CANDIDATE_MAX_SAMPLES", "baseline_decimation"]
 
 
 def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings | None = None,
@@ -174,7 +174,7 @@ def prepare_search_tests(data: BenchData, settings: DiscrepancySettings, say,
         notes.append(note)
         fit_pts = [pt for pt in fit_pts if pt.test.file not in bare]
         held_pts = [pt for pt in held_pts if pt.test.file not in bare]
-    sub_pts = spread(fit_pts, settings.max_fit_tests)
+    sub_pts = spread_within(fit_pts, settings.max_fit_tests, CANDIDATE_MAX_SAMPLES)
     say(f"{len(fit_pts)} fit tests ({len(sub_pts)} for candidate fits), "
         f"{len(held_pts)} {evaluation} tests")
     vdir = (Path(str(getattr(data, "path", "") or ".")) / "validation"
@@ -237,6 +237,13 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
 BASELINE_MAX_SAMPLES = 4000
 
 
+#: The candidate fits (collocation on every sample: an effect may ring or ripple at
+#: hundreds of Hz) use at most this many samples: ``max_fit_tests`` spread over the fit
+#: tests, fewer while they hold more (:func:`~.split.spread_within`).  The candidates are
+#: judged, as always, by simulation on every fit and held-out test.
+CANDIDATE_MAX_SAMPLES = 6000
+
+
 def baseline_decimation(fit_pts, rig: Rig) -> int:
     """The step k of :data:`BASELINE_MAX_SAMPLES` for a model with states (collocation);
     1 for a model without (a least-squares fit, whose cost is linear)."""
@@ -272,7 +279,7 @@ def name_force_lag(tests: SearchTests, base: Baseline, state: SearchState,
                         "parameters": cand.parameters})
     state.n_eff_fit = effective_samples(fit_pts, cur_fit)
     state.n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
-    tests.sub_pts = spread(fit_pts, settings.max_fit_tests)
+    tests.sub_pts = spread_within(fit_pts, settings.max_fit_tests, CANDIDATE_MAX_SAMPLES)
     base.fit_pred = predict(fit_pts, tests.rig, base.fit.parameters)
     base.held_pred = predict(held_pts, tests.rig, base.fit.parameters) if held_pts else []
     return state
@@ -309,7 +316,7 @@ def name_drive_lag(tests: SearchTests, base: Baseline, state: SearchState,
                         "parameters": fields["parameters"]})
     state.n_eff_fit = effective_samples(fit_pts, cur_fit)
     state.n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
-    tests.sub_pts = spread(fit_pts, settings.max_fit_tests)
+    tests.sub_pts = spread_within(fit_pts, settings.max_fit_tests, CANDIDATE_MAX_SAMPLES)
     base.fit_pred = predict(fit_pts, tests.rig, base.fit.parameters)  # on the applied force
     base.held_pred = predict(held_pts, tests.rig, base.fit.parameters) if held_pts else []
     return state
