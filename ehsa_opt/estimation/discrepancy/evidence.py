@@ -48,7 +48,7 @@ __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
            "residual_is_white", "disturbance_masks", "block_excess_reductions",
            "own_evidence", "judge_candidate", "choose_winner", "MIN_EXCESS_REDUCTION",
            "MIN_EXCESS_OVER_FLOOR", "MIN_SSE_EXCESS", "BLOCKS_PER_TEST", "WHITE_P",
-           "MASK_BEFORE_S", "MASK_AFTER_S"]
+           "MASK_BEFORE_S", "MASK_AFTER_S", "refuted_by_rotor_channel"]
 
 
 # ------------------------------------------------------------------ residual size
@@ -401,6 +401,21 @@ def own_evidence(reductions: np.ndarray, min_reduction: float) -> tuple[bool, fl
 
 
 # ------------------------------------------------------------------ judging a candidate
+def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff: float
+                             ) -> bool:
+    """Whether a transmission effect is refuted by the channel that measures the rotor.
+
+    A transmission effect (a gap, a mount spring) lets the rotor move otherwise than
+    the rod; the generator's voltage measures the rotor's speed.  Such an effect present
+    in the rig explains the voltage too; a refit that trades the voltage for the force
+    is another force law in disguise (friction presliding fitted as a mount spring: the
+    force misfit at reversals falls, the model's rotor then lags a rotor that does not).
+    Refuted when the held-out voltage SSE grows by more than the evidence the member's
+    ``k`` parameters are charged: N_eff ln(SSE_after/SSE_before) > k ln N_eff."""
+    return n_eff * math.log(max(sse_after, 1e-300) / max(sse_before, 1e-300)) \
+        > k * math.log(max(n_eff, 2.0))
+
+
 def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse_fit,
                     sse_held,
                     n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say,
@@ -458,6 +473,14 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     c.earns_by = ("total excess" if by_total else "own evidence") if (by_total or by_own) \
         else ""
     c.earns = bool((by_total or by_own) and c.resolved)
+    if (c.earns and impact_record(res) is None and comps[name].transmission
+            and len(ch_n) > 1 and refuted_by_rotor_channel(
+                ch_sse0[1], channel_sse(ev_pts, ev_pred)[0][1], k,
+                n_eff_held if held_pts else n_eff_fit)):
+        c.earns, c.earns_by = False, ""
+        say(f"{name}: refuted by the voltage (the rotor's speed): its held-out voltage SSE "
+            f"grows {ch_sse0[1] / ch_n[1]:.3g} -> "
+            f"{channel_sse(ev_pts, ev_pred)[0][1] / ch_n[1]:.3g} per sample")
     if impact_record(res) is not None and cur_ev_pred is not None:
         judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say)
     c.predictions = pf + ph

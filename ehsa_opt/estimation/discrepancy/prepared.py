@@ -11,7 +11,7 @@ rig without generator shares between model and measurement, and its white-noise 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -21,7 +21,7 @@ from ...physics.motion import FilteredMotion, SineMotion
 from ..identify_options import IdentifyOptions, estimate_motion
 
 __all__ = ["NO_GENERATOR_FIXED", "PreparedTest", "prepare_tests", "noise_std",
-           "parallel_filter", "filtered_noise_gain"]
+           "parallel_filter", "filtered_noise_gain", "decimated", "decimation_factor"]
 
 #: Values fixed on a rig without generator: no load, no (separable) bearing friction.
 NO_GENERATOR_FIXED: dict[str, float] = {
@@ -159,3 +159,29 @@ def prepare_tests(tests: Sequence[BenchTest], has_generator: bool = True,
         out.append(PreparedTest(t, motion, t.time_s, u, y, sig, fixed, weight, mass_kg,
                                 raw, gain, fhz))
     return out
+
+
+def decimation_factor(prepared: Sequence[PreparedTest], max_samples: int | None) -> int:
+    """The smallest integer step k that leaves at most ``max_samples`` samples in
+    ``prepared`` when every k-th sample is kept (1: all; ``max_samples`` None: 1)."""
+    n = sum(pt.time_s.size for pt in prepared)
+    if max_samples is None or n <= max_samples:
+        return 1
+    return int(math.ceil(n / max_samples))
+
+
+def decimated(pt: PreparedTest, k: int) -> PreparedTest:
+    """``pt`` on every ``k``-th sample: the same motion (its derivatives are those of the
+    full record, not re-estimated), the same noise levels and resolved-sample weights
+    (the record itself is not filtered: the samples kept are measured samples)."""
+    if k <= 1:
+        return pt
+    s = slice(None, None, k)
+    t = pt.test
+    nt = replace(t, time_s=t.time_s[s], displacement_m=t.displacement_m[s],
+                 force_N=t.force_N[s],
+                 voltage_V=t.voltage_V[s] if t.voltage_V is not None else None)
+    return PreparedTest(nt, pt.motion, pt.time_s[s], pt.u[:, s], pt.y[:, s], pt.sigma,
+                        pt.fixed, pt.weight[s], pt.mass_kg,
+                        pt.raw_force_N[s] if pt.raw_force_N is not None else None,
+                        pt.force_noise_gain)

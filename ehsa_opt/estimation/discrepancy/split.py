@@ -18,7 +18,7 @@ import numpy as np
 
 from ...datasets.bench_format import BenchData, BenchTest, load_bench
 
-__all__ = ["split_tests", "load_split", "spread", "crop_test"]
+__all__ = ["split_tests", "load_split", "spread", "spread_within", "crop_test"]
 
 
 def _grid_key(t: BenchTest) -> tuple:
@@ -57,6 +57,18 @@ def spread(items: Sequence[Any], n: int | None) -> list[Any]:
         return list(items)
     idx = np.unique(np.round(np.linspace(0, len(items) - 1, n)).astype(int))
     return [items[i] for i in idx]
+
+
+def spread_within(pts: Sequence[Any], n: int | None, max_samples: int | None) -> list[Any]:
+    """:func:`spread` of at most ``n`` prepared tests, fewer while their samples exceed
+    ``max_samples`` (at least one test; ``max_samples`` None: no limit)."""
+    n = len(pts) if n is None else min(n, len(pts))
+    sub = spread(pts, n)
+    while (max_samples is not None and n > 1
+           and sum(pt.time_s.size for pt in sub) > max_samples):
+        n -= 1
+        sub = spread(pts, n)
+    return sub
 
 
 def load_split(data: BenchData, settings: Any) -> tuple[list, list, str]:

@@ -45,7 +45,7 @@ from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 
 __all__ = ["TermProposal", "feature_library", "discover_term", "propose_term", "shift_lag",
-           "GROUPS", "LAG_GRID_S", "TERM_PREFERENCE"]
+           "shift_sse_curves", "GROUPS", "LAG_GRID_S", "TERM_PREFERENCE"]
 
 #: Feature groups of the library, in the order they are described.
 GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity")
@@ -302,13 +302,16 @@ def _shifted(pt: PreparedTest, pred: np.ndarray, tau: float) -> np.ndarray:
     return np.interp(pt.time_s - tau, pt.time_s, pred[0])
 
 
+def shift_sse_curves(pts, preds) -> np.ndarray:
+    """(tests, :data:`LAG_GRID_S`) SSE of (F − F̂(t − τ))/σ of each test at each delay τ."""
+    return np.array([[float(np.sum(((pt.y[0] - _shifted(pt, yp, tau)) * pt.wnorm[0]) ** 2))
+                      for tau in LAG_GRID_S] for pt, yp in zip(pts, preds)])
+
+
 def shift_lag(pts, preds) -> tuple[float, float] | None:
     """The delay τ of the force channel (on :data:`LAG_GRID_S`) minimising the fit-set
     SSE of (F − F̂(t − τ))/σ, and that SSE; None when τ = 0 is best."""
-    sses = []
-    for tau in LAG_GRID_S:
-        sses.append(sum(float(np.sum(((pt.y[0] - _shifted(pt, yp, tau)) * pt.wnorm[0]) ** 2))
-                        for pt, yp in zip(pts, preds)))
+    sses = shift_sse_curves(pts, preds).sum(axis=0)
     k = int(np.argmin(sses))
     if abs(LAG_GRID_S[k]) < 1e-9:
         return None

@@ -142,3 +142,17 @@ def test_noise_floor_of_a_filtered_force_is_the_raw_noise_through_the_filter():
     assert force_noise_floor_percent([pt]) == pytest.approx(expected, rel=0.1)
     pt.raw_force_N, pt.force_noise_gain = None, 1.0  # the filtered record's own noise
     assert force_noise_floor_percent([pt]) < 0.2 * expected
+
+
+def test_a_transmission_effect_is_refuted_by_a_worse_rotor_channel():
+    from ehsa_opt.estimation.discrepancy.evidence import refuted_by_rotor_channel
+    n_eff = 1500.0
+    # the voltage explained better, unchanged, or worse within the member's charge: kept
+    assert not refuted_by_rotor_channel(2100.0, 1700.0, 2, n_eff)
+    assert not refuted_by_rotor_channel(1000.0, 1000.0, 2, n_eff)
+    assert not refuted_by_rotor_channel(1000.0, 1000.0 * math.exp(0.9 * 2 * math.log(n_eff)
+                                                                   / n_eff), 2, n_eff)
+    # presliding fitted as a mount spring on a clean campaign: 3.39 -> 8.96 per sample
+    assert refuted_by_rotor_channel(3.39, 8.96, 2, n_eff)
+    assert refuted_by_rotor_channel(1000.0, 1000.0 * math.exp(1.1 * 2 * math.log(n_eff)
+                                                               / n_eff), 2, n_eff)

@@ -24,11 +24,11 @@ from ..evidence import (
     normalised_sse,
 )
 from ..fit import fit_group
-from ..prepared import PreparedTest, prepare_tests
+from ..prepared import PreparedTest, decimated, prepare_tests
 from ..rig import predict
-from ..terms import shift_lag
+from ..terms import shift_lag, shift_sse_curves
 
-__all__ = ["try_lag"]
+__all__ = ["try_lag", "per_test_delays"]
 
 
 def _lag_tests(pts: Sequence[PreparedTest], tau: float, has_generator: bool
@@ -47,20 +47,45 @@ def _lag_tests(pts: Sequence[PreparedTest], tau: float, has_generator: bool
     return out
 
 
+def per_test_delays(pts, preds, n_eff: float) -> float:
+    """ΔBIC of one delay per test against one delay for all (< 0: the tests' own delays
+    fit significantly better).
+
+    A delay of the force channel is one number for the whole record: the same at every
+    frequency of a sine, every speed of a stroke, every protocol.  A residual that a
+    time shift reduces for another reason — friction whose transition at a reversal
+    takes a distance (presliding), so that the lead it looks like is that distance over
+    the speed — asks for a different shift on each test.  Per-test delays then reduce
+    the SSE beyond what their ``len(pts) - 1`` extra parameters explain (ΔBIC with the
+    effective sample size ``n_eff`` of the fit tests)."""
+    curves = shift_sse_curves(pts, preds)
+    return delta_bic(float(curves.min(axis=1).sum()), float(curves.sum(axis=0).min()),
+                     len(pts) - 1, n_eff)
+
+
 def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit, n_eff_held,
-             err0, settings, say):
+             err0, settings, say, decimation: int = 1):
     """Catalogue member ``force_lag`` (a measurement-channel delay of the force): the
     delay from a time-shift search on the baseline residual (:func:`~ehsa_opt.estimation.discrepancy.terms.shift_lag`),
-    the force re-aligned by it and the baseline refitted; kept when it earns by the
-    decision rule (compared on the re-aligned held-out tests, cropped alike)."""
+    the force re-aligned by it and the baseline refitted (collocation on every
+    ``decimation``-th sample, as the baseline); kept when it is one delay for every test
+    (:func:`per_test_delays`) and earns by the decision rule (compared on the re-aligned
+    held-out tests, cropped alike)."""
     lag = shift_lag(fit_pts, fit_pred)
     if lag is None:
+        return None
+    spread_bic = per_test_delays(fit_pts, fit_pred, n_eff_fit)
+    if spread_bic < 0:
+        say(f"force_lag: not a channel delay — the best delay differs from test to test "
+            f"(per-test delays against one delay: ΔBIC {spread_bic:.3g} < 0): the force's "
+            f"lead depends on the motion, which a delay of the record does not")
         return None
     tau = lag[0]
     for it in range(2):  # re-estimate once on the re-aligned baseline
         f2 = _lag_tests(fit_pts, tau, rig.has_generator)
         h2 = _lag_tests(held_pts, tau, rig.has_generator) if held_pts else []
-        b2 = fit_group(f2, rig, [base.parameters], max_iter=settings.max_iter)
+        b2 = fit_group([decimated(pt, decimation) for pt in f2], rig, [base.parameters],
+                       max_iter=settings.max_iter)
         if not b2.parameters:
             return None
         pf = predict(f2, rig, b2.parameters)
