@@ -28,7 +28,7 @@ from ehsa_opt.datasets.bench_format import load_bench
 from ehsa_opt.datasets.embedded import embedded_data_dir
 from ehsa_opt.estimation.covariance import hac_covariance
 from ehsa_opt.estimation.discrepancy.openloop import open_loop_position
-from ehsa_opt.estimation.discrepancy.outputerror import OE_PARAMETERS, _Record, _refit
+from ehsa_opt.estimation.discrepancy.outputerror import OE_PARAMETERS, OpenLoopRecord, refit_record
 
 TRUTH = {"inertia_kg": 95.0, "nut_viscous_Ns_per_m": 200.0, "nut_coulomb_N": 20.0,
          "offset_N": -3.0}
@@ -55,8 +55,8 @@ def main() -> None:
     for _ in range(a.sets):
         e = lfilter([1.0], [1.0, -a.rho], sd_w * rng.standard_normal(q.size))
         test = replace(est, time_s=est.time_s[k], force_N=est.force_N[k], displacement_m=q + e)
-        rec = _Record(test, TRUTH)
-        p, out, _, _ = _refit(rec, TRUTH, free, None, 60)
+        rec = OpenLoopRecord(test, TRUTH)
+        p, out, _, _ = refit_record(rec, TRUTH, free, None, 60)
         h = hac_covariance(rec.jacobian(p)[:, idx], out.fun)
         err = p[idx] - truth
         hits.append(np.abs(err) <= 1.96 * np.sqrt(np.diag(h.cov)))

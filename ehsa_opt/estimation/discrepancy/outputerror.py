@@ -31,7 +31,8 @@ import numpy as np
 
 from .openloop import SKIP_SAMPLES, open_loop_error
 
-__all__ = ["output_error_refit", "output_error_multistart", "output_error_rows", "OE_PARAMETERS"]
+__all__ = ["output_error_refit", "output_error_multistart", "output_error_rows", "OE_PARAMETERS",
+           "OpenLoopRecord", "refit_record"]
 
 #: The port's parameters in the order of the simulator's parameter vector.
 OE_PARAMETERS = ("inertia_kg", "nut_viscous_Ns_per_m", "nut_coulomb_N", "offset_N",
@@ -77,7 +78,7 @@ def _simulator(n: int):
 _SIMULATORS: dict[int, tuple] = {}
 
 
-class _Record:
+class OpenLoopRecord:
     """A record's force (through a named drive lag) and measured position, simulated
     open loop from the measured position at rest (the benchmark's convention, its
     first :data:`SKIP_SAMPLES` left out of every error), up to ``stop`` samples."""
@@ -116,7 +117,7 @@ class _Record:
         return 1e3 * np.asarray(self._sim(n)[1](*self._args(p, n)))[SKIP_SAMPLES:]
 
 
-def _refit(rec: _Record, params: Mapping[str, float], free: Sequence[str],
+def refit_record(rec: OpenLoopRecord, params: Mapping[str, float], free: Sequence[str],
            stop: int | None, max_nfev: int):
     """Least-squares refit of ``free`` on the record's samples before ``stop`` (all:
     None): (full parameter vector, scipy result, scale, indices of ``free``)."""
@@ -167,8 +168,8 @@ def output_error_refit(fit_test, params: Mapping[str, float], free: Sequence[str
     if unknown:
         raise ValueError(f"output_error_refit: unknown free parameters {unknown} "
                          f"(choose from {', '.join(OE_PARAMETERS)})")
-    rec = _Record(fit_test, params)
-    p, out, _, _ = _refit(rec, params, free, None, max_nfev)
+    rec = OpenLoopRecord(fit_test, params)
+    p, out, _, _ = refit_record(rec, params, free, None, max_nfev)
     fitted = {**{k: float(v) for k, v in params.items()},
               **{k: float(v) for k, v in zip(OE_PARAMETERS, p)}}
     rms = float(np.sqrt(np.mean(out.fun ** 2)))
@@ -257,7 +258,7 @@ def output_error_multistart(fit_test, eval_test, anchors: Sequence[tuple[str, Ma
                          f"(choose from {', '.join(OE_PARAMETERS)}) or no anchors")
     starts = _perturbed_starts(anchors, free, perturbations, spread, seed)
     # the drive lag (held) is the same for every start: one record
-    rec = _Record(fit_test, starts[0][1])
+    rec = OpenLoopRecord(fit_test, starts[0][1])
     edges = [int(c[0]) for c in np.array_split(np.arange(rec.t.size), int(blocks))] + [rec.t.size]
     # the first fold trains on at least ``min_train_fraction`` of the record: a short
     # start of a record may not reverse, and nothing learnt there extrapolates
@@ -268,12 +269,12 @@ def output_error_multistart(fit_test, eval_test, anchors: Sequence[tuple[str, Ma
         for k in range(first, int(blocks)):
             # forward chaining: fitted on the blocks before block k, the simulation
             # carried on through block k and judged there
-            pk, _, _, _ = _refit(rec, p0, free, edges[k], max_nfev)
+            pk, _, _, _ = refit_record(rec, p0, free, edges[k], max_nfev)
             e = rec.residual(pk, edges[k + 1], edges[k]) if pk[0] > 0 else np.full(1, np.inf)
             folds.append(float(np.sqrt(np.mean(e ** 2))))
             sq += float(np.sum(e ** 2))
             n += e.size
-        p, out, _, idx = _refit(rec, p0, free, None, max_nfev)
+        p, out, _, idx = refit_record(rec, p0, free, None, max_nfev)
         fitted = {**{k: float(v) for k, v in p0.items()},
                   **{k: float(v) for k, v in zip(OE_PARAMETERS, p)}}
         ok = bool(out.success and np.all(np.isfinite(out.x)) and p[0] > 0)
