@@ -153,9 +153,13 @@ def run_truth(name: str, friction: FrictionParams | None, seed: int, root: Path)
 def _print(r: dict) -> bool:
     p = r["plan"]
     print(f"{r['name']}: road sigma_v {r['sigma']:.3f} m/s; proposed: "
-          + "; ".join(f"{c.label()} [expected residual {st['predicted_residual_rms_N']:.0f} N]"
+          + "; ".join(f"{c.label()} [expected residual {st['predicted_residual_rms_N']:.0f} N"
+                      f" on {st['effective_samples']:.0f} effective samples]"
                       for c, st in zip(p.proposed, p.steps)) + f" ({r['seconds']:.0f} s)")
-    print(f"  predicted band at 1 m/s: +-{p.band_before_N[1]:.1f} -> +-{p.band_after_N[1]:.1f} N")
+    print(f"  statistical half-width at 1 m/s, predicted -> realised: before "
+          f"+-{p.band_before_N[1]:.1f} -> +-{r['info0']['statistical_N']:.1f} N; after the "
+          f"planned tests +-{p.band_after_N[1]:.1f} -> +-{r['planned'][2]['statistical_N']:.1f}"
+          f" N")
     n_p = r["band0"] - r["planned"][0]
     n_g = r["band0"] - r["grid"][0]
     met = n_p > 0 and n_p >= 2 * n_g

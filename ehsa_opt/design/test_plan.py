@@ -9,11 +9,15 @@ uncertainty of the rod friction *where the road puts the strokes*:
 * the current uncertainty is the best law's sandwich covariance Σ₀ from
   ``identification.json`` (:mod:`ehsa_opt.estimation.rod_law`); its information is Σ₀⁺;
 * a candidate test adds the Fisher information of its friction samples,
-  I_c = (n_c / τ) mean_t g(v_t) g(v_t)ᵀ / σ², with g the gradient of F_rod(v) in the
-  friction parameters at the best law, σ the residual level and τ = n / n_eff the
-  autocorrelation inflation of the campaign's residuals (on a rigid bench the force
-  samples carry the friction at the prescribed velocity; the load only sets the force
-  and power the rig must deliver);
+  I_c = n_eff,c mean_t g(v_t) g(v_t)ᵀ / σ², with g the gradient of F_rod(v) in the
+  friction parameters at the best law, σ the residual level and n_eff,c the effective
+  number of independent samples a record of its length carries, as the campaign's own
+  tests show it (:func:`effective_samples`: their residuals' autocorrelation, per test,
+  interpolated in the record length; a record longer than every campaign test is
+  credited the effective samples of the longest, never more — a 20 s record of a
+  0.1 Hz sine is not ten tests' worth: its residual is smooth and correlated over the
+  slow cycle).  On a rigid bench the force samples carry the friction at the prescribed
+  velocity; the load only sets the force and power the rig must deliver;
 * the road's stroke velocity is Gaussian with the σ_v of the vehicle's design on its
   road (friction-aware fast path, :func:`ehsa_opt.vehicle.fast_path.friction_metrics`)
   and W = E_road[w(v) g gᵀ], w(v) ∝ F_rod(v) |v| by default (the friction's dissipated
@@ -46,7 +50,7 @@ from ..physics.params import HarvesterParams, ParameterError, load_toml, nearest
 
 __all__ = ["RigLimits", "load_rig", "Candidate", "candidate_tests", "TestPlan", "plan_tests",
            "road_velocity_sigma", "plan_from_files", "triangle_resolved_velocity",
-           "residual_model"]
+           "residual_model", "effective_samples"]
 
 _KINDS = ("sine", "triangle")
 #: Fewest resolved samples a triangle candidate must keep (as a recorded test to be fitted).
@@ -285,9 +289,11 @@ class TestPlan:
                f"{self.criterion}-optimal greedy choice:"]
         for k, (c, st) in enumerate(zip(self.proposed, self.steps), 1):
             res = st.get("predicted_residual_rms_N")
+            neff = st.get("effective_samples")
             out.append(f"  {k}. {c.label()}: peak force {c.peak_force_N:.0f} N, power "
                        f"{c.peak_power_W:.0f} W"
                        + (f", expected residual {res:.0f} N rms" if res is not None else "")
+                       + (f" on {neff:.0f} effective samples" if neff is not None else "")
                        + f" -> road-weighted band +-{st['road_band_N']:.1f} N")
         out.append("predicted 95 % band of the rod friction (+- N), before -> after:")
         for v, b, a in zip(self.velocities_m_per_s, self.band_before_N, self.band_after_N):
@@ -395,16 +401,49 @@ def residual_model(law: RodLawFit) -> tuple[float, float]:
     return max(s0, 1e-12), float(coef[1])
 
 
+def effective_samples(law: RodLawFit, n_samples: Any) -> np.ndarray:
+    """Effective number of independent friction samples in a record of ``n_samples``
+    samples, as the campaign's tests show it.
+
+    Every test of the campaign has n_g samples and n_eff,g = n_g / τ_g effective ones
+    (τ_g the inflation of its residuals' autocorrelation; ``RodLawFit.test_n_effective``).
+    The tests of one length are summarised by their median n_eff; between the campaign's
+    lengths n_eff is interpolated in log–log; a record shorter than the shortest test
+    keeps that test's inflation (n × n_eff/n of it); a record longer than the longest is
+    credited the longest test's n_eff — the data say nothing about errors decorrelating
+    over a record longer than any measured, and on a bench the slow, long tests are the
+    ones whose residual is smoothest (on the embedded campaign τ is 1 at 2–3.5 Hz, 3.5 at
+    1 Hz and 15 at 0.5 Hz).  Laws from files of earlier versions (no per-test counts)
+    use the campaign's mean inflation n/n_eff and count at most its average test length.
+    """
+    n = np.asarray(n_samples, dtype=float)
+    ns = np.asarray(law.test_n_samples, dtype=float)
+    ne = np.asarray(law.test_n_effective, dtype=float)
+    ok = (np.isfinite(ns) & np.isfinite(ne) & (ns > 0) & (ne > 0)
+          if ns.size == ne.size else np.zeros(0, dtype=bool))
+    if not ok.any():
+        tau = law.n_samples / max(law.n_effective, 1.0)
+        return np.minimum(n, law.n_samples / max(law.n_tests, 1)) / tau
+    ns, ne = ns[ok], np.minimum(ne[ok], ns[ok])
+    lengths = np.unique(ns)
+    neff = np.array([np.median(ne[ns == L]) for L in lengths])
+    out = np.exp(np.interp(np.log(np.maximum(n, 1.0)), np.log(lengths), np.log(neff)))
+    out = np.where(n < lengths[0], n * neff[0] / lengths[0], out)
+    return np.minimum(out, n)
+
+
 def _candidate_information(cands: list[Candidate], rig: RigLimits, law: RodLawFit,
-                           d: np.ndarray, tau: float, kappa: float
-                           ) -> tuple[list[Candidate], list[np.ndarray], list[float]]:
+                           d: np.ndarray, kappa: float
+                           ) -> tuple[list[Candidate], list[np.ndarray], list[float],
+                                      list[float]]:
     """The candidates that keep resolved samples, the Fisher information of each (in the
-    coordinates scaled by ``d``) and its expected residual rms (N): the campaign's error
-    at the candidate's stroke acceleration (:func:`residual_model`), inflated by the
-    autocorrelation ``tau`` and deflated by the cluster factor ``kappa``."""
+    coordinates scaled by ``d``), its expected residual rms (N) — the campaign's error
+    at the candidate's stroke acceleration (:func:`residual_model`) — and its effective
+    number of samples (:func:`effective_samples`); the information is deflated by the
+    cluster factor ``kappa``."""
     s0, beta = residual_model(law)
     p, names, lead = law.parameters, law.free, law.lead_m_per_rad
-    infos, kept, sig = [], [], []
+    infos, kept, sig, neffs = [], [], [], []
     tri_v: dict[float, np.ndarray] = {}
     for c in cands:
         if c.kind == "triangle":
@@ -415,15 +454,17 @@ def _candidate_information(cands: list[Candidate], rig: RigLimits, law: RodLawFi
             v = c.velocity_samples(rig)
         if v.size < _MIN_RESOLVED:
             continue  # all reversal: nothing a fit would use
-        s2 = (s0 + beta * c.acceleration_m_per_s2(rig) ** 2) * tau
-        # the information is n × the mean of g gᵀ over the samples: 400 evenly spaced ones
-        # give the mean of these smooth periodic records to well below a per cent
+        s2 = s0 + beta * c.acceleration_m_per_s2(rig) ** 2
+        n_eff = float(effective_samples(law, v.size))
+        # the information is n_eff × the mean of g gᵀ over the samples: 400 evenly spaced
+        # ones give the mean of these smooth periodic records to well below a per cent
         sub = v[np.unique(np.linspace(0, v.size - 1, min(v.size, 400)).astype(int))]
         G = rod_gradient(sub, p, names, lead) * d
-        infos.append(v.size * (G.T @ G) / sub.size / (s2 / kappa))
+        infos.append(n_eff * (G.T @ G) / sub.size / (s2 / kappa))
         kept.append(c)
-        sig.append(math.sqrt(s2 / tau))
-    return kept, infos, sig
+        sig.append(math.sqrt(s2))
+        neffs.append(n_eff)
+    return kept, infos, sig, neffs
 
 
 def _pinv(A: np.ndarray, rcond: float = 1e-9) -> np.ndarray:
@@ -469,7 +510,6 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
                         criterion, sigma_v_m_per_s, list(velocities_m_per_s), [], [],
                         math.nan, math.nan, [], 0, rig, law.velocity_range_m_per_s[1])
     names, p, lead = law.free, law.parameters, law.lead_m_per_rad
-    tau = law.n_samples / max(law.n_effective, 1.0)
     # road weight: |v| half-normal, Gauss-Legendre on [0, 5 sigma]
     x, wq = np.polynomial.legendre.leggauss(64)
     vr = 2.5 * sigma_v_m_per_s * (x + 1.0)
@@ -494,7 +534,7 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
     J0 = _pinv(cov0 / np.outer(d, d))
     Gr = Graw * d
     W = (Gr * wr[:, None]).T @ Gr
-    cands, infos, sig = _candidate_information(cands, rig, law, d, tau, kappa)
+    cands, infos, sig, neffs = _candidate_information(cands, rig, law, d, kappa)
     if not cands:
         return TestPlan(False, "no candidate test keeps resolved samples within the rig's "
                         "limits: raise stroke_m or peak_velocity_m_per_s in [rig]", [],
@@ -521,7 +561,7 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
         J = J + infos[k]
         chosen.append(cands[k])
         steps.append({"file": cands[k].file, "criterion": score(J), "road_band_N": road_band(J),
-                      "predicted_residual_rms_N": sig[k]})
+                      "predicted_residual_rms_N": sig[k], "effective_samples": neffs[k]})
     Gv = rod_gradient(np.asarray(velocities_m_per_s, dtype=float), p, names, lead) * d
 
     def band(Jm: np.ndarray) -> list[float]:

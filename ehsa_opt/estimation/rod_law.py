@@ -296,6 +296,10 @@ class RodLawFit:
         an error a test repeats in every cycle biases the law, which no spread-based
         covariance sees.  The band is at least that distance (within the statistical
         band the two differ by noise alone).
+    test_n_samples, test_n_effective : list of float
+        Per test: the friction samples used and their effective number n / (1 + 2 Σ w_l ρ_l)
+        (the residuals' autocorrelation, as in ``n_effective``) — how many independent
+        samples a test of that length carries (empty in files of earlier versions).
     """
 
     parameters: dict[str, float]
@@ -314,6 +318,8 @@ class RodLawFit:
     test_peak_acceleration_m_per_s2: list[float] = field(default_factory=list)
     alternatives: list[dict[str, float]] = field(default_factory=list)
     weighted: dict[str, float] | None = None
+    test_n_samples: list[float] = field(default_factory=list)
+    test_n_effective: list[float] = field(default_factory=list)
 
     def rod_N(self, v_m_per_s: Any) -> np.ndarray:
         """F_rod of the law at ``v_m_per_s``."""
@@ -398,6 +404,8 @@ class RodLawFit:
                     for x in self.test_peak_acceleration_m_per_s2],
                 "alternatives": [dict(a) for a in self.alternatives],
                 "weighted": None if self.weighted is None else dict(self.weighted),
+                "test_n_samples": [float(x) for x in self.test_n_samples],
+                "test_n_effective": [float(x) for x in self.test_n_effective],
                 "covariance": np.asarray(self.covariance).tolist(),
                 "covariance_iid": np.asarray(self.covariance_iid).tolist(),
                 "covariance_cluster": (None if self.covariance_cluster is None else
@@ -432,7 +440,9 @@ class RodLawFit:
                     for x in d.get("test_peak_acceleration_m_per_s2", [])],
                    [{k: float(v) for k, v in a.items()} for a in d.get("alternatives", [])],
                    None if not d.get("weighted") else
-                   {k: float(v) for k, v in d["weighted"].items()})
+                   {k: float(v) for k, v in d["weighted"].items()},
+                   [float(x) for x in d.get("test_n_samples", [])],
+                   [float(x) for x in d.get("test_n_effective", [])])
 
 
 def _free_names(params: Mapping[str, float], has_generator: bool) -> list[str]:
@@ -527,7 +537,7 @@ def rod_law_fit(samples: FrictionSamples, parameters: Mapping[str, float],
                      (float(peaks.min()), float(peaks.max())), cov_cl, len(Js),
                      [float(np.sqrt(np.mean(e ** 2))) for e in es],
                      [float(x) for x in samples.peak_acceleration_m_per_s2()], alternatives,
-                     weighted)
+                     weighted, [float(e.size) for e in es], [float(x) for x in neff])
 
 
 def _refit_starts(p: Mapping[str, float], lead: float, names: Sequence[str]
