@@ -168,3 +168,55 @@ def test_an_error_growing_with_acceleration_steers_the_plan_to_plateaus() -> Non
     flat = dataclasses.replace(law, test_residual_rms_N=[], test_peak_acceleration_m_per_s2=[])
     assert residual_model(flat)[1] == 0.0
     assert plan_tests(flat, rig, HarvesterParams(), 0.5, n_tests=1).proposed[0].kind == "sine"
+
+
+def _cycle_correlated_record(f_hz: float, amp_m: float, rng) -> tuple[np.ndarray, np.ndarray]:
+    """Two cycles at 1 kHz of a sine whose friction samples carry an error correlated over
+    a twentieth of the period (AR(1), 3 N): a model error smooth in the cycle's phase, as
+    the slow tests of a bench show."""
+    dt, w = 1e-3, 2 * math.pi * f_hz
+    t = np.arange(0, 2 / f_hz, dt)
+    v = w * amp_m * np.cos(w * t)
+    rho = math.exp(-dt * f_hz * 20.0)
+    e = np.zeros(v.size)
+    e[0] = rng.normal(0, 3.0)
+    for k in range(1, v.size):
+        e[k] = rho * e[k - 1] + rng.normal(0, 3.0 * math.sqrt(1 - rho * rho))
+    return v, np.asarray(rod_friction_N(v, TRUTH, LEAD)) + e
+
+
+def test_a_long_slow_test_is_credited_no_more_than_its_effective_samples() -> None:
+    """A 20 s record of a 0.1 Hz sine has ten times the samples of a 0.5 Hz test but, with
+    an error smooth over the cycle, no more independent ones: the planner credits it the
+    effective samples the campaign's longest test shows — within 1.5x of what such a
+    record really carries (measured by the same estimator) — where the campaign's mean
+    inflation n/n_eff would credit it several times more; and it is credited no more
+    Fisher information than a 0.5 Hz sine of the same peak velocity."""
+    import dataclasses
+    from ehsa_opt.design.test_plan import Candidate, _candidate_information, effective_samples
+    rng = np.random.default_rng(5)
+    vs, ys = [], []
+    for f in (0.5, 1.0, 2.0, 3.0, 3.5):
+        v, y = _cycle_correlated_record(f, 0.015, rng)
+        vs.append(v)
+        ys.append(y)
+    law = rod_law_fit(FrictionSamples(list("abcde"), vs, ys), TRUTH.as_dict(), LEAD)
+    assert len(law.test_n_effective) == 5 and law.test_n_samples[0] == vs[0].size
+    n_long = 20_000
+    real = np.mean([rod_law_fit(FrictionSamples(["x"], [v], [y]), TRUTH.as_dict(),
+                                LEAD).test_n_effective[0]
+                    for v, y in (_cycle_correlated_record(0.1, 0.075, rng) for _ in range(3))])
+    credited = float(effective_samples(law, n_long))
+    naive = n_long * law.n_effective / law.n_samples
+    assert credited <= 1.5 * real and naive > 3.0 * real
+    assert credited <= max(law.test_n_effective) + 1e-9
+    # the same velocities (peak 47 mm/s) over 20 s or 4 s: no more information
+    flat = dataclasses.replace(law, test_residual_rms_N=[], test_peak_acceleration_m_per_s2=[])
+    rig = RigLimits(stroke_m=0.2)
+    slow, short = (Candidate("sine", a, 47.0, f, None, 2 * math.pi * f * a)
+                   for f, a in ((0.1, 0.075), (0.5, 0.015)))
+    d = np.sqrt(np.diag(law.covariance))
+    _, infos, _, neffs = _candidate_information([slow, short], rig, flat, d, 1.0)
+    assert slow.velocity_samples(rig).size == n_long
+    assert np.trace(infos[0]) <= np.trace(infos[1]) * (1 + 1e-6)
+    assert neffs[0] == pytest.approx(credited)
