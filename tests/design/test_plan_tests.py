@@ -18,7 +18,7 @@ from ehsa_opt.design.test_plan import (
     residual_model,
     triangle_resolved_velocity,
 )
-from ehsa_opt.estimation.rod_law import FrictionSamples, rod_law_fit
+from ehsa_opt.estimation.rod_law import FrictionSamples, RodLawFit, rod_law_fit
 from ehsa_opt.physics.friction import rod_friction_N
 from ehsa_opt.physics.params import FrictionParams, HarvesterParams, ParameterError
 
@@ -202,6 +202,9 @@ def test_a_long_slow_test_is_credited_no_more_than_its_effective_samples() -> No
         ys.append(y)
     law = rod_law_fit(FrictionSamples(list("abcde"), vs, ys), TRUTH.as_dict(), LEAD)
     assert len(law.test_n_effective) == 5 and law.test_n_samples[0] == vs[0].size
+    back = RodLawFit.from_json(law.to_json())  # stored in identification.json
+    assert back.test_n_effective == law.test_n_effective
+    assert back.test_n_samples == law.test_n_samples
     n_long = 20_000
     real = np.mean([rod_law_fit(FrictionSamples(["x"], [v], [y]), TRUTH.as_dict(),
                                 LEAD).test_n_effective[0]
