@@ -11,12 +11,9 @@ uncertainty of the rod friction *where the road puts the strokes*:
 * a candidate test adds the Fisher information of its friction samples,
   I_c = n_eff,c mean_t g(v_t) g(v_t)ᵀ / σ², with g the gradient of F_rod(v) in the
   friction parameters at the best law, σ the residual level and n_eff,c the effective
-  number of independent samples a record of its length carries, as the campaign's own
-  tests show it (:func:`effective_samples`: their residuals' autocorrelation, per test,
-  interpolated in the record length; a record longer than every campaign test is
-  credited the effective samples of the longest, never more — a 20 s record of a
-  0.1 Hz sine is not ten tests' worth: its residual is smooth and correlated over the
-  slow cycle).  On a rigid bench the force samples carry the friction at the prescribed
+  number of independent samples a record of its length carries, as the campaign's
+  tests show it (:func:`effective_samples`; a 20 s record of a 0.1 Hz sine is not ten
+  tests' worth: its residual is smooth over the slow cycle).  On a rigid bench the force samples carry the friction at the prescribed
   velocity; the load only sets the force and power the rig must deliver;
 * the road's stroke velocity is Gaussian with the σ_v of the vehicle's design on its
   road (friction-aware fast path, :func:`ehsa_opt.vehicle.fast_path.friction_metrics`)
@@ -405,16 +402,13 @@ def effective_samples(law: RodLawFit, n_samples: Any) -> np.ndarray:
     """Effective number of independent friction samples in a record of ``n_samples``
     samples, as the campaign's tests show it.
 
-    Every test of the campaign has n_g samples and n_eff,g = n_g / τ_g effective ones
-    (τ_g the inflation of its residuals' autocorrelation; ``RodLawFit.test_n_effective``).
-    The tests of one length are summarised by their median n_eff; between the campaign's
-    lengths n_eff is interpolated in log–log; a record shorter than the shortest test
-    keeps that test's inflation (n × n_eff/n of it); a record longer than the longest is
-    credited the longest test's n_eff — the data say nothing about errors decorrelating
-    over a record longer than any measured, and on a bench the slow, long tests are the
-    ones whose residual is smoothest (on the embedded campaign τ is 1 at 2–3.5 Hz, 3.5 at
-    1 Hz and 15 at 0.5 Hz).  Laws from files of earlier versions (no per-test counts)
-    use the campaign's mean inflation n/n_eff and count at most its average test length.
+    Every campaign test has n_g samples and n_eff,g = n_g / τ_g (``test_n_effective``: its
+    residuals' autocorrelation), the median per length interpolated in log–log; shorter
+    than every test: the shortest's inflation; longer than every test: the longest's
+    n_eff — nothing says an error decorrelates over a longer record than any measured, and
+    the slow tests' residual is the smoothest (embedded campaign: τ 1 at 2–3.5 Hz, 15 at
+    0.5 Hz).  Laws of earlier versions (no per-test counts): the mean inflation n/n_eff,
+    at most the average test length.
     """
     n = np.asarray(n_samples, dtype=float)
     ns = np.asarray(law.test_n_samples, dtype=float)
