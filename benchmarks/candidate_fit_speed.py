@@ -67,6 +67,7 @@ def main(argv=None) -> int:
     ap.add_argument("--members", default="compliance,cogging")
     ap.add_argument("--data-root", default="/tmp/ehsa_candidate_fit_speed")
     args = ap.parse_args(argv)
+    sys.stdout.reconfigure(line_buffering=True)
     data_dir = campaign(args.case, Path(args.data_root))
     settings = DiscrepancySettings()
     quiet = lambda msg: None  # noqa: E731
