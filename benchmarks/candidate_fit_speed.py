@@ -98,14 +98,17 @@ def main(argv=None) -> int:
             rig_module.USE_MAP = True
             (s0, r0, f0, h0), (s1, r1, f1, h1) = out["cvodes"], out["map"]
             eff = [q.name for q in comps[name].parameters]
+            specs = {**rig_module.BASE_SPECS, **{q.name: q for q in comps[name].parameters}}
+            # relative to the larger of the value and its typical scale (a friction level
+            # fitted to ~0 would otherwise give a meaningless ratio)
             diffs = {n: abs(r1.parameters[n] - r0.parameters[n]) /
-                     max(abs(r0.parameters[n]), 1e-12) for n in r0.free
-                     if n in r1.parameters}
+                     max(abs(r0.parameters[n]), rig_module.param_scale(specs[n]))
+                     for n in r0.free if n in r1.parameters and n in specs}
             worst = max(diffs, key=diffs.get) if diffs else "-"
             print(f"  {name:<12} ratio cvodes/map {s0 / s1:5.1f}x; effect "
                   + ", ".join(f"{n} {r0.parameters[n]:.4g} -> {r1.parameters[n]:.4g}"
                               for n in eff)
-                  + f"; largest relative parameter change {diffs.get(worst, 0):.2e} "
+                  + f"; largest parameter change (relative to value or scale) {diffs.get(worst, 0):.2e} "
                   f"({worst}); fit SSE change {(f1 - f0) / f0:+.2e}, held-out "
                   f"{(h1 - h0) / h0:+.2e}")
             rows.append((name, s0, s1))
