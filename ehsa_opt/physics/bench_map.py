@@ -22,9 +22,9 @@ differentiable exactly), and one ``mapaccum`` call runs the whole record.
   break the order of any fixed-step rule; those stay on CVODES.
 
 Accuracy (tested in ``tests/physics/test_bench_map.py`` against CVODES at rtol 1e-10 on
-recorded and sine motions, a 5e5 and a 1e9 N/m mount compliance, cogging): the
-noise-normalised rms difference is below 0.02 (CVODES at rtol 1e-7, the discrepancy
-fits' default, differs from rtol 1e-10 by up to 0.9 on the 1e9 N/m mount).
+recorded and sine motions: the rigid rig, a 5e5 and a 1e9 N/m mount compliance, cogging):
+the noise-normalised rms difference is below 0.02 (0.1 on the 1e9 N/m mount, where CVODES
+at rtol 1e-7, the discrepancy fits' default, is itself 0.5 off).
 """
 
 from __future__ import annotations
