@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -52,7 +52,8 @@ class PolishOutcome:
 
 def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
            free: Sequence[str], *, max_iter: int = 8, diff_step: float = 1e-3,
-           log_names: Sequence[str] = (), ftol: float = 1e-8) -> PolishOutcome:
+           log_names: Sequence[str] = (), ftol: float = 1e-8,
+           predictor: Callable[..., list[np.ndarray]] = predict) -> PolishOutcome:
     """Refine a collocation fit on the forward simulation itself.
 
     The collocation defects are a one-step rule on the sample grid; a stiff
@@ -81,6 +82,10 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     ftol : float
         Stop when an iteration lowers the SSE by less than this share
         (``scipy.optimize.least_squares``' ``ftol``).
+    predictor : callable
+        The forward simulation, ``(prepared, rig, parameters) -> outputs``:
+        :func:`~.rig.predict` (CVODES, default) or :func:`~.rig.predict_map` (the
+        compiled Radau IIA map, for a smooth rig).
     """
     from scipy.optimize import least_squares
     t0 = time.perf_counter()
@@ -114,7 +119,7 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
             raise _Stop
         counter[0] += 1
         vals = {**base, **{n: float(v) for n, v in zip(free, values(z))}}
-        preds = predict(prepared, rig, vals)
+        preds = predictor(prepared, rig, vals)
         r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
                             for pt, yp in zip(prepared, preds)])
         r = np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=-1e6)
