@@ -40,12 +40,12 @@ from typing import Sequence
 
 import numpy as np
 
-from .evidence import WHITE_P, delta_bic, earns, residual_is_white
+from .evidence import WHITE_P, delta_bic, earns, effective_samples, residual_is_white
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 
 __all__ = ["TermProposal", "feature_library", "discover_term", "propose_term", "shift_lag",
-           "shift_sse_curves", "GROUPS", "LAG_GRID_S", "TERM_PREFERENCE"]
+           "shift_sse_curves", "per_test_delays", "GROUPS", "LAG_GRID_S", "TERM_PREFERENCE"]
 
 #: Feature groups of the library, in the order they are described.
 GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity")
@@ -78,6 +78,13 @@ class TermProposal:
         Held-out SSE of the noise-normalised force residual.
     quantity : dict
         The named quantity (e.g. ``{"lag_ms": 3.1}``, ``{"stroke_mm": [4, 10]}``).
+    sse_fit_before, sse_fit_after : float
+        The same SSE on the fit tests (where the term was fitted).
+    earns : bool
+        Whether the term earns by the decision rule (:func:`propose_term`).
+    refused : str
+        Why a term that would earn by its size is not a term of the record ("" when
+        it is not refused; :func:`propose_term`).
     """
 
     success: bool
@@ -91,7 +98,10 @@ class TermProposal:
     sse_before: float = math.nan
     sse_after: float = math.nan
     quantity: dict = field(default_factory=dict)
+    sse_fit_before: float = math.nan
+    sse_fit_after: float = math.nan
     earns: bool = False
+    refused: str = ""
 
     def as_dict(self) -> dict:
         return {"description": self.description, "group": self.group,
@@ -99,7 +109,8 @@ class TermProposal:
                 "error_before": self.error_before, "error_after": self.error_after,
                 "sse_before": self.sse_before, "sse_after": self.sse_after,
                 "quantity": self.quantity, "earns_on_heldout": self.earns,
-                "message": self.message}
+                "sse_fit_before": self.sse_fit_before, "sse_fit_after": self.sse_fit_after,
+                "refused": self.refused, "message": self.message}
 
 
 def _stroke_centres(pts: Sequence[PreparedTest]) -> tuple[np.ndarray, float]:
@@ -212,9 +223,11 @@ def _describe(group: str, sel: dict[str, float], centres: np.ndarray, width: flo
 
 def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarray],
                   eval_pts: Sequence[PreparedTest], eval_preds: Sequence[np.ndarray], *,
-                  lead_m_per_rad: float, seed: int = 0) -> TermProposal:
+                  lead_m_per_rad: float, seed: int = 0,
+                  exclude: tuple[str, ...] = ()) -> TermProposal:
     """Sparse regression of the fit tests' force residual on :func:`feature_library`;
-    the term's gain is measured on ``eval_pts`` (the held-out tests).
+    the term's gain is measured on ``eval_pts`` (the held-out tests).  ``exclude``:
+    feature groups left out of the library (``"lag"``: also no time-shift proposal).
 
     Returns a :class:`TermProposal` (``earns`` is left to the caller's decision rule).
     """
@@ -225,6 +238,10 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
 
     centres, width = _stroke_centres(list(fit_pts) + list(eval_pts))
     X, y, _, names, groups = _stack(fit_pts, fit_preds, lead_m_per_rad, centres, width)
+    use = np.array([g not in exclude for g in groups])
+    X = X[:, use]
+    names = [n for n, u in zip(names, use) if u]
+    groups = [g for g, u in zip(groups, use) if u]
     scale = np.sqrt(np.mean(X ** 2, axis=0))
     scale[scale == 0] = 1.0
     Xs = X / scale
@@ -263,7 +280,7 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     term_fit = X[:, support] @ b
     sel = {names[k]: float(coef[k]) for k in support}
     desc, qty = _describe(group, sel, centres, width, coef, names)
-    lag = shift_lag(fit_pts, fit_preds)
+    lag = None if "lag" in exclude else shift_lag(fit_pts, fit_preds)
     if lag is not None and lag[1] < float((y - term_fit) @ (y - term_fit)):
         # a pure time shift of the model force explains the fit set better than the
         # sparse term: propose the lag (exact shift, not its first-order Taylor term)
@@ -274,7 +291,7 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     for pt, yp in zip(eval_pts, eval_preds):
         Xe, _, _ = feature_library(pt, yp, lead_m_per_rad=lead_m_per_rad, centres=centres,
                                    width_m=width)
-        corr = Xe @ coef
+        corr = Xe[:, use] @ coef
         r0 = (pt.y[0] - yp[0]) * pt.wnorm[0]
         r1 = (pt.y[0] - yp[0] - corr) * pt.wnorm[0]
         sse_b += float(r0 @ r0)
@@ -290,7 +307,8 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
                               f"(fit-set SSE {float(y @ y):.4g} -> "
                               f"{float((y - term_fit) @ (y - term_fit)):.4g})",
                         desc, group, shares, {names[k]: float(coef[k]) for k in support},
-                        e0, e1, sse_b, sse_a, qty)
+                        e0, e1, sse_b, sse_a, qty, float(y @ y),
+                        float((y - term_fit) @ (y - term_fit)))
 
 
 #: Lags searched by :func:`shift_lag`, s.
@@ -318,6 +336,22 @@ def shift_lag(pts, preds) -> tuple[float, float] | None:
     return float(LAG_GRID_S[k]), float(sses[k])
 
 
+def per_test_delays(pts, preds, n_eff: float) -> float:
+    """ΔBIC of one delay per test against one delay for all (< 0: the tests' own delays
+    fit significantly better).
+
+    A delay of the force channel is one number for the whole record: the same at every
+    frequency of a sine, every speed of a stroke, every protocol.  A residual that a
+    time shift reduces for another reason — friction whose transition at a reversal
+    takes a distance (presliding), so that the lead it looks like is that distance over
+    the speed — asks for a different shift on each test.  Per-test delays then reduce
+    the SSE beyond what their ``len(pts) - 1`` extra parameters explain (ΔBIC with the
+    effective sample size ``n_eff`` of the fit tests)."""
+    curves = shift_sse_curves(pts, preds)
+    return delta_bic(float(curves.min(axis=1).sum()), float(curves.sum(axis=0).min()),
+                     len(pts) - 1, n_eff)
+
+
 def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
     tau = lag[0]
     pb, pa, ym = [], [], []
@@ -338,7 +372,7 @@ def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
                         f"displacement", "lag", shares, {"lag_s": tau},
                         force_relative_error_percent(np.concatenate(pb), m),
                         force_relative_error_percent(np.concatenate(pa), m), sse_b, sse_a,
-                        {"lag_ms": 1e3 * tau})
+                        {"lag_ms": 1e3 * tau}, sse_fit0, lag[1])
 
 
 #: A catalogue effect that earns is still not named when the data-driven term leaves
@@ -351,17 +385,40 @@ TERM_PREFERENCE = 0.5
 
 
 def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> TermProposal:
-    """The data-driven term of the current residual, judged by the decision rule —
-    none when the residual of the fit tests is white (Ljung–Box, :func:`~.evidence.residual_is_white`):
-    a term fitted to a white residual is fitted to noise."""
+    """The data-driven term of the current residual, judged like a catalogue effect.
+
+    * None when the residual of the fit tests is white (Ljung–Box,
+      :func:`~.evidence.residual_is_white`): a term fitted to a white residual is
+      fitted to noise.
+    * A term of the ``lag`` group (a time shift of the force) is a delay of the record
+      only when one delay fits every fit test (:func:`per_test_delays`, the check the
+      ``force_lag`` member makes): otherwise the shift stands for a lead that depends
+      on the motion (friction presliding), it is refused (``refused`` says why) and the
+      term is sought again without the lag features.
+    * The term earns by :func:`~.evidence.earns`: its share of the held-out error above
+      the noise floor, ΔBIC < 0 on the fit tests (``N_eff`` of the fit residual) and on
+      the held-out tests (``n_eff``), one parameter per selected column.
+    """
     white, p = residual_is_white(fit_pts, fit_pred)
     if white:
         return TermProposal(True, f"the residual is white (Ljung-Box p = {p:.2g} > "
                                   f"{WHITE_P:g} on every fit test): no term proposed",
                             description="none (white residual)")
     term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead, seed=seed)
+    n_eff_fit = effective_samples(fit_pts, fit_pred)
+    refused = ""
+    if term.group == "lag" and len(fit_pts) > 1:
+        spread = per_test_delays(fit_pts, fit_pred, n_eff_fit)
+        if spread < 0:
+            refused = (f"{term.description}: refused — not a delay of the record, the best "
+                       f"delay differs from test to test (per-test delays against one: "
+                       f"ΔBIC {spread:.3g} < 0)")
+            term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead,
+                                 seed=seed, exclude=("lag",))
+    term.refused = refused
     if term.columns:
-        d_b = delta_bic(term.sse_after, term.sse_before, len(term.columns), n_eff)
-        term.earns = earns(term.error_before, term.error_after, floor, d_b, d_b)
+        k = len(term.columns)
+        d_fit = delta_bic(term.sse_fit_after, term.sse_fit_before, k, n_eff_fit)
+        d_held = delta_bic(term.sse_after, term.sse_before, k, n_eff)
+        term.earns = earns(term.error_before, term.error_after, floor, d_fit, d_held)
     return term
-
