@@ -21,6 +21,16 @@ what they would mean:
     falling with current (magnetic saturation).
 ``velocity``
     tanh(v/u), v, v|v|, a, 1: a friction or inertia law of another shape.
+``presliding``
+    sign(v) exp(−s/ℓ), s the rod's travel since the last reversal, ℓ on
+    :data:`PRESLIDING_LENGTHS_M`: friction that changes over a *distance* after each
+    reversal (presliding, a transition length) rather than over a velocity — a
+    friction law of another shape too.
+
+A term of the ``velocity`` or ``presliding`` group (:data:`FRICTION_LAW_GROUPS`) is a
+friction law the baseline's does not follow, not an effect the rig lacks: it is
+reported (the residual's shape, in words) but does not make the answer "none of the
+catalogue" (:func:`names_an_effect`).
 
 The sparse regression is scikit-learn's :class:`~sklearn.linear_model.LassoCV`
 (contiguous folds, so neighbouring samples do not leak between folds) on
@@ -40,15 +50,22 @@ from typing import Sequence
 
 import numpy as np
 
-from .evidence import WHITE_P, delta_bic, earns, effective_samples, residual_is_white
+from .evidence import WHITE_P, autocorrelation_time, delta_bic, earns, effective_samples, residual_is_white
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 
-__all__ = ["TermProposal", "feature_library", "discover_term", "propose_term", "shift_lag",
+__all__ = ["TermProposal", "names_an_effect", "travel_since_reversal_m", "FRICTION_LAW_GROUPS",
+           "PRESLIDING_LENGTHS_M", "feature_library", "discover_term", "propose_term", "shift_lag",
            "shift_sse_curves", "per_test_delays", "GROUPS", "LAG_GRID_S", "TERM_PREFERENCE"]
 
 #: Feature groups of the library, in the order they are described.
-GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity")
+GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity", "presliding")
+#: Groups that describe the friction (or inertia) law itself: a term of these is a
+#: friction law of another shape, not an effect outside the catalogue.
+FRICTION_LAW_GROUPS: tuple[str, ...] = ("velocity", "presliding")
+#: Transition lengths ℓ of the presliding columns sign(v) exp(−s/ℓ), m of rod travel
+#: (ball-screw presliding displacements are tens of µm; the grid spans 10 µm – 0.3 mm).
+PRESLIDING_LENGTHS_M: tuple[float, ...] = (1e-5, 3e-5, 1e-4, 3e-4)
 #: Gaussian bumps over the stroke.
 N_STROKE_BUMPS = 16
 #: Highest rotor-angle harmonic, periods per revolution.
@@ -155,7 +172,24 @@ def feature_library(pt: PreparedTest, pred: np.ndarray, *, lead_m_per_rad: float
     add(v * np.abs(v), "v|v|", "velocity")
     add(a, "a", "velocity")
     add(np.ones_like(v), "1", "velocity")
+    s = travel_since_reversal_m(x, v)
+    for ell in PRESLIDING_LENGTHS_M:
+        add(np.sign(v) * np.exp(-s / ell), f"sign(v)*exp(-s/{1e6 * ell:.0f} um)", "presliding")
     return np.column_stack(cols), names, groups
+
+
+def travel_since_reversal_m(x: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """|x − x at the last reversal| per sample (m); infinite before the first reversal
+    (the record starts in motion: no transition is known to be under way)."""
+    sg = np.sign(v)
+    idx = np.flatnonzero((sg[1:] != sg[:-1]) & (sg[1:] != 0)) + 1
+    last = np.full(x.size, -1)
+    last[idx] = idx
+    last = np.maximum.accumulate(last)
+    out = np.full(x.size, np.inf)
+    k = last >= 0
+    out[k] = np.abs(x[k] - x[last[k]])
+    return out
 
 
 def _stack(pts, preds, lead, centres, width):
@@ -169,6 +203,22 @@ def _stack(pts, preds, lead, centres, width):
         ys.append((pt.y[0] - yp[0]) * w)
         ws.append(w)
     return np.vstack(Xs), np.concatenate(ys), np.concatenate(ws), names, groups
+
+
+def _lasso_support(Xs: np.ndarray, y: np.ndarray, seed: int) -> np.ndarray:
+    """Columns of ``Xs`` (standardised) that scikit-learn's LassoCV selects (contiguous
+    folds: neighbouring samples do not leak between folds)."""
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.linear_model import LassoCV
+    with warnings.catch_warnings():  # a path point short of convergence is harmless:
+        warnings.simplefilter("ignore", ConvergenceWarning)  # the support is refitted
+        # precompute: coordinate descent on the Gram matrix (features ≪ samples;
+        # same alpha and support, EMPS 24 841 × 86: 4 s → 0.4 s)
+        lasso = LassoCV(cv=5, alphas=30, max_iter=3000, tol=1e-3, fit_intercept=False,
+                        precompute=True, random_state=seed).fit(Xs, y)
+    return np.flatnonzero(np.abs(lasso.coef_) > 1e-10)
 
 
 def _describe(group: str, sel: dict[str, float], centres: np.ndarray, width: float,
@@ -217,6 +267,10 @@ def _describe(group: str, sel: dict[str, float], centres: np.ndarray, width: flo
     if group == "current":
         return ("force term in the current (i|i|, i³): a generator constant changing with "
                 "current (e.g. magnetic saturation)", {k: v for k, v in sel.items()})
+    if group == "presliding":
+        return ("friction changing over a distance after each reversal (presliding, a "
+                "transition length): a friction law of another shape",
+                {k: v for k, v in sel.items()})
     return ("velocity/acceleration-dependent force of another shape (friction or inertia "
             "law)", {k: v for k, v in sel.items()})
 
@@ -231,11 +285,6 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
 
     Returns a :class:`TermProposal` (``earns`` is left to the caller's decision rule).
     """
-    import warnings
-
-    from sklearn.exceptions import ConvergenceWarning
-    from sklearn.linear_model import LassoCV
-
     centres, width = _stroke_centres(list(fit_pts) + list(eval_pts))
     X, y, _, names, groups = _stack(fit_pts, fit_preds, lead_m_per_rad, centres, width)
     use = np.array([g not in exclude for g in groups])
@@ -246,22 +295,15 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     scale[scale == 0] = 1.0
     Xs = X / scale
     try:
-        with warnings.catch_warnings():  # a path point short of convergence is harmless:
-            warnings.simplefilter("ignore", ConvergenceWarning)  # the support is refitted
-            # precompute: coordinate descent on the Gram matrix (features ≪ samples;
-            # same alpha and support, EMPS 24 841 × 86: 4 s → 0.4 s)
-            lasso = LassoCV(cv=5, alphas=30, max_iter=3000, tol=1e-3, fit_intercept=False,
-                            precompute=True, random_state=seed).fit(Xs, y)
+        support = _lasso_support(Xs, y, seed)
     except ValueError as exc:
         return TermProposal(False, f"sparse regression failed: {exc}")
-    support = np.flatnonzero(np.abs(lasso.coef_) > 1e-10)
     if support.size == 0:
         return TermProposal(True, "the sparse regression selects no feature (residual is noise)")
-    # least-squares refit on the support (debiased)
+    # least-squares refit on the support (debiased): the groups' shares of the term
     b, *_ = np.linalg.lstsq(X[:, support], y, rcond=None)
     coef = np.zeros(X.shape[1])
     coef[support] = b
-    term_fit = X[:, support] @ b
     shares = {}
     for g in GROUPS:
         idx = [k for k in support if groups[k] == g]
@@ -270,20 +312,37 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
             shares[g] = float(part @ part)
     tot = sum(shares.values()) or 1.0
     shares = {g: v / tot for g, v in shares.items()}
-    group = max(shares, key=shares.get)
-    # the proposed term is the dominant group's selected columns alone, refitted
-    # (what the words name; the other groups' small pieces would overfit the fit set)
-    support = np.array([k for k in support if groups[k] == group])
-    b, *_ = np.linalg.lstsq(X[:, support], y, rcond=None)
+    # the proposed term has one physical support: one group's columns (what the words
+    # name), each group's selected columns refitted alone, the group chosen by BIC
+    # on the fit tests with the force residual's effective sample size.  (Not the
+    # group with most of the joint term's energy: collinear groups — bumps in stroke
+    # and harmonics in rotor angle — cancel each other with large coefficients.)
+    n_eff = sum(pt.n_resolved / autocorrelation_time(((pt.y[0] - yp[0]) * pt.wnorm[0])
+                                                     [pt.weight > 0])
+                for pt, yp in zip(fit_pts, fit_preds))
+    pen = math.log(max(n_eff, 2.0))
+    best = None
+    for g in GROUPS:
+        sup = np.array([k for k in support if groups[k] == g], dtype=int)
+        if not sup.size:
+            continue
+        bg, *_ = np.linalg.lstsq(X[:, sup], y, rcond=None)
+        res = y - X[:, sup] @ bg
+        bic = n_eff * math.log(max(float(res @ res), 1e-300)) + sup.size * pen
+        if best is None or bic < best[0]:
+            best = (bic, g, sup, bg)
+    if best is None:
+        return TermProposal(True, "the sparse regression selects no feature (residual is noise)")
+    _, group, support, b = best
     coef = np.zeros(X.shape[1])
     coef[support] = b
     term_fit = X[:, support] @ b
     sel = {names[k]: float(coef[k]) for k in support}
     desc, qty = _describe(group, sel, centres, width, coef, names)
     lag = None if "lag" in exclude else shift_lag(fit_pts, fit_preds)
-    if lag is not None and lag[1] < float((y - term_fit) @ (y - term_fit)):
-        # a pure time shift of the model force explains the fit set better than the
-        # sparse term: propose the lag (exact shift, not its first-order Taylor term)
+    if lag is not None and (n_eff * math.log(max(lag[1], 1e-300)) + pen < best[0]):
+        # a pure time shift of the model force (one parameter) explains the fit set
+        # better than the sparse term: propose the lag (exact shift, not its Taylor term)
         return _lag_proposal(lag, eval_pts, eval_preds, shares, float(y @ y))
     # the held-out gain of the whole selected term
     sse_b = sse_a = 0.0
@@ -309,6 +368,15 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
                         desc, group, shares, {names[k]: float(coef[k]) for k in support},
                         e0, e1, sse_b, sse_a, qty, float(y @ y),
                         float((y - term_fit) @ (y - term_fit)))
+
+
+def names_an_effect(term: "TermProposal | None") -> bool:
+    """Whether a data-driven term makes the answer "none of the catalogue": it earns and
+    is not a friction law of another shape (:data:`FRICTION_LAW_GROUPS`).  The
+    catalogue's friction effects and the baseline's friction law describe the force as
+    a function of the motion alone; a term that is such a function is that law refined
+    — a misspecified friction curve, not an effect the rig lacks."""
+    return term is not None and term.earns and term.group not in FRICTION_LAW_GROUPS
 
 
 #: Lags searched by :func:`shift_lag`, s.
@@ -378,9 +446,11 @@ def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
 #: A catalogue effect that earns is still not named when the data-driven term leaves
 #: less than this share of the effect's remaining error above the noise floor (the
 #: catalogue name would point at the wrong part: e.g. backlash for a lagging force
-#: channel).  Not applied to a term of the ``velocity`` group: a friction law of another
-#: shape is what the catalogue's friction effects are (its constant column *is* a
-#: direction-dependent Coulomb level, collinear with the offset).
+#: channel).  Not applied to a term of :data:`FRICTION_LAW_GROUPS`: a friction law of
+#: another shape is what the catalogue's friction effects are (the constant column *is*
+#: a direction-dependent Coulomb level, collinear with the offset), and a friction
+#: transition over a distance after each reversal is what a gap looks like in the force
+#: (the gap is told from presliding by the rotor's channel, the voltage, not by this).
 TERM_PREFERENCE = 0.5
 
 
