@@ -269,7 +269,7 @@ def _describe(group: str, sel: dict[str, float], centres: np.ndarray, width: flo
                 "current (e.g. magnetic saturation)", {k: v for k, v in sel.items()})
     if group == "presliding":
         return ("friction changing over a distance after each reversal (presliding, a "
-                "transition length): a friction law of another shape",
+                "transition length)",
                 {k: v for k, v in sel.items()})
     return ("velocity/acceleration-dependent force of another shape (friction or inertia "
             "law)", {k: v for k, v in sel.items()})

@@ -358,9 +358,9 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
         msg += f"; proposed term: {term.description}"
     elif term is not None and term.earns and not effects:
         # a friction law of another shape: said, but it is not an effect the rig lacks
-        note = (f"the residual is a friction law of another shape than the baseline's, not "
-                f"an effect: {term.description} ({evaluation} error {term.error_before:.3f} "
-                f"-> {term.error_after:.3f} % with that term)")
+        note = (f"no effect named: the term that explains the residual is a friction law "
+                f"of another shape than the baseline's — {term.description} ({evaluation} "
+                f"error {term.error_before:.3f} -> {term.error_after:.3f} % with that term)")
         msg += f"; {note}"
         notes.append(note)
     if term is not None and term.refused:
