@@ -105,3 +105,14 @@ def test_a_friction_transition_over_a_distance_is_a_friction_law_not_an_effect()
     term = propose_term(*_residual_case(rough), LEAD, 0, 0.5, 2000.0)
     assert term.group == "stroke" and term.earns, term.description
     assert names_an_effect(term)
+
+
+@pytest.mark.parametrize("group, extra", [
+    ("rotor_angle", lambda pt: 5.0 * np.sin(12 * pt.u[0] / LEAD + 0.3)),  # a detent
+    ("rotor_angle", lambda pt: 0.05 * pt.y[0] * np.sin(pt.u[0] / LEAD)),  # a lead error
+    ("velocity", lambda pt: 200.0 * pt.u[1]),  # more viscous friction: no effect
+])
+def test_the_support_is_chosen_by_bic_and_only_friction_laws_name_nothing(group, extra):
+    term = propose_term(*_residual_case(extra), LEAD, 0, 0.5, 2000.0)
+    assert term.group == group and term.earns, term.description
+    assert names_an_effect(term) == (group != "velocity")
