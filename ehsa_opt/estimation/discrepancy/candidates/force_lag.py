@@ -26,7 +26,7 @@ from ..evidence import (
 from ..fit import fit_group
 from ..prepared import PreparedTest, decimated, prepare_tests
 from ..rig import predict
-from ..terms import per_test_delays, shift_lag
+from ..terms import DELAY_SPREAD_BIC, per_test_delays, shift_lag
 
 __all__ = ["try_lag", "per_test_delays"]
 
@@ -59,9 +59,10 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
     if lag is None:
         return None
     spread_bic = per_test_delays(fit_pts, fit_pred, n_eff_fit)
-    if spread_bic < 0:
+    if spread_bic < DELAY_SPREAD_BIC:
         say(f"force_lag: not a channel delay — the best delay differs from test to test "
-            f"(per-test delays against one delay: ΔBIC {spread_bic:.3g} < 0): the force's "
+            f"(per-test delays against one delay: ΔBIC {spread_bic:.3g} < "
+            f"{DELAY_SPREAD_BIC:g}): the force's "
             f"lead depends on the motion, which a delay of the record does not")
         return None
     tau = lag[0]
