@@ -356,7 +356,7 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
         notes.append(state.cut)
     if effect == NONE_OF_CATALOGUE:
         msg += f"; proposed term: {term.description}"
-    elif term is not None and term.earns and not effects:
+    elif effect == "none" and term is not None and term.earns:
         # a friction law of another shape: said, but it is not an effect the rig lacks
         note = (f"no effect named: the term that explains the residual is a friction law "
                 f"of another shape than the baseline's — {term.description} ({evaluation} "
