@@ -58,7 +58,7 @@ from .lookahead import (
     supported,
 )
 from .results import CandidateResult, DiscrepancySettings
-from .terms import TERM_PREFERENCE, propose_term
+from .terms import FRICTION_LAW_GROUPS, TERM_PREFERENCE, propose_term
 
 __all__ = ["SearchTests", "SearchState", "RoundRanking", "run_rounds", "rank_round",
            "judge_round", "widen_round", "add_winner", "should_widen", "WIDEN_BELOW"]
@@ -379,7 +379,7 @@ def _term_preferred(rnd: int, win: CandidateResult, tests: SearchTests, state: S
                          state.n_eff_held if tests.held_pts else state.n_eff_fit)
     ex_win = math.sqrt(max(win.error_after ** 2 - floor ** 2, 0.0))
     ex_term = math.sqrt(max(rival.error_after ** 2 - floor ** 2, 0.0))
-    if rival.earns and rival.group != "velocity" and ex_term < TERM_PREFERENCE * ex_win:
+    if rival.earns and rival.group not in FRICTION_LAW_GROUPS and ex_term < TERM_PREFERENCE * ex_win:
         say(f"round {rnd}: {win.effect} earns ({win.error_after:.3f} %) but a data-driven "
             f"term explains the residual far better ({rival.error_after:.3f} %): "
             f"{rival.description}")

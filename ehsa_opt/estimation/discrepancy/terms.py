@@ -21,6 +21,16 @@ what they would mean:
     falling with current (magnetic saturation).
 ``velocity``
     tanh(v/u), v, v|v|, a, 1: a friction or inertia law of another shape.
+``presliding``
+    sign(v) exp(−s/ℓ), s the rod's travel since the last reversal, ℓ on
+    :data:`PRESLIDING_LENGTHS_M`: friction that changes over a *distance* after each
+    reversal (presliding, a transition length) rather than over a velocity — a
+    friction law of another shape too.
+
+A term of the ``velocity`` or ``presliding`` group (:data:`FRICTION_LAW_GROUPS`) is a
+friction law the baseline's does not follow, not an effect the rig lacks: it is
+reported (the residual's shape, in words) but does not make the answer "none of the
+catalogue" (:func:`names_an_effect`).
 
 The sparse regression is scikit-learn's :class:`~sklearn.linear_model.LassoCV`
 (contiguous folds, so neighbouring samples do not leak between folds) on
@@ -40,15 +50,23 @@ from typing import Sequence
 
 import numpy as np
 
-from .evidence import WHITE_P, delta_bic, earns, residual_is_white
+from .evidence import WHITE_P, autocorrelation_time, delta_bic, earns, effective_samples, residual_is_white
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 
-__all__ = ["TermProposal", "feature_library", "discover_term", "propose_term", "shift_lag",
-           "shift_sse_curves", "GROUPS", "LAG_GRID_S", "TERM_PREFERENCE"]
+__all__ = ["TermProposal", "names_an_effect", "travel_since_reversal_m", "FRICTION_LAW_GROUPS",
+           "PRESLIDING_LENGTHS_M", "feature_library", "discover_term", "propose_term", "shift_lag",
+           "shift_sse_curves", "per_test_delays", "DELAY_SPREAD_BIC", "GROUPS", "LAG_GRID_S",
+           "TERM_PREFERENCE"]
 
 #: Feature groups of the library, in the order they are described.
-GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity")
+GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity", "presliding")
+#: Groups that describe the friction (or inertia) law itself: a term of these is a
+#: friction law of another shape, not an effect outside the catalogue.
+FRICTION_LAW_GROUPS: tuple[str, ...] = ("velocity", "presliding")
+#: Transition lengths ℓ of the presliding columns sign(v) exp(−s/ℓ), m of rod travel
+#: (ball-screw presliding displacements are tens of µm; the grid spans 10 µm – 0.3 mm).
+PRESLIDING_LENGTHS_M: tuple[float, ...] = (1e-5, 3e-5, 1e-4, 3e-4)
 #: Gaussian bumps over the stroke.
 N_STROKE_BUMPS = 16
 #: Highest rotor-angle harmonic, periods per revolution.
@@ -78,6 +96,13 @@ class TermProposal:
         Held-out SSE of the noise-normalised force residual.
     quantity : dict
         The named quantity (e.g. ``{"lag_ms": 3.1}``, ``{"stroke_mm": [4, 10]}``).
+    sse_fit_before, sse_fit_after : float
+        The same SSE on the fit tests (where the term was fitted).
+    earns : bool
+        Whether the term earns by the decision rule (:func:`propose_term`).
+    refused : str
+        Why a term that would earn by its size is not a term of the record ("" when
+        it is not refused; :func:`propose_term`).
     """
 
     success: bool
@@ -91,7 +116,10 @@ class TermProposal:
     sse_before: float = math.nan
     sse_after: float = math.nan
     quantity: dict = field(default_factory=dict)
+    sse_fit_before: float = math.nan
+    sse_fit_after: float = math.nan
     earns: bool = False
+    refused: str = ""
 
     def as_dict(self) -> dict:
         return {"description": self.description, "group": self.group,
@@ -99,7 +127,8 @@ class TermProposal:
                 "error_before": self.error_before, "error_after": self.error_after,
                 "sse_before": self.sse_before, "sse_after": self.sse_after,
                 "quantity": self.quantity, "earns_on_heldout": self.earns,
-                "message": self.message}
+                "sse_fit_before": self.sse_fit_before, "sse_fit_after": self.sse_fit_after,
+                "refused": self.refused, "message": self.message}
 
 
 def _stroke_centres(pts: Sequence[PreparedTest]) -> tuple[np.ndarray, float]:
@@ -144,7 +173,24 @@ def feature_library(pt: PreparedTest, pred: np.ndarray, *, lead_m_per_rad: float
     add(v * np.abs(v), "v|v|", "velocity")
     add(a, "a", "velocity")
     add(np.ones_like(v), "1", "velocity")
+    s = travel_since_reversal_m(x, v)
+    for ell in PRESLIDING_LENGTHS_M:
+        add(np.sign(v) * np.exp(-s / ell), f"sign(v)*exp(-s/{1e6 * ell:.0f} um)", "presliding")
     return np.column_stack(cols), names, groups
+
+
+def travel_since_reversal_m(x: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """|x − x at the last reversal| per sample (m); infinite before the first reversal
+    (the record starts in motion: no transition is known to be under way)."""
+    sg = np.sign(v)
+    idx = np.flatnonzero((sg[1:] != sg[:-1]) & (sg[1:] != 0)) + 1
+    last = np.full(x.size, -1)
+    last[idx] = idx
+    last = np.maximum.accumulate(last)
+    out = np.full(x.size, np.inf)
+    k = last >= 0
+    out[k] = np.abs(x[k] - x[last[k]])
+    return out
 
 
 def _stack(pts, preds, lead, centres, width):
@@ -158,6 +204,22 @@ def _stack(pts, preds, lead, centres, width):
         ys.append((pt.y[0] - yp[0]) * w)
         ws.append(w)
     return np.vstack(Xs), np.concatenate(ys), np.concatenate(ws), names, groups
+
+
+def _lasso_support(Xs: np.ndarray, y: np.ndarray, seed: int) -> np.ndarray:
+    """Columns of ``Xs`` (standardised) that scikit-learn's LassoCV selects (contiguous
+    folds: neighbouring samples do not leak between folds)."""
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.linear_model import LassoCV
+    with warnings.catch_warnings():  # a path point short of convergence is harmless:
+        warnings.simplefilter("ignore", ConvergenceWarning)  # the support is refitted
+        # precompute: coordinate descent on the Gram matrix (features ≪ samples;
+        # same alpha and support, EMPS 24 841 × 86: 4 s → 0.4 s)
+        lasso = LassoCV(cv=5, alphas=30, max_iter=3000, tol=1e-3, fit_intercept=False,
+                        precompute=True, random_state=seed).fit(Xs, y)
+    return np.flatnonzero(np.abs(lasso.coef_) > 1e-10)
 
 
 def _describe(group: str, sel: dict[str, float], centres: np.ndarray, width: float,
@@ -206,45 +268,43 @@ def _describe(group: str, sel: dict[str, float], centres: np.ndarray, width: flo
     if group == "current":
         return ("force term in the current (i|i|, i³): a generator constant changing with "
                 "current (e.g. magnetic saturation)", {k: v for k, v in sel.items()})
+    if group == "presliding":
+        return ("friction changing over a distance after each reversal (presliding, a "
+                "transition length)",
+                {k: v for k, v in sel.items()})
     return ("velocity/acceleration-dependent force of another shape (friction or inertia "
             "law)", {k: v for k, v in sel.items()})
 
 
 def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarray],
                   eval_pts: Sequence[PreparedTest], eval_preds: Sequence[np.ndarray], *,
-                  lead_m_per_rad: float, seed: int = 0) -> TermProposal:
+                  lead_m_per_rad: float, seed: int = 0,
+                  exclude: tuple[str, ...] = ()) -> TermProposal:
     """Sparse regression of the fit tests' force residual on :func:`feature_library`;
-    the term's gain is measured on ``eval_pts`` (the held-out tests).
+    the term's gain is measured on ``eval_pts`` (the held-out tests).  ``exclude``:
+    feature groups left out of the library (``"lag"``: also no time-shift proposal).
 
     Returns a :class:`TermProposal` (``earns`` is left to the caller's decision rule).
     """
-    import warnings
-
-    from sklearn.exceptions import ConvergenceWarning
-    from sklearn.linear_model import LassoCV
-
     centres, width = _stroke_centres(list(fit_pts) + list(eval_pts))
     X, y, _, names, groups = _stack(fit_pts, fit_preds, lead_m_per_rad, centres, width)
+    use = np.array([g not in exclude for g in groups])
+    X = X[:, use]
+    names = [n for n, u in zip(names, use) if u]
+    groups = [g for g, u in zip(groups, use) if u]
     scale = np.sqrt(np.mean(X ** 2, axis=0))
     scale[scale == 0] = 1.0
     Xs = X / scale
     try:
-        with warnings.catch_warnings():  # a path point short of convergence is harmless:
-            warnings.simplefilter("ignore", ConvergenceWarning)  # the support is refitted
-            # precompute: coordinate descent on the Gram matrix (features ≪ samples;
-            # same alpha and support, EMPS 24 841 × 86: 4 s → 0.4 s)
-            lasso = LassoCV(cv=5, alphas=30, max_iter=3000, tol=1e-3, fit_intercept=False,
-                            precompute=True, random_state=seed).fit(Xs, y)
+        support = _lasso_support(Xs, y, seed)
     except ValueError as exc:
         return TermProposal(False, f"sparse regression failed: {exc}")
-    support = np.flatnonzero(np.abs(lasso.coef_) > 1e-10)
     if support.size == 0:
         return TermProposal(True, "the sparse regression selects no feature (residual is noise)")
-    # least-squares refit on the support (debiased)
+    # least-squares refit on the support (debiased): the groups' shares of the term
     b, *_ = np.linalg.lstsq(X[:, support], y, rcond=None)
     coef = np.zeros(X.shape[1])
     coef[support] = b
-    term_fit = X[:, support] @ b
     shares = {}
     for g in GROUPS:
         idx = [k for k in support if groups[k] == g]
@@ -253,20 +313,37 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
             shares[g] = float(part @ part)
     tot = sum(shares.values()) or 1.0
     shares = {g: v / tot for g, v in shares.items()}
-    group = max(shares, key=shares.get)
-    # the proposed term is the dominant group's selected columns alone, refitted
-    # (what the words name; the other groups' small pieces would overfit the fit set)
-    support = np.array([k for k in support if groups[k] == group])
-    b, *_ = np.linalg.lstsq(X[:, support], y, rcond=None)
+    # the proposed term has one physical support: one group's columns (what the words
+    # name), each group's selected columns refitted alone, the group chosen by BIC
+    # on the fit tests with the force residual's effective sample size.  (Not the
+    # group with most of the joint term's energy: collinear groups — bumps in stroke
+    # and harmonics in rotor angle — cancel each other with large coefficients.)
+    n_eff = sum(pt.n_resolved / autocorrelation_time(((pt.y[0] - yp[0]) * pt.wnorm[0])
+                                                     [pt.weight > 0])
+                for pt, yp in zip(fit_pts, fit_preds))
+    pen = math.log(max(n_eff, 2.0))
+    best = None
+    for g in GROUPS:
+        sup = np.array([k for k in support if groups[k] == g], dtype=int)
+        if not sup.size:
+            continue
+        bg, *_ = np.linalg.lstsq(X[:, sup], y, rcond=None)
+        res = y - X[:, sup] @ bg
+        bic = n_eff * math.log(max(float(res @ res), 1e-300)) + sup.size * pen
+        if best is None or bic < best[0]:
+            best = (bic, g, sup, bg)
+    if best is None:
+        return TermProposal(True, "the sparse regression selects no feature (residual is noise)")
+    _, group, support, b = best
     coef = np.zeros(X.shape[1])
     coef[support] = b
     term_fit = X[:, support] @ b
     sel = {names[k]: float(coef[k]) for k in support}
     desc, qty = _describe(group, sel, centres, width, coef, names)
-    lag = shift_lag(fit_pts, fit_preds)
-    if lag is not None and lag[1] < float((y - term_fit) @ (y - term_fit)):
-        # a pure time shift of the model force explains the fit set better than the
-        # sparse term: propose the lag (exact shift, not its first-order Taylor term)
+    lag = None if "lag" in exclude else shift_lag(fit_pts, fit_preds)
+    if lag is not None and (n_eff * math.log(max(lag[1], 1e-300)) + pen < best[0]):
+        # a pure time shift of the model force (one parameter) explains the fit set
+        # better than the sparse term: propose the lag (exact shift, not its Taylor term)
         return _lag_proposal(lag, eval_pts, eval_preds, shares, float(y @ y))
     # the held-out gain of the whole selected term
     sse_b = sse_a = 0.0
@@ -274,7 +351,7 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     for pt, yp in zip(eval_pts, eval_preds):
         Xe, _, _ = feature_library(pt, yp, lead_m_per_rad=lead_m_per_rad, centres=centres,
                                    width_m=width)
-        corr = Xe @ coef
+        corr = Xe[:, use] @ coef
         r0 = (pt.y[0] - yp[0]) * pt.wnorm[0]
         r1 = (pt.y[0] - yp[0] - corr) * pt.wnorm[0]
         sse_b += float(r0 @ r0)
@@ -290,7 +367,17 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
                               f"(fit-set SSE {float(y @ y):.4g} -> "
                               f"{float((y - term_fit) @ (y - term_fit)):.4g})",
                         desc, group, shares, {names[k]: float(coef[k]) for k in support},
-                        e0, e1, sse_b, sse_a, qty)
+                        e0, e1, sse_b, sse_a, qty, float(y @ y),
+                        float((y - term_fit) @ (y - term_fit)))
+
+
+def names_an_effect(term: "TermProposal | None") -> bool:
+    """Whether a data-driven term makes the answer "none of the catalogue": it earns and
+    is not a friction law of another shape (:data:`FRICTION_LAW_GROUPS`).  The
+    catalogue's friction effects and the baseline's friction law describe the force as
+    a function of the motion alone; a term that is such a function is that law refined
+    — a misspecified friction curve, not an effect the rig lacks."""
+    return term is not None and term.earns and term.group not in FRICTION_LAW_GROUPS
 
 
 #: Lags searched by :func:`shift_lag`, s.
@@ -318,6 +405,30 @@ def shift_lag(pts, preds) -> tuple[float, float] | None:
     return float(LAG_GRID_S[k]), float(sses[k])
 
 
+#: Per-test delays refuse one delay of the record only on very strong evidence: their
+#: ΔBIC against one delay below this (Kass & Raftery 1995: |ΔBIC| > 10).  The baseline
+#: is fitted on the delayed record and absorbs a little of a true delay differently per
+#: test (a 5 ms delay on our own generator: ΔBIC −3.8); friction presliding asks for
+#: shifts that differ by tens of ms (ΔBIC −119 to −1.9e3 on the clean tuning campaigns).
+DELAY_SPREAD_BIC = -10.0
+
+
+def per_test_delays(pts, preds, n_eff: float) -> float:
+    """ΔBIC of one delay per test against one delay for all (< 0: the tests' own delays
+    fit significantly better).
+
+    A delay of the force channel is one number for the whole record: the same at every
+    frequency of a sine, every speed of a stroke, every protocol.  A residual that a
+    time shift reduces for another reason — friction whose transition at a reversal
+    takes a distance (presliding), so that the lead it looks like is that distance over
+    the speed — asks for a different shift on each test.  Per-test delays then reduce
+    the SSE beyond what their ``len(pts) - 1`` extra parameters explain (ΔBIC with the
+    effective sample size ``n_eff`` of the fit tests)."""
+    curves = shift_sse_curves(pts, preds)
+    return delta_bic(float(curves.min(axis=1).sum()), float(curves.sum(axis=0).min()),
+                     len(pts) - 1, n_eff)
+
+
 def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
     tau = lag[0]
     pb, pa, ym = [], [], []
@@ -338,30 +449,55 @@ def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
                         f"displacement", "lag", shares, {"lag_s": tau},
                         force_relative_error_percent(np.concatenate(pb), m),
                         force_relative_error_percent(np.concatenate(pa), m), sse_b, sse_a,
-                        {"lag_ms": 1e3 * tau})
+                        {"lag_ms": 1e3 * tau}, sse_fit0, lag[1])
 
 
 #: A catalogue effect that earns is still not named when the data-driven term leaves
 #: less than this share of the effect's remaining error above the noise floor (the
 #: catalogue name would point at the wrong part: e.g. backlash for a lagging force
-#: channel).  Not applied to a term of the ``velocity`` group: a friction law of another
-#: shape is what the catalogue's friction effects are (its constant column *is* a
-#: direction-dependent Coulomb level, collinear with the offset).
+#: channel).  Not applied to a term of :data:`FRICTION_LAW_GROUPS`: a friction law of
+#: another shape is what the catalogue's friction effects are (the constant column *is*
+#: a direction-dependent Coulomb level, collinear with the offset), and a friction
+#: transition over a distance after each reversal is what a gap looks like in the force
+#: (the gap is told from presliding by the rotor's channel, the voltage, not by this).
 TERM_PREFERENCE = 0.5
 
 
 def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> TermProposal:
-    """The data-driven term of the current residual, judged by the decision rule —
-    none when the residual of the fit tests is white (Ljung–Box, :func:`~.evidence.residual_is_white`):
-    a term fitted to a white residual is fitted to noise."""
+    """The data-driven term of the current residual, judged like a catalogue effect.
+
+    * None when the residual of the fit tests is white (Ljung–Box,
+      :func:`~.evidence.residual_is_white`): a term fitted to a white residual is
+      fitted to noise.
+    * A term of the ``lag`` group (a time shift of the force) is a delay of the record
+      only when one delay fits every fit test (:func:`per_test_delays`, the check the
+      ``force_lag`` member makes): otherwise the shift stands for a lead that depends
+      on the motion (friction presliding), it is refused (``refused`` says why) and the
+      term is sought again without the lag features.
+    * The term earns by :func:`~.evidence.earns`: its share of the held-out error above
+      the noise floor, ΔBIC < 0 on the fit tests (``N_eff`` of the fit residual) and on
+      the held-out tests (``n_eff``), one parameter per selected column.
+    """
     white, p = residual_is_white(fit_pts, fit_pred)
     if white:
         return TermProposal(True, f"the residual is white (Ljung-Box p = {p:.2g} > "
                                   f"{WHITE_P:g} on every fit test): no term proposed",
                             description="none (white residual)")
     term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead, seed=seed)
+    n_eff_fit = effective_samples(fit_pts, fit_pred)
+    refused = ""
+    if term.group == "lag" and len(fit_pts) > 1:
+        spread = per_test_delays(fit_pts, fit_pred, n_eff_fit)
+        if spread < DELAY_SPREAD_BIC:
+            refused = (f"{term.description}: refused — not a delay of the record, the best "
+                       f"delay differs from test to test (per-test delays against one: "
+                       f"ΔBIC {spread:.3g} < {DELAY_SPREAD_BIC:g})")
+            term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead,
+                                 seed=seed, exclude=("lag",))
+    term.refused = refused
     if term.columns:
-        d_b = delta_bic(term.sse_after, term.sse_before, len(term.columns), n_eff)
-        term.earns = earns(term.error_before, term.error_after, floor, d_b, d_b)
+        k = len(term.columns)
+        d_fit = delta_bic(term.sse_fit_after, term.sse_fit_before, k, n_eff_fit)
+        d_held = delta_bic(term.sse_after, term.sse_before, k, n_eff)
+        term.earns = earns(term.error_before, term.error_after, floor, d_fit, d_held)
     return term
-

@@ -37,8 +37,10 @@ round after round, then propose a data-driven term for what no catalogue effect 
    added on top of it) until nothing earns or ``max_effects`` are named.
 8. **Outside the catalogue**: the remaining force residual is regressed on a
    library of physical features (:func:`~.terms.discover_term`); the term is
-   reported when it earns by the same rule.  No catalogue effect earned but the
-   term does → ``effect = "none of the catalogue"`` with the term in words.
+   reported when it earns by the same rule (a time shift only when one delay fits
+   every test).  No catalogue effect earned but the term does → ``effect = "none of
+   the catalogue"`` with the term in words — unless the term is a friction law of
+   another shape (:func:`~.terms.names_an_effect`): then ``none``, the shape said.
 
 :func:`run_discrepancy` runs these as named phases: :func:`load_data`,
 :func:`prepare_search_tests` (1), :func:`fit_baseline` (2–3), :func:`name_force_lag`
@@ -76,7 +78,7 @@ from .results import (
 )
 from .search import SearchState, SearchTests, run_rounds
 from .split import crop_test, load_split, spread_within
-from .terms import TermProposal, propose_term
+from .terms import TermProposal, names_an_effect, propose_term
 
 __all__ = ["run_discrepancy", "load_data", "prepare_search_tests", "fit_baseline", "Baseline",
            "name_force_lag", "name_drive_lag", "assemble_result", "BASELINE_MAX_SAMPLES",
@@ -342,7 +344,7 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
     elif state.cut:  # nothing named before the time budget: the work done does not say "none"
         effect = UNDECIDED
     else:
-        effect = NONE_OF_CATALOGUE if term is not None and term.earns else "none"
+        effect = NONE_OF_CATALOGUE if names_an_effect(term) else "none"
     loc1 = localise(fit_pts + held_pts, state.fit_pred + state.held_pred,
                     lead_m_per_rad=tests.lead_m_per_rad) if effects else None
     ok = base.fit.success and not state.cut and all(c.fit is not None and c.fit.parameters
@@ -354,6 +356,15 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
         notes.append(state.cut)
     if effect == NONE_OF_CATALOGUE:
         msg += f"; proposed term: {term.description}"
+    elif effect == "none" and term is not None and term.earns:
+        # a friction law of another shape: said, but it is not an effect the rig lacks
+        note = (f"no effect named: the term that explains the residual is a friction law "
+                f"of another shape than the baseline's — {term.description} ({evaluation} "
+                f"error {term.error_before:.3f} -> {term.error_after:.3f} % with that term)")
+        msg += f"; {note}"
+        notes.append(note)
+    if term is not None and term.refused:
+        notes.append(term.refused)
     validation = None
     if evaluation == "validation set" and not tests.rig.has_generator:
         raw = raw or ([pt.test for pt in fit_pts], [pt.test for pt in held_pts])

@@ -26,7 +26,7 @@ from ..evidence import (
 from ..fit import fit_group
 from ..prepared import PreparedTest, decimated, prepare_tests
 from ..rig import predict
-from ..terms import shift_lag, shift_sse_curves
+from ..terms import DELAY_SPREAD_BIC, per_test_delays, shift_lag
 
 __all__ = ["try_lag", "per_test_delays"]
 
@@ -47,22 +47,6 @@ def _lag_tests(pts: Sequence[PreparedTest], tau: float, has_generator: bool
     return out
 
 
-def per_test_delays(pts, preds, n_eff: float) -> float:
-    """ΔBIC of one delay per test against one delay for all (< 0: the tests' own delays
-    fit significantly better).
-
-    A delay of the force channel is one number for the whole record: the same at every
-    frequency of a sine, every speed of a stroke, every protocol.  A residual that a
-    time shift reduces for another reason — friction whose transition at a reversal
-    takes a distance (presliding), so that the lead it looks like is that distance over
-    the speed — asks for a different shift on each test.  Per-test delays then reduce
-    the SSE beyond what their ``len(pts) - 1`` extra parameters explain (ΔBIC with the
-    effective sample size ``n_eff`` of the fit tests)."""
-    curves = shift_sse_curves(pts, preds)
-    return delta_bic(float(curves.min(axis=1).sum()), float(curves.sum(axis=0).min()),
-                     len(pts) - 1, n_eff)
-
-
 def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit, n_eff_held,
              err0, settings, say, decimation: int = 1):
     """Catalogue member ``force_lag`` (a measurement-channel delay of the force): the
@@ -75,9 +59,10 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
     if lag is None:
         return None
     spread_bic = per_test_delays(fit_pts, fit_pred, n_eff_fit)
-    if spread_bic < 0:
+    if spread_bic < DELAY_SPREAD_BIC:
         say(f"force_lag: not a channel delay — the best delay differs from test to test "
-            f"(per-test delays against one delay: ΔBIC {spread_bic:.3g} < 0): the force's "
+            f"(per-test delays against one delay: ΔBIC {spread_bic:.3g} < "
+            f"{DELAY_SPREAD_BIC:g}): the force's "
             f"lead depends on the motion, which a delay of the record does not")
         return None
     tau = lag[0]
