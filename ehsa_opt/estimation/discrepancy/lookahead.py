@@ -46,6 +46,7 @@ def supported(c: Any) -> bool:
     a 12-per-rev cogging fitted alone stays small (the gap dominates the residual);
     the path is judged as a whole."""
     return bool(c.fitted and c.predictions is not None and getattr(c, "resolved", True)
+            and not getattr(c, "at_bound", ())
                 and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0)
 
 

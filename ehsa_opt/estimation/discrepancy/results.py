@@ -125,6 +125,8 @@ class CandidateResult:
     blocks_judged: int = 0
     earns_by: str = ""  # "total excess" | "own evidence" | ""
     resolved: bool = True
+    #: effect parameters fitted on a non-physical bound of their range (never earns)
+    at_bound: list[str] = field(default_factory=list)
     earns: bool = False
     parameters: dict[str, float] = field(default_factory=dict)
     intervals: dict[str, tuple[float, float] | None] = field(default_factory=dict)
@@ -142,7 +144,8 @@ class CandidateResult:
                 "sse_route_open": bool(self.sse_route),
                 "median_block_excess_reduction": self.block_reduction,
                 "blocks_judged": int(self.blocks_judged), "earns_by": self.earns_by,
-                "earns_its_parameters": bool(self.earns), "parameters": self.parameters,
+                "earns_its_parameters": bool(self.earns), "at_bound": list(self.at_bound),
+                "parameters": self.parameters,
                 "intervals_95": {k: list(v) if v else None for k, v in self.intervals.items()},
                 "ipopt_status": self.fit.message if self.fit else None,
                 "fit_seconds": self.fit.seconds if self.fit else None}

@@ -74,6 +74,11 @@ class Candidate:
         the effect earns only when the ~95 % interval of one of them excludes zero
         (:func:`~ehsa_opt.estimation.discrepancy.evidence.significant`).  Empty for a transmission effect, whose
         absence is a limit (infinite stiffness), not a zero.
+    limits : tuple of (str, str)
+        Bounds of the effect parameters that are physical limits, as (name, "lower" or
+        "upper"): a fit there is physical (a stiffness at its upper bound is the rigid
+        limit).  Every other nonzero bound is the edge of the member's physical range,
+        and a fit there does not earn (:func:`~ehsa_opt.estimation.discrepancy.evidence.at_bound`).
     impact_fit : bool
         A contact whose impacts the sample-wise fit cannot follow when stiff: when the
         data's transient energy far exceeds the current model's, it is fitted on
@@ -93,6 +98,7 @@ class Candidate:
     rigid_channels: tuple[int, ...] | None = None
     without_generator_only: bool = False
     impact_fit: bool = False
+    limits: tuple[tuple[str, str], ...] = ()
 
     def applicable(self, rig: Rig) -> bool:
         if self.without_generator_only and rig.has_generator:
@@ -122,7 +128,10 @@ CANDIDATES: dict[str, Candidate] = {
         # solve on the default data's 6 fit tests (4 tests: 5 s) - IPOPT on a stiff
         # contact's defects; Gauss-Newton from the screened start costs seconds
         effect_fit="simulation", full_refit="simulation",
-        log_names=("backlash_contact_stiffness_N_per_m",), impact_fit=True),
+        log_names=("backlash_contact_stiffness_N_per_m",), impact_fit=True,
+        # the rigid contact (at least this stiff) and the contact without rebound
+        limits=(("backlash_contact_stiffness_N_per_m", "upper"),
+                ("backlash_contact_damping_Ns_per_m", "upper"))),
     "asymmetric_friction": Candidate(
         "asymmetric_friction",
         probes=({"asym_coulomb_N": 5.0}, {"asym_viscous_Ns_per_m": 30.0}),
@@ -149,7 +158,8 @@ CANDIDATES: dict[str, Candidate] = {
         # on the simulation: on data it does not describe (e.g. a wide gap) the
         # effect-only collocation NLP of a compliance is degenerate and ran for > 20 min
         effect_fit="simulation", full_refit="simulation",
-        log_names=("compliance_stiffness_N_per_m",)),
+        log_names=("compliance_stiffness_N_per_m",),
+        limits=(("compliance_stiffness_N_per_m", "upper"),)),
     "voltage_drop": Candidate(
         "voltage_drop",
         probes=({"voltage_drop_V": 0.5},),
