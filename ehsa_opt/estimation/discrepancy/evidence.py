@@ -49,7 +49,7 @@ __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
            "own_evidence", "judge_candidate", "choose_winner", "MIN_EXCESS_REDUCTION",
            "MIN_EXCESS_OVER_FLOOR", "MIN_SSE_EXCESS", "BLOCKS_PER_TEST", "WHITE_P",
            "MASK_BEFORE_S", "MASK_AFTER_S", "refuted_by_rotor_channel", "at_bound",
-           "refuse_at_bound",
+           "refuse_at_bound", "own_channel_dbic",
            "AT_BOUND_REL"]
 
 
@@ -271,6 +271,15 @@ def significant(intervals: dict, amplitudes: Sequence[str]) -> bool:
     return any(lo > 0 or hi < 0 for lo, hi in known)
 
 
+def own_channel_dbic(c: Any) -> float:
+    """The candidate's held-out ΔBIC on its own channel (``c.channel_dbic`` at
+    ``c.own_channel``), NaN when either is unknown."""
+    ch, d = getattr(c, "own_channel", None), getattr(c, "channel_dbic", None)
+    if ch is None or not d or ch >= len(d):
+        return math.nan
+    return float(d[ch])
+
+
 def choose_winner(earning: Sequence[Any]) -> Any:
     """The earning candidate to add: the lowest held-out ΔBIC.
 
@@ -290,7 +299,15 @@ def choose_winner(earning: Sequence[Any]) -> Any:
     """
     if not earning:
         raise ValueError("choose_winner: no earning candidate")
-    return min(earning, key=lambda c: (c.delta_bic_heldout, c.sse_heldout))
+    physical = [c for c in earning if not getattr(c, "at_bound", ())] or list(earning)
+    own = [own_channel_dbic(c) for c in physical]
+    if len(physical) > 1 and all(map(math.isfinite, own)):
+        # each on the channel that sees it best: the all-channel ΔBIC let a mount
+        # compliance that trades the force's presliding misfit for the voltage win over
+        # the diode drop that removed 96 % of the voltage excess
+        return min(zip(own, physical), key=lambda t: (t[0], t[1].delta_bic_heldout,
+                                                      t[1].sse_heldout))[1]
+    return min(physical, key=lambda c: (c.delta_bic_heldout, c.sse_heldout))
 
 
 # ------------------------------------------------------------------ the effect's own evidence
@@ -521,6 +538,8 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     c.sse_reduction = channel_sse_excess_reduction(
         ch_sse0[ch], channel_sse(ev_pts, ev_pred)[0][ch], ch_n[ch])
     c.resolved = significant(c.intervals, member.amplitudes)
+    c.channel_dbic = [delta_bic(s1, s0, k, n_eff_held if held_pts else n_eff_fit)
+                      for s0, s1 in zip(ch_sse0, channel_sse(ev_pts, ev_pred)[0])]
     # the SSE (other-channel) route is for effects seen mainly in another channel: it is
     # offered where the force error has no excess beyond noise left, or where another
     # channel's excess over its noise expectation (SSE/N − 1) exceeds the force's;

@@ -70,3 +70,83 @@ def test_a_member_at_its_bound_does_not_earn():
     c.earns, c.parameters["compliance_stiffness_N_per_m"] = True, 5e5
     assert not refuse_at_bound(c, _specs("compliance"), CANDIDATES["compliance"])
     assert c.earns and c.at_bound == []
+
+
+def _stacked(n=2000, seed=0):
+    """A stacked, noise-normalised residual: a force misfit (a presliding-like hump at
+    each reversal, 8 sigma, and a ripple no member explains) and a voltage offset with
+    the current's sign (a diode drop, 2 sigma), each channel n samples, plus unit noise."""
+    import numpy as np
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 4, n)
+    v = np.sin(2 * np.pi * t)
+    hump = 8 * np.sign(v) * np.exp(-np.abs(np.sin(2 * np.pi * t)) * 3)
+    drop = -2 * np.sign(v)
+    r = np.concatenate([hump + 6 * np.sin(14 * np.pi * t), drop]) + rng.normal(size=2 * n)
+    chan = np.repeat([0, 1], n)
+    return r, chan, hump, drop, v
+
+
+def test_a_voltage_only_signature_ranks_above_a_force_member():
+    import numpy as np
+    from ehsa_opt.estimation.discrepancy.candidates.catalogue import (channel_parts,
+                                                                      rank_value)
+    r, chan, hump, drop, v = _stacked()
+    n = hump.size
+    # the voltage member: its signature is the drop on the voltage (and a trace on the force)
+    s_v = np.concatenate([0.05 * np.sign(v), -np.sign(v)])[:, None]
+    fit_v = s_v @ np.linalg.lstsq(s_v, r, rcond=None)[0]
+    # a force member whose columns follow the hump (and move the voltage a little)
+    s_f = np.concatenate([hump / 8, 0.1 * np.cos(2 * np.pi * np.linspace(0, 4, n))])[:, None]
+    fit_f = s_f @ np.linalg.lstsq(s_f, r, rcond=None)[0]
+    total = float(r @ r)
+    sc_v = {"score": float(fit_v @ fit_v) / total, **channel_parts(r, fit_v, s_v, chan, 2)}
+    sc_f = {"score": float(fit_f @ fit_f) / total, **channel_parts(r, fit_f, s_f, chan, 2)}
+    assert sc_v["channel"] == 1 and sc_f["channel"] == 0
+    # on the stacked residual the force member scores higher (the hump dominates) ...
+    assert sc_f["score"] > sc_v["score"]
+    # ... ranked on the channel that sees it, the voltage member comes first
+    assert sc_v["channel_shares"][1] > 0.7 and sc_v["channel_excess"][1] > 3
+    assert rank_value(sc_v) > rank_value(sc_f) == sc_f["score"]
+    # a voltage residual at the noise expectation gives no such lift
+    sc_v["channel_excess"] = [sc_v["channel_excess"][0], 0.1]
+    assert rank_value(sc_v) == sc_v["score"]
+
+
+def test_family_probes_are_combined_with_non_negative_weights():
+    import numpy as np
+    from ehsa_opt.estimation.discrepancy.candidates.catalogue import nnls_weights
+    assert CANDIDATES["compliance"].family_probes and CANDIDATES["backlash"].family_probes
+    assert not CANDIDATES["cogging"].family_probes
+    t = np.linspace(0, 1, 500)
+    a, b = np.exp(-t / 0.1), np.exp(-t / 0.12)  # two neighbouring members of a family
+    r = a - b  # their difference: no member of the family looks like it
+    S = np.column_stack([a, b])
+    w_free = np.linalg.lstsq(S, r, rcond=None)[0]
+    assert np.allclose(S @ w_free, r)  # unconstrained, the difference is "explained"
+    w = nnls_weights(S, r)
+    assert np.all(w >= 0)
+    explained = 1 - np.sum((r - S @ w) ** 2) / np.sum(r ** 2)
+    assert explained < 0.5
+    # a member between the probes is still explained by them
+    w = nnls_weights(S, 0.4 * a + 0.7 * b)
+    assert np.allclose(w, [0.4, 0.7], atol=1e-6)
+
+
+def test_the_winner_is_chosen_on_its_own_channel_among_physical_members():
+    from ehsa_opt.estimation.discrepancy.evidence import choose_winner
+    # the diode campaign: the drop removes the voltage excess; a compliance trading the
+    # force's presliding misfit for the voltage has the lower all-channel ΔBIC
+    drop = NS(effect="voltage_drop", delta_bic_heldout=-900.0, sse_heldout=50.0, at_bound=[],
+              own_channel=1, channel_dbic=[-10.0, -890.0])
+    comp = NS(effect="compliance", delta_bic_heldout=-1500.0, sse_heldout=40.0, at_bound=[],
+              own_channel=0, channel_dbic=[-700.0, -800.0])
+    assert choose_winner([comp, drop]) is drop
+    # without the channels known, the all-channel ΔBIC decides (as before)
+    assert choose_winner([NS(**{**comp.__dict__, "own_channel": None}), drop]).effect == \
+        "compliance"
+    # a member at bound is never preferred to a physical one
+    comp.channel_dbic = [-5000.0, -800.0]
+    assert choose_winner([comp, drop]) is comp
+    comp.at_bound = ["compliance_stiffness_N_per_m"]
+    assert choose_winner([comp, drop]) is drop

@@ -27,7 +27,8 @@ from ..rig import Rig, predict
 from ..localise import best_rotor_period, stroke_window
 
 __all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for",
-           "absorbed_columns", "compatible"]
+           "absorbed_columns", "compatible", "rank_value", "nnls_weights", "channel_parts",
+           "CHANNEL_EXCESS_MIN"]
 
 
 @dataclass(frozen=True)
@@ -79,6 +80,12 @@ class Candidate:
         "upper"): a fit there is physical (a stiffness at its upper bound is the rigid
         limit).  Every other nonzero bound is the edge of the member's physical range,
         and a fit there does not earn (:func:`~ehsa_opt.estimation.discrepancy.evidence.at_bound`).
+    family_probes : bool
+        The probes are points of a family the member moves along (a gap, a mount
+        stiffness over its decades), not independent directions (a cogging's sine and
+        cosine): the ranking combines them with non-negative weights only
+        (:func:`signature_scores`) — the member at some parameter between two probes,
+        never the difference of two members, which can mimic any shape.
     impact_fit : bool
         A contact whose impacts the sample-wise fit cannot follow when stiff: when the
         data's transient energy far exceeds the current model's, it is fitted on
@@ -99,6 +106,7 @@ class Candidate:
     without_generator_only: bool = False
     impact_fit: bool = False
     limits: tuple[tuple[str, str], ...] = ()
+    family_probes: bool = False
 
     def applicable(self, rig: Rig) -> bool:
         if self.without_generator_only and rig.has_generator:
@@ -129,6 +137,7 @@ CANDIDATES: dict[str, Candidate] = {
         # contact's defects; Gauss-Newton from the screened start costs seconds
         effect_fit="simulation", full_refit="simulation",
         log_names=("backlash_contact_stiffness_N_per_m",), impact_fit=True,
+        family_probes=True,
         # the rigid contact (at least this stiff) and the contact without rebound
         limits=(("backlash_contact_stiffness_N_per_m", "upper"),
                 ("backlash_contact_damping_Ns_per_m", "upper"))),
@@ -158,7 +167,7 @@ CANDIDATES: dict[str, Candidate] = {
         # on the simulation: on data it does not describe (e.g. a wide gap) the
         # effect-only collocation NLP of a compliance is degenerate and ran for > 20 min
         effect_fit="simulation", full_refit="simulation",
-        log_names=("compliance_stiffness_N_per_m",),
+        log_names=("compliance_stiffness_N_per_m",), family_probes=True,
         limits=(("compliance_stiffness_N_per_m", "upper"),)),
     "voltage_drop": Candidate(
         "voltage_drop",
@@ -240,6 +249,10 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
     names = list(names or CANDIDATES)
     r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel() for pt, yp in
                         zip(prepared, baseline_pred)])
+    # the output channel of each element of the stacked vectors
+    chan = np.concatenate([np.repeat(np.arange(pt.y.shape[0]), pt.y.shape[1])
+                           for pt in prepared])
+    n_ch = int(chan.max()) + 1 if chan.size else 1
     u_brk = float(baseline.get("nut_breakaway_velocity_m_per_s", 0.01))
     B = np.vstack([absorbed_columns(pt, rig, u_brk) for pt in prepared])
     Qb, _ = np.linalg.qr(B)
@@ -269,10 +282,75 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
         Qs, Rs = np.linalg.qr(S)
         keep = np.abs(np.diag(Rs)) > 1e-9 * max(np.abs(np.diag(Rs)).max(), 1e-300)
         Qs = Qs[:, keep]
-        proj = float(np.sum((Qs.T @ r_perp) ** 2))
+        if cand.family_probes:  # the member somewhere along its family: weights >= 0
+            fitted = S @ nnls_weights(S, r_perp)
+        else:
+            fitted = Qs @ (Qs.T @ r_perp)
+        proj = float(fitted @ fitted)
         out[name] = {"score": proj / total if total > 0 else 0.0, "chi2": proj,
-                     "columns": int(keep.sum()), "applicable": True}
+                     "columns": int(keep.sum()), "applicable": True,
+                     **channel_parts(r_perp, fitted, S, chan, n_ch)}
     return out
+
+
+def nnls_weights(S: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Non-negative least-squares weights of the columns ``S`` for ``r`` (columns scaled
+    to unit norm for the solver, weights returned in the columns' own scale)."""
+    from scipy.optimize import nnls
+    norm = np.linalg.norm(S, axis=0)
+    ok = norm > 0
+    w = np.zeros(S.shape[1])
+    if ok.any():
+        w[ok] = nnls(S[:, ok] / norm[ok], r)[0] / norm[ok]
+    return w
+
+
+def channel_parts(r: np.ndarray, fitted: np.ndarray, S: np.ndarray, chan: np.ndarray,
+                  n_ch: int) -> dict:
+    """Per output channel (0 force, 1 voltage) of the stacked, noise-normalised vectors:
+    the candidate's own channel (where its signature columns ``S`` carry most energy:
+    the channel that sees it best) and the share of each channel's residual ``r`` that
+    the candidate's fitted signature ``fitted`` explains, 1 − ‖r_c − f_c‖²/‖r_c‖²."""
+    energy = [float(np.sum(S[chan == c] ** 2)) for c in range(n_ch)]
+    shares = []
+    for c in range(n_ch):
+        rc, fc = r[chan == c], fitted[chan == c]
+        rr = float(rc @ rc)
+        shares.append(1.0 - float((rc - fc) @ (rc - fc)) / rr if rr > 0 else 0.0)
+    excess = []
+    for c in range(n_ch):
+        rc = r[chan == c]
+        excess.append(float(rc @ rc) / rc.size - 1.0 if rc.size else 0.0)
+    return {"channel": int(np.argmax(energy)) if any(energy) else 0,
+            "channel_shares": shares, "channel_excess": excess}
+
+
+#: A channel other than the force ranks a candidate by the share of its residual the
+#: candidate explains when its residual exceeds the noise expectation by this share
+#: (SSE/N − 1; the decision rule's all-channel alternative uses the same threshold).
+CHANNEL_EXCESS_MIN = 0.25
+
+
+def rank_value(sc: dict) -> float:
+    """The value a candidate is ranked by: its score (share of the stacked residual
+    its signature explains), or — for a member seen best on another channel than the
+    force (its ``channel``, e.g. a diode drop, a flux saturation or a winding heating
+    on the voltage) where that channel's residual has a real excess — the share of
+    that channel's residual it explains, when larger.
+
+    The stacked residual is dominated by the force whenever the force carries a misfit
+    (the friction law's presliding, which no member describes): a diode drop that
+    explains 90 % of the voltage residual then scored below a mount compliance that
+    explained 20 % of the force's, and was not fitted before the time budget.  An
+    effect is ranked on the channel that sees it."""
+    score = float(np.nan_to_num(sc.get("score", math.nan)))
+    c = sc.get("channel", 0)
+    shares, excess = sc.get("channel_shares"), sc.get("channel_excess")
+    if not c or shares is None or excess is None or c >= len(shares):
+        return score
+    if excess[c] <= CHANNEL_EXCESS_MIN:
+        return score
+    return max(score, float(shares[c]))
 
 
 def components_for(names: Sequence[str], prepared: Sequence[PreparedTest],
