@@ -150,3 +150,22 @@ def test_the_winner_is_chosen_on_its_own_channel_among_physical_members():
     assert choose_winner([comp, drop]) is comp
     comp.at_bound = ["compliance_stiffness_N_per_m"]
     assert choose_winner([comp, drop]) is drop
+
+
+def test_a_transmission_member_that_worsens_the_voltage_ranks_last():
+    from ehsa_opt.estimation.discrepancy.candidates.catalogue import (ROTOR_WORSE_SHARE,
+                                                                      rank_value)
+    # the winding-heating campaign: a compliance explains 53 % of the force residual
+    # and makes the voltage residual 3.3-fold; the heating explains 27 % of the voltage
+    comp = {"score": 0.46, "transmission": True, "channel": 1,
+            "channel_shares": [0.53, -2.31], "channel_excess": [205.0, 3.9]}
+    heat = {"score": 0.006, "transmission": False, "channel": 1,
+            "channel_shares": [0.0, 0.27], "channel_excess": [205.0, 3.9]}
+    assert rank_value(comp) == 0.0 < rank_value(heat) == 0.27
+    # a gap that explains both channels keeps its score
+    gap = {**comp, "channel_shares": [0.53, 0.2], "channel": 0}
+    assert rank_value(gap) == 0.46
+    # the same voltage loss is no reason to demote a member that is not a transmission
+    assert rank_value({**comp, "transmission": False}) == 0.46
+    comp["channel_shares"] = [0.53, -0.5 * ROTOR_WORSE_SHARE]
+    assert rank_value(comp) == 0.46

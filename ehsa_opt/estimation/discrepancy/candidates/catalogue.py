@@ -28,7 +28,7 @@ from ..localise import best_rotor_period, stroke_window
 
 __all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for",
            "absorbed_columns", "compatible", "rank_value", "nnls_weights", "channel_parts",
-           "CHANNEL_EXCESS_MIN"]
+           "CHANNEL_EXCESS_MIN", "ROTOR_WORSE_SHARE"]
 
 
 @dataclass(frozen=True)
@@ -289,6 +289,7 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
         proj = float(fitted @ fitted)
         out[name] = {"score": proj / total if total > 0 else 0.0, "chi2": proj,
                      "columns": int(keep.sum()), "applicable": True,
+                     "transmission": bool(comp.transmission),
                      **channel_parts(r_perp, fitted, S, chan, n_ch)}
     return out
 
@@ -331,6 +332,11 @@ def channel_parts(r: np.ndarray, fitted: np.ndarray, S: np.ndarray, chan: np.nda
 CHANNEL_EXCESS_MIN = 0.25
 
 
+#: A transmission member whose fitted signature makes the voltage residual's energy grow
+#: by more than this share is ranked behind every other member (:func:`rank_value`).
+ROTOR_WORSE_SHARE = 0.05
+
+
 def rank_value(sc: dict) -> float:
     """The value a candidate is ranked by: its score (share of the stacked residual
     its signature explains), or — for a member seen best on another channel than the
@@ -342,10 +348,20 @@ def rank_value(sc: dict) -> float:
     (the friction law's presliding, which no member describes): a diode drop that
     explains 90 % of the voltage residual then scored below a mount compliance that
     explained 20 % of the force's, and was not fitted before the time budget.  An
-    effect is ranked on the channel that sees it."""
+    effect is ranked on the channel that sees it.
+
+    A transmission member (a gap, a mount spring) whose fitted signature explains the
+    force by making the voltage — the rotor's speed — worse by more than
+    :data:`ROTOR_WORSE_SHARE` of its residual energy ranks 0: its refit would be
+    refuted by the rotor channel (:func:`~..evidence.refuted_by_rotor_channel`), and on
+    a winding-heating campaign a compliance that grew the voltage residual 3.3-fold
+    ranked first and took the budget."""
     score = float(np.nan_to_num(sc.get("score", math.nan)))
     c = sc.get("channel", 0)
     shares, excess = sc.get("channel_shares"), sc.get("channel_excess")
+    if (sc.get("transmission") and shares is not None and len(shares) > 1
+            and shares[1] < -ROTOR_WORSE_SHARE):
+        return 0.0
     if not c or shares is None or excess is None or c >= len(shares):
         return score
     if excess[c] <= CHANNEL_EXCESS_MIN:
