@@ -169,3 +169,27 @@ def test_a_transmission_member_that_worsens_the_voltage_ranks_last():
     assert rank_value({**comp, "transmission": False}) == 0.46
     comp["channel_shares"] = [0.53, -0.5 * ROTOR_WORSE_SHARE]
     assert rank_value(comp) == 0.46
+
+
+def test_impacts_rank_the_contact_member_first():
+    import numpy as np
+    from ehsa_opt.estimation.discrepancy.candidates.catalogue import rank_value
+    from ehsa_opt.estimation.discrepancy.impact_features import impact_energy_ratio
+    from ehsa_opt.estimation.discrepancy.impacts import IMPACT_ENERGY_RATIO
+
+    class _PT:  # what the transient energies read
+        def __init__(self, y):
+            self.y, self.sigma, self.weight = y, np.array([1.0, 0.02]), np.ones(y.shape[1])
+    t = np.arange(4000) * 1e-3
+    smooth = np.vstack([100 * np.sin(2 * np.pi * t), 3 * np.sin(2 * np.pi * t)])
+    hits = smooth.copy()
+    for k in range(250, 4000, 500):  # a decaying 300 Hz ringing at each reversal
+        j = np.arange(k, min(k + 60, 4000))
+        hits[0, j] += 800 * np.exp(-(j - k) / 10) * np.sin(2 * np.pi * 300 * t[j - k])
+    assert impact_energy_ratio([_PT(hits)], [smooth]) > IMPACT_ENERGY_RATIO
+    assert impact_energy_ratio([_PT(smooth + 0.0)], [smooth]) < 3
+    gap = {"score": 0.003, "impacts": 523.0, "transmission": True,
+           "channel_shares": [0.0, -0.5], "channel": 0, "channel_excess": [1900, 420]}
+    comp = {"score": 0.019, "transmission": True, "channel": 1,
+            "channel_shares": [0.001, 0.03], "channel_excess": [1900, 420]}
+    assert rank_value(gap) > 1.0 > rank_value(comp)
