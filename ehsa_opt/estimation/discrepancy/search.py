@@ -32,6 +32,7 @@ from .candidates import (
     fit_flexibility_member,
     flexibility_refusal,
     rank_value,
+    MIN_RANK_VALUE,
     signature_scores,
 )
 from .evidence import (
@@ -184,6 +185,12 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
     if judge is None:  # nothing can earn: the round is not re-identified
         all_cands += [rk.cands[n] for n in rk.order]
         return False, joint
+    if not rk.chosen:
+        note = (f"round {rnd}: no member's signature explains {100 * MIN_RANK_VALUE:g} % of "
+                f"the residual on the channel it is ranked on (or it would end at a bound "
+                f"of its range, or worsens the rotor's channel): none re-identified")
+        say(note)
+        notes.append(note)
     judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True)
     if rk.flex_out is not None and not rk.cands["flexibility"].earns:
         note = flexibility_refusal(rk.cands["flexibility"], rk.flex_out[1], rnd)
@@ -250,7 +257,8 @@ def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySett
                                 error_before=state.error,
                                 own_channel=scores[n].get("channel")) for n in order}
     chosen = [n for n in order if scores[n]["applicable"] and n != "flexibility"
-              and compatible(state.rig, comps[n])][:settings.top]
+              and compatible(state.rig, comps[n])
+              and rank_value(scores[n]) >= MIN_RANK_VALUE][:settings.top]
     return RoundRanking(comps, scores, flex_out, order, cands, chosen)
 
 
@@ -348,7 +356,8 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
         # it removes measures the chaos, not what is left unexplained
         return earning, first, blocked
     more = [n for n in order if n not in rk.chosen and rk.scores[n]["applicable"]
-            and n != "flexibility" and compatible(state.rig, rk.comps[n])]
+            and n != "flexibility" and compatible(state.rig, rk.comps[n])
+            and rank_value(rk.scores[n]) >= MIN_RANK_VALUE]
     if not more:
         return earning, first, blocked
     best = max(earning, key=lambda c: c.excess_reduction)

@@ -193,3 +193,21 @@ def test_impacts_rank_the_contact_member_first():
     comp = {"score": 0.019, "transmission": True, "channel": 1,
             "channel_shares": [0.001, 0.03], "channel_excess": [1900, 420]}
     assert rank_value(gap) > 1.0 > rank_value(comp)
+
+
+def test_a_family_fitted_on_its_edge_probe_ranks_as_at_bound():
+    from ehsa_opt.estimation.discrepancy.candidates.catalogue import (MIN_RANK_VALUE,
+                                                                      edge_dominated,
+                                                                      rank_value)
+    comp = CANDIDATES["compliance"]
+    edges = [bool(at_bound(p, _specs("compliance"), comp.limits)) for p in comp.probes]
+    assert edges == [True, False, False, False, False]  # the 1e4 N/m probe
+    # the diode campaign: 90 % of the fitted signature from the 1e4 N/m probe
+    assert edge_dominated([3487.0, 0.0, 101.0, 283.0, 19.0], edges)
+    # a 5e5 N/m mount spreads over the decades
+    assert not edge_dominated([639.0, 889.0, 0.0, 566.0, 809.0], edges)
+    assert not edge_dominated([0.0] * 5, edges)
+    sc = {"score": 0.42, "at_bound": True, "transmission": True, "channel": 1,
+          "channel_shares": [0.07, 0.45], "channel_excess": [160.0, 2670.0]}
+    assert rank_value(sc) == 0.0 < MIN_RANK_VALUE  # not re-identified
+    assert rank_value({**sc, "at_bound": False}) == 0.45

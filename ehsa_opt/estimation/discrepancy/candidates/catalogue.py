@@ -27,10 +27,11 @@ from ..rig import Rig, predict
 from ..localise import best_rotor_period, stroke_window
 from ..impact_features import impact_energy_ratio
 from ..impacts import IMPACT_ENERGY_RATIO
+from ..evidence import at_bound
 
 __all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for",
            "absorbed_columns", "compatible", "rank_value", "nnls_weights", "channel_parts",
-           "CHANNEL_EXCESS_MIN", "ROTOR_WORSE_SHARE"]
+           "CHANNEL_EXCESS_MIN", "ROTOR_WORSE_SHARE", "MIN_RANK_VALUE", "edge_dominated"]
 
 
 @dataclass(frozen=True)
@@ -287,18 +288,31 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
         Qs, Rs = np.linalg.qr(S)
         keep = np.abs(np.diag(Rs)) > 1e-9 * max(np.abs(np.diag(Rs)).max(), 1e-300)
         Qs = Qs[:, keep]
+        edge = False
         if cand.family_probes:  # the member somewhere along its family: weights >= 0
-            fitted = S @ nnls_weights(S, r_perp)
+            w = nnls_weights(S, r_perp)
+            fitted = S @ w
+            edge = edge_dominated(w * np.linalg.norm(S, axis=0), [
+                bool(at_bound(p, comp.parameters, cand.limits)) for p in cand.probes])
         else:
             fitted = Qs @ (Qs.T @ r_perp)
         proj = float(fitted @ fitted)
         out[name] = {"score": proj / total if total > 0 else 0.0, "chi2": proj,
                      "columns": int(keep.sum()), "applicable": True,
-                     "transmission": bool(comp.transmission),
+                     "transmission": bool(comp.transmission), "at_bound": edge,
                      "impacts": (impacts if cand.impact_fit and impacts > IMPACT_ENERGY_RATIO
                                  else None),
                      **channel_parts(r_perp, fitted, S, chan, n_ch)}
     return out
+
+
+def edge_dominated(contributions: np.ndarray, at_edge: Sequence[bool]) -> bool:
+    """Whether more than half of a probe family's fitted signature (``contributions``,
+    weight × column norm per probe) comes from probes on a non-physical edge of the
+    member's range (``at_edge``): the member would be fitted at its bound."""
+    c = np.abs(np.asarray(contributions, float))
+    edge = np.asarray(at_edge, bool)
+    return bool(c.sum() > 0 and c[edge].sum() > 0.5 * c.sum())
 
 
 def nnls_weights(S: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -339,6 +353,13 @@ def channel_parts(r: np.ndarray, fitted: np.ndarray, S: np.ndarray, chan: np.nda
 CHANNEL_EXCESS_MIN = 0.25
 
 
+#: A member whose :func:`rank_value` is below this is not re-identified: its signature
+#: explains under 2 % of the residual energy of the channel it is ranked on, i.e. it
+#: would remove about 1 % of the error's excess — a tenth of what it must remove to
+#: earn (the decision rule's 10 %).
+MIN_RANK_VALUE = 0.02
+
+
 #: A transmission member whose fitted signature makes the voltage residual's energy grow
 #: by more than this share is ranked behind every other member (:func:`rank_value`).
 ROTOR_WORSE_SHARE = 0.05
@@ -369,10 +390,17 @@ def rank_value(sc: dict) -> float:
     :data:`~..impacts.IMPACT_ENERGY_RATIO` (``sc["impacts"]``, the ratio): a rattling
     contact's sample-wise signature is not reproducible, so its linearised score is
     near 0 (0.003 on a 0.15 mm gap with a Hertzian contact, energy ratio 523, where the
-    six other tuning campaigns of that generator give 0.8-3.6)."""
+    six other tuning campaigns of that generator give 0.8-3.6).
+
+    A probe family whose fitted signature is dominated by the probe on a non-physical
+    edge of the range (``sc["at_bound"]``, :func:`edge_dominated`: the 1e4 N/m
+    mount) ranks 0, as its refit would end at that bound and not earn
+    (:func:`~..evidence.at_bound`)."""
     score = float(np.nan_to_num(sc.get("score", math.nan)))
     if sc.get("impacts"):
         return 1.0 + score
+    if sc.get("at_bound"):
+        return 0.0
     c = sc.get("channel", 0)
     shares, excess = sc.get("channel_shares"), sc.get("channel_excess")
     if (sc.get("transmission") and shares is not None and len(shares) > 1
