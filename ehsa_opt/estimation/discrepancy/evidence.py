@@ -573,6 +573,7 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
             f"{channel_sse(ev_pts, ev_pred)[0][1] / ch_n[1]:.3g} per sample")
     if impact_record(res) is not None and cur_ev_pred is not None:
         judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say)
+        c.channel_dbic = []  # judged on impacts: its sample-wise channels are not evidence
     refuse_at_bound(c, comps[name].parameters, member, say)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
