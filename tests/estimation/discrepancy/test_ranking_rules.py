@@ -89,9 +89,12 @@ def _stacked(n=2000, seed=0):
 
 def test_a_voltage_only_signature_ranks_above_a_force_member():
     import numpy as np
-    from ehsa_opt.estimation.discrepancy.candidates.catalogue import (channel_parts,
-                                                                      rank_value)
-    r, chan, hump, drop, v = _stacked()
+
+    from ehsa_opt.estimation.discrepancy.candidates.catalogue import (
+        channel_parts,
+        rank_value,
+    )
+    r, chan, hump, _drop, v = _stacked()
     n = hump.size
     # the voltage member: its signature is the drop on the voltage (and a trace on the force)
     s_v = np.concatenate([0.05 * np.sign(v), -np.sign(v)])[:, None]
@@ -115,6 +118,7 @@ def test_a_voltage_only_signature_ranks_above_a_force_member():
 
 def test_family_probes_are_combined_with_non_negative_weights():
     import numpy as np
+
     from ehsa_opt.estimation.discrepancy.candidates.catalogue import nnls_weights
     assert CANDIDATES["compliance"].family_probes and CANDIDATES["backlash"].family_probes
     assert not CANDIDATES["cogging"].family_probes
@@ -153,8 +157,10 @@ def test_the_winner_is_chosen_on_its_own_channel_among_physical_members():
 
 
 def test_a_transmission_member_that_worsens_the_voltage_ranks_last():
-    from ehsa_opt.estimation.discrepancy.candidates.catalogue import (ROTOR_WORSE_SHARE,
-                                                                      rank_value)
+    from ehsa_opt.estimation.discrepancy.candidates.catalogue import (
+        ROTOR_WORSE_SHARE,
+        rank_value,
+    )
     # the winding-heating campaign: a compliance explains 53 % of the force residual
     # and makes the voltage residual 3.3-fold; the heating explains 27 % of the voltage
     comp = {"score": 0.46, "transmission": True, "channel": 1,
@@ -173,6 +179,7 @@ def test_a_transmission_member_that_worsens_the_voltage_ranks_last():
 
 def test_impacts_rank_the_contact_member_first():
     import numpy as np
+
     from ehsa_opt.estimation.discrepancy.candidates.catalogue import rank_value
     from ehsa_opt.estimation.discrepancy.impact_features import impact_energy_ratio
     from ehsa_opt.estimation.discrepancy.impacts import IMPACT_ENERGY_RATIO
@@ -196,9 +203,11 @@ def test_impacts_rank_the_contact_member_first():
 
 
 def test_a_family_fitted_on_its_edge_probe_ranks_as_at_bound():
-    from ehsa_opt.estimation.discrepancy.candidates.catalogue import (MIN_RANK_VALUE,
-                                                                      edge_dominated,
-                                                                      rank_value)
+    from ehsa_opt.estimation.discrepancy.candidates.catalogue import (
+        MIN_RANK_VALUE,
+        edge_dominated,
+        rank_value,
+    )
     comp = CANDIDATES["compliance"]
     edges = [bool(at_bound(p, _specs("compliance"), comp.limits)) for p in comp.probes]
     assert edges == [True, False, False, False, False]  # the 1e4 N/m probe
