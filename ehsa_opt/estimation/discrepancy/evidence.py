@@ -48,7 +48,9 @@ __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
            "residual_is_white", "disturbance_masks", "block_excess_reductions",
            "own_evidence", "judge_candidate", "choose_winner", "MIN_EXCESS_REDUCTION",
            "MIN_EXCESS_OVER_FLOOR", "MIN_SSE_EXCESS", "BLOCKS_PER_TEST", "WHITE_P",
-           "MASK_BEFORE_S", "MASK_AFTER_S", "refuted_by_rotor_channel"]
+           "MASK_BEFORE_S", "MASK_AFTER_S", "refuted_by_rotor_channel", "at_bound",
+           "refuse_at_bound", "own_channel_dbic",
+           "AT_BOUND_REL"]
 
 
 # ------------------------------------------------------------------ residual size
@@ -269,6 +271,15 @@ def significant(intervals: dict, amplitudes: Sequence[str]) -> bool:
     return any(lo > 0 or hi < 0 for lo, hi in known)
 
 
+def own_channel_dbic(c: Any) -> float:
+    """The candidate's held-out ΔBIC on its own channel (``c.channel_dbic`` at
+    ``c.own_channel``), NaN when either is unknown."""
+    ch, d = getattr(c, "own_channel", None), getattr(c, "channel_dbic", None)
+    if ch is None or not d or ch >= len(d):
+        return math.nan
+    return float(d[ch])
+
+
 def choose_winner(earning: Sequence[Any]) -> Any:
     """The earning candidate to add: the lowest held-out ΔBIC.
 
@@ -288,7 +299,15 @@ def choose_winner(earning: Sequence[Any]) -> Any:
     """
     if not earning:
         raise ValueError("choose_winner: no earning candidate")
-    return min(earning, key=lambda c: (c.delta_bic_heldout, c.sse_heldout))
+    physical = [c for c in earning if not getattr(c, "at_bound", ())] or list(earning)
+    own = [own_channel_dbic(c) for c in physical]
+    if len(physical) > 1 and all(map(math.isfinite, own)):
+        # each on the channel that sees it best: the all-channel ΔBIC let a mount
+        # compliance that trades the force's presliding misfit for the voltage win over
+        # the diode drop that removed 96 % of the voltage excess
+        return min(zip(own, physical), key=lambda t: (t[0], t[1].delta_bic_heldout,
+                                                      t[1].sse_heldout))[1]
+    return min(physical, key=lambda c: (c.delta_bic_heldout, c.sse_heldout))
 
 
 # ------------------------------------------------------------------ the effect's own evidence
@@ -400,6 +419,75 @@ def own_evidence(reductions: np.ndarray, min_reduction: float) -> tuple[bool, fl
     return bool(med >= min_reduction), med, int(r.size)
 
 
+# ------------------------------------------------------------------ physical parameters
+#: A fitted effect parameter within this share of a bound's magnitude of that bound is
+#: "at bound" (:func:`at_bound`).
+AT_BOUND_REL = 0.05
+
+
+def at_bound(parameters: dict[str, float], specs: Sequence[Any],
+             limits: Sequence[tuple[str, str]] = (), rel: float = AT_BOUND_REL) -> list[str]:
+    """The effect parameters fitted at (or within ``rel`` of) a bound of their search
+    range that is not a physical limit of the effect.
+
+    A member's search range (:class:`~ehsa_opt.physics.components.ParamSpec` lower,
+    upper) is the range over which its law describes a physical rig: a mount softer
+    than 1e4 N/m would deflect by more than the stroke under the friction alone, a
+    cogging above 0.1 N m would stall the screw.  A fit that ends on such an edge says
+    the data want the member outside its physics: it is used as a surrogate for
+    something else (on a Shockley-diode campaign a 1e4 N/m compliance "won" a round
+    against the 0.54 V voltage drop that had earned).  Such a member does not earn;
+    the range is not widened (beyond it the law stops describing the rig).  Two kinds
+    of bound are physical limits and are not counted: a zero lower bound (the quantity
+    vanishes: no damping, no drop) and the bounds listed in ``limits`` (a contact's
+    stiffness at its upper bound is the rigid contact: "at least this stiff").
+
+    Parameters
+    ----------
+    parameters : dict
+        Fitted effect parameters (name → value, the parameter's units).
+    specs : sequence of ParamSpec
+        The member's parameter specifications (``name``, ``lower``, ``upper``).
+    limits : sequence of (name, "lower" | "upper")
+        Bounds that are the effect's physical limits.
+    rel : float
+        Relative distance to the bound counted as at the bound, ``|v − b| ≤ rel |b|``.
+
+    Returns
+    -------
+    list of str
+        Names of the parameters at such a bound (empty: every parameter is inside).
+    """
+    if not 0.0 <= rel < 1.0:
+        raise ValueError(f"at_bound: rel must be in [0, 1), got {rel!r}")
+    free = set(map(tuple, limits))
+    out = []
+    for q in specs:
+        v = parameters.get(q.name)
+        if v is None or not math.isfinite(v):
+            continue
+        for side, b in (("lower", q.lower), ("upper", q.upper)):
+            if b == 0.0 or (q.name, side) in free or not math.isfinite(b):
+                continue
+            if abs(v - b) <= rel * abs(b):
+                out.append(q.name)
+                break
+    return out
+
+
+def refuse_at_bound(c: Any, specs: Sequence[Any], member: Any, say: Any = None) -> bool:
+    """Set ``c.at_bound`` (:func:`at_bound` of its fitted ``parameters`` with the
+    member's physical ``limits``) and withdraw its ``earns`` when it is not empty: an
+    unphysical fit does not earn.  Returns whether it was at a bound."""
+    c.at_bound = at_bound(c.parameters, specs, getattr(member, "limits", ()))
+    if c.at_bound and c.earns:
+        c.earns, c.earns_by = False, ""
+        if say is not None:
+            say(f"{c.effect}: at bound ({', '.join(c.at_bound)} on the edge of its "
+                f"physical range): an unphysical fit, not earned")
+    return bool(c.at_bound)
+
+
 # ------------------------------------------------------------------ judging a candidate
 def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff: float
                              ) -> bool:
@@ -450,6 +538,8 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     c.sse_reduction = channel_sse_excess_reduction(
         ch_sse0[ch], channel_sse(ev_pts, ev_pred)[0][ch], ch_n[ch])
     c.resolved = significant(c.intervals, member.amplitudes)
+    c.channel_dbic = [delta_bic(s1, s0, k, n_eff_held if held_pts else n_eff_fit)
+                      for s0, s1 in zip(ch_sse0, channel_sse(ev_pts, ev_pred)[0])]
     # the SSE (other-channel) route is for effects seen mainly in another channel: it is
     # offered where the force error has no excess beyond noise left, or where another
     # channel's excess over its noise expectation (SSE/N − 1) exceeds the force's;
@@ -483,6 +573,8 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
             f"{channel_sse(ev_pts, ev_pred)[0][1] / ch_n[1]:.3g} per sample")
     if impact_record(res) is not None and cur_ev_pred is not None:
         judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say)
+        c.channel_dbic = []  # judged on impacts: its sample-wise channels are not evidence
+    refuse_at_bound(c, comps[name].parameters, member, say)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
@@ -495,5 +587,6 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
         f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
         f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}{blk}; {res.seconds:.1f} s)"
-        f"{' EARNS (' + c.earns_by + ')' if c.earns else ''}; {pars}")
+        f"{' EARNS (' + c.earns_by + ')' if c.earns else ''}"
+        f"{' AT BOUND' if c.at_bound else ''}; {pars}")
 

@@ -34,6 +34,7 @@ def confounded(cands: Sequence[Any]) -> Any | None:
     effect's residual on the fit tests (a gap taking up a 12-per-rev cogging ripple:
     fit ΔBIC −1005, held-out error 14.28 → 15.41 %); None when there is none."""
     pool = [c for c in cands if c.fitted and not c.earns and c.predictions is not None
+            and not getattr(c, "at_bound", ())  # refused as unphysical, not confounded
             and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0]
     return min(pool, key=lambda c: c.delta_bic_fit) if pool else None
 
@@ -46,6 +47,7 @@ def supported(c: Any) -> bool:
     a 12-per-rev cogging fitted alone stays small (the gap dominates the residual);
     the path is judged as a whole."""
     return bool(c.fitted and c.predictions is not None and getattr(c, "resolved", True)
+                and not getattr(c, "at_bound", ())  # an unphysical fit is no first step
                 and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0)
 
 

@@ -125,6 +125,12 @@ class CandidateResult:
     blocks_judged: int = 0
     earns_by: str = ""  # "total excess" | "own evidence" | ""
     resolved: bool = True
+    #: effect parameters fitted on a non-physical bound of their range (never earns)
+    at_bound: list[str] = field(default_factory=list)
+    #: the output channel its signature is seen best on (0 force, 1 voltage), and the
+    #: held-out ΔBIC per channel (the winner is chosen on its own channel's)
+    own_channel: int | None = None
+    channel_dbic: list[float] = field(default_factory=list)
     earns: bool = False
     parameters: dict[str, float] = field(default_factory=dict)
     intervals: dict[str, tuple[float, float] | None] = field(default_factory=dict)
@@ -142,7 +148,10 @@ class CandidateResult:
                 "sse_route_open": bool(self.sse_route),
                 "median_block_excess_reduction": self.block_reduction,
                 "blocks_judged": int(self.blocks_judged), "earns_by": self.earns_by,
-                "earns_its_parameters": bool(self.earns), "parameters": self.parameters,
+                "earns_its_parameters": bool(self.earns), "at_bound": list(self.at_bound),
+                "own_channel": self.own_channel,
+                "delta_bic_heldout_per_channel": list(self.channel_dbic),
+                "parameters": self.parameters,
                 "intervals_95": {k: list(v) if v else None for k, v in self.intervals.items()},
                 "ipopt_status": self.fit.message if self.fit else None,
                 "fit_seconds": self.fit.seconds if self.fit else None}

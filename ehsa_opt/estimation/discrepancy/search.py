@@ -31,6 +31,8 @@ from .candidates import (
     components_for,
     fit_flexibility_member,
     flexibility_refusal,
+    rank_value,
+    MIN_RANK_VALUE,
     signature_scores,
 )
 from .evidence import (
@@ -183,6 +185,12 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
     if judge is None:  # nothing can earn: the round is not re-identified
         all_cands += [rk.cands[n] for n in rk.order]
         return False, joint
+    if not rk.chosen:
+        note = (f"round {rnd}: no member's signature explains {100 * MIN_RANK_VALUE:g} % of "
+                f"the residual on the channel it is ranked on (or it would end at a bound "
+                f"of its range, or worsens the rotor's channel): none re-identified")
+        say(note)
+        notes.append(note)
     judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True)
     if rk.flex_out is not None and not rk.cands["flexibility"].earns:
         note = flexibility_refusal(rk.cands["flexibility"], rk.flex_out[1], rnd)
@@ -241,13 +249,16 @@ def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySett
         if flex_out is None:
             scores["flexibility"] = {"score": math.nan, "chi2": math.nan, "columns": 0,
                                      "applicable": False}
+    # each member ranked on the channel that sees it best (rank_value)
     order = sorted(remaining, key=lambda n: (not scores[n]["applicable"],
-                                             -np.nan_to_num(scores[n]["score"])))
+                                             -rank_value(scores[n])))
     cands = {n: CandidateResult(n, scores[n]["applicable"], scores[n]["score"],
                                 scores[n]["chi2"], len(state.effects) + 1,
-                                error_before=state.error) for n in order}
+                                error_before=state.error,
+                                own_channel=scores[n].get("channel")) for n in order}
     chosen = [n for n in order if scores[n]["applicable"] and n != "flexibility"
-              and compatible(state.rig, comps[n])][:settings.top]
+              and compatible(state.rig, comps[n])
+              and rank_value(scores[n]) >= MIN_RANK_VALUE][:settings.top]
     return RoundRanking(comps, scores, flex_out, order, cands, chosen)
 
 
@@ -266,7 +277,12 @@ def _judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRa
     ch_sse0, ch_n = channel_sse(eval_pts, state.eval_pred())
     say(f"round {rnd} (error {cur_err:.3f} %, floor {floor:.3f} %, SSE/N {sse0 / n_obs:.3f}"
         f" [per channel " + ", ".join(f"{a / b:.3f}" for a, b in zip(ch_sse0, ch_n))
-        + "]) ranking: " + ", ".join(f"{n} {rk.scores[n]['score']:.3g}" for n in rk.order))
+        + "]) ranking: " + ", ".join(f"{n} {rk.scores[n]['score']:.3g}"
+                                     + (f" (channel {rk.scores[n]['channel']}: "
+                                        f"{rank_value(rk.scores[n]):.3g})"
+                                        if rank_value(rk.scores[n])
+                                        > np.nan_to_num(rk.scores[n]['score']) else "")
+                                     for n in rk.order))
     if not (can_earn(cur_err, floor, 0.0, 1.0) or sse_can_earn(ch_sse0, ch_n)):
         excess = math.sqrt(max(cur_err ** 2 - floor ** 2, 0.0))
         note = (f"round {rnd}: candidates not re-identified — the {tests.evaluation} force "
@@ -340,7 +356,8 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
         # it removes measures the chaos, not what is left unexplained
         return earning, first, blocked
     more = [n for n in order if n not in rk.chosen and rk.scores[n]["applicable"]
-            and n != "flexibility" and compatible(state.rig, rk.comps[n])]
+            and n != "flexibility" and compatible(state.rig, rk.comps[n])
+            and rank_value(rk.scores[n]) >= MIN_RANK_VALUE]
     if not more:
         return earning, first, blocked
     best = max(earning, key=lambda c: c.excess_reduction)

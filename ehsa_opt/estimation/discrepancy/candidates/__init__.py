@@ -17,6 +17,8 @@ from .catalogue import (
     candidate_names,
     compatible,
     components_for,
+    rank_value,
+    MIN_RANK_VALUE,
     signature_scores,
 )
 from .drive_lag import try_drive_lag
@@ -24,5 +26,6 @@ from .flexibility import fit_flexibility, fit_flexibility_member, flexibility_re
 from .force_lag import try_lag
 
 __all__ = ["CANDIDATES", "Candidate", "absorbed_columns", "candidate_names", "compatible",
-           "components_for", "signature_scores", "fit_flexibility", "fit_flexibility_member",
+           "components_for", "rank_value", "MIN_RANK_VALUE", "signature_scores",
+           "fit_flexibility", "fit_flexibility_member",
            "flexibility_refusal", "try_lag", "try_drive_lag"]

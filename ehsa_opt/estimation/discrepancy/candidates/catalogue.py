@@ -25,9 +25,13 @@ from ....physics import COMPONENTS, make_component
 from ..prepared import PreparedTest
 from ..rig import Rig, predict
 from ..localise import best_rotor_period, stroke_window
+from ..impact_features import impact_energy_ratio
+from ..impacts import IMPACT_ENERGY_RATIO
+from ..evidence import at_bound
 
 __all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for",
-           "absorbed_columns", "compatible"]
+           "absorbed_columns", "compatible", "rank_value", "nnls_weights", "channel_parts",
+           "CHANNEL_EXCESS_MIN", "ROTOR_WORSE_SHARE", "MIN_RANK_VALUE", "edge_dominated"]
 
 
 @dataclass(frozen=True)
@@ -74,6 +78,17 @@ class Candidate:
         the effect earns only when the ~95 % interval of one of them excludes zero
         (:func:`~ehsa_opt.estimation.discrepancy.evidence.significant`).  Empty for a transmission effect, whose
         absence is a limit (infinite stiffness), not a zero.
+    limits : tuple of (str, str)
+        Bounds of the effect parameters that are physical limits, as (name, "lower" or
+        "upper"): a fit there is physical (a stiffness at its upper bound is the rigid
+        limit).  Every other nonzero bound is the edge of the member's physical range,
+        and a fit there does not earn (:func:`~ehsa_opt.estimation.discrepancy.evidence.at_bound`).
+    family_probes : bool
+        The probes are points of a family the member moves along (a gap, a mount
+        stiffness over its decades), not independent directions (a cogging's sine and
+        cosine): the ranking combines them with non-negative weights only
+        (:func:`signature_scores`) — the member at some parameter between two probes,
+        never the difference of two members, which can mimic any shape.
     impact_fit : bool
         A contact whose impacts the sample-wise fit cannot follow when stiff: when the
         data's transient energy far exceeds the current model's, it is fitted on
@@ -93,6 +108,8 @@ class Candidate:
     rigid_channels: tuple[int, ...] | None = None
     without_generator_only: bool = False
     impact_fit: bool = False
+    limits: tuple[tuple[str, str], ...] = ()
+    family_probes: bool = False
 
     def applicable(self, rig: Rig) -> bool:
         if self.without_generator_only and rig.has_generator:
@@ -122,7 +139,11 @@ CANDIDATES: dict[str, Candidate] = {
         # solve on the default data's 6 fit tests (4 tests: 5 s) - IPOPT on a stiff
         # contact's defects; Gauss-Newton from the screened start costs seconds
         effect_fit="simulation", full_refit="simulation",
-        log_names=("backlash_contact_stiffness_N_per_m",), impact_fit=True),
+        log_names=("backlash_contact_stiffness_N_per_m",), impact_fit=True,
+        family_probes=True,
+        # the rigid contact (at least this stiff) and the contact without rebound
+        limits=(("backlash_contact_stiffness_N_per_m", "upper"),
+                ("backlash_contact_damping_Ns_per_m", "upper"))),
     "asymmetric_friction": Candidate(
         "asymmetric_friction",
         probes=({"asym_coulomb_N": 5.0}, {"asym_viscous_Ns_per_m": 30.0}),
@@ -149,7 +170,8 @@ CANDIDATES: dict[str, Candidate] = {
         # on the simulation: on data it does not describe (e.g. a wide gap) the
         # effect-only collocation NLP of a compliance is degenerate and ran for > 20 min
         effect_fit="simulation", full_refit="simulation",
-        log_names=("compliance_stiffness_N_per_m",)),
+        log_names=("compliance_stiffness_N_per_m",), family_probes=True,
+        limits=(("compliance_stiffness_N_per_m", "upper"),)),
     "voltage_drop": Candidate(
         "voltage_drop",
         probes=({"voltage_drop_V": 0.5},),
@@ -230,11 +252,18 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
     names = list(names or CANDIDATES)
     r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel() for pt, yp in
                         zip(prepared, baseline_pred)])
+    # the output channel of each element of the stacked vectors
+    chan = np.concatenate([np.repeat(np.arange(pt.y.shape[0]), pt.y.shape[1])
+                           for pt in prepared])
+    n_ch = int(chan.max()) + 1 if chan.size else 1
     u_brk = float(baseline.get("nut_breakaway_velocity_m_per_s", 0.01))
     B = np.vstack([absorbed_columns(pt, rig, u_brk) for pt in prepared])
     Qb, _ = np.linalg.qr(B)
     r_perp = r - Qb @ (Qb.T @ r)
     total = float(r_perp @ r_perp)
+    # impacts the current model has not (a rattling contact): no sample-wise linear
+    # signature describes them, the transient energies do
+    impacts = impact_energy_ratio(prepared, baseline_pred)
     out: dict[str, dict] = {}
     for name in names:
         cand = CANDIDATES[name]
@@ -259,10 +288,129 @@ def signature_scores(prepared: Sequence[PreparedTest], rig: Rig, baseline: dict[
         Qs, Rs = np.linalg.qr(S)
         keep = np.abs(np.diag(Rs)) > 1e-9 * max(np.abs(np.diag(Rs)).max(), 1e-300)
         Qs = Qs[:, keep]
-        proj = float(np.sum((Qs.T @ r_perp) ** 2))
+        edge = False
+        if cand.family_probes:  # the member somewhere along its family: weights >= 0
+            w = nnls_weights(S, r_perp)
+            fitted = S @ w
+            edge = edge_dominated(w * np.linalg.norm(S, axis=0), [
+                bool(at_bound(p, comp.parameters, cand.limits)) for p in cand.probes])
+        else:
+            fitted = Qs @ (Qs.T @ r_perp)
+        proj = float(fitted @ fitted)
         out[name] = {"score": proj / total if total > 0 else 0.0, "chi2": proj,
-                     "columns": int(keep.sum()), "applicable": True}
+                     "columns": int(keep.sum()), "applicable": True,
+                     "transmission": bool(comp.transmission), "at_bound": edge,
+                     "impacts": (impacts if cand.impact_fit and impacts > IMPACT_ENERGY_RATIO
+                                 else None),
+                     **channel_parts(r_perp, fitted, S, chan, n_ch)}
     return out
+
+
+def edge_dominated(contributions: np.ndarray, at_edge: Sequence[bool]) -> bool:
+    """Whether more than half of a probe family's fitted signature (``contributions``,
+    weight × column norm per probe) comes from probes on a non-physical edge of the
+    member's range (``at_edge``): the member would be fitted at its bound."""
+    c = np.abs(np.asarray(contributions, float))
+    edge = np.asarray(at_edge, bool)
+    return bool(c.sum() > 0 and c[edge].sum() > 0.5 * c.sum())
+
+
+def nnls_weights(S: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Non-negative least-squares weights of the columns ``S`` for ``r`` (columns scaled
+    to unit norm for the solver, weights returned in the columns' own scale)."""
+    from scipy.optimize import nnls
+    norm = np.linalg.norm(S, axis=0)
+    ok = norm > 0
+    w = np.zeros(S.shape[1])
+    if ok.any():
+        w[ok] = nnls(S[:, ok] / norm[ok], r)[0] / norm[ok]
+    return w
+
+
+def channel_parts(r: np.ndarray, fitted: np.ndarray, S: np.ndarray, chan: np.ndarray,
+                  n_ch: int) -> dict:
+    """Per output channel (0 force, 1 voltage) of the stacked, noise-normalised vectors:
+    the candidate's own channel (where its signature columns ``S`` carry most energy:
+    the channel that sees it best) and the share of each channel's residual ``r`` that
+    the candidate's fitted signature ``fitted`` explains, 1 − ‖r_c − f_c‖²/‖r_c‖²."""
+    energy = [float(np.sum(S[chan == c] ** 2)) for c in range(n_ch)]
+    shares = []
+    for c in range(n_ch):
+        rc, fc = r[chan == c], fitted[chan == c]
+        rr = float(rc @ rc)
+        shares.append(1.0 - float((rc - fc) @ (rc - fc)) / rr if rr > 0 else 0.0)
+    excess = []
+    for c in range(n_ch):
+        rc = r[chan == c]
+        excess.append(float(rc @ rc) / rc.size - 1.0 if rc.size else 0.0)
+    return {"channel": int(np.argmax(energy)) if any(energy) else 0,
+            "channel_shares": shares, "channel_excess": excess}
+
+
+#: A channel other than the force ranks a candidate by the share of its residual the
+#: candidate explains when its residual exceeds the noise expectation by this share
+#: (SSE/N − 1; the decision rule's all-channel alternative uses the same threshold).
+CHANNEL_EXCESS_MIN = 0.25
+
+
+#: A member whose :func:`rank_value` is below this is not re-identified: its signature
+#: explains under 2 % of the residual energy of the channel it is ranked on, i.e. it
+#: would remove about 1 % of the error's excess — a tenth of what it must remove to
+#: earn (the decision rule's 10 %).
+MIN_RANK_VALUE = 0.02
+
+
+#: A transmission member whose fitted signature makes the voltage residual's energy grow
+#: by more than this share is ranked behind every other member (:func:`rank_value`).
+ROTOR_WORSE_SHARE = 0.05
+
+
+def rank_value(sc: dict) -> float:
+    """The value a candidate is ranked by: its score (share of the stacked residual
+    its signature explains), or — for a member seen best on another channel than the
+    force (its ``channel``, e.g. a diode drop, a flux saturation or a winding heating
+    on the voltage) where that channel's residual has a real excess — the share of
+    that channel's residual it explains, when larger.
+
+    The stacked residual is dominated by the force whenever the force carries a misfit
+    (the friction law's presliding, which no member describes): a diode drop that
+    explains 90 % of the voltage residual then scored below a mount compliance that
+    explained 20 % of the force's, and was not fitted before the time budget.  An
+    effect is ranked on the channel that sees it.
+
+    A transmission member (a gap, a mount spring) whose fitted signature explains the
+    force by making the voltage — the rotor's speed — worse by more than
+    :data:`ROTOR_WORSE_SHARE` of its residual energy ranks 0: its refit would be
+    refuted by the rotor channel (:func:`~..evidence.refuted_by_rotor_channel`), and on
+    a winding-heating campaign a compliance that grew the voltage residual 3.3-fold
+    ranked first and took the budget.
+
+    A contact member fitted on its impacts (``impact_fit``) ranks first (1 + score) when
+    the data's force transient energy exceeds the current model's by more than
+    :data:`~..impacts.IMPACT_ENERGY_RATIO` (``sc["impacts"]``, the ratio): a rattling
+    contact's sample-wise signature is not reproducible, so its linearised score is
+    near 0 (0.003 on a 0.15 mm gap with a Hertzian contact, energy ratio 523, where the
+    six other tuning campaigns of that generator give 0.8-3.6).
+
+    A probe family whose fitted signature is dominated by the probe on a non-physical
+    edge of the range (``sc["at_bound"]``, :func:`edge_dominated`: the 1e4 N/m
+    mount) ranks 0, as its refit would end at that bound and not earn
+    (:func:`~..evidence.at_bound`)."""
+    score = float(np.nan_to_num(sc.get("score", math.nan)))
+    if sc.get("impacts"):
+        return 1.0 + score
+    if sc.get("at_bound"):
+        return 0.0
+    c = sc.get("channel", 0)
+    shares, excess = sc.get("channel_shares"), sc.get("channel_excess")
+    if (sc.get("transmission") and shares is not None and len(shares) > 1
+            and shares[1] < -ROTOR_WORSE_SHARE):
+        return 0.0
+    if not c or shares is None or excess is None or c >= len(shares):
+        return score
+    if excess[c] <= CHANNEL_EXCESS_MIN:
+        return score
+    return max(score, float(shares[c]))
 
 
 def components_for(names: Sequence[str], prepared: Sequence[PreparedTest],
