@@ -81,3 +81,14 @@ def test_grid_must_be_uniform():
     with pytest.raises(ValueError, match="uniform"):
         simulate_map(model, SineMotion(0.01, 1.0), model.param_vector(10.0),
                      np.array([0.0, 1e-3, 3e-3, 4e-3]))
+
+
+def test_a_jittered_grid_is_left_to_cvodes():
+    """Time stamps rounded to 1e-8 s (EMPS: ±3e-5 of the step) are not a uniform grid
+    for the map; an exact grid is."""
+    from ehsa_opt.estimation.discrepancy.rig import uniform_grid
+    t = np.arange(1000) * 1e-3
+    assert uniform_grid(t)
+    jittered = t + np.where(np.arange(1000) % 7 == 0, 3e-8, 0.0)
+    assert not uniform_grid(jittered)
+    assert not uniform_grid(t[:1])
