@@ -33,7 +33,7 @@ from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .prepared import PreparedTest
 
 __all__ = ["Rig", "RigSimulation", "linear_baseline", "param_scale", "predict", "simulate_test",
-           "predict_map", "map_suits", "uniform_grid", "fit_predictor", "NON_SMOOTH", "USE_MAP",
+           "predict_map", "map_suits", "uniform_grid", "parameter_vector", "warmup_grid", "fit_predictor", "NON_SMOOTH", "USE_MAP",
            "BASE_SPECS", "DISCREPANCY_PARAMETERS", "NUT_NAMES"]
 
 NUT_NAMES = FRICTION_NAMES[:4]
@@ -143,6 +143,24 @@ def linear_baseline(prepared: Sequence[PreparedTest], rig: Rig,
 
 
 # ------------------------------------------------------------------ predictions
+def parameter_vector(model: BenchModel, pt: PreparedTest,
+                     values: Mapping[str, float]) -> np.ndarray:
+    """The model's parameter vector for test ``pt``: its fixed values (load, rig)
+    overridden by ``values``, in the order of ``model.param_names``."""
+    vals = {**pt.fixed, **values}
+    return np.array([float(vals[n]) for n in model.param_names])
+
+
+def warmup_grid(pt: PreparedTest, t: np.ndarray) -> tuple[np.ndarray, int]:
+    """The grid ``t`` (s) with one unrecorded warm-up cycle before it for a sine test,
+    and the number of warm-up samples (0 for other motions)."""
+    if not isinstance(pt.motion, SineMotion):
+        return t, 0
+    dt = float(np.median(np.diff(t)))
+    nw = int(round(1.0 / pt.motion.frequency_hz / dt))
+    return np.concatenate([t[0] - dt * np.arange(nw, 0, -1), t]), nw
+
+
 def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
             rtol: float = 1e-7, filtered: bool = True) -> list[np.ndarray]:
     """Simulated outputs (ny, N) of each test with the given parameters.
@@ -156,15 +174,14 @@ def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str,
     model = rig.model()
     out = []
     for pt in prepared:
-        vals = {**pt.fixed, **parameters}
-        p = np.array([float(vals[n]) for n in model.param_names])
+        p = parameter_vector(model, pt, parameters)
         ny = pt.y.shape[0]
         if model.n_states == 0:  # algebraic model: evaluate on the samples
             y = np.array(model.outputs.map(pt.time_s.size)(np.zeros((0, pt.time_s.size)),
                                                           pt.u, p))
             out.append(pt.filter_output(y[:ny]) if filtered else y[:ny])
             continue
-        sim = simulate_test(model, pt, vals, rtol=rtol)
+        sim = simulate_test(model, pt, parameters, rtol=rtol)
         y = np.vstack([sim.force_N, sim.voltage_V])[:ny]
         out.append(pt.filter_output(y) if filtered else y)
     return out
@@ -184,14 +201,10 @@ def simulate_test(model: BenchModel, pt: PreparedTest, values: Mapping[str, floa
               grid: np.ndarray | None = None, rtol: float = 1e-7) -> RigSimulation:
     """CVODES simulation on the test's grid (or ``grid``; one warm-up cycle before
     sine records)."""
-    vals = {**pt.fixed, **values}
-    p = np.array([float(vals[n]) for n in model.param_names])
+    p = parameter_vector(model, pt, values)
     t = pt.time_s if grid is None else grid
     if isinstance(pt.motion, SineMotion):
-        period = 1.0 / pt.motion.frequency_hz
-        dt = float(np.median(np.diff(t)))
-        nw = int(round(period / dt))
-        grid = np.concatenate([t[0] - dt * np.arange(nw, 0, -1), t])
+        grid, nw = warmup_grid(pt, t)
         sim = simulate_bench(model, pt.motion, p, grid, rtol=rtol, atol=rtol * 1e-2)
         keep = slice(nw, None)
     else:
@@ -241,15 +254,9 @@ def predict_map(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[
     model = rig.model()
     out = []
     for pt in prepared:
-        vals = {**pt.fixed, **parameters}
-        p = np.array([float(vals[n]) for n in model.param_names])
+        p = parameter_vector(model, pt, parameters)
         ny = pt.y.shape[0]
-        t = pt.time_s
-        nw = 0
-        if isinstance(pt.motion, SineMotion):
-            dt = float(np.median(np.diff(t)))
-            nw = int(round(1.0 / pt.motion.frequency_hz / dt))
-            t = np.concatenate([t[0] - dt * np.arange(nw, 0, -1), t])
+        t, nw = warmup_grid(pt, pt.time_s)
         y, _ = simulate_map(model, pt.motion, p, t)
         y = y[:ny, nw:]
         out.append(pt.filter_output(y) if filtered else y)
