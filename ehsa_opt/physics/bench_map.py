@@ -42,7 +42,7 @@ from .motion import FilteredMotion, SampledMotion, SineMotion
 
 __all__ = ["RADAU_A", "RADAU_C", "NEWTON_ITERATIONS", "OSCILLATION_STEP", "MAX_SUBSTEPS",
            "TRANSMISSION_MIN_SUBSTEPS",
-           "simulate_map", "substeps_for", "stage_inputs"]
+           "simulate_map", "simulate_map_sensitivity", "substeps_for", "stage_inputs"]
 
 _S6 = math.sqrt(6.0)
 #: Radau IIA (3 stages) nodes and coefficients.
@@ -99,6 +99,7 @@ def _substep_function(model: BenchModel) -> ca.Function:
     for _ in range(NEWTON_ITERATIONS):
         Kv = Kv - ca.solve(jac(Kv, x, p, h, U), res(Kv, x, p, h, U))
     xn = x + h * (ca.reshape(Kv, nx, 3) @ ca.DM(RADAU_A[2, :]))  # stiffly accurate
+    cache["substep_expr"] = (x, U, p, h, K, residual(ca.vec(K)), Kv, xn)
     xn = ca.cse(xn)  # common subexpressions evaluated once
     opts = _compile_options()
     try:
@@ -107,6 +108,50 @@ def _substep_function(model: BenchModel) -> ca.Function:
         F = ca.Function("radau_substep", [x, U, p, h], [xn])
     cache["substep"] = F
     return F
+
+
+def _sensitivity_substep_function(model: BenchModel) -> ca.Function:
+    """([x; vec S], U, p, h) → [x⁺; vec S⁺] with S = ∂x/∂p (n_states × n_params): the
+    sub-step of :func:`_substep_function` and its derivative, the stage derivatives
+    by the implicit function theorem at the Newton iterate (exact for the converged
+    stages; the map's three Newton iterations converge to far below the noise).
+    Cached on the model."""
+    cache: dict = model.__dict__.setdefault("_map_cache", {})
+    if "sens_substep" in cache:
+        return cache["sens_substep"]
+    _substep_function(model)
+    x, U, p, h, K, R, Kv, xn = cache["substep_expr"]
+    nx, npar = model.n_states, len(model.param_names)
+    S = ca.SX.sym("S", nx, npar)
+    # implicit function theorem on the stage equations R(K, x, p) = 0 at the Newton
+    # iterate: dK = -(∂R/∂K)⁻¹ (∂R/∂x S + ∂R/∂p); one factorisation for all columns
+    # (differentiating through the three written-out Newton solves gives the same to
+    # the Newton residual but an expression too large to compile in reasonable time)
+    sens = ca.Function("radau_stage_sens", [ca.vec(K), x, p, h, U, S],
+                       [-ca.solve(ca.jacobian(R, ca.vec(K)),
+                                  ca.jacobian(R, x) @ S + ca.jacobian(R, p))])
+    dK = sens(Kv, x, p, h, U, S)                       # (3 nx) × n_params
+    Sn = S + h * sum(RADAU_A[2, j] * dK[j * nx:(j + 1) * nx, :] for j in range(3))
+    zn = ca.cse(ca.vertcat(xn, ca.vec(Sn)))
+    z = ca.vertcat(x, ca.vec(S))
+    try:
+        F = ca.Function("radau_substep_sens", [z, U, p, h], [zn], _compile_options())
+    except RuntimeError:  # the compiler failed: interpret
+        F = ca.Function("radau_substep_sens", [z, U, p, h], [zn])
+    cache["sens_substep"] = F
+    return F
+
+
+def _output_jacobians(model: BenchModel) -> ca.Function:
+    """(x, u, p) → (∂y/∂x, ∂y/∂p) of the model's outputs (cached on the model)."""
+    cache: dict = model.__dict__.setdefault("_map_cache", {})
+    if "out_jac" not in cache:
+        x = ca.SX.sym("x", model.n_states)
+        u, p = ca.SX.sym("u", 3), ca.SX.sym("p", len(model.param_names))
+        y = model.outputs(x, u, p)
+        cache["out_jac"] = ca.Function("bench_out_jac", [x, u, p],
+                                       [ca.jacobian(y, x), ca.jacobian(y, p)])
+    return cache["out_jac"]
 
 
 def stage_inputs(motion: Any, grid: np.ndarray, substeps: int) -> np.ndarray:
@@ -147,6 +192,71 @@ def substeps_for(model: BenchModel, u: np.ndarray, p: np.ndarray, h: float) -> i
     im = float(np.max(np.abs(np.linalg.eigvals(J).imag))) if J.size else 0.0
     lo = TRANSMISSION_MIN_SUBSTEPS if model.transmission is not None else 1
     return int(min(MAX_SUBSTEPS, max(lo, math.ceil(im * h / OSCILLATION_STEP))))
+
+
+def _check_grid(grid: Any) -> tuple[np.ndarray, float]:
+    grid = np.asarray(grid, dtype=float)
+    if grid.ndim != 1 or grid.size < 2 or np.any(np.diff(grid) <= 0):
+        raise ValueError("simulate_map: grid must be 1-D, strictly increasing, >= 2 samples")
+    dt = np.diff(grid)
+    h = float(np.median(dt))
+    if np.max(np.abs(dt - h)) > 1e-6 * h:
+        raise ValueError("simulate_map: the grid must be uniform (one sample step)")
+    return grid, h
+
+
+def _samples(motion: Any, grid: np.ndarray) -> tuple[Any, np.ndarray]:
+    """The motion as the simulation sees it and its (x, v, a) on the samples."""
+    if isinstance(motion, FilteredMotion):
+        motion = motion.sampled()
+    if isinstance(motion, SampledMotion):  # as the CVODES simulation sees it
+        return motion, np.vstack([np.interp(grid, motion.time_s, r)
+                                  for r in motion.evaluate(motion.time_s)])
+    return motion, motion.evaluate(grid)
+
+
+def simulate_map_sensitivity(model: BenchModel, motion: Any, p: Any, grid: np.ndarray,
+                             substeps: int | None = None
+                             ) -> tuple[np.ndarray, np.ndarray]:
+    """Outputs (2 × N) on ``grid`` by the Radau IIA map, as :func:`simulate_map`, and
+    their exact derivatives with respect to every model parameter (2 × N × n_params,
+    in the order of ``model.param_names``): forward sensitivities S = ∂x/∂p carried
+    through every sub-step (the derivative of the map itself, differentiated through
+    its Newton iterations, so it agrees with finite differences of
+    :func:`simulate_map` to their truncation error), from the rest-consistent start,
+    whose own dependence on ``p`` is differenced (it is algebraic)."""
+    grid, h = _check_grid(grid)
+    p = np.asarray(p, dtype=float).ravel()
+    motion, uu = _samples(motion, grid)
+    npar, nx, N = p.size, model.n_states, grid.size
+    if nx == 0:
+        y = np.array(model.outputs.map(N)(np.zeros((0, N)), uu, p))
+        _, dyp = _output_jacobians(model).map(N)(np.zeros((0, N)), uu, p)
+        return y, np.array(dyp).reshape(2, N, npar)
+    x0 = model.initial_state(uu[:, 0], p)
+    S0 = np.zeros((nx, npar))
+    for j in range(npar):  # the rest-consistent start (algebraic in p)
+        dp = 1e-7 * max(abs(p[j]), 1.0)
+        pj = p.copy()
+        pj[j] += dp
+        S0[:, j] = (model.initial_state(uu[:, 0], pj) - x0) / dp
+    m = int(substeps) if substeps else substeps_for(model, uu, p, h)
+    n = (N - 1) * m
+    cache: dict = model.__dict__.setdefault("_map_cache", {})
+    key = ("sens_acc", n)
+    if key not in cache:
+        cache[key] = _sensitivity_substep_function(model).mapaccum(n)
+    z0 = np.concatenate([x0, S0.ravel(order="F")])
+    Zs = np.array(cache[key](z0, stage_inputs(motion, grid, m), p, h / m))
+    Z = np.hstack([z0[:, None], Zs[:, m - 1::m]])
+    X = Z[:nx]
+    S = Z[nx:].reshape(nx, npar, N, order="F")  # S[:, :, k] = ∂x_k/∂p
+    y = np.array(model.outputs.map(N)(X, uu, p))
+    dyx, dyp = _output_jacobians(model).map(N)(X, uu, p)
+    dyx = np.array(dyx).reshape(2, N, nx).transpose(0, 2, 1)   # 2 × nx × N
+    dyp = np.array(dyp).reshape(2, N, npar)                     # 2 × N × np
+    dy = dyp + np.einsum("ikn,kjn->inj", dyx, S)
+    return y, dy
 
 
 def simulate_map(model: BenchModel, motion: Any, p: Any, grid: np.ndarray,
