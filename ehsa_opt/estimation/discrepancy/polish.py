@@ -12,7 +12,8 @@ import numpy as np
 
 from .deadline import past_deadline
 from .prepared import PreparedTest
-from .rig import BASE_SPECS, Rig, param_scale, predict
+from . import rig as _rig
+from .rig import BASE_SPECS, Rig, param_scale, predict, uniform_grid
 
 __all__ = ["PolishOutcome", "polish", "gauss_newton_covariance"]
 
@@ -30,7 +31,8 @@ class PolishOutcome:
     sse_before, sse_after : float
         Sum of squared noise-normalised simulation residuals on the fitted tests.
     nfev : int
-        Simulations of the test group (including finite differences).
+        Simulations of the test group (including finite differences and sensitivity
+        runs).
     seconds : float
     free : list[str]
         The refined names.
@@ -85,7 +87,11 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     predictor : callable
         The forward simulation, ``(prepared, rig, parameters) -> outputs``:
         :func:`~.rig.predict` (CVODES, default) or :func:`~.rig.predict_map` (the
-        compiled Radau IIA map, for a smooth rig).
+        compiled Radau IIA map, for a smooth rig).  A predictor with a ``jacobian``
+        attribute (``predict_map``: :func:`~.rig.predict_map_jacobian`) gives the
+        Gauss–Newton exact sensitivities (one sensitivity run per iteration instead
+        of ``len(free)`` differenced simulations; chain rule for the log10 names);
+        otherwise, or on a non-uniform grid, forward differences.
     """
     from scipy.optimize import least_squares
     t0 = time.perf_counter()
@@ -127,14 +133,38 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
             best[0], best[1] = float(r @ r), np.array(z, dtype=float)
         return r
 
+    # exact sensitivities when the predictor has them (the compiled map on uniform
+    # grids), else forward differences (CVODES, e.g. a rig with a contact)
+    exact = getattr(predictor, "jacobian", None) if _rig.EXACT_JACOBIAN else None
+    if exact is not None and not all(uniform_grid(pt.time_s) for pt in prepared):
+        exact = None
+    jac_counter = [0]
+
+    def jac(z: np.ndarray) -> np.ndarray:
+        if past_deadline():
+            raise _Stop
+        jac_counter[0] += 1
+        x = values(z)
+        vals = {**base, **{n: float(v) for n, v in zip(free, x)}}
+        got = exact(prepared, rig, vals, free)
+        preds, dpreds = got
+        r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
+                            for pt, yp in zip(prepared, preds)])
+        if np.all(np.isfinite(r)) and float(r @ r) < best[0]:
+            best[0], best[1] = float(r @ r), np.array(z, dtype=float)
+        dxdz = np.where(is_log, np.log(10.0) * x, scales)
+        J = np.concatenate([-(dy * pt.wnorm[:, :, None]).reshape(-1, len(free))
+                            for pt, dy in zip(prepared, dpreds)])
+        return np.nan_to_num(J * dxdz[None, :], nan=0.0, posinf=0.0, neginf=0.0)
+
     x0 = np.array([base[n] for n in free], dtype=float)
     z0 = np.clip(np.where(is_log, np.log10(np.maximum(x0, 1e-300)), x0 / scales), lb, ub)
     r0 = resid(z0)
     sse0 = float(r0 @ r0)
     try:
         sol = least_squares(resid, z0, bounds=(lb, ub), method="trf", x_scale="jac",
-                            diff_step=diff_step, max_nfev=max_iter, jac="2-point",
-                            ftol=ftol)
+                            diff_step=diff_step, max_nfev=max_iter,
+                            jac=jac if exact is not None else "2-point", ftol=ftol)
     except _Stop:  # the run's deadline: the best point simulated so far, no covariance
         msg = f"stopped at the time budget after {counter[0]} simulations"
         if not best[0] < sse0:
@@ -164,7 +194,9 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         cov = np.where(known, h.cov, cov)
     except (ValueError, np.linalg.LinAlgError):
         pass  # the Gauss-Newton covariance stays
-    return PolishOutcome(True, sol.message, out, sse0, sse1, counter[0],
+    return PolishOutcome(True, sol.message + (f" (exact Jacobian, {jac_counter[0]} "
+                                              f"sensitivity runs)" if exact else ""),
+                         out, sse0, sse1, counter[0] + jac_counter[0],
                          time.perf_counter() - t0, free, cov)
 
 
