@@ -9,8 +9,14 @@ simulations on CVODES (``rig.USE_MAP = False``, the reference) and on the compil
 (the default).  Prints the wall time of each, the ratio, the largest relative difference
 of the fitted parameters and the fit/held-out SSE of both (CVODES outputs).
 
+``--paths map-fd,map`` compares instead the Gauss–Newton on the map with
+finite-difference Jacobians (``rig.EXACT_JACOBIAN = False``, the reference) against the
+map's exact sensitivities (the default); ``--paths map-fd,map --force-simulation``
+fits a collocation member by the simulation recipe in both (as on a large campaign).
+
     PYTHONPATH=. flock /tmp/ehsa-heavy.lock python benchmarks/candidate_fit_speed.py \\
-        [--case t-compliance] [--members compliance,cogging] [--data-root DIR]
+        [--case t-compliance] [--members compliance,cogging] [--data-root DIR] \\
+        [--paths cvodes,map | map-fd,map] [--force-simulation]
 """
 
 from __future__ import annotations
@@ -66,7 +72,18 @@ def main(argv=None) -> int:
     ap.add_argument("--case", default="t-compliance")
     ap.add_argument("--members", default="compliance,cogging")
     ap.add_argument("--data-root", default="/tmp/ehsa_candidate_fit_speed")
+    ap.add_argument("--paths", default="cvodes,map",
+                    help="reference,new: cvodes,map (default) or map-fd,map")
+    ap.add_argument("--force-simulation", action="store_true",
+                    help="fit collocation members by the simulation recipe")
     args = ap.parse_args(argv)
+    paths = [p.strip() for p in args.paths.split(",")]
+    flags = {"cvodes": (False, True), "map": (True, True), "map-fd": (True, False)}
+    if len(paths) != 2 or any(p not in flags for p in paths):
+        raise SystemExit("--paths: two of cvodes, map-fd, map (reference first)")
+    if args.force_simulation:
+        from ehsa_opt.estimation.discrepancy import candidate_fit
+        candidate_fit.SIMULATION_RECIPE_MIN_SAMPLES = 0
     sys.stdout.reconfigure(line_buffering=True)
     data_dir = campaign(args.case, Path(args.data_root))
     settings = DiscrepancySettings()
@@ -86,8 +103,8 @@ def main(argv=None) -> int:
             a = (name, comps[name], CANDIDATES[name].starts, tests.sub_pts, tests.fit_pts,
                  tests.held_pts, tests.rig, base.fit.parameters, settings.max_iter)
             out = {}
-            for path, use_map in (("cvodes", False), ("map", True)):
-                rig_module.USE_MAP = use_map
+            for path in paths:
+                rig_module.USE_MAP, rig_module.EXACT_JACOBIAN = flags[path]
                 t = time.perf_counter()
                 _, res, pf, ph, _ = fit_member(a)
                 sec = time.perf_counter() - t
@@ -95,8 +112,8 @@ def main(argv=None) -> int:
                              normalised_sse(tests.held_pts, ph) if ph else np.nan)
                 print(f"  {name:<12} {path:<6} {sec:7.1f} s  fit SSE {out[path][2]:.6g}  "
                       f"held-out SSE {out[path][3]:.6g}  {res.message[:90]}")
-            rig_module.USE_MAP = True
-            (s0, r0, f0, h0), (s1, r1, f1, h1) = out["cvodes"], out["map"]
+            rig_module.USE_MAP = rig_module.EXACT_JACOBIAN = True
+            (s0, r0, f0, h0), (s1, r1, f1, h1) = out[paths[0]], out[paths[1]]
             eff = [q.name for q in comps[name].parameters]
             specs = {**rig_module.BASE_SPECS, **{q.name: q for q in comps[name].parameters}}
             # relative to the larger of the value and its typical scale (a friction level
@@ -105,7 +122,7 @@ def main(argv=None) -> int:
                      max(abs(r0.parameters[n]), rig_module.param_scale(specs[n]))
                      for n in r0.free if n in r1.parameters and n in specs}
             worst = max(diffs, key=diffs.get) if diffs else "-"
-            print(f"  {name:<12} ratio cvodes/map {s0 / s1:5.1f}x; effect "
+            print(f"  {name:<12} ratio {paths[0]}/{paths[1]} {s0 / s1:5.1f}x; effect "
                   + ", ".join(f"{n} {r0.parameters[n]:.4g} -> {r1.parameters[n]:.4g}"
                               for n in eff)
                   + f"; largest parameter change (relative to value or scale) {diffs.get(worst, 0):.2e} "

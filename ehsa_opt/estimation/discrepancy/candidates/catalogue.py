@@ -93,6 +93,12 @@ class Candidate:
         A contact whose impacts the sample-wise fit cannot follow when stiff: when the
         data's transient energy far exceeds the current model's, it is fitted on
         transient energies and kinematic gaps (:mod:`..impacts`).
+    simulation_starts : tuple of dict
+        Starts added to the screen when a collocation member is fitted by the
+        simulation recipe on a large campaign
+        (:func:`~ehsa_opt.estimation.discrepancy.candidate_fit.simulation_recipe`):
+        Gauss–Newton has no collocation NLP to start near, so a member whose
+        parameters are multimodal (a cogging's phase) gets a grid of them.
     """
 
     name: str
@@ -110,6 +116,7 @@ class Candidate:
     impact_fit: bool = False
     limits: tuple[tuple[str, str], ...] = ()
     family_probes: bool = False
+    simulation_starts: tuple[dict, ...] = ()
 
     def applicable(self, rig: Rig) -> bool:
         if self.without_generator_only and rig.has_generator:
@@ -156,6 +163,11 @@ CANDIDATES: dict[str, Candidate] = {
         probes=({"cogging_sin_Nm": 0.005}, {"cogging_cos_Nm": 0.005}),
         starts=({"cogging_sin_Nm": 1e-3, "cogging_cos_Nm": 1e-3},
                 {"cogging_sin_Nm": 2e-2, "cogging_cos_Nm": -2e-2}),
+        # the phase on a grid of 45 degrees at two amplitudes when fitted by
+        # Gauss-Newton on the simulation (no collocation NLP to start near)
+        simulation_starts=tuple({"cogging_sin_Nm": a * math.cos(ph),
+                                 "cogging_cos_Nm": a * math.sin(ph)}
+                                for a in (0.005, 0.03) for ph in np.arange(8) * math.pi / 4),
         amplitudes=("cogging_sin_Nm", "cogging_cos_Nm"),
         rigid_channels=(0,)),
     "compliance": Candidate(
