@@ -11,12 +11,14 @@ of the fitted parameters and the fit/held-out SSE of both (CVODES outputs).
 
 ``--paths map-fd,map`` compares instead the Gauss–Newton on the map with
 finite-difference Jacobians (``rig.EXACT_JACOBIAN = False``, the reference) against the
-map's exact sensitivities (the default); ``--paths map-fd,map --force-simulation``
-fits a collocation member by the simulation recipe in both (as on a large campaign).
+map's exact sensitivities (the default); ``--paths colloc,map`` a collocation member
+fitted by its collocation recipe whatever the campaign's size
+(``candidate_fit.SIMULATION_RECIPE_MIN_SAMPLES`` infinite) against the default (on a
+large campaign: the simulation recipe on the map).
 
     PYTHONPATH=. flock /tmp/ehsa-heavy.lock python benchmarks/candidate_fit_speed.py \\
         [--case t-compliance] [--members compliance,cogging] [--data-root DIR] \\
-        [--paths cvodes,map | map-fd,map] [--force-simulation]
+        [--paths cvodes,map | map-fd,map | colloc,map]
 """
 
 from __future__ import annotations
@@ -73,17 +75,16 @@ def main(argv=None) -> int:
     ap.add_argument("--members", default="compliance,cogging")
     ap.add_argument("--data-root", default="/tmp/ehsa_candidate_fit_speed")
     ap.add_argument("--paths", default="cvodes,map",
-                    help="reference,new: cvodes,map (default) or map-fd,map")
-    ap.add_argument("--force-simulation", action="store_true",
-                    help="fit collocation members by the simulation recipe")
+                    help="reference,new: cvodes,map (default), map-fd,map or colloc,map")
     args = ap.parse_args(argv)
     paths = [p.strip() for p in args.paths.split(",")]
-    flags = {"cvodes": (False, True), "map": (True, True), "map-fd": (True, False)}
+    from ehsa_opt.estimation.discrepancy import candidate_fit
+    threshold = candidate_fit.SIMULATION_RECIPE_MIN_SAMPLES
+    # (use the map, exact Jacobians, sample threshold of the simulation recipe)
+    flags = {"cvodes": (False, True, threshold), "map": (True, True, threshold),
+             "map-fd": (True, False, threshold), "colloc": (True, True, float("inf"))}
     if len(paths) != 2 or any(p not in flags for p in paths):
-        raise SystemExit("--paths: two of cvodes, map-fd, map (reference first)")
-    if args.force_simulation:
-        from ehsa_opt.estimation.discrepancy import candidate_fit
-        candidate_fit.SIMULATION_RECIPE_MIN_SAMPLES = 0
+        raise SystemExit("--paths: two of cvodes, map-fd, colloc, map (reference first)")
     sys.stdout.reconfigure(line_buffering=True)
     data_dir = campaign(args.case, Path(args.data_root))
     settings = DiscrepancySettings()
@@ -104,7 +105,8 @@ def main(argv=None) -> int:
                  tests.held_pts, tests.rig, base.fit.parameters, settings.max_iter)
             out = {}
             for path in paths:
-                rig_module.USE_MAP, rig_module.EXACT_JACOBIAN = flags[path]
+                (rig_module.USE_MAP, rig_module.EXACT_JACOBIAN,
+                 candidate_fit.SIMULATION_RECIPE_MIN_SAMPLES) = flags[path]
                 t = time.perf_counter()
                 _, res, pf, ph, _ = fit_member(a)
                 sec = time.perf_counter() - t
@@ -113,6 +115,7 @@ def main(argv=None) -> int:
                 print(f"  {name:<12} {path:<6} {sec:7.1f} s  fit SSE {out[path][2]:.6g}  "
                       f"held-out SSE {out[path][3]:.6g}  {res.message[:90]}")
             rig_module.USE_MAP = rig_module.EXACT_JACOBIAN = True
+            candidate_fit.SIMULATION_RECIPE_MIN_SAMPLES = threshold
             (s0, r0, f0, h0), (s1, r1, f1, h1) = out[paths[0]], out[paths[1]]
             eff = [q.name for q in comps[name].parameters]
             specs = {**rig_module.BASE_SPECS, **{q.name: q for q in comps[name].parameters}}
