@@ -140,22 +140,16 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         exact = None
     jac_counter = [0]
 
+    def seen(z: np.ndarray, r: np.ndarray) -> None:  # a sensitivity run's own residuals
+        if np.all(np.isfinite(r)) and float(r @ r) < best[0]:
+            best[0], best[1] = float(r @ r), np.array(z, dtype=float)
+
     def jac(z: np.ndarray) -> np.ndarray:
         if past_deadline():
             raise _Stop
         jac_counter[0] += 1
-        x = values(z)
-        vals = {**base, **{n: float(v) for n, v in zip(free, x)}}
-        got = exact(prepared, rig, vals, free)
-        preds, dpreds = got
-        r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
-                            for pt, yp in zip(prepared, preds)])
-        if np.all(np.isfinite(r)) and float(r @ r) < best[0]:
-            best[0], best[1] = float(r @ r), np.array(z, dtype=float)
-        dxdz = np.where(is_log, np.log(10.0) * x, scales)
-        J = np.concatenate([-(dy * pt.wnorm[:, :, None]).reshape(-1, len(free))
-                            for pt, dy in zip(prepared, dpreds)])
-        return np.nan_to_num(J * dxdz[None, :], nan=0.0, posinf=0.0, neginf=0.0)
+        return _exact_residual_jacobian(prepared, rig, base, free, values(z), is_log,
+                                        scales, exact, lambda r: seen(z, r))
 
     x0 = np.array([base[n] for n in free], dtype=float)
     z0 = np.clip(np.where(is_log, np.log10(np.maximum(x0, 1e-300)), x0 / scales), lb, ub)
@@ -182,11 +176,41 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
                              time.perf_counter() - t0, free)
     x1 = values(sol.x)
     out = {**base, **{n: float(v) for n, v in zip(free, x1)}}
-    # Gauss-Newton covariance from the final Jacobian (chain rule to physical units)
+    cov = _final_covariance(sol, x1, is_log, scales, prepared, r0.size)
+    return PolishOutcome(True, sol.message + (f" (exact Jacobian, {jac_counter[0]} "
+                                              f"sensitivity runs)" if exact else ""),
+                         out, sse0, sse1, counter[0] + jac_counter[0],
+                         time.perf_counter() - t0, free, cov)
+
+
+def _exact_residual_jacobian(prepared: Sequence[PreparedTest], rig: Rig,
+                             base: Mapping[str, float], free: Sequence[str], x: np.ndarray,
+                             is_log: np.ndarray, scales: np.ndarray, exact: Callable,
+                             seen: Callable[[np.ndarray], None]) -> np.ndarray:
+    """Jacobian of the noise-normalised residuals with respect to the scaled (or log10)
+    parameters at the physical values ``x`` of ``free``, from the predictor's exact
+    sensitivities ``exact`` (chain rule: ∂x/∂z = scale, or x ln 10 for a log10 name);
+    ``seen`` gets the residuals of the same run."""
+    vals = {**base, **{n: float(v) for n, v in zip(free, x)}}
+    preds, dpreds = exact(prepared, rig, vals, free)
+    seen(np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
+                         for pt, yp in zip(prepared, preds)]))
+    dxdz = np.where(is_log, np.log(10.0) * x, scales)
+    J = np.concatenate([-(dy * pt.wnorm[:, :, None]).reshape(-1, len(free))
+                        for pt, dy in zip(prepared, dpreds)])
+    return np.nan_to_num(J * dxdz[None, :], nan=0.0, posinf=0.0, neginf=0.0)
+
+
+def _final_covariance(sol, x1: np.ndarray, is_log: np.ndarray, scales: np.ndarray,
+                      prepared: Sequence[PreparedTest], n_resid: int) -> np.ndarray:
+    """Gauss–Newton covariance (physical units) from the final Jacobian of
+    ``least_squares``' solution ``sol``; the Newey–West sandwich where the data
+    determine the parameters (autocorrelated residuals)."""
+    sse1 = float(2.0 * sol.cost)
     dxdz = np.where(is_log, np.log(10.0) * x1, scales)
     Jx = np.asarray(sol.jac, dtype=float) / dxdz[None, :]
-    cov = gauss_newton_covariance(Jx, sse1 / max(r0.size - len(free), 1))
-    try:  # autocorrelated residuals: the Newey-West sandwich where the data determine
+    cov = gauss_newton_covariance(Jx, sse1 / max(n_resid - x1.size, 1))
+    try:
         from ..covariance import hac_covariance
         h = hac_covariance(Jx, np.asarray(sol.fun, dtype=float),
                            groups=[pt.y.shape[1] for pt in prepared for _ in pt.y])
@@ -194,10 +218,7 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         cov = np.where(known, h.cov, cov)
     except (ValueError, np.linalg.LinAlgError):
         pass  # the Gauss-Newton covariance stays
-    return PolishOutcome(True, sol.message + (f" (exact Jacobian, {jac_counter[0]} "
-                                              f"sensitivity runs)" if exact else ""),
-                         out, sse0, sse1, counter[0] + jac_counter[0],
-                         time.perf_counter() - t0, free, cov)
+    return cov
 
 
 def gauss_newton_covariance(J: np.ndarray, s2: float, rcond: float = 1e-9) -> np.ndarray:
