@@ -52,6 +52,10 @@ class PolishOutcome:
     covariance: np.ndarray | None = None
 
 
+class _Stop(Exception):
+    """The run's deadline was reached inside a polish."""
+
+
 def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, float],
            free: Sequence[str], *, max_iter: int = 8, diff_step: float = 1e-3,
            log_names: Sequence[str] = (), ftol: float = 1e-8,
@@ -112,13 +116,14 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     counter = [0]
     best: list = [np.inf, None]  # lowest SSE simulated so far and its point
 
-    class _Stop(Exception):
-        pass
-
     def values(z: np.ndarray) -> np.ndarray:
         out = np.asarray(z, dtype=float) * scales   # 10**z only where refined in log10
         out[is_log] = 10.0 ** np.asarray(z, dtype=float)[is_log]
         return out
+
+    def seen(z: np.ndarray, r: np.ndarray) -> None:  # keep the lowest SSE simulated
+        if np.all(np.isfinite(r)) and float(r @ r) < best[0]:
+            best[0], best[1] = float(r @ r), np.array(z, dtype=float)
 
     def resid(z: np.ndarray) -> np.ndarray:
         if counter[0] and past_deadline():
@@ -129,20 +134,10 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
                             for pt, yp in zip(prepared, preds)])
         r = np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=-1e6)
-        if float(r @ r) < best[0]:
-            best[0], best[1] = float(r @ r), np.array(z, dtype=float)
+        seen(z, r)
         return r
 
-    # exact sensitivities when the predictor has them (the compiled map on uniform
-    # grids), else forward differences (CVODES, e.g. a rig with a contact)
-    exact = getattr(predictor, "jacobian", None) if _rig.EXACT_JACOBIAN else None
-    if exact is not None and not all(uniform_grid(pt.time_s) for pt in prepared):
-        exact = None
-    jac_counter = [0]
-
-    def seen(z: np.ndarray, r: np.ndarray) -> None:  # a sensitivity run's own residuals
-        if np.all(np.isfinite(r)) and float(r @ r) < best[0]:
-            best[0], best[1] = float(r @ r), np.array(z, dtype=float)
+    exact, jac_counter = _exact_sensitivities(predictor, prepared), [0]
 
     def jac(z: np.ndarray) -> np.ndarray:
         if past_deadline():
@@ -161,11 +156,9 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
                             jac=jac if exact is not None else "2-point", ftol=ftol)
     except _Stop:  # the run's deadline: the best point simulated so far, no covariance
         msg = f"stopped at the time budget after {counter[0]} simulations"
-        if not best[0] < sse0:
-            return PolishOutcome(True, msg, base, sse0, sse0, counter[0],
-                                 time.perf_counter() - t0, free)
-        out = {**base, **{n: float(v) for n, v in zip(free, values(best[1]))}}
-        return PolishOutcome(True, msg, out, sse0, best[0], counter[0],
+        out = {**base, **{n: float(v) for n, v in zip(free, values(best[1]))}} \
+            if best[0] < sse0 else base
+        return PolishOutcome(True, msg, out, sse0, min(best[0], sse0), counter[0],
                              time.perf_counter() - t0, free)
     except Exception as exc:  # noqa: BLE001 - a failed polish keeps the collocation fit
         return PolishOutcome(False, f"polish failed: {exc}", base, sse0, sse0, counter[0],
@@ -181,6 +174,16 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
                                               f"sensitivity runs)" if exact else ""),
                          out, sse0, sse1, counter[0] + jac_counter[0],
                          time.perf_counter() - t0, free, cov)
+
+
+def _exact_sensitivities(predictor: Callable, prepared: Sequence[PreparedTest]
+                         ) -> Callable | None:
+    """The predictor's exact sensitivities when it has them (the compiled map on
+    uniform grids), else None: forward differences (CVODES, e.g. a rig with a contact)."""
+    exact = getattr(predictor, "jacobian", None) if _rig.EXACT_JACOBIAN else None
+    if exact is not None and not all(uniform_grid(pt.time_s) for pt in prepared):
+        return None
+    return exact
 
 
 def _exact_residual_jacobian(prepared: Sequence[PreparedTest], rig: Rig,
