@@ -15,6 +15,12 @@ fitted parameters and of the objective between the paths.
     PYTHONPATH=. flock /tmp/ehsa-heavy.lock python benchmarks/collocation_build_speed.py \\
         [--case t-cogging] [--sizes 2500,5000,10000,15000] [--rig base|cogging] \\
         [--paths old,new]
+    PYTHONPATH=. flock /tmp/ehsa-heavy.lock python benchmarks/collocation_build_speed.py \
+        --member cogging [--case t-cogging]
+
+With ``--member NAME``: instead of the sizes, the baseline is identified once and the
+member re-identified by ``fit_member`` (the workflow's own call) with each path; prints
+the wall time of each, the time in ``core.build`` and the fitted effect parameters.
 """
 
 from __future__ import annotations
@@ -78,6 +84,8 @@ def main(argv=None) -> int:
                     help="the baseline's rigid rig, or with the cogging member (8 periods "
                          "per revolution)")
     ap.add_argument("--paths", default="old,new")
+    ap.add_argument("--member", default=None,
+                    help="one candidate fit (fit_member) with each path instead of the sizes")
     ap.add_argument("--data-root", default="/tmp/ehsa_collocation_build_speed")
     args = ap.parse_args(argv)
     sys.stdout.reconfigure(line_buffering=True)
@@ -91,6 +99,8 @@ def main(argv=None) -> int:
         if args.rig == "cogging":
             rig = rig.with_components([*rig.components,
                                        CANDIDATES["cogging"].component(periods_per_rev=8)])
+        if args.member:
+            return _member(args.member, tests, paths)
         pool = tests.fit_pts + tests.held_pts
         print(f"case {args.case}, rig {args.rig} ({len(rig.model().param_specs)} component "
               f"parameters, states {', '.join(rig.model().state_names)})")
@@ -129,6 +139,43 @@ def main(argv=None) -> int:
                                f"{out['new'][2]:.1f} s")
         if summary:
             print("summary: " + "; ".join(summary))
+    return 0
+
+
+def _member(name: str, tests, paths) -> int:
+    from ehsa_opt.estimation.discrepancy.candidate_fit import fit_member
+    from ehsa_opt.estimation.discrepancy.candidates import components_for
+    from ehsa_opt.estimation.discrepancy.evidence import normalised_sse
+    from ehsa_opt.estimation.discrepancy.workflow import fit_baseline
+    settings = DiscrepancySettings()
+    t = time.perf_counter()
+    base = fit_baseline(tests, settings, lambda msg: None)
+    print(f"{len(tests.fit_pts)} fit tests ({len(tests.sub_pts)} for candidate fits, "
+          f"{sum(p.time_s.size for p in tests.sub_pts)} samples), {len(tests.held_pts)} held "
+          f"out; baseline {time.perf_counter() - t:.1f} s")
+    comp = components_for([name], tests.fit_pts, base.fit_pred, tests.lead_m_per_rad)[name]
+    a = (name, comp, CANDIDATES[name].starts, tests.sub_pts, tests.fit_pts, tests.held_pts,
+         tests.rig, base.fit.parameters, settings.max_iter)
+    out = {}
+    for path in paths:
+        core.STRUCTURED_HESSIAN = path == "new"
+        core._CACHE.clear()  # noqa: SLF001 - every run builds its NLPs
+        t = time.perf_counter()
+        with _Timer() as tm:
+            _, res, pf, ph, _ = fit_member(a)
+        sec = time.perf_counter() - t
+        out[path] = sec
+        eff = ", ".join(f"{q.name} {res.parameters.get(q.name, float('nan')):.6g}"
+                        for q in comp.parameters)
+        print(f"  {name} {path}: {sec:6.1f} s (core.build {tm.build:5.1f} s, IPOPT "
+              f"{tm.solve:5.1f} s); {eff}; fit SSE "
+              f"{normalised_sse(tests.fit_pts, pf) if pf else float('nan'):.8g}, held-out SSE "
+              f"{normalised_sse(tests.held_pts, ph) if ph else float('nan'):.8g}; "
+              f"{res.message[:80]}")
+    core.STRUCTURED_HESSIAN = True
+    if "old" in out and "new" in out:
+        print(f"summary: {name} {out['old']:.1f} s -> {out['new']:.1f} s "
+              f"({out['old'] / out['new']:.1f}x)")
     return 0
 
 
