@@ -48,6 +48,8 @@ import casadi as ca
 import numpy as np
 
 from ..physics.bench_model import BenchModel
+from .hessians import given_hessian as _given_hessian
+from .hessians import theta_hessian as _theta_hessian
 from .collocation import (
     Block,
     build_block_symbols,
@@ -57,6 +59,11 @@ from .collocation import (
 
 __all__ = ["ParamSpace", "Objective", "NLP", "build", "solve_starts", "BUILD_COUNT",
            "build_count", "model_key", "states_depend_on", "SolveRecord"]
+
+#: ``theta`` NLPs get their Lagrangian Hessian assembled node by node
+#: (:func:`_theta_hessian`); False: CasADi differentiates the whole NLP graph (the
+#: reference, quadratic in the samples: kept for the build-speed benchmark).
+STRUCTURED_HESSIAN = True
 
 #: Number of NLPs (IPOPT solvers) built in this process, by transcription kind.
 BUILD_COUNT: dict[str, int] = {}
@@ -315,6 +322,10 @@ class NLP:
         if kind == "given" and objective.kind == "minimax" and sym is ca.SX:
             opts["hess_lag"] = _given_hessian(model, space, keys, W, P, self.data_sizes,
                                               self.n_eq, int(G.numel()))
+        if kind == "theta" and STRUCTURED_HESSIAN and model.n_states:
+            opts["hess_lag"] = _theta_hessian(model, space, objective, keys, W, P,
+                                              self.data_sizes, self.n_eq, int(G.numel()),
+                                              float(sum(nobs)))
         self.solver = ca.nlpsol(f"core_{kind}", "ipopt", {"x": W, "f": f, "g": G, "p": P}, opts)
         lbw, ubw = np.full(self.nw, -np.inf), np.full(self.nw, np.inf)
         lbw[:nv], ubw[:nv] = space.lbz, space.ubz
@@ -418,59 +429,6 @@ class NLP:
         return dy
 
 
-def _given_hessian(model: BenchModel, space: ParamSpace, keys: Sequence[tuple], W: Any, P: Any,
-                   data_sizes: Sequence[int], n_eq: int, ng: int) -> ca.Function:
-    """Exact Hessian of the minimax Lagrangian on ``given`` blocks, built per sample.
-
-    The objective is linear and the order constraints are linear, so
-    ∇²L = Σ_k λ_k ∇²J_k over the rows J_k − e_k; J_k is a sum over samples, so its
-    Hessian is the sum of one small per-sample Hessian (differentiated once,
-    mapped over the samples) instead of the differentiation of the whole NLP
-    graph: the same values, a fraction of the build time.
-    """
-    nv, nx, npar = space.nv, model.n_states, len(space.names)
-    lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", ng)
-    z, x, u = ca.SX.sym("z", nv), ca.SX.sym("x", nx), ca.SX.sym("u", 3)
-    pb = ca.SX.sym("pb", npar)
-    funs: dict[tuple[int, int], ca.Function] = {}
-    Hz = ca.SX(nv, nv)
-    pos, ch = nv, 0  # P = [zref, block data...]
-    for key, size in zip(keys, data_sizes):
-        _, n, ny = key
-        if (ny, n) not in funs:
-            ym, wy, mu = ca.SX.sym("ym", ny), ca.SX.sym("wy", ny), ca.SX.sym("mu", ny)
-            Pz, _ = space.expression(z, pb)
-            y = model.outputs(x, u, Pz)[:ny]
-            # ∇²(μ (w (y − y_m))²) = 2 μ w² (∇y ∇yᵀ + (y − y_m) ∇²y), upper triangle
-            h = ca.SX(nv, nv)
-            for k in range(ny):
-                if ca.depends_on(y[k], z):
-                    g = ca.jacobian(y[k], z)
-                    hy, _ = ca.hessian(y[k], z)
-                    h += 2 * mu[k] * wy[k] ** 2 * (ca.mtimes(g.T, g) + (y[k] - ym[k]) * hy)
-            funs[(ny, n)] = ca.Function("h", [z, x, u, pb, ym, wy, mu], [ca.triu(h)],
-                                   {"cse": True}).map("hmap", "serial", n, [0, 3, 6], [0])
-        d = P[pos:pos + size]
-        a = 0
-        Xg = ca.reshape(d[a:a + nx * n], nx, n)
-        a += nx * n
-        ug = ca.reshape(d[a:a + 3 * n], 3, n)
-        a += 3 * n
-        pbase = d[a:a + npar]
-        a += npar
-        ymg = ca.reshape(d[a:a + ny * n], ny, n)
-        a += ny * n
-        wyg = ca.reshape(d[a:a + ny * n], ny, n)  # per-sample weights
-        mu = lam_g[n_eq + ch:n_eq + ch + ny] / n
-        Hz = Hz + funs[(ny, n)](W[:nv], Xg, ug, pbase, ymg, wyg, mu)
-        pos += size
-        ch += ny
-    nw = int(W.numel())
-    H = ca.diagcat(Hz, ca.SX(nw - nv, nw - nv))
-    return ca.Function("nlp_hess_l", [W, P, lam_f, lam_g], [H],
-                       ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
-
-
 def _csc(m: Any) -> Any:
     import scipy.sparse as sp
     m = ca.DM(m)
@@ -503,7 +461,7 @@ def build(model: BenchModel, space: ParamSpace, objective: Objective,
     if len(kinds) != 1:
         raise ValueError(f"core.build: one transcription per NLP, got {sorted(kinds)}")
     keys = tuple(b.key for b in blocks)
-    ck = (model_key(model), space, objective, settings, keys)
+    ck = (model_key(model), space, objective, settings, keys, STRUCTURED_HESSIAN)
     nlp = _CACHE.get(ck)
     if nlp is None:
         if len(_CACHE) >= _CACHE_MAX:

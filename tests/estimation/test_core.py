@@ -123,3 +123,62 @@ def test_ipopt_failure_is_reported_without_numbers(rigid_tests, path):
     assert all(s["status"] == "Maximum_Iterations_Exceeded" for s in res.starts)
     assert all(math.isnan(v) for v in res.parameters.values())
     assert res.delta_F is None and res.identifiability is None
+
+
+def _theta_problem(test, every):
+    """A compliance model on the first 100 samples of ``test`` (theta transcription,
+    ``every`` sub-intervals per sample): model, parameter space, blocks."""
+    from ehsa_opt.estimation.collocation import theta_block
+    from ehsa_opt.physics.components import Compliance
+    model = BenchModel(HarvesterParams(), [Compliance()])
+    free = ["nut_coulomb_N", "nut_viscous_Ns_per_m", "bearing_coulomb_Nm",
+            "compliance_stiffness_N_per_m", "compliance_damping_Ns_per_m"]
+    specs = dict(model.param_specs)
+    lower = [0.0, 0.0, 0.0, specs[free[3]].lower, specs[free[4]].lower]
+    upper = [500.0, 5e3, 1.0, specs[free[3]].upper, specs[free[4]].upper]
+    scale = [50.0, 500.0, 0.05, 2e6, 1e3]
+    space = core.ParamSpace(tuple(model.param_names), tuple(free), tuple(lower), tuple(upper),
+                            tuple(scale), order=(("nut_breakaway_N", "nut_coulomb_N"),))
+    n = 100
+    t, m = test.time_s[:n], motion_of(test)
+    tf = np.append((t[:-1, None] + np.diff(t)[:, None] * (np.arange(every) / every)).ravel(),
+                   t[-1])
+    y = np.vstack([test.force_N[:n], test.voltage_V[:n]])
+    w = np.vstack([np.full(n, 1 / 2.0), np.full(n, 1 / 0.02)])
+    pbase = np.asarray(model.param_vector(test.load_ohm), float)
+    return model, space, [theta_block(model, tf, m.evaluate(tf), every, y, w, pbase)]
+
+
+@pytest.mark.parametrize("objective, every, solve", [
+    (core.Objective("likelihood", regularisation=1e-6), 2, True),
+    (core.Objective("minimax"), 1, False)])
+def test_node_by_node_hessian_is_the_whole_graph_hessian(rigid_tests, objective, every, solve):
+    """The theta NLP's Hessian assembled node by node has CasADi's whole-graph pattern
+    and values (likelihood and minimax, observations at every node or every other),
+    and IPOPT ends at the same point with either."""
+    model, space, blocks = _theta_problem(rigid_tests[0], every)
+    settings = core.SolverSettings(1e-8, 200)
+    nlps = []
+    try:
+        for flag in (False, True):
+            core.STRUCTURED_HESSIAN = flag
+            nlps.append(core.build(model, space, objective, settings, blocks))
+    finally:
+        core.STRUCTURED_HESSIAN = True
+    z0 = space.z_of({"nut_coulomb_N": 30.0, "nut_viscous_Ns_per_m": 200.0,
+                     "bearing_coulomb_Nm": 0.01, "compliance_stiffness_N_per_m": 2e6,
+                     "compliance_damping_Ns_per_m": 1e3})
+    p = nlps[0].data(blocks, z0)
+    rng = np.random.default_rng(3)
+    w = nlps[0].initial(z0, blocks, p) + 0.1 * rng.standard_normal(nlps[0].nw)
+    lam_g = rng.standard_normal(nlps[0].lbg.size)
+    H = [n.solver.get_function("nlp_hess_l")(w, p, 0.7, lam_g) for n in nlps]
+    assert H[0].sparsity() == H[1].sparsity()
+    a, b = np.array(H[0].nonzeros()), np.array(H[1].nonzeros())
+    assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a))
+    if not solve:
+        return
+    recs = [core.solve_starts(n, blocks, [z0], zref=z0)[0] for n in nlps]
+    assert all(r.success for r in recs), [r.status for r in recs]
+    assert np.allclose(recs[1].w[:space.nv], recs[0].w[:space.nv], rtol=1e-6, atol=1e-9)
+    assert recs[1].objective == pytest.approx(recs[0].objective, rel=1e-9)
