@@ -67,7 +67,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from .prepared import PreparedTest
-from .rig import Rig, predict, warmup_grid
+from .rig import Rig, predict
 from .impact_features import (
     BEARING_LEVELS,
     NUT_LEVELS,
@@ -86,7 +86,7 @@ from .impact_features import (
 )
 
 __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective",
-           "impact_energy_ratio", "impact_tests", "IMPACT_FIT_TESTS", "fit_impacts", "fit_candidate_on_impacts", "IMPACT_SHARES", "impact_record",
+           "impact_energy_ratio", "fit_impacts", "fit_candidate_on_impacts", "IMPACT_SHARES", "impact_record",
            "impact_verdict", "judge_on_impacts", "IMPACT_EARN_OBJECTIVE", "IMPACT_EARN_SHARE",
            "IMPACT_EVALUATIONS_WITH_SHARES", "IMPACT_FRICTION_SPREAD",
            "IMPACT_FRICTION_DOMINATED",
@@ -106,9 +106,6 @@ IMPACT_EVALUATIONS_WITH_SHARES = 72
 #: with a 1e8-1e9 N/m contact: 700-2200; the prototype's soft 0.1 mm / 5e6 N/m one: 2;
 #: a 5e7 N/m compliance: 2.3).
 IMPACT_ENERGY_RATIO = 30.0
-#: Fit tests an impact-aware contact fit simulates (those carrying most impact energy
-#: per simulated sample, :func:`impact_tests`); the candidate is judged on every test.
-IMPACT_FIT_TESTS = 4
 #: Contact stiffnesses (log10 N/m) and dampings (log10 N s/m) of the starting grid.
 _GRID_LOG_K = (6.0, 6.5, 7.0, 7.5, 8.0, 8.5, 9.0, 9.5)
 _GRID_LOG_C = (3.0, 4.0)
@@ -422,30 +419,6 @@ def _kinematic_start(prepared: Sequence[PreparedTest], data: FeatureData, harves
     return g, (float(np.mean(forces)) if forces else 0.0)
 
 
-def impact_tests(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray],
-                 max_tests: int = IMPACT_FIT_TESTS) -> list[int]:
-    """Indices (in their order) of the tests an impact-aware contact fit simulates: at
-    most ``max_tests`` of those whose measured force transient energy exceeds the
-    current model's ``preds`` by :data:`IMPACT_ENERGY_RATIO`, the ones with the most
-    excess transient energy per simulated sample (a sine test also simulates its
-    warm-up cycle).  The excess is what the contact must put there (impacts and
-    ringing); a test with little of it per sample costs its simulations and says
-    little about the contact.  Every test when none qualifies or ``max_tests`` covers
-    them all."""
-    rows = []
-    for i, (pt, yp) in enumerate(zip(prepared, preds)):
-        e, s = transient_energies(pt.y[:1], pt.sigma[:1], pt.weight)
-        es, _ = transient_energies(np.asarray(yp)[:1], None, pt.weight)
-        num, den = max(e[0, 0], 0.0) + s[0, 0], max(es[0, 0], 0.0) + s[0, 0]
-        if not (den > 0 and num / den > IMPACT_ENERGY_RATIO):
-            continue
-        grid, _ = warmup_grid(pt, pt.time_s)
-        rows.append((max(e[0, 0] - max(es[0, 0], 0.0), 0.0) / grid.size, i))
-    if not rows or len(prepared) <= max_tests:
-        return list(range(len(prepared)))
-    return sorted(i for _, i in sorted(rows, reverse=True)[:max_tests])
-
-
 def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
                              held_pts: Sequence[PreparedTest], rig: Rig, crig: Rig,
                              start: Mapping[str, float], split: Callable, log: object = None
@@ -462,31 +435,23 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     from ..fit_result import FitResult
     if not rig.has_generator or any(pt.y.shape[0] < 2 for pt in fit_pts):
         return None
-    cur = predict(fit_pts, rig, start)
-    ratio = impact_energy_ratio(fit_pts, cur)
+    ratio = impact_energy_ratio(fit_pts, predict(fit_pts, rig, start))
     if not ratio > IMPACT_ENERGY_RATIO:
         return None
     t0 = time.perf_counter()
-    keep = impact_tests(fit_pts, cur)
-    imp_pts = [fit_pts[i] for i in keep]
-    res = fit_impacts(imp_pts, crig, start, shares=IMPACT_SHARES, split=split,
+    res = fit_impacts(fit_pts, crig, start, shares=IMPACT_SHARES, split=split,
                       max_evaluations=IMPACT_EVALUATIONS_WITH_SHARES,
                       friction_spread=IMPACT_FRICTION_SPREAD, log=log)
     pf = predict(fit_pts, crig, res.parameters)
     sse = float(sum(np.sum(((pt.y - yp) * pt.wnorm) ** 2) for pt, yp in zip(fit_pts, pf)))
     n_obs = sum(pt.y.size for pt in fit_pts)
     # how far the sample-wise response depends on the integration error itself (the
-    # same measure as the sample-wise refit reports; on the contact's fit tests)
-    fine = predict(imp_pts, crig, res.parameters, rtol=1e-9)
-    d = np.concatenate([((pf[i] - yb) * fit_pts[i].wnorm).ravel()
-                        for i, yb in zip(keep, fine)])
+    # same measure as the sample-wise refit reports)
+    fine = predict(fit_pts, crig, res.parameters, rtol=1e-9)
+    d = np.concatenate([((ya - yb) * pt.wnorm).ravel() for pt, ya, yb in zip(fit_pts, pf, fine)])
     chaos = float(np.sqrt(np.mean(d ** 2)))
-    subset = ("" if len(keep) == len(fit_pts) else
-              f"contact fitted on the {len(keep)} of {len(fit_pts)} fit tests carrying most "
-              f"impact energy per simulated sample ({', '.join(pt.test.file for pt in imp_pts)})"
-              f", judged on all; ")
     note = (f"the force's transient energy is {ratio:.3g} x the current model's (impacts): "
-            f"{subset}{res.message}; sample-wise response reproducible to {chaos:.3g} noise std "
+            f"{res.message}; sample-wise response reproducible to {chaos:.3g} noise std "
             f"between tolerances 1e-7 and 1e-9"
             + (" (a rattling contact: fitted on transient energies and kinematic gaps, not "
                "sample by sample)" if chaos > 1.0 else ""))
