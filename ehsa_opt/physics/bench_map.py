@@ -159,16 +159,14 @@ def _output_jacobians(model: BenchModel) -> ca.Function:
 
 def stage_inputs(motion: Any, grid: np.ndarray, substeps: int) -> np.ndarray:
     """The motion (x, v, a) at the three stage times of every sub-step: (3, 3 m (N − 1)),
-    the columns in time order.  A sampled motion is linearly interpolated between its
-    samples, as in the CVODES simulation; a closed-form motion is evaluated exactly."""
+    the columns in time order.  A sampled motion is its samples' smoothing spline, as in the CVODES simulation (its own x, v = dx/dt, a,
+    never linear interpolants: those bend x at every sample, which a stiff mount or
+    contact turns into a spurious force); a closed-form motion is evaluated exactly."""
     m = int(substeps)
     frac = ((np.arange(m)[:, None] + RADAU_C[None, :]) / m).ravel()
     ts = (grid[:-1, None] + np.diff(grid)[:, None] * frac[None, :]).ravel()
     if isinstance(motion, FilteredMotion):
         motion = motion.sampled()
-    if isinstance(motion, SampledMotion):
-        knots = motion.evaluate(motion.time_s)
-        return np.vstack([np.interp(ts, motion.time_s, row) for row in knots])
     return motion.evaluate(ts)
 
 

@@ -239,7 +239,8 @@ class SampledMotion:
 
     @property
     def max_step_s(self) -> float:
-        """The shortest sample step, s (the interpolants are linear between samples)."""
+        """The shortest sample step, s (a simulation step never spans two sample
+        intervals; the spline's acceleration has a corner at every sample)."""
         return float(np.min(np.diff(self.time_s)))
 
     def evaluate(self, t: np.ndarray) -> np.ndarray:
@@ -249,11 +250,22 @@ class SampledMotion:
         return np.vstack([sp(t), sp.derivative(1)(t), sp.derivative(2)(t)])
 
     def expressions(self, t: Any) -> tuple[Any, Any, Any]:
-        """CasADi (MX) linear interpolants of x, v, a on the sample grid."""
-        xva = self.evaluate(self.time_s)
-        grid = [self.time_s.tolist()]
-        return tuple(ca.interpolant(f"motion_{k}", "linear", grid, xva[k].tolist())(t)
-                     for k in range(3))
+        """CasADi (MX) expressions of x, v, a: the smoothing spline itself (a cubic
+        B-spline on the samples, as :meth:`evaluate`) and its first two derivatives,
+        so v is exactly dx/dt, x is C², v C¹ and a C⁰ (piecewise linear).
+
+        Linear interpolants of the sampled x, v, a (the representation before) put a
+        corner into v and a jump into dv/dt at every sample: a variable-order
+        integrator then fails its error test and restarts at low order sample after
+        sample (a 3 001-sample multisine: ten times a sine test's CVODES cost), and a
+        stiff contact is struck by a small acceleration step at every sample."""
+        sp = self._spline
+        out = []
+        for d in (sp, sp.derivative(1), sp.derivative(2)):
+            knots = np.asarray(d.t, dtype=float)
+            coef = np.asarray(d.c, dtype=float)[:knots.size - d.k - 1]  # scipy may pad
+            out.append(ca.bspline(t, ca.DM(coef), [knots.tolist()], [int(d.k)], 1, {}))
+        return tuple(out)
 
 
 class FilteredMotion:
