@@ -226,7 +226,23 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         say(note)
         notes.append(note)
         return False, joint
+    if state.remaining and past_deadline() and joint is None and not _ranked_above(rk, state):
+        # the next round would start after the deadline; nothing it could re-identify
+        # ranked here: it is not work skipped (no cut)
+        note = (f"round {rnd}: {win.effect} named at the time budget; no other member's "
+                f"signature explained {100 * MIN_RANK_VALUE:g} % of this round's residual: "
+                f"no further round (not a cut)")
+        say(note)
+        notes.append(note)
+        return False, joint
     return bool(state.remaining), joint
+
+
+def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
+    """The remaining members this round ranked at or above :data:`MIN_RANK_VALUE` (the
+    ones a next round could re-identify)."""
+    return [n for n in state.remaining if n in rk.scores and rk.scores[n]["applicable"]
+            and rank_value(rk.scores[n]) >= MIN_RANK_VALUE]
 
 
 def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySettings
