@@ -271,7 +271,7 @@ def check_voltage_skew(tests: SearchTests, base: Baseline, state: SearchState, s
     Returns the state and the check (None: no voltage channel, or no delay is better
     than none)."""
     skew = find_voltage_skew(tests.fit_pts, state.fit_pred, tests.held_pts, state.held_pred,
-                             state.n_eff_fit, state.n_eff_held)
+                             state.n_eff_fit, state.n_eff_held, tests.rig.harvester)
     if skew is None:
         return state, None
     say(skew.message)
