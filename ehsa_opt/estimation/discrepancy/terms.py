@@ -54,7 +54,8 @@ from .evidence import WHITE_P, autocorrelation_time, delta_bic, earns, effective
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 
-__all__ = ["TermProposal", "shifted_force", "names_an_effect", "travel_since_reversal_m", "FRICTION_LAW_GROUPS",
+__all__ = ["TermProposal", "shifted_force", "names_an_effect", "travel_since_reversal_m",
+           "FRICTION_LAW_GROUPS",
            "PRESLIDING_LENGTHS_M", "feature_library", "discover_term", "propose_term", "shift_lag",
            "shift_sse_curves", "per_test_delays", "DELAY_SPREAD_BIC", "GROUPS", "LAG_GRID_S",
            "TERM_PREFERENCE"]

@@ -51,7 +51,8 @@ from .evidence import delta_bic
 from .prepared import PreparedTest
 from .terms import LAG_GRID_S
 
-__all__ = ["VoltageSkew", "find_voltage_skew", "em_force_per_volt", "realign_voltage", "voltage_shift_curves",
+__all__ = ["VoltageSkew", "find_voltage_skew", "em_force_per_volt", "realign_voltage",
+           "voltage_shift_curves",
            "SKEW_BIC", "SKEW_EXPLAINS", "SKEW_SPREAD"]
 
 #: One delay of the voltage record against none: ΔBIC below this on the fit and on the
