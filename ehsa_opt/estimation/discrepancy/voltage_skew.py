@@ -30,8 +30,9 @@ check.  The check (:func:`find_voltage_skew`), before the rounds, on the baselin
    mount, a gap) lags in the force too — the generator's force on the rod,
    K_t V/(R_load r), comes from the rotor's current — while a late voltage record leaves
    the force on time.  The model's force with its generator part moved by the same τ,
-   F̂ + c (V̂(t − τ) − V̂(t)) with c = K_t/(R_load r), must fit the force of the held-out
-   tests *worse* than F̂ (``em_force_per_V``, per test; skipped when not given).
+   F̂ + c (V̂(t − τ) − V̂(t)) with c = K_t/(R_load r), must not fit the force of the
+   held-out tests significantly better than F̂ (N_eff ln(SSE_moved/SSE_on) < :data:`SKEW_BIC`
+   refuses the skew; skipped without ``harvester``).
 
 When all of them hold, every test's voltage is re-aligned, V(t + τ) on the same samples
 (:func:`realign_voltage`; the last |τ| of a record extrapolated linearly from its last
@@ -173,7 +174,7 @@ def find_voltage_skew(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.nda
             dv = np.interp(pt.time_s - tau, pt.time_s, yp[1]) - yp[1]
             f_on += float(np.sum(((pt.y[0] - yp[0]) * w) ** 2))
             f_moved += float(np.sum(((pt.y[0] - yp[0] - c * dv) * w) ** 2))
-    follows = f_moved < f_on
+    follows = f_on > 0 and delta_bic(f_moved, f_on, 0, n_eff) < SKEW_BIC
     edge = abs(abs(tau) - float(np.max(np.abs(LAG_GRID_S)))) < 1e-9
     found = (not edge and spread <= SKEW_SPREAD and d_fit < SKEW_BIC
              and d_held < SKEW_BIC and explained >= SKEW_EXPLAINS and not follows)
@@ -190,7 +191,7 @@ def find_voltage_skew(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.nda
            f"from the model otherwise than by a delay of the record"
            if explained < SKEW_EXPLAINS else
            f"the force follows: its generator part moved by the same delay fits the "
-           f"force better (SSE {f_on:.4g} -> {f_moved:.4g}) — the rotor lags, not the "
+           f"force significantly better (SSE {f_on:.4g} -> {f_moved:.4g}) — the rotor lags, not the "
            f"record")
     msg = (f"voltage skew: the voltage {1e3 * abs(tau):.1f} ms {word} against force and "
            f"displacement removes {100 * explained:.0f} % of the voltage residual's excess "
