@@ -191,8 +191,8 @@ def find_voltage_skew(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.nda
            f"from the model otherwise than by a delay of the record"
            if explained < SKEW_EXPLAINS else
            f"the force follows: its generator part moved by the same delay fits the "
-           f"force significantly better (SSE {f_on:.4g} -> {f_moved:.4g}) — the rotor lags, not the "
-           f"record")
+           f"force significantly better (SSE {f_on:.4g} -> {f_moved:.4g}) — the rotor "
+           f"lags, not the record")
     msg = (f"voltage skew: the voltage {1e3 * abs(tau):.1f} ms {word} against force and "
            f"displacement removes {100 * explained:.0f} % of the voltage residual's excess "
            f"(ΔBIC against no delay: fit {d_fit:.3g}, held-out {d_held:.3g}; per-test "
