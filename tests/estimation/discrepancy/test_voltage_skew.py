@@ -67,3 +67,26 @@ def test_a_mount_spring_is_not_taken_for_a_voltage_skew():
     assert sse0[1] / n[1] > 3.0  # the mount is visible in the voltage
     skew = find_voltage_skew(fp, fpr, hp, hpr, nf, nh, HarvesterParams())
     assert skew is None or not skew.found, skew.message
+
+
+@pytest.mark.slow  # ~80 s on the shared machine
+def test_the_workflow_states_a_late_voltage_record_and_names_no_catalogue_member(tmp_path):
+    """End to end on a clean campaign whose voltage is recorded 1.5 ms late: the skew is
+    stated in the answer, the record re-aligned, and no catalogue member is named."""
+    from dataclasses import replace
+
+    from ehsa_opt.datasets.bench_format import load_bench
+    from ehsa_opt.datasets.synthetic import write_synthetic
+    from ehsa_opt.estimation.discrepancy import DiscrepancySettings, run_discrepancy
+
+    d = write_synthetic(tmp_path / "data", SyntheticSpec(
+        frequencies_hz=(1.5, 2.5, 3.5), loads_ohm=(15.0, 109.0), cycles=1.0, seed=5))
+    data = load_bench(d)
+    late = [replace(t, voltage_V=np.interp(t.time_s - 0.0015, t.time_s, t.voltage_V))
+            for t in data.tests]
+    res = run_discrepancy(replace(data, tests=late), DiscrepancySettings(seed=0))
+    assert res.effect == "none of the catalogue", res.message
+    assert "voltage record is 1.4 ms late" in res.message or \
+        "voltage record is 1.5 ms late" in res.message or \
+        "voltage record is 1.6 ms late" in res.message, res.message
+    assert not res.effects
