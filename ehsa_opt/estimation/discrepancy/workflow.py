@@ -394,7 +394,8 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
                 f"test; re-aligned before the rounds, no catalogue member named for it)")
     if effect == NONE_OF_CATALOGUE and names_an_effect(term):
         msg += f"; proposed term: {term.description}"
-    elif effect == "none" and term is not None and term.earns:
+    if (not effects and not state.cut and term is not None and term.earns
+            and not names_an_effect(term)):
         # a friction law of another shape: said, but it is not an effect the rig lacks
         note = (f"no effect named: the term that explains the residual is a friction law "
                 f"of another shape than the baseline's — {term.description} ({evaluation} "
