@@ -226,7 +226,34 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         say(note)
         notes.append(note)
         return False, joint
+    if state.remaining and past_deadline() and joint is None and not _ranked_above(rk, state):
+        # the next round would start after the deadline; nothing it could re-identify
+        # ranked here: it is not work skipped (no cut)
+        note = (f"round {rnd}: {win.effect} named at the time budget; no other member "
+                f"ranked at {100 * MIN_RANK_VALUE:g} % of this round's residual is left "
+                f"unfitted or with held-out evidence (ΔBIC < 0): no further round (not a cut)")
+        say(note)
+        notes.append(note)
+        return False, joint
     return bool(state.remaining), joint
+
+
+def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
+    """The remaining members a next round could still name: ranked at or above
+    :data:`MIN_RANK_VALUE` in this round and either not re-identified in it, or
+    re-identified with some held-out evidence (ΔBIC < 0) that did not suffice to earn
+    (an effect the winner may have masked).  A member re-identified here whose held-out
+    ΔBIC was ≥ 0 had no held-out evidence at all and is not counted."""
+    out = []
+    for n in state.remaining:
+        if n not in rk.scores or not rk.scores[n]["applicable"] \
+                or not rank_value(rk.scores[n]) >= MIN_RANK_VALUE:
+            continue
+        c = rk.cands.get(n)
+        if c is not None and c.fitted and not (c.delta_bic_heldout < 0):
+            continue
+        out.append(n)
+    return out
 
 
 def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySettings

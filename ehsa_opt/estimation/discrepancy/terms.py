@@ -54,7 +54,8 @@ from .evidence import WHITE_P, autocorrelation_time, delta_bic, earns, effective
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 
-__all__ = ["TermProposal", "names_an_effect", "travel_since_reversal_m", "FRICTION_LAW_GROUPS",
+__all__ = ["TermProposal", "shifted_force", "names_an_effect", "travel_since_reversal_m",
+           "FRICTION_LAW_GROUPS",
            "PRESLIDING_LENGTHS_M", "feature_library", "discover_term", "propose_term", "shift_lag",
            "shift_sse_curves", "per_test_delays", "DELAY_SPREAD_BIC", "GROUPS", "LAG_GRID_S",
            "TERM_PREFERENCE"]
@@ -384,9 +385,12 @@ def names_an_effect(term: "TermProposal | None") -> bool:
 LAG_GRID_S = np.arange(-0.02, 0.02001, 0.0002)
 
 
-def _shifted(pt: PreparedTest, pred: np.ndarray, tau: float) -> np.ndarray:
+def shifted_force(pt: PreparedTest, pred: np.ndarray, tau: float) -> np.ndarray:
     """The model force delayed by ``tau`` (linear interpolation)."""
     return np.interp(pt.time_s - tau, pt.time_s, pred[0])
+
+
+_shifted = shifted_force
 
 
 def shift_sse_curves(pts, preds) -> np.ndarray:

@@ -79,10 +79,11 @@ from .results import (
 from .search import SearchState, SearchTests, run_rounds
 from .split import crop_test, load_split, spread_within
 from .terms import TermProposal, names_an_effect, propose_term
+from .voltage_skew import VoltageSkew, find_voltage_skew, realign_voltage
 
 __all__ = ["run_discrepancy", "load_data", "prepare_search_tests", "fit_baseline", "Baseline",
            "name_force_lag", "name_drive_lag", "assemble_result", "BASELINE_MAX_SAMPLES",
-           "CANDIDATE_MAX_SAMPLES", "baseline_decimation"]
+           "CANDIDATE_MAX_SAMPLES", "baseline_decimation", "check_voltage_skew"]
 
 
 def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings | None = None,
@@ -115,6 +116,9 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     all_cands: list[CandidateResult] = []
     # the recorded tests (the open-loop metric's input, whatever the members change)
     raw = ([pt.test for pt in tests.fit_pts], [pt.test for pt in tests.held_pts])
+    skew = None
+    if tests.rig.has_generator:
+        state, skew = check_voltage_skew(tests, base, state, say, notes)
     if "drive_lag" in settings.candidates and not tests.rig.has_generator:
         state = name_drive_lag(tests, base, state, settings, say, all_cands, notes)
     if "drive_lag" in state.effects and "force_lag" in settings.candidates:
@@ -136,7 +140,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 f"{term.error_before:.3f} -> {term.error_after:.3f} % "
                 f"({'earns' if term.earns else 'does not earn'})")
     return assemble_result(data, tests, base, state, all_cands, term, notes,
-                           time.perf_counter() - t_start, raw)
+                           time.perf_counter() - t_start, raw, skew)
 
 
 def load_data(data: BenchData | str | Path, say, notes: list[str]) -> BenchData:
@@ -258,6 +262,33 @@ def baseline_decimation(fit_pts, rig: Rig) -> int:
     return decimation_factor(fit_pts, BASELINE_MAX_SAMPLES) if rig.model().n_states else 1
 
 
+def check_voltage_skew(tests: SearchTests, base: Baseline, state: SearchState, say,
+                       notes: list[str]) -> tuple[SearchState, VoltageSkew | None]:
+    """The voltage-skew check (:func:`~.voltage_skew.find_voltage_skew`) on the baseline;
+    when one delay of the voltage record explains the voltage residual, every test's
+    voltage is re-aligned from here on (``tests`` changed in place; the model's outputs
+    are unchanged — the same samples — and the effective sample sizes are recomputed).
+    Returns the state and the check (None: no voltage channel, or no delay is better
+    than none)."""
+    skew = find_voltage_skew(tests.fit_pts, state.fit_pred, tests.held_pts, state.held_pred,
+                             state.n_eff_fit, state.n_eff_held, tests.rig.harvester)
+    if skew is None:
+        return state, None
+    say(skew.message)
+    notes.append(skew.message)
+    if not skew.found:
+        return state, skew
+    fit_ids = {id(pt): k for k, pt in enumerate(tests.fit_pts)}
+    sub_idx = [fit_ids[id(pt)] for pt in tests.sub_pts]
+    tests.fit_pts = realign_voltage(tests.fit_pts, skew.delay_s)
+    tests.held_pts = realign_voltage(tests.held_pts, skew.delay_s)
+    tests.sub_pts = [tests.fit_pts[k] for k in sub_idx]
+    state.n_eff_fit = effective_samples(tests.fit_pts, state.fit_pred)
+    state.n_eff_held = (effective_samples(tests.held_pts, state.held_pred)
+                        if tests.held_pts else math.nan)
+    return state, skew
+
+
 def name_force_lag(tests: SearchTests, base: Baseline, state: SearchState,
                    settings: DiscrepancySettings, say, all_cands: list) -> SearchState:
     """The ``force_lag`` member (:func:`~.candidates.force_lag.try_lag`) tried on the
@@ -332,7 +363,8 @@ def name_drive_lag(tests: SearchTests, base: Baseline, state: SearchState,
 
 def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: SearchState,
                     all_cands: list, term: TermProposal | None, notes: list[str],
-                    seconds: float, raw: tuple | None = None) -> DiscrepancyResult:
+                    seconds: float, raw: tuple | None = None,
+                    skew: VoltageSkew | None = None) -> DiscrepancyResult:
     """The named effect(s), the message, the localisation of the final residual and,
     on a validation set of a rig without generator, the open-loop validation
     (``raw``: the recorded fit and held-out tests, before any member changed them)."""
@@ -344,7 +376,8 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
     elif state.cut:  # nothing named before the time budget: the work done does not say "none"
         effect = UNDECIDED
     else:
-        effect = NONE_OF_CATALOGUE if names_an_effect(term) else "none"
+        skewed = skew is not None and skew.found
+        effect = NONE_OF_CATALOGUE if names_an_effect(term) or skewed else "none"
     loc1 = localise(fit_pts + held_pts, state.fit_pred + state.held_pred,
                     lead_m_per_rad=tests.lead_m_per_rad) if effects else None
     ok = base.fit.success and not state.cut and all(c.fit is not None and c.fit.parameters
@@ -354,9 +387,15 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
     if state.cut:
         msg += f"; partial answer — {state.cut}"
         notes.append(state.cut)
-    if effect == NONE_OF_CATALOGUE:
+    if skew is not None and skew.found:
+        word = "late" if skew.delay_s > 0 else "early"
+        msg += (f"; the voltage record is {1e3 * abs(skew.delay_s):.1f} ms {word} against "
+                f"force and displacement (a skew of the acquisition, one delay for every "
+                f"test; re-aligned before the rounds, no catalogue member named for it)")
+    if effect == NONE_OF_CATALOGUE and names_an_effect(term):
         msg += f"; proposed term: {term.description}"
-    elif effect == "none" and term is not None and term.earns:
+    if (not effects and not state.cut and term is not None and term.earns
+            and not names_an_effect(term)):
         # a friction law of another shape: said, but it is not an effect the rig lacks
         note = (f"no effect named: the term that explains the residual is a friction law "
                 f"of another shape than the baseline's — {term.description} ({evaluation} "

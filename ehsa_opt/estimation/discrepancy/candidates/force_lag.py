@@ -6,6 +6,18 @@ by a time-shift search on the baseline residual (:func:`~ehsa_opt.estimation.dis
 measured force is re-aligned by it (F(t + τ), the ends cropped) and the baseline is
 refitted; the delay is named when it earns by the decision rule (:func:`~ehsa_opt.estimation.discrepancy.evidence.earns`),
 compared on the re-aligned held-out tests against the baseline on the same samples.
+
+Two checks before the refits (each refit is a collocation fit of the baseline, tens of
+seconds on a 15-test campaign), each on the check's own evidence: the delay must be one
+delay for every test (:func:`~ehsa_opt.estimation.discrepancy.terms.per_test_delays`) and
+inside the searched delays (not at the edge of
+:data:`~ehsa_opt.estimation.discrepancy.terms.LAG_GRID_S`: the residual then asks for a
+shift the search does not locate — an impact-ridden residual, not a record's delay), and
+the baseline's own force moved by it, *without* a refit, must already remove
+:data:`SCREEN_SHARE` of the share of the evaluation error's excess that earning asks for
+(:data:`~ehsa_opt.estimation.discrepancy.evidence.MIN_EXCESS_REDUCTION`).  A delay of the
+record is what the shift itself undoes; the refit only re-balances the friction on the
+re-aligned samples.
 """
 
 from __future__ import annotations
@@ -17,6 +29,7 @@ from typing import Sequence
 import numpy as np
 
 from ..evidence import (
+    MIN_EXCESS_REDUCTION,
     delta_bic,
     earns,
     excess_reduction,
@@ -26,9 +39,24 @@ from ..evidence import (
 from ..fit import fit_group
 from ..prepared import PreparedTest, decimated, prepare_tests
 from ..rig import predict
-from ..terms import DELAY_SPREAD_BIC, per_test_delays, shift_lag
+from ..terms import DELAY_SPREAD_BIC, LAG_GRID_S, per_test_delays, shifted_force, shift_lag
 
-__all__ = ["try_lag", "per_test_delays"]
+__all__ = ["try_lag", "per_test_delays", "screen_lag", "SCREEN_SHARE"]
+
+#: The shift alone (no refit) must remove this share of
+#: :data:`~ehsa_opt.estimation.discrepancy.evidence.MIN_EXCESS_REDUCTION` of the evaluation
+#: error's excess over the noise floor before the baseline is refitted on the re-aligned
+#: record (a margin of two for what the refit adds).
+SCREEN_SHARE = 0.5
+
+
+def screen_lag(tau: float, eval_pts, eval_pred, floor: float) -> tuple[float, float, float]:
+    """The evaluation force error (%) of the baseline as it is and with its force moved
+    by ``tau`` (no refit), and the share of the excess over ``floor`` the move removes."""
+    e0 = force_error_percent(eval_pts, eval_pred)
+    moved = [np.atleast_2d(shifted_force(pt, yp, tau)) for pt, yp in zip(eval_pts, eval_pred)]
+    e1 = force_error_percent(eval_pts, moved)
+    return e0, e1, excess_reduction(e0, e1, floor)
 
 
 def _lag_tests(pts: Sequence[PreparedTest], tau: float, has_generator: bool
@@ -66,6 +94,19 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
             f"lead depends on the motion, which a delay of the record does not")
         return None
     tau = lag[0]
+    if abs(abs(tau) - float(np.max(np.abs(LAG_GRID_S)))) < 1e-9:
+        say(f"force_lag: not tried — the best shift of the force ({1e3 * tau:.1f} ms) is at "
+            f"the edge of the searched delays (±{1e3 * float(np.max(LAG_GRID_S)):.0f} ms): "
+            f"the residual is not a delay of the record the search locates")
+        return None
+    ev_pts, ev_pred = (held_pts, held_pred) if held_pts else (fit_pts, fit_pred)
+    e0, e1, share = screen_lag(tau, ev_pts, ev_pred, floor)
+    if share < SCREEN_SHARE * MIN_EXCESS_REDUCTION:
+        say(f"force_lag: not tried — the baseline's force moved by {1e3 * tau:.2f} ms "
+            f"(no refit) removes {100 * share:.1f} % of the error's excess ({e0:.3f} -> "
+            f"{e1:.3f} %), less than {100 * SCREEN_SHARE * MIN_EXCESS_REDUCTION:g} % "
+            f"({SCREEN_SHARE:g} × the {100 * MIN_EXCESS_REDUCTION:g} % earning asks for)")
+        return None
     for it in range(2):  # re-estimate once on the re-aligned baseline
         f2 = _lag_tests(fit_pts, tau, rig.has_generator)
         h2 = _lag_tests(held_pts, tau, rig.has_generator) if held_pts else []
