@@ -125,7 +125,7 @@ def run_case(case: tuple, args) -> dict:
     if js.exists():
         doc = json.loads(js.read_text())
         if doc.get("partial"):  # the command's own budget cut it: a stated partial answer
-            row["cut"] = True
+            row["cut"] = row["partial"] = True
             doc["effect"] = "budget: " + doc["effect"]
         row.update(answer=doc["effect"], named=doc["effects"], steps=[
             {"effect": s["effect"], "error_after": s.get("error_after"),
@@ -188,8 +188,9 @@ def summary(rows: list[dict]) -> str:
                  f"{sorted(r['seconds'] for r in rows)[len(rows) // 2]:.0f} s; peak memory max "
                  f"{max(r['peak_MB'] for r in rows):.0f} MB; over 3 min: {len(slow)}"
                  + (f" ({', '.join(r['case'] for r in slow)})" if slow else "")
-                 + f"; over 1 GB: {len(big)}; cut at the cap: "
-                 f"{sum(r['cut'] for r in rows)}")
+                 + f"; over 1 GB: {len(big)}; partial at the budget: "
+                 f"{sum(bool(r.get('partial')) for r in rows)}; killed at the cap: "
+                 f"{sum(r['cut'] and not r.get('partial') for r in rows)}")
     return "\n".join(lines)
 
 
