@@ -266,21 +266,9 @@ def simulate_map(model: BenchModel, motion: Any, p: Any, grid: np.ndarray,
     """Outputs (2 × N: force N, voltage V) and states (n_states × N) on ``grid`` (s,
     uniform) by the Radau IIA map, ``substeps`` per sample (default :func:`substeps_for`).
     """
-    grid = np.asarray(grid, dtype=float)
-    if grid.ndim != 1 or grid.size < 2 or np.any(np.diff(grid) <= 0):
-        raise ValueError("simulate_map: grid must be 1-D, strictly increasing, >= 2 samples")
-    dt = np.diff(grid)
-    h = float(np.median(dt))
-    if np.max(np.abs(dt - h)) > 1e-6 * h:
-        raise ValueError("simulate_map: the grid must be uniform (one sample step)")
+    grid, h = _check_grid(grid)
     p = np.asarray(p, dtype=float).ravel()
-    if isinstance(motion, FilteredMotion):
-        motion = motion.sampled()
-    if isinstance(motion, SampledMotion):  # as the CVODES simulation sees it
-        uu = np.vstack([np.interp(grid, motion.time_s, r)
-                        for r in motion.evaluate(motion.time_s)])
-    else:
-        uu = motion.evaluate(grid)
+    motion, uu = _samples(motion, grid)
     if x0 is None:
         x0 = model.initial_state(uu[:, 0], p)
     if model.n_states == 0:
