@@ -372,10 +372,10 @@ def rig_on_simulation(rig: Rig) -> bool:
 #: A member whose recipe is collocation is fitted by the simulation recipe (screened
 #: starts, effect-only and joint Gauss–Newton on the compiled map with its exact
 #: sensitivities) when its candidate-fit tests hold more samples than this and the rig
-#: suits the map.  The collocation NLP's build grows faster than the samples (about
-#: with their square: 0.7 s for 2 403 samples, 51 s for 15 049); a map simulation
-#: grows with them.  Our own held-out benchmark campaigns (4 fit tests of at most
-#: 1 250 samples) stay on collocation.
+#: suits the map.  On such a campaign the map is the cheaper path (one cogging fit on
+#: 8 tests, about 10 800 samples: 12.6 s on the map, 17.1 s by collocation with the
+#: node-by-node Hessian, 51 s before it).  Our own held-out benchmark campaigns (4 fit
+#: tests of at most 1 250 samples) stay on collocation.
 SIMULATION_RECIPE_MIN_SAMPLES = 6000
 
 
