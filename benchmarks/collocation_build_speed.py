@@ -54,21 +54,18 @@ class _Timer:
         self.build = self.solve = 0.0
         self._b, self._s = core.build, core.solve_starts
 
-    def __enter__(self) -> "_Timer":
-        def build(*a, **k):
+    def _timed(self, fn, total: str):
+        def wrapped(*a, **k):
             t = time.perf_counter()
             try:
-                return self._b(*a, **k)
+                return fn(*a, **k)
             finally:
-                self.build += time.perf_counter() - t
+                setattr(self, total, getattr(self, total) + time.perf_counter() - t)
+        return wrapped
 
-        def solve(*a, **k):
-            t = time.perf_counter()
-            try:
-                return self._s(*a, **k)
-            finally:
-                self.solve += time.perf_counter() - t
-        core.build, core.solve_starts = build, solve
+    def __enter__(self) -> "_Timer":
+        core.build = self._timed(self._b, "build")
+        core.solve_starts = self._timed(self._s, "solve")
         return self
 
     def __exit__(self, *exc) -> None:

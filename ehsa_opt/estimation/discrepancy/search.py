@@ -219,21 +219,20 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         win.earns = False
         return False, joint
     joint = add_winner(rnd, win, first, joint, tests, state, say)
+    stop = None
     if impact_record(win.fit) is not None and state.remaining:
-        note = (f"round {rnd}: {win.effect} was fitted and judged on transient energies and "
+        stop = (f"round {rnd}: {win.effect} was fitted and judged on transient energies and "
                 f"kinematic gaps (a rattling contact): the model's sample-wise residual is "
                 f"not reproducible, so no further effect is searched on it")
-        say(note)
-        notes.append(note)
-        return False, joint
-    if state.remaining and past_deadline() and joint is None and not _ranked_above(rk, state):
+    elif state.remaining and past_deadline() and joint is None and not _ranked_above(rk, state):
         # the next round would start after the deadline; nothing it could re-identify
         # ranked here: it is not work skipped (no cut)
-        note = (f"round {rnd}: {win.effect} named at the time budget; no other member "
+        stop = (f"round {rnd}: {win.effect} named at the time budget; no other member "
                 f"ranked at {100 * MIN_RANK_VALUE:g} % of this round's residual is left "
                 f"unfitted or with held-out evidence (ΔBIC < 0): no further round (not a cut)")
-        say(note)
-        notes.append(note)
+    if stop is not None:
+        say(stop)
+        notes.append(stop)
         return False, joint
     return bool(state.remaining), joint
 
