@@ -189,6 +189,12 @@ class DiscrepancyResult:
     cut : str
         Empty, or where the time budget (``settings.budget_s``) cut the run: the answer
         is then partial (the named effects are those the completed work supports).
+    voltage_skew : dict or None
+        The voltage-skew check of the baseline (``found``, ``delay_s`` in s, > 0 when
+        the voltage is sampled late, its ΔBIC on the fit and held-out tests, the share
+        of the held-out voltage excess it explains, ``message``); None when the check
+        was not run (no voltage channel).  When found, the voltage was re-aligned by
+        ``delay_s`` before the rounds.
     """
 
     success: bool
@@ -215,6 +221,7 @@ class DiscrepancyResult:
     validation: dict | None = None
     notes: list[str] = field(default_factory=list)
     cut: str = ""
+    voltage_skew: dict | None = None
 
     @property
     def winner(self) -> CandidateResult | None:
@@ -274,6 +281,7 @@ class DiscrepancyResult:
                 "validation": self.validation,
                 "notes": self.notes,
                 "partial": bool(self.cut), "cut": self.cut or None,
+                "voltage_skew": self.voltage_skew,
                 "localisation_before": self.loc_before.as_dict(),
                 "localisation_after": self.loc_after.as_dict() if self.loc_after else None,
                 "per_test": self.per_test_errors(),

@@ -101,6 +101,13 @@ class VoltageSkew:
     explained: float
     message: str
 
+    def as_dict(self) -> dict:
+        """The check as plain JSON values (the result file's ``voltage_skew``)."""
+        return {"found": bool(self.found), "delay_s": float(self.delay_s),
+                "dbic_fit": float(self.dbic_fit), "dbic_heldout": float(self.dbic_held),
+                "spread": float(self.spread), "explained": float(self.explained),
+                "message": self.message}
+
 
 def _voltage_at(pt: PreparedTest, tau: float) -> np.ndarray:
     """The measured voltage at t + τ on the test's samples (linear interpolation; linear

@@ -414,7 +414,7 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
         held_pts, base.fit_pred + base.held_pred, base.localisation, loc1,
         {"fit": state.n_eff_fit, "heldout": state.n_eff_held}, seconds,
         str(getattr(data, "path", "")), effects, state.steps, term, floor, validation, notes,
-        state.cut)
+        state.cut, skew.as_dict() if skew is not None else None)
 
 
 def _open_loop_validation(raw: tuple, base: Baseline, state: SearchState,

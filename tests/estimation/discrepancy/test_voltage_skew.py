@@ -2,6 +2,8 @@
 acquisition) is found, stated and re-aligned; a mount spring, which also moves the rotor's
 channel against the force, is not taken for one."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -49,6 +51,9 @@ def test_a_late_voltage_record_is_found_and_realigned():
     assert sse0[1] / n[1] > 3.0          # the skew is far outside the noise ...
     assert sse1[1] / n[1] < 1.2          # ... and re-aligned the record is at its noise
     assert sse1[0] == pytest.approx(sse0[0])  # the force is untouched
+    doc = skew.as_dict()  # plain JSON values for the result file
+    assert doc["found"] is True and doc["delay_s"] == pytest.approx(skew.delay_s)
+    assert json.loads(json.dumps(doc)) == doc
 
 
 def test_a_record_without_skew_is_left_alone():
@@ -90,3 +95,6 @@ def test_the_workflow_states_a_late_voltage_record_and_names_no_catalogue_member
         "voltage record is 1.5 ms late" in res.message or \
         "voltage record is 1.6 ms late" in res.message, res.message
     assert not res.effects
+    doc = res.as_dict()["voltage_skew"]  # the result file carries the check
+    assert doc["found"] and abs(doc["delay_s"] - 0.0015) < 2.5e-4
+    assert doc["dbic_heldout"] < -10 and doc["explained"] >= 0.5
