@@ -194,7 +194,8 @@ class DiscrepancyResult:
         the voltage is sampled late, its ΔBIC on the fit and held-out tests, the share
         of the held-out voltage excess it explains, ``message``); None when the check
         was not run (no voltage channel).  When found, the voltage was re-aligned by
-        ``delay_s`` before the rounds.
+        ``delay_s`` before the rounds; None also when no delay of the grid fits better
+        than none.
     """
 
     success: bool
