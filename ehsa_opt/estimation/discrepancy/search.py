@@ -57,6 +57,7 @@ from .lookahead import (
     confounded_first,
     fit_on_top,
     lookahead_winner,
+    second_steps,
     supported,
 )
 from .results import CandidateResult, DiscrepancySettings
@@ -400,8 +401,10 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
         earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,
                                                settings.max_iter, rnd), say,
         first_steps=[c for c in cands.values() if supported(c)])
-    others = [cands[n] for n in order if cands[n].fitted
-              and cands[n].predictions is not None and cands[n] is not blocked]
+    # the second steps: what a round after `blocked` would re-identify, ranked on the
+    # residual of the model with it (not among the members this round happened to fit)
+    others = second_steps(blocked, [n for n in state.remaining if n != "flexibility"],
+                          tests.fit_pts, tests.sub_pts, tests.lead_m_per_rad, say)
     if first is None and confounded_first(
             blocked, others,
             lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd),
