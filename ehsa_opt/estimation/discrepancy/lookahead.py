@@ -33,7 +33,7 @@ from .evidence import (
 )
 
 __all__ = ["confounded", "supported", "fit_on_top", "lookahead_winner", "confounded_first",
-           "second_steps"]
+           "second_steps", "member_key"]
 
 
 def confounded(cands: Sequence[Any]) -> Any | None:
@@ -125,10 +125,27 @@ def _paths(pool: Sequence[Any], blocked: Any, attempt: Any, max_paths: int):
         tried += 1
         yield c, step
 
-def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd: int
-               ) -> Any:
+def member_key(args: tuple) -> tuple:
+    """What a :func:`~.candidate_fit.fit_member` call's result depends on, from its
+    argument tuple: the member, its configured component (e.g. the cogging period),
+    the rig (by identity), the current parameters, the tests (by identity), the starts
+    and the iteration limit.  Two calls with the same key give the same fit: the
+    look-ahead's fit of a member on top of C is the next round's fit of it once C is
+    added (:func:`fit_on_top`, :func:`~.search.judge_round`)."""
+    name, comp, starts, sub_pts, fit_pts, held_pts, rig, params, max_iter = args
+    return (name, type(comp).__name__,
+            tuple(sorted((k, repr(v)) for k, v in vars(comp).items())), id(rig),
+            tuple(sorted((k, repr(v)) for k, v in params.items())),
+            tuple(map(id, sub_pts)), tuple(map(id, fit_pts)), tuple(map(id, held_pts)),
+            repr(starts), int(max_iter))
+
+
+def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd: int,
+               fitted: dict | None = None) -> Any:
     """``blocked`` re-identified on the model with ``c`` and judged against it (the
-    look-ahead of :func:`lookahead_winner`); None when incompatible."""
+    look-ahead of :func:`lookahead_winner`); None when incompatible.  ``fitted``
+    (optional) keeps the member fit by :func:`member_key` (with the rig it was made on)
+    for the next round to reuse once ``c`` is added."""
     comp = judge["comps"][blocked.effect]
     if c.rig is None or c.fit is None or not compatible(c.rig, comp):
         return None
@@ -144,8 +161,11 @@ def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, 
     ch_sse0, ch_n = channel_sse(ev_pts, ev_pred)
     step = type(blocked)(blocked.effect, True, blocked.score, blocked.chi2, rnd + 1,
                            error_before=c.error_after)
-    out = fit_member((blocked.effect, comp, CANDIDATES[blocked.effect].starts, sub_pts, fit_pts,
-                    held_pts, c.rig, dict(c.fit.parameters), max_iter))
+    args = (blocked.effect, comp, CANDIDATES[blocked.effect].starts, sub_pts, fit_pts,
+            held_pts, c.rig, dict(c.fit.parameters), max_iter)
+    out = fit_member(args)
+    if fitted is not None:
+        fitted[member_key(args)] = (c.rig, out)
     judge_candidate(step, out, member=CANDIDATES.get(blocked.effect), **{**judge, "sse_fit": sse_fit, "n_eff_fit": n_eff_fit,
                          "cur_ev_pred": ev_pred,
                          "sse_held": normalised_sse(held_pts, ph) if held_pts else math.nan,

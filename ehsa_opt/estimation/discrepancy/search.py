@@ -57,6 +57,7 @@ from .lookahead import (
     confounded_first,
     fit_on_top,
     lookahead_winner,
+    member_key,
     second_steps,
     supported,
 )
@@ -122,6 +123,9 @@ class SearchState:
     remaining: list[str] = field(default_factory=list)
     #: where the run's time budget cut the search ("" while it was not reached)
     cut: str = ""
+    #: member fits made by the look-ahead, by :func:`~.lookahead.member_key`, with the
+    #: rig they were made on: reused when a round fits the same member on that model
+    fitted: dict = field(default_factory=dict)
 
     def snapshot(self) -> SearchState:
         """A copy that later rounds do not change."""
@@ -350,7 +354,11 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
         args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
                  tests.held_pts, state.rig, state.params, settings.max_iter)
                 for n in names[a:a + step]]
-        for out in fit_members(args, settings.jobs):
+        # a member the look-ahead already fitted on this model (same inputs): reused
+        done = [state.fitted.pop(member_key(x), (None, None)) for x in args]
+        done = [out for rig, out in done if rig is state.rig and out is not None]
+        new = [x for x in args if x[0] not in {out[0] for out in done}]
+        for out in done + fit_members(new, settings.jobs):
             judge_candidate(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
     if not with_flexibility or rk.flex_out is None:
         return
@@ -399,7 +407,7 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
         return earning, first, blocked
     first = lookahead_winner(
         earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,
-                                               settings.max_iter, rnd), say,
+                                               settings.max_iter, rnd, state.fitted), say,
         first_steps=[c for c in cands.values() if supported(c)])
     # the second steps: what a round after `blocked` would re-identify, ranked on the
     # residual of the model with it (not among the members this round happened to fit)
@@ -407,7 +415,8 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
                           tests.fit_pts, tests.sub_pts, tests.lead_m_per_rad, say)
     if first is None and confounded_first(
             blocked, others,
-            lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd),
+            lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd,
+                                 state.fitted),
             state.error, tests.floor,
             choose_winner(earning).sse_heldout if earning else math.inf, say):
         first = blocked
@@ -443,6 +452,8 @@ def add_winner(rnd: int, win: CandidateResult, first: CandidateResult | None,
     state.effects.append(win.effect)
     state.remaining.remove(win.effect)
     state.rig, state.params = win.rig, dict(win.fit.parameters)
+    # the look-ahead's fits on top of the winner stay for the next round; others go
+    state.fitted = {k: v for k, v in state.fitted.items() if v[0] is state.rig}
     state.fit_pred = win.predictions[:len(fit_pts)]
     state.held_pred = win.predictions[len(fit_pts):]
     state.n_eff_fit = effective_samples(fit_pts, state.fit_pred)
