@@ -233,8 +233,9 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         # the next round would start after the deadline; nothing it could re-identify
         # ranked here: it is not work skipped (no cut)
         stop = (f"round {rnd}: {win.effect} named at the time budget; no other member "
-                f"ranked at {100 * MIN_RANK_VALUE:g} % of this round's residual is left "
-                f"unfitted or with held-out evidence (ΔBIC < 0): no further round (not a cut)")
+                f"ranked at {100 * MIN_RANK_VALUE:g} % of this round's residual and able "
+                f"to join the model is left unfitted or with held-out evidence (ΔBIC < 0): "
+                f"no further round (not a cut)")
     if stop is not None:
         say(stop)
         notes.append(stop)
@@ -247,11 +248,15 @@ def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
     :data:`MIN_RANK_VALUE` in this round and either not re-identified in it, or
     re-identified with some held-out evidence (ΔBIC < 0) that did not suffice to earn
     (an effect the winner may have masked).  A member re-identified here whose held-out
-    ΔBIC was ≥ 0 had no held-out evidence at all and is not counted."""
+    ΔBIC was ≥ 0 had no held-out evidence at all and is not counted, nor one that
+    cannot join the current rig (a gap once a mount spring is named: one transmission
+    at most), which no next round could name."""
     out = []
     for n in state.remaining:
         if n not in rk.scores or not rk.scores[n]["applicable"] \
                 or not rank_value(rk.scores[n]) >= MIN_RANK_VALUE:
+            continue
+        if n in rk.comps and not compatible(state.rig, rk.comps[n]):
             continue
         c = rk.cands.get(n)
         if c is not None and c.fitted and not (c.delta_bic_heldout < 0):
