@@ -362,6 +362,9 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
         # a member the look-ahead already fitted on this model (same inputs): reused
         done = [state.fitted.pop(member_key(x), (None, None)) for x in args]
         done = [out for rig, out in done if rig is state.rig and out is not None]
+        for out in done:
+            judge["say"](f"{out[0]}: the look-ahead's fit on this model (the same inputs) "
+                         f"is judged again, not repeated")
         new = [x for x in args if x[0] not in {out[0] for out in done}]
         for out in done + fit_members(new, settings.jobs):
             judge_candidate(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
