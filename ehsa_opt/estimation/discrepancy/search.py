@@ -57,6 +57,8 @@ from .lookahead import (
     confounded_first,
     fit_on_top,
     lookahead_winner,
+    member_key,
+    second_steps,
     supported,
 )
 from .results import CandidateResult, DiscrepancySettings
@@ -121,6 +123,9 @@ class SearchState:
     remaining: list[str] = field(default_factory=list)
     #: where the run's time budget cut the search ("" while it was not reached)
     cut: str = ""
+    #: member fits made by the look-ahead, by :func:`~.lookahead.member_key`, with the
+    #: rig they were made on: reused when a round fits the same member on that model
+    fitted: dict = field(default_factory=dict)
 
     def snapshot(self) -> SearchState:
         """A copy that later rounds do not change."""
@@ -228,8 +233,9 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         # the next round would start after the deadline; nothing it could re-identify
         # ranked here: it is not work skipped (no cut)
         stop = (f"round {rnd}: {win.effect} named at the time budget; no other member "
-                f"ranked at {100 * MIN_RANK_VALUE:g} % of this round's residual is left "
-                f"unfitted or with held-out evidence (ΔBIC < 0): no further round (not a cut)")
+                f"ranked at {100 * MIN_RANK_VALUE:g} % of this round's residual and able "
+                f"to join the model is left unfitted or with held-out evidence (ΔBIC < 0): "
+                f"no further round (not a cut)")
     if stop is not None:
         say(stop)
         notes.append(stop)
@@ -242,11 +248,15 @@ def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
     :data:`MIN_RANK_VALUE` in this round and either not re-identified in it, or
     re-identified with some held-out evidence (ΔBIC < 0) that did not suffice to earn
     (an effect the winner may have masked).  A member re-identified here whose held-out
-    ΔBIC was ≥ 0 had no held-out evidence at all and is not counted."""
+    ΔBIC was ≥ 0 had no held-out evidence at all and is not counted, nor one that
+    cannot join the current rig (a gap once a mount spring is named: one transmission
+    at most), which no next round could name."""
     out = []
     for n in state.remaining:
         if n not in rk.scores or not rk.scores[n]["applicable"] \
                 or not rank_value(rk.scores[n]) >= MIN_RANK_VALUE:
+            continue
+        if n in rk.comps and not compatible(state.rig, rk.comps[n]):
             continue
         c = rk.cands.get(n)
         if c is not None and c.fitted and not (c.delta_bic_heldout < 0):
@@ -349,7 +359,14 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
         args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
                  tests.held_pts, state.rig, state.params, settings.max_iter)
                 for n in names[a:a + step]]
-        for out in fit_members(args, settings.jobs):
+        # a member the look-ahead already fitted on this model (same inputs): reused
+        done = [state.fitted.pop(member_key(x), (None, None)) for x in args]
+        done = [out for rig, out in done if rig is state.rig and out is not None]
+        for out in done:
+            judge["say"](f"{out[0]}: the look-ahead's fit on this model (the same inputs) "
+                         f"is judged again, not repeated")
+        new = [x for x in args if x[0] not in {out[0] for out in done}]
+        for out in done + fit_members(new, settings.jobs):
             judge_candidate(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
     if not with_flexibility or rk.flex_out is None:
         return
@@ -398,13 +415,16 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
         return earning, first, blocked
     first = lookahead_winner(
         earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,
-                                               settings.max_iter, rnd), say,
+                                               settings.max_iter, rnd, state.fitted), say,
         first_steps=[c for c in cands.values() if supported(c)])
-    others = [cands[n] for n in order if cands[n].fitted
-              and cands[n].predictions is not None and cands[n] is not blocked]
+    # the second steps: what a round after `blocked` would re-identify, ranked on the
+    # residual of the model with it (not among the members this round happened to fit)
+    others = second_steps(blocked, [n for n in state.remaining if n != "flexibility"],
+                          tests.fit_pts, tests.sub_pts, tests.lead_m_per_rad, say)
     if first is None and confounded_first(
             blocked, others,
-            lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd),
+            lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd,
+                                 state.fitted),
             state.error, tests.floor,
             choose_winner(earning).sse_heldout if earning else math.inf, say):
         first = blocked
@@ -440,6 +460,8 @@ def add_winner(rnd: int, win: CandidateResult, first: CandidateResult | None,
     state.effects.append(win.effect)
     state.remaining.remove(win.effect)
     state.rig, state.params = win.rig, dict(win.fit.parameters)
+    # the look-ahead's fits on top of the winner stay for the next round; others go
+    state.fitted = {k: v for k, v in state.fitted.items() if v[0] is state.rig}
     state.fit_pred = win.predictions[:len(fit_pts)]
     state.held_pred = win.predictions[len(fit_pts):]
     state.n_eff_fit = effective_samples(fit_pts, state.fit_pred)
