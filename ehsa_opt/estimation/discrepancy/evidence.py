@@ -40,7 +40,7 @@ from scipy.stats import chi2
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 from .impacts import impact_record, judge_on_impacts
-from .bounds import AT_BOUND_REL, at_bound, refuse_at_bound
+from .bounds import AT_BOUND_REL, at_bound, refuse_at_bound, unconstrained_step
 from .channels import (autocorrelation_time, channel_delta_bic, channel_effective_samples,
                        channel_sse, refuted_by_channel)
 
@@ -507,7 +507,10 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     if impact_record(res) is not None and cur_ev_pred is not None:
         judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say)
         c.channel_dbic = []  # judged on impacts: its sample-wise channels are not evidence
-    refuse_at_bound(c, comps[name].parameters, member, say)
+    # a bound counts where it is active: the unconstrained step from the fit crosses it
+    step = (None if impact_record(res) is not None or not hasattr(crig, "model") else
+            (lambda: unconstrained_step(fit_pts, crig, res.parameters, comp_params)))
+    refuse_at_bound(c, comps[name].parameters, member, say, step)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
