@@ -37,6 +37,7 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.stats import chi2
 
+from ...physics.components import Component
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 from .impacts import impact_record, judge_on_impacts
@@ -46,7 +47,7 @@ from .channels import (autocorrelation_time, channel_delta_bic, channel_effectiv
 
 __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
            "effective_samples", "channel_effective_samples", "delta_bic", "channel_delta_bic",
-           "earns_on_own_channel", "refuted_by_channel", "floor_noise_std", "force_noise_floor_percent",
+           "earns_on_own_channel", "refuted_by_channel", "acts_on_generator", "floor_noise_std", "force_noise_floor_percent",
            "excess_reduction", "force_resolution", "earns", "can_earn", "channel_sse",
            "channel_sse_excess_reduction", "sse_can_earn", "significant", "ljung_box",
            "residual_is_white", "disturbance_masks", "block_excess_reductions",
@@ -181,6 +182,19 @@ def earns_on_own_channel(own_reduction: float | None, dbic_fit: float, dbic_held
     channel (:func:`choose_winner`)."""
     return (own_reduction is not None and own_reduction >= MIN_EXCESS_REDUCTION
             and dbic_fit < 0 and dbic_heldout < 0 and bool(force_kept))
+
+
+def acts_on_generator(component: Any) -> bool:
+    """Whether a bench-model component changes the generator's electrics directly (its
+    EMF, its winding resistance or its flux: a voltage drop, a heating, a saturation).
+
+    The own-channel route (:func:`earns_on_own_channel`) is for the *first* such
+    effect: once one is in the model, the voltage's leftover excess is that member's
+    misfit of another law as much as a second effect (after a constant drop fitted to
+    a Shockley diode, a flux saturation removed 15 % of the voltage's remaining
+    excess), and the force decides where its excess dominates, as before."""
+    return any(getattr(type(component), m, None) is not getattr(Component, m)
+               for m in ("emf", "extra_resistance_ohm", "generator_factor"))
 
 
 def can_earn(err_before: float, floor: float, sse_before: float, n_obs: float) -> bool:
@@ -470,7 +484,8 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     # excess: the held-out ΔBIC with a variance per channel, the force kept
     by_channel, own_txt = False, ""
     own_ch = [q for q in (getattr(member, "own_channels", None) or ()) if q < len(ch_n)]
-    if own_ch and len(ch_n) > 1 and not by_total:
+    if own_ch and len(ch_n) > 1 and not by_total and not any(
+            acts_on_generator(q) for q in list(getattr(crig, "components", ()))[:-1]):
         neff = channel_effective_samples(
             ev_pts, cur_ev_pred if cur_ev_pred is not None else ev_pred)
         own_red = channel_sse_excess_reduction(ch_sse0[own_ch], ch_sse1[own_ch], ch_n[own_ch])
