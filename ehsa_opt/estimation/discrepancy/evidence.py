@@ -21,6 +21,10 @@ discrepancy search judges a model by, and the rule that names an effect.
   vetoing an effect that acts everywhere (a direction-dependent friction); the
   likelihood evidence (held-out ΔBIC with the effective sample size) and a resolved
   size are required as before;
+* :func:`earns_on_own_channel`: a generator member (voltage drop, heating, saturation)
+  judged on its own channel, the voltage, whatever the force's excess — per-channel
+  statistics in :mod:`.channels`, the physical-range rule (:func:`at_bound`, a bound
+  counts where it is active) in :mod:`.bounds`;
 * :func:`ljung_box` / :func:`residual_is_white`: the portmanteau test of a residual's
   autocorrelation (Ljung & Box 1978), applied before a data-driven term is proposed
   — a term fitted to a white residual is a term fitted to noise;
