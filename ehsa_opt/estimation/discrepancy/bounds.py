@@ -44,8 +44,9 @@ def at_bound(parameters: dict[str, float], specs: Sequence[Any],
     5 % of :data:`AT_BOUND_REL` only says where to look) and, when ``step`` is given,
     the unconstrained Gauss–Newton step from the fit (:func:`unconstrained_step`: the
     same refit with the bounds relaxed, to first order) would cross that bound, or the
-    data do not determine the parameter (``step`` NaN: nothing shows that the optimum
-    is inside).  A fit at 9.6 K/J of a 10 K/J edge whose likelihood has its optimum
+    data do not determine the parameter (``step`` NaN, or a step that leaves the range
+    on its other side — a linearisation far from valid, e.g. a cooling time at 1e4 s
+    stepping by −7e8 s: nothing shows that the optimum is inside).  A fit at 9.6 K/J of a 10 K/J edge whose likelihood has its optimum
     there (step inside) is a physical fit of the member's range; a heating at
     10 K/J whose unconstrained step goes to 14 K/J is the member used outside its
     physics.  Without ``step`` the proxy alone decides (every fit within ``rel``).
@@ -82,7 +83,7 @@ def at_bound(parameters: dict[str, float], specs: Sequence[Any],
                 continue
             if abs(v - b) <= rel * abs(b):
                 d = (step or {}).get(q.name)
-                if d is not None and math.isfinite(d) and (
+                if d is not None and math.isfinite(d) and q.lower <= v + d <= q.upper and (
                         v + d < b if side == "upper" else v + d > b):
                     continue  # the optimum is inside: the bound is not active
                 out.append(q.name)

@@ -47,6 +47,10 @@ def test_an_undetermined_parameter_near_its_edge_stays_at_bound():
     p = {"winding_heating_K_per_J": 9.9, "winding_cooling_time_s": 1e4}
     st = {"winding_heating_K_per_J": -1.0, "winding_cooling_time_s": math.nan}
     assert at_bound(p, COMP.parameters, step=st) == ["winding_cooling_time_s"]
+    # a step that leaves the range on its other side is no evidence of an inside optimum
+    p = {"winding_heating_K_per_J": 10.0, "winding_cooling_time_s": 1e4}
+    st = {"winding_heating_K_per_J": -16.7, "winding_cooling_time_s": -7e8}
+    assert at_bound(p, COMP.parameters, step=st) == NAMES
 
 
 class _C:
