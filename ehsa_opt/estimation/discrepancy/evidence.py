@@ -21,6 +21,10 @@ discrepancy search judges a model by, and the rule that names an effect.
   vetoing an effect that acts everywhere (a direction-dependent friction); the
   likelihood evidence (held-out ΔBIC with the effective sample size) and a resolved
   size are required as before;
+* :func:`earns_on_own_channel`: a generator member (voltage drop, heating, saturation)
+  judged on its own channel, the voltage, whatever the force's excess — per-channel
+  statistics in :mod:`.channels`, the physical-range rule (:func:`at_bound`, a bound
+  counts where it is active) in :mod:`.bounds`;
 * :func:`ljung_box` / :func:`residual_is_white`: the portmanteau test of a residual's
   autocorrelation (Ljung & Box 1978), applied before a data-driven term is proposed
   — a term fitted to a white residual is a term fitted to noise;
@@ -37,12 +41,17 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.stats import chi2
 
+from ...physics.components import Component
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 from .impacts import impact_record, judge_on_impacts
+from .bounds import AT_BOUND_REL, at_bound, refuse_at_bound, unconstrained_step
+from .channels import (autocorrelation_time, channel_delta_bic, channel_effective_samples,
+                       channel_sse, refuted_by_channel)
 
 __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
-           "effective_samples", "delta_bic", "floor_noise_std", "force_noise_floor_percent",
+           "effective_samples", "channel_effective_samples", "delta_bic", "channel_delta_bic",
+           "earns_on_own_channel", "refuted_by_channel", "acts_on_generator", "floor_noise_std", "force_noise_floor_percent",
            "excess_reduction", "force_resolution", "earns", "can_earn", "channel_sse",
            "channel_sse_excess_reduction", "sse_can_earn", "significant", "ljung_box",
            "residual_is_white", "disturbance_masks", "block_excess_reductions",
@@ -54,31 +63,9 @@ __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
 
 
 # ------------------------------------------------------------------ residual size
-def autocorrelation_time(r: np.ndarray) -> float:
-    """Integrated autocorrelation time (initial positive sequence), ≥ 1."""
-    r = r - r.mean()
-    n = r.size
-    if n < 8 or not np.any(r):
-        return 1.0
-    f = np.fft.rfft(r, 2 * n)
-    ac = np.fft.irfft(f * np.conj(f))[:n]
-    ac = ac / ac[0]
-    tau = 1.0
-    for k in range(1, n // 2):
-        if ac[k] <= 0:
-            break
-        tau += 2 * ac[k]
-    return float(max(tau, 1.0))
-
-
 def effective_samples(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> float:
     """N_eff = Σ over tests and channels of N / τ of the normalised residual."""
-    total = 0.0
-    for pt, yp in zip(prepared, preds):
-        for ch in range(pt.y.shape[0]):
-            r = (pt.y[ch] - yp[ch]) * pt.wnorm[ch]
-            total += pt.n_resolved / autocorrelation_time(r[pt.weight > 0])
-    return total
+    return float(np.sum(channel_effective_samples(prepared, preds)))
 
 
 def normalised_sse(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> float:
@@ -177,6 +164,43 @@ def earns(err_before: float, err_after: float, floor: float, dbic_fit: float,
     return gain >= MIN_EXCESS_REDUCTION and dbic_fit < 0 and dbic_heldout < 0
 
 
+def earns_on_own_channel(own_reduction: float | None, dbic_fit: float, dbic_heldout: float,
+                         force_kept: bool) -> bool:
+    """The decision rule for a member whose own channel is not the force (a generator
+    effect, seen in the voltage: :attr:`~.candidates.Candidate.own_channels`), whatever
+    the force's excess over its noise floor.
+
+    Earns when the held-out SSE of its own channel(s) falls by at least
+    :data:`MIN_EXCESS_REDUCTION` of its excess over noise (``own_reduction``,
+    :func:`channel_sse_excess_reduction` on those channels; None when no own channel
+    has an excess, and then it does not earn here), ΔBIC < 0 on the fit tests and on
+    the held-out tests (the held-out one with a variance per channel,
+    :func:`channel_delta_bic`), and the force is kept (``force_kept``: its held-out
+    error grows by no more than :func:`force_resolution`, or its SSE by no more than
+    the member's parameters are charged, :func:`refuted_by_channel`).
+
+    The force's excess does not close this route: where the force carries a misfit no
+    member describes (presliding friction, 13 % against a 0.6 % floor), a flux
+    saturation that removed 78 % of the voltage's excess was otherwise judged by the
+    force alone and not named.  Ranking and the winner already use the member's own
+    channel (:func:`choose_winner`)."""
+    return (own_reduction is not None and own_reduction >= MIN_EXCESS_REDUCTION
+            and dbic_fit < 0 and dbic_heldout < 0 and bool(force_kept))
+
+
+def acts_on_generator(component: Any) -> bool:
+    """Whether a bench-model component changes the generator's electrics directly (its
+    EMF, its winding resistance or its flux: a voltage drop, a heating, a saturation).
+
+    The own-channel route (:func:`earns_on_own_channel`) is for the *first* such
+    effect: once one is in the model, the voltage's leftover excess is that member's
+    misfit of another law as much as a second effect (after a constant drop fitted to
+    a Shockley diode, a flux saturation removed 15 % of the voltage's remaining
+    excess), and the force decides where its excess dominates, as before."""
+    return any(getattr(type(component), m, None) is not getattr(Component, m)
+               for m in ("emf", "extra_resistance_ohm", "generator_factor"))
+
+
 def can_earn(err_before: float, floor: float, sse_before: float, n_obs: float) -> bool:
     """Whether *any* refit could earn by :func:`earns` from this state — False when
     the force error's excess over the noise floor is within
@@ -186,27 +210,6 @@ def can_earn(err_before: float, floor: float, sse_before: float, n_obs: float) -
     cannot name anything, so it is not run."""
     ex0 = math.sqrt(max(err_before ** 2 - floor ** 2, 0.0))
     return ex0 > MIN_EXCESS_OVER_FLOOR * floor or sse_before > (1 + MIN_SSE_EXCESS) * n_obs
-
-
-def channel_sse(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray]
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """Noise-normalised SSE per output channel and its noise expectation.
-
-    Returns
-    -------
-    sse : ndarray, shape (ny,)
-        Σ over tests of Σ ((y − ŷ)/σ)² of each channel (force [, voltage]),
-        dimensionless.
-    n : ndarray, shape (ny,)
-        Number of samples of each channel (the SSE pure noise gives).
-    """
-    ny = max(pt.y.shape[0] for pt in prepared)
-    sse, n = np.zeros(ny), np.zeros(ny)
-    for pt, yp in zip(prepared, preds):
-        for ch in range(pt.y.shape[0]):
-            sse[ch] += float(np.sum(((pt.y[ch] - yp[ch]) * pt.wnorm[ch]) ** 2))
-            n[ch] += pt.y.shape[1]
-    return sse, n
 
 
 def channel_sse_excess_reduction(sse_before: np.ndarray, sse_after: np.ndarray,
@@ -419,75 +422,6 @@ def own_evidence(reductions: np.ndarray, min_reduction: float) -> tuple[bool, fl
     return bool(med >= min_reduction), med, int(r.size)
 
 
-# ------------------------------------------------------------------ physical parameters
-#: A fitted effect parameter within this share of a bound's magnitude of that bound is
-#: "at bound" (:func:`at_bound`).
-AT_BOUND_REL = 0.05
-
-
-def at_bound(parameters: dict[str, float], specs: Sequence[Any],
-             limits: Sequence[tuple[str, str]] = (), rel: float = AT_BOUND_REL) -> list[str]:
-    """The effect parameters fitted at (or within ``rel`` of) a bound of their search
-    range that is not a physical limit of the effect.
-
-    A member's search range (:class:`~ehsa_opt.physics.components.ParamSpec` lower,
-    upper) is the range over which its law describes a physical rig: a mount softer
-    than 1e4 N/m would deflect by more than the stroke under the friction alone, a
-    cogging above 0.1 N m would stall the screw.  A fit that ends on such an edge says
-    the data want the member outside its physics: it is used as a surrogate for
-    something else (on a Shockley-diode campaign a 1e4 N/m compliance "won" a round
-    against the 0.54 V voltage drop that had earned).  Such a member does not earn;
-    the range is not widened (beyond it the law stops describing the rig).  Two kinds
-    of bound are physical limits and are not counted: a zero lower bound (the quantity
-    vanishes: no damping, no drop) and the bounds listed in ``limits`` (a contact's
-    stiffness at its upper bound is the rigid contact: "at least this stiff").
-
-    Parameters
-    ----------
-    parameters : dict
-        Fitted effect parameters (name → value, the parameter's units).
-    specs : sequence of ParamSpec
-        The member's parameter specifications (``name``, ``lower``, ``upper``).
-    limits : sequence of (name, "lower" | "upper")
-        Bounds that are the effect's physical limits.
-    rel : float
-        Relative distance to the bound counted as at the bound, ``|v − b| ≤ rel |b|``.
-
-    Returns
-    -------
-    list of str
-        Names of the parameters at such a bound (empty: every parameter is inside).
-    """
-    if not 0.0 <= rel < 1.0:
-        raise ValueError(f"at_bound: rel must be in [0, 1), got {rel!r}")
-    free = set(map(tuple, limits))
-    out = []
-    for q in specs:
-        v = parameters.get(q.name)
-        if v is None or not math.isfinite(v):
-            continue
-        for side, b in (("lower", q.lower), ("upper", q.upper)):
-            if b == 0.0 or (q.name, side) in free or not math.isfinite(b):
-                continue
-            if abs(v - b) <= rel * abs(b):
-                out.append(q.name)
-                break
-    return out
-
-
-def refuse_at_bound(c: Any, specs: Sequence[Any], member: Any, say: Any = None) -> bool:
-    """Set ``c.at_bound`` (:func:`at_bound` of its fitted ``parameters`` with the
-    member's physical ``limits``) and withdraw its ``earns`` when it is not empty: an
-    unphysical fit does not earn.  Returns whether it was at a bound."""
-    c.at_bound = at_bound(c.parameters, specs, getattr(member, "limits", ()))
-    if c.at_bound and c.earns:
-        c.earns, c.earns_by = False, ""
-        if say is not None:
-            say(f"{c.effect}: at bound ({', '.join(c.at_bound)} on the edge of its "
-                f"physical range): an unphysical fit, not earned")
-    return bool(c.at_bound)
-
-
 # ------------------------------------------------------------------ judging a candidate
 def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff: float
                              ) -> bool:
@@ -499,9 +433,9 @@ def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff:
     is another force law in disguise (friction presliding fitted as a mount spring: the
     force misfit at reversals falls, the model's rotor then lags a rotor that does not).
     Refuted when the held-out voltage SSE grows by more than the evidence the member's
-    ``k`` parameters are charged: N_eff ln(SSE_after/SSE_before) > k ln N_eff."""
-    return n_eff * math.log(max(sse_after, 1e-300) / max(sse_before, 1e-300)) \
-        > k * math.log(max(n_eff, 2.0))
+    ``k`` parameters are charged: N_eff ln(SSE_after/SSE_before) > k ln N_eff
+    (:func:`refuted_by_channel`)."""
+    return refuted_by_channel(sse_before, sse_after, k, n_eff)
 
 
 def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse_fit,
@@ -535,11 +469,11 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     if ch is None or any(q.transmission for q in crig.components):
         ch = tuple(range(len(ch_n)))
     ch = [k for k in ch if k < len(ch_n)]
-    c.sse_reduction = channel_sse_excess_reduction(
-        ch_sse0[ch], channel_sse(ev_pts, ev_pred)[0][ch], ch_n[ch])
+    ch_sse1 = channel_sse(ev_pts, ev_pred)[0]
+    c.sse_reduction = channel_sse_excess_reduction(ch_sse0[ch], ch_sse1[ch], ch_n[ch])
     c.resolved = significant(c.intervals, member.amplitudes)
     c.channel_dbic = [delta_bic(s1, s0, k, n_eff_held if held_pts else n_eff_fit)
-                      for s0, s1 in zip(ch_sse0, channel_sse(ev_pts, ev_pred)[0])]
+                      for s0, s1 in zip(ch_sse0, ch_sse1)]
     # the SSE (other-channel) route is for effects seen mainly in another channel: it is
     # offered where the force error has no excess beyond noise left, or where another
     # channel's excess over its noise expectation (SSE/N − 1) exceeds the force's;
@@ -547,9 +481,27 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     exc = [s0 / n0 - 1.0 if n0 > 0 else -math.inf for s0, n0 in zip(ch_sse0, ch_n)]
     c.sse_route = (not can_earn(cur_err, floor, 0.0, 1.0)
                    or (len(exc) > 1 and max(exc[1:]) > exc[0]))
+    n_force = sum(pt.y.shape[1] for pt in ev_pts)
     by_total = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
-                          c.sse_reduction if c.sse_route else None,
-                          n_force=sum(pt.y.shape[1] for pt in ev_pts)))
+                          c.sse_reduction if c.sse_route else None, n_force=n_force))
+    # a generator effect earns on its own channel (the voltage) whatever the force's
+    # excess: the held-out ΔBIC with a variance per channel, the force kept
+    by_channel, own_txt = False, ""
+    own_ch = [q for q in (getattr(member, "own_channels", None) or ()) if q < len(ch_n)]
+    if own_ch and len(ch_n) > 1 and not by_total and not any(
+            acts_on_generator(q) for q in list(getattr(crig, "components", ()))[:-1]):
+        neff = channel_effective_samples(
+            ev_pts, cur_ev_pred if cur_ev_pred is not None else ev_pred)
+        own_red = channel_sse_excess_reduction(ch_sse0[own_ch], ch_sse1[own_ch], ch_n[own_ch])
+        dbic_ch = channel_delta_bic(ch_sse0, ch_sse1, neff, k)
+        force_kept = (c.error_after <= cur_err + force_resolution(floor, n_force)
+                      or not refuted_by_channel(ch_sse0[0], ch_sse1[0], k, neff[0]))
+        by_channel = earns_on_own_channel(own_red, c.delta_bic_fit, dbic_ch, force_kept)
+        own_txt = (f", own channel{'s' if len(own_ch) > 1 else ''} "
+                   f"{','.join(map(str, own_ch))}: SSE excess reduced "
+                   + (f"{100 * own_red:.0f} %" if own_red is not None else "n/a")
+                   + f", held-out dBIC per channel {dbic_ch:.1f}, force "
+                   + ("kept" if force_kept else "refuted"))
     # the effect's own evidence: the same likelihood evidence, and its practical size
     # judged per block of the held-out records (documented disturbances masked), so
     # that an effect another one dominates in a few blocks is not vetoed
@@ -560,9 +512,9 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
         by_own, c.block_reduction, c.blocks_judged = own_evidence(red, MIN_EXCESS_REDUCTION)
         by_own = (by_own and c.delta_bic_fit < 0 and c.delta_bic_heldout < 0
                   and c.error_after <= cur_err)
-    c.earns_by = ("total excess" if by_total else "own evidence") if (by_total or by_own) \
-        else ""
-    c.earns = bool((by_total or by_own) and c.resolved)
+    c.earns_by = ("total excess" if by_total else "own channel" if by_channel
+                  else "own evidence") if (by_total or by_channel or by_own) else ""
+    c.earns = bool((by_total or by_channel or by_own) and c.resolved)
     if (c.earns and impact_record(res) is None and comps[name].transmission
             and len(ch_n) > 1 and refuted_by_rotor_channel(
                 ch_sse0[1], channel_sse(ev_pts, ev_pred)[0][1], k,
@@ -574,7 +526,10 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     if impact_record(res) is not None and cur_ev_pred is not None:
         judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say)
         c.channel_dbic = []  # judged on impacts: its sample-wise channels are not evidence
-    refuse_at_bound(c, comps[name].parameters, member, say)
+    # a bound counts where it is active: the unconstrained step from the fit crosses it
+    step = (None if impact_record(res) is not None or not hasattr(crig, "model") else
+            (lambda: unconstrained_step(fit_pts, crig, res.parameters, comp_params)))
+    refuse_at_bound(c, comps[name].parameters, member, say, step)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
@@ -586,7 +541,8 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
            f"{c.blocks_judged} blocks" if math.isfinite(c.block_reduction) else "")
     say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
         f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
-        f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}{blk}; {res.seconds:.1f} s)"
+        f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}{blk}{own_txt}; "
+        f"{res.seconds:.1f} s)"
         f"{' EARNS (' + c.earns_by + ')' if c.earns else ''}"
         f"{' AT BOUND' if c.at_bound else ''}; {pars}")
 

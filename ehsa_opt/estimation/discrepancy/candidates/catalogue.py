@@ -73,6 +73,14 @@ class Candidate:
         a mechanical effect on the rod or rotor side changes only the force.  The SSE
         alternative of the decision rule is judged on these channels only — a gain
         elsewhere is the current model's re-fit, not the effect.  None: all.
+    own_channels : tuple of int or None
+        Output channels the effect is seen in beyond what the force law absorbs: a
+        generator effect (a voltage drop, a winding's heating, a flux saturation)
+        changes the force only through the current, which the baseline's friction and
+        damping largely absorb, while the voltage shows it directly.  Such a member
+        earns on these channels whatever the force's excess
+        (:func:`~ehsa_opt.estimation.discrepancy.evidence.earns_on_own_channel`), the
+        force kept.  None: the force decides where its excess dominates.
     amplitudes : tuple of str
         Effect parameters that are all zero when the effect is absent (its size):
         the effect earns only when the ~95 % interval of one of them excludes zero
@@ -112,6 +120,7 @@ class Candidate:
     log_names: tuple[str, ...] = ()
     amplitudes: tuple[str, ...] = ()
     rigid_channels: tuple[int, ...] | None = None
+    own_channels: tuple[int, ...] | None = None
     without_generator_only: bool = False
     impact_fit: bool = False
     limits: tuple[tuple[str, str], ...] = ()
@@ -188,14 +197,14 @@ CANDIDATES: dict[str, Candidate] = {
         "voltage_drop",
         probes=({"voltage_drop_V": 0.5},),
         starts=tuple({"voltage_drop_V": v} for v in (0.05, 0.2, 0.5, 1.0, 2.0, 3.0)),
-        needs_generator=True, amplitudes=("voltage_drop_V",)),
+        needs_generator=True, amplitudes=("voltage_drop_V",), own_channels=(1,)),
     "winding_heating": Candidate(
         "winding_heating",
         probes=({"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 100.0},
                 {"winding_heating_K_per_J": 1.0, "winding_cooling_time_s": 0.3}),
         starts=tuple({"winding_heating_K_per_J": h, "winding_cooling_time_s": tau}
                      for h in (0.3, 1.0, 3.0, 10.0) for tau in (0.5, 5.0, 50.0)),
-        needs_generator=True, amplitudes=("winding_heating_K_per_J",)),
+        needs_generator=True, amplitudes=("winding_heating_K_per_J",), own_channels=(1,)),
     "position_friction": Candidate(
         "position_friction",
         # centre and width are not in the probes or starts: they come from the
@@ -222,7 +231,7 @@ CANDIDATES: dict[str, Candidate] = {
         "magnetic_saturation",
         probes=({"saturation_per_A2": 0.05},),
         starts=tuple({"saturation_per_A2": b} for b in (0.003, 0.01, 0.03, 0.1, 0.3)),
-        needs_generator=True, amplitudes=("saturation_per_A2",)),
+        needs_generator=True, amplitudes=("saturation_per_A2",), own_channels=(1,)),
 }
 assert set(CANDIDATES) <= set(COMPONENTS)
 
