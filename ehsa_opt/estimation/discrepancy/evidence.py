@@ -39,6 +39,7 @@ from scipy.stats import chi2
 
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
+from .gap_resolution import refuse_unresolved_gap
 from .impacts import impact_record, judge_on_impacts
 
 __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
@@ -575,6 +576,7 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
         judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say)
         c.channel_dbic = []  # judged on impacts: its sample-wise channels are not evidence
     refuse_at_bound(c, comps[name].parameters, member, say)
+    refuse_unresolved_gap(c, fit_pts, res.parameters, say, crig)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]

@@ -90,7 +90,7 @@ __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective
            "impact_verdict", "judge_on_impacts", "IMPACT_EARN_OBJECTIVE", "IMPACT_EARN_SHARE",
            "IMPACT_EVALUATIONS_WITH_SHARES", "IMPACT_FRICTION_SPREAD",
            "IMPACT_FRICTION_DOMINATED",
-           "IMPACT_EVALUATIONS", "IMPACT_ENERGY_RATIO", "GAP", "STIFFNESS",
+           "IMPACT_EVALUATIONS", "IMPACT_ENERGY_RATIO", "IMPACT_LAWS", "with_contact_law", "GAP", "STIFFNESS",
            "DAMPING"]
 
 GAP = "backlash_gap_m"
@@ -106,6 +106,8 @@ IMPACT_EVALUATIONS_WITH_SHARES = 72
 #: with a 1e8-1e9 N/m contact: 700-2200; the prototype's soft 0.1 mm / 5e6 N/m one: 2;
 #: a 5e7 N/m compliance: 2.3).
 IMPACT_ENERGY_RATIO = 30.0
+#: Contact laws the workflow's impact-aware fit compares (exponents: linear, Hertz).
+IMPACT_LAWS = (1.0, 1.5)
 #: Contact stiffnesses (log10 N/m) and dampings (log10 N s/m) of the starting grid.
 _GRID_LOG_K = (6.0, 6.5, 7.0, 7.5, 8.0, 8.5, 9.0, 9.5)
 _GRID_LOG_C = (3.0, 4.0)
@@ -158,12 +160,53 @@ class ImpactFit:
     evaluations: int
     seconds: float
     history: list[dict] = field(default_factory=list)
+    contact_exponent: float = 1.0
+
+
+def with_contact_law(rig: Rig, exponent: float) -> Rig:
+    """``rig`` with its backlash (the last component of that name) on the contact law of
+    ``exponent`` (:class:`~ehsa_opt.physics.components.Backlash`)."""
+    from ...physics.components import Backlash
+    comps = list(rig.components)
+    for i in range(len(comps) - 1, -1, -1):
+        c = comps[i]
+        if isinstance(c, Backlash):
+            if c.contact_exponent != float(exponent):
+                comps[i] = Backlash(c.smoothing_m, float(exponent), c.reference_m)
+            return rig.with_components(comps)
+    return rig
+
+
+def _choose_law(history: list[dict], others: Sequence[float], law: list[float],
+                cost: Callable[[np.ndarray], float], grid_point: Callable, share: float,
+                say: Callable[[str], None]) -> float:
+    """Each other contact law at every grid stiffness with the damping that was better
+    there under the first law; returns the law of the best grid point."""
+    first = law[0]
+    rows = [r for r in history if r["contact_exponent"] == first
+            and abs(r["bearing_share"] - share) < 1e-12]
+    for n in others:
+        law[0] = float(n)
+        for lk in _GRID_LOG_K:
+            at = [r for r in rows if abs(math.log10(r[STIFFNESS]) - lk) < 1e-9]
+            lc = math.log10(min(at, key=lambda r: r["objective"])[DAMPING]) if at else 4.0
+            try:
+                cost(grid_point(lk, lc, share))
+            except _Budget:
+                break
+    best = {n: min((r["objective"] for r in history if r["contact_exponent"] == n),
+                   default=math.inf) for n in (first, *map(float, others))}
+    chosen = min(best, key=best.get)
+    say("impact-aware fit: contact law " + ", ".join(
+        f"exponent {n:g} grid best {v:.3g}" for n, v in best.items())
+        + f"; continues with exponent {chosen:g}")
+    return chosen
 
 
 def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, float], *,
                 max_evaluations: int = IMPACT_EVALUATIONS, shares: Sequence[float] = (),
                 split: Callable | None = None, friction_spread: float = 0.0,
-                log: object = None) -> ImpactFit:
+                laws: Sequence[float] = (1.0,), log: object = None) -> ImpactFit:
     """Fit the gap, contact stiffness and damping of a backlash on chaos-robust features
     of the forward simulation (transient energies and kinematic gaps, module docstring).
 
@@ -193,6 +236,12 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         features are widened by what it does to them, tests it dominates are left out
         (:func:`_widen_by_friction`) and each grid stiffness gets a gap step
         (:func:`_gap_steps`).
+    laws : sequence of float
+        Contact exponents compared on the stiffness grid (1: linear; 1.5: Hertz's law of a
+        ball on a race, :class:`~ehsa_opt.physics.components.Backlash`): the first law's
+        full grid, then each other law at every grid stiffness with that stiffness's
+        better damping; the rest of the search uses the law of the best grid point
+        (``ImpactFit.contact_exponent``).
     log : callable, optional
         Progress messages.
 
@@ -217,25 +266,28 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         raise ValueError("fit_impacts: shares need split (e.g. candidate_fit.split_friction)")
     lo4 = np.append(lo, 0.0)
     hi4 = np.append(hi, 0.9)
+    rigs = {float(n): with_contact_law(rig, n) for n in laws}
+    law = [float(laws[0])]  # the law of the search's current stage
 
     def friction(share: float) -> dict[str, float]:
         return dict(start) if share <= 0.0 else split(dict(start), share, h.lead_m_per_rad)
 
     def cost(q: np.ndarray) -> float:
         q = np.clip(np.asarray(q, dtype=float), lo4, hi4)
-        key = tuple(np.round(q, 12))
+        key = (*np.round(q, 12), law[0])
         if key in cache:
             return cache[key]
         if len(history) >= max_evaluations:
             raise _Budget
         p = {**friction(float(q[3])), GAP: float(q[0]), STIFFNESS: float(10 ** q[1]),
              DAMPING: float(10 ** q[2])}
-        mism[key] = mismatch(prepared, predict(prepared, rig, p), h, data)
+        mism[key] = mismatch(prepared, predict(prepared, rigs[law[0]], p), h, data)
         c = score(mism[key], widen)
         c = c if math.isfinite(c) else 1e6
         cache[key] = c
         history.append({GAP: p[GAP], STIFFNESS: p[STIFFNESS], DAMPING: p[DAMPING],
-                        "bearing_share": float(q[3]), "objective": c, "_key": key})
+                        "bearing_share": float(q[3]), "objective": c, "_key": key,
+                        "contact_exponent": law[0]})
         return c
 
     def grid_point(lk: float, lc: float, share: float) -> np.ndarray:
@@ -252,25 +304,29 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     for lk in _GRID_LOG_K:
         for lc in _GRID_LOG_C:
             cost(grid_point(lk, lc, share_best))
+    if len(rigs) > 1:
+        law[0] = _choose_law(history, laws[1:], law, cost, grid_point, share_best, say)
     if friction_spread > 0.0:
         centres = []
         for lk in _SPREAD_LOG_K:
             q = grid_point(lk, 4.0, share_best)
             cost(q)
-            centres.append((mism[tuple(np.round(np.clip(q, lo4, hi4), 12))],
+            centres.append((mism[(*np.round(np.clip(q, lo4, hi4), 12), law[0])],
                             {**friction(share_best), GAP: float(q[0]),
                              STIFFNESS: 10 ** float(q[1]), DAMPING: 10 ** float(q[2])}))
-        widen, left_out, extra = _widen_by_friction(prepared, rig, data, centres,
+        widen, left_out, extra = _widen_by_friction(prepared, rigs[law[0]], data, centres,
                                                     friction_spread, say)
         for r in history:  # every objective so far re-scored with the widened spreads
             r["objective"] = cache[r["_key"]] = score(mism[r["_key"]], widen)
-        _gap_steps(history, mism, widen, share_best, g_kin, cost)
-    best = min(history, key=lambda r: r["objective"])
+        _gap_steps(history, mism, widen, share_best, g_kin, cost, law[0])
+    best = min((r for r in history if r["contact_exponent"] == law[0]),
+               key=lambda r: r["objective"])
     f_grid = best["objective"]
     say(f"impact-aware fit: kinematic gap {1e3 * g_kin:.4g} mm; grid best k "
         f"{best[STIFFNESS]:.3g} N/m, c {best[DAMPING]:.3g} N s/m (objective {f_grid:.3g})")
     converged, stop = _nelder_mead(cost, best, 4 if with_share else 3, max_evaluations)
-    best = min(history, key=lambda r: r["objective"])
+    best = min((r for r in history if r["contact_exponent"] == law[0]),
+               key=lambda r: r["objective"])
     share_best = best["bearing_share"]
     params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
               DAMPING: best[DAMPING]}
@@ -279,7 +335,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     for r in history:
         r.pop("_key", None)
     return ImpactFit(converged, msg, params, best["objective"], f_grid, len(history) + extra,
-                     time.perf_counter() - t0, history)
+                     time.perf_counter() - t0, history, law[0])
 
 
 #: Contact stiffnesses (log10 N/m) at which the friction's effect on the features is taken.
@@ -295,7 +351,9 @@ def _fit_message(stop: str, sims: int, best: Mapping[str, float], f_grid: float,
         f"by the friction's uncertainty): {', '.join(left_out)}" if left_out else "")
     return (f"impact-aware fit ({stop}, {sims} simulations, bearing share of the friction "
             f"{best['bearing_share']:g}{note}): gap {1e3 * best[GAP]:.4g} mm, contact "
-            f"stiffness {best[STIFFNESS]:.3g} N/m, damping {best[DAMPING]:.3g} N s/m; "
+            + ("" if best.get("contact_exponent", 1.0) == 1.0 else
+               f"law exponent {best['contact_exponent']:g} (secant at 10 um) ")
+            + f"stiffness {best[STIFFNESS]:.3g} N/m, damping {best[DAMPING]:.3g} N s/m; "
             f"feature objective {f_grid:.3g} (grid) -> {best['objective']:.3g}")
 
 
@@ -356,7 +414,7 @@ def _widen_by_friction(prepared: Sequence[PreparedTest], rig: Rig, data: Feature
 
 def _gap_steps(history: list[dict], mism: Mapping[tuple, Mismatch],
                widen: Sequence[tuple[np.ndarray, float]] | None, share: float, g_kin: float,
-               cost: Callable[[np.ndarray], float]) -> None:
+               cost: Callable[[np.ndarray], float], law: float = 1.0) -> None:
     """Each grid stiffness at the gap whose simulated kinematic gap matches the data's
     (one step from its better damping's point, :func:`~.impact_features.gap_step`): a
     rotor bouncing on its face at mid-stroke biases the kinematic gap low (by up to 10 %
@@ -367,7 +425,7 @@ def _gap_steps(history: list[dict], mism: Mapping[tuple, Mismatch],
     rough objective (0.19 against 0.06 without them, stiffness +57 % against +12 %)."""
     for lk in _GRID_LOG_K:
         rows = [r for r in history if abs(math.log10(r[STIFFNESS]) - lk) < 1e-9
-                and abs(r["bearing_share"] - share) < 1e-12]
+                and abs(r["bearing_share"] - share) < 1e-12 and r["contact_exponent"] == law]
         if not rows:
             continue
         r0 = min(rows, key=lambda r: r["objective"])
@@ -441,7 +499,8 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     t0 = time.perf_counter()
     res = fit_impacts(fit_pts, crig, start, shares=IMPACT_SHARES, split=split,
                       max_evaluations=IMPACT_EVALUATIONS_WITH_SHARES,
-                      friction_spread=IMPACT_FRICTION_SPREAD, log=log)
+                      friction_spread=IMPACT_FRICTION_SPREAD, laws=IMPACT_LAWS, log=log)
+    crig = with_contact_law(crig, res.contact_exponent)
     pf = predict(fit_pts, crig, res.parameters)
     sse = float(sum(np.sum(((pt.y - yp) * pt.wnorm) ** 2) for pt, yp in zip(fit_pts, pf)))
     n_obs = sum(pt.y.size for pt in fit_pts)
@@ -462,6 +521,7 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
                                             "objective_grid": res.objective_start,
                                             "simulations": res.evaluations,
                                             "converged": res.success,
+                                            "contact_exponent": res.contact_exponent,
                                             "tolerance_change_rms_sigma": chaos}}],
                     seconds=time.perf_counter() - t0, path="impacts", sse=sse, n_obs=n_obs)
     return name, out, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
