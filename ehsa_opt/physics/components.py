@@ -148,8 +148,8 @@ class Backlash(Component):
     a ball on a race (point contact; the stiffness grows with the load, a ball screw's
     balls and an angular-contact bearing's are such contacts); n = 1 (default) is the
     linear law of a lumped, preloaded or line contact.  The damping term is the same
-    in both.  Stored energy for n ≠ 1: k_c p_ref^(1−n) ramp^(n+1)/(n+1), exact up to the
-    smoothing width.
+    in both.  Stored energy for n ≠ 1: k_c p_ref^(1−n) ramp^(n+1)/(n+1), whose derivative
+    is the elastic force (ramp^n times the smoothed step).
     """
 
     name = "backlash"
@@ -175,15 +175,19 @@ class Backlash(Component):
         self.contact_exponent = float(contact_exponent)
         self.reference_m = float(reference_m)
 
-    def _law(self, ramp: Any) -> Any:
-        """The contact's elastic force per unit stiffness at a penetration ``ramp`` (m)."""
-        n, r = self.contact_exponent, self.reference_m
-        return ramp if n == 1.0 else r * (ramp / r) ** n
+    def _law(self, z: Any) -> Any:
+        """The contact's elastic force per unit stiffness (m) at an overlap ``z`` (m): the
+        smoothed ramp; for n ≠ 1 the derivative of p_ref^(1−n) ramp^(n+1)/(n+1), so the
+        stored energy is exact."""
+        n, r, e = self.contact_exponent, self.reference_m, self.smoothing_m
+        if n == 1.0:
+            return smooth_ramp(z, e)
+        return r * (smooth_ramp(z, e) / r) ** n * smooth_step(z, e)
 
     def _parts(self, s: dict, p: dict) -> tuple[Any, Any, Any]:
         h = 0.5 * p["backlash_gap_m"]
         d, e = s["delta"], self.smoothing_m
-        pen = self._law(smooth_ramp(d - h, e)) - self._law(smooth_ramp(-d - h, e))
+        pen = self._law(d - h) - self._law(-d - h)
         ind = smooth_step(d - h, e) + smooth_step(-d - h, e)
         return h, pen, ind
 
