@@ -68,7 +68,16 @@ from scipy.optimize import minimize
 
 from .prepared import PreparedTest
 from .rig import Rig, predict
+from .impact_verdict import (
+    IMPACT_EARN_OBJECTIVE,
+    IMPACT_EARN_SHARE,
+    impact_record,
+    impact_verdict,
+    judge_on_impacts,
+)
 from .impact_features import (
+    IMPACT_FRICTION_DOMINATED,
+    IMPACT_FRICTION_SPREAD,
     BEARING_LEVELS,
     NUT_LEVELS,
     FeatureData,
@@ -116,13 +125,6 @@ _GRID_LOG_C = (3.0, 4.0)
 #: a rigid baseline lumps the friction into the nut, but the bearing's part brakes the
 #: rotor while it coasts through the gap, which sets the impact speeds.
 IMPACT_SHARES = (0.15, 0.3, 0.45)
-#: Relative uncertainty of a rigid baseline's friction levels when the data hold impacts
-#: it does not model (each of the nut's and the bearing's levels moved by ± this share to
-#: see what it does to each test's features; see :func:`fit_impacts`).
-IMPACT_FRICTION_SPREAD = 0.05
-#: A test whose log transient energy that uncertainty alone moves by more than this is
-#: left out of the contact fit (it says more about the friction than about the contact).
-IMPACT_FRICTION_DOMINATED = 1.0
 #: Contact stiffnesses (log10 N/m) at which the friction shares are compared.
 _SHARE_GRID_LOG_K = (7.0, 8.0, 9.0)
 #: Nelder–Mead unit of the bearing share (then a fourth search direction).
@@ -177,11 +179,19 @@ def with_contact_law(rig: Rig, exponent: float) -> Rig:
     return rig
 
 
+def _best(history: Sequence[dict], law: float) -> dict:
+    """The best evaluated point of the contact law ``law``."""
+    return min((r for r in history if r["contact_exponent"] == law),
+               key=lambda r: r["objective"])
+
+
 def _choose_law(history: list[dict], others: Sequence[float], law: list[float],
                 cost: Callable[[np.ndarray], float], grid_point: Callable, share: float,
                 say: Callable[[str], None]) -> float:
-    """Each other contact law at every grid stiffness with the damping that was better
-    there under the first law; returns the law of the best grid point."""
+    """Each other contact law (exponent; 1.5: Hertz's ball-on-race law,
+    :class:`~ehsa_opt.physics.components.Backlash`) at every grid stiffness with the
+    damping that was better there under the first law; returns the law of the best grid
+    point."""
     first = law[0]
     rows = [r for r in history if r["contact_exponent"] == first
             and abs(r["bearing_share"] - share) < 1e-12]
@@ -221,27 +231,20 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         gap search starts from the data's kinematic gap (:func:`kinematic_gap`, less
         the contact deflection at each grid stiffness), not from ``start``'s gap.
     max_evaluations : int
-        Simulations of the fit tests allowed (a grid of 16, the shares, then
-        Nelder–Mead); the search stops there and says so.
+        Simulations allowed (grid, shares, Nelder–Mead); the search stops there, says so.
     shares : sequence of float
         Bearing shares of the start's rod-equivalent friction screened first (with 0, at
-        1e7, 1e8 and 1e9 N/m; e.g. :data:`IMPACT_SHARES` for a rigid baseline, which lumped
-        it all into the nut), then refined by Nelder–Mead (a fourth direction).
+        1e7-1e9 N/m; e.g. :data:`IMPACT_SHARES` for a rigid baseline, which lumped it all
+        into the nut), then refined by Nelder–Mead (a fourth direction).
     split : callable
         ``split(parameters, share, lead_m_per_rad)`` moving that share of the friction to
-        the bearing (:func:`~.candidate_fit.split_friction`); needed when ``shares`` is given.
+        the bearing (:func:`~.candidate_fit.split_friction`); needed with ``shares``.
     friction_spread : float
-        Relative uncertainty of the start's friction levels (e.g.
-        :data:`IMPACT_FRICTION_SPREAD` for a rigid baseline's; 0: known).  When > 0 the
+        Relative uncertainty of the start's friction levels (0: known).  When > 0 the
         features are widened by what it does to them, tests it dominates are left out
-        (:func:`_widen_by_friction`) and each grid stiffness gets a gap step
-        (:func:`_gap_steps`).
+        (:func:`_widen_by_friction`), each grid stiffness gets a gap step (:func:`_gap_steps`).
     laws : sequence of float
-        Contact exponents compared on the stiffness grid (1: linear; 1.5: Hertz's law of a
-        ball on a race, :class:`~ehsa_opt.physics.components.Backlash`): the first law's
-        full grid, then each other law at every grid stiffness with that stiffness's
-        better damping; the rest of the search uses the law of the best grid point
-        (``ImpactFit.contact_exponent``).
+        Contact exponents (1 linear, 1.5 Hertz; :func:`_choose_law`), the best goes on.
     log : callable, optional
         Progress messages.
 
@@ -249,23 +252,18 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     -------
     ImpactFit
     """
-    lo, hi = _search_box(prepared, rig, max_evaluations)
+    lo, hi = _search_box(prepared, rig, max_evaluations, shares, split)
     t0 = time.perf_counter()
     say = log or (lambda msg: None)
     h = rig.harvester
     data = data_features(prepared, h)
     g_kin, f_push = _kinematic_start(prepared, data, h, start)
     g_kin = g_kin if math.isfinite(g_kin) else float(start[GAP])
-    history: list[dict] = []
-    cache: dict[tuple, float] = {}
-    mism: dict[tuple, Mismatch] = {}
+    history, cache, mism = [], {}, {}  # evaluated points; objectives, mismatches by key
     widen: list[tuple[np.ndarray, float]] | None = None
     extra, left_out = 0, []
     with_share = bool(shares)
-    if with_share and split is None:
-        raise ValueError("fit_impacts: shares need split (e.g. candidate_fit.split_friction)")
-    lo4 = np.append(lo, 0.0)
-    hi4 = np.append(hi, 0.9)
+    lo4, hi4 = np.append(lo, 0.0), np.append(hi, 0.9)
     rigs = {float(n): with_contact_law(rig, n) for n in laws}
     law = [float(laws[0])]  # the law of the search's current stage
 
@@ -319,14 +317,12 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         for r in history:  # every objective so far re-scored with the widened spreads
             r["objective"] = cache[r["_key"]] = score(mism[r["_key"]], widen)
         _gap_steps(history, mism, widen, share_best, g_kin, cost, law[0])
-    best = min((r for r in history if r["contact_exponent"] == law[0]),
-               key=lambda r: r["objective"])
+    best = _best(history, law[0])
     f_grid = best["objective"]
     say(f"impact-aware fit: kinematic gap {1e3 * g_kin:.4g} mm; grid best k "
         f"{best[STIFFNESS]:.3g} N/m, c {best[DAMPING]:.3g} N s/m (objective {f_grid:.3g})")
     converged, stop = _nelder_mead(cost, best, 4 if with_share else 3, max_evaluations)
-    best = min((r for r in history if r["contact_exponent"] == law[0]),
-               key=lambda r: r["objective"])
+    best = _best(history, law[0])
     share_best = best["bearing_share"]
     params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
               DAMPING: best[DAMPING]}
@@ -438,9 +434,12 @@ def _gap_steps(history: list[dict], mism: Mapping[tuple, Mismatch],
                 return
 
 
-def _search_box(prepared: Sequence[PreparedTest], rig: Rig, max_evaluations: int
+def _search_box(prepared: Sequence[PreparedTest], rig: Rig, max_evaluations: int,
+                shares: Sequence[float] = (), split: Callable | None = None
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Checks of :func:`fit_impacts`' arguments; the bounds of (gap, log10 k, log10 c)."""
+    if shares and split is None:
+        raise ValueError("fit_impacts: shares need split (e.g. candidate_fit.split_friction)")
     n_grid = len(_GRID_LOG_K) * len(_GRID_LOG_C)
     if max_evaluations < n_grid + 4:
         raise ValueError(f"fit_impacts: max_evaluations must be >= {n_grid + 4}, "
@@ -525,65 +524,6 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
                                             "tolerance_change_rms_sigma": chaos}}],
                     seconds=time.perf_counter() - t0, path="impacts", sse=sse, n_obs=n_obs)
     return name, out, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
-
-
-#: An impact-fitted contact earns when its held-out feature objective is at most this
-#: (its transient energies and kinematic gaps match within ~3 allowed spreads rms; the
-#: true parameters give 1.7 on the fit tests of a 1e9 N/m campaign) ...
-IMPACT_EARN_OBJECTIVE = 10.0
-#: ... and at most this share of the current model's (which misses the impacts by
-#: orders of magnitude in energy).
-IMPACT_EARN_SHARE = 0.1
-
-
-def impact_record(fit: Any) -> dict | None:
-    """The impact-aware record of a candidate fit (:func:`fit_candidate_on_impacts`), or
-    None for a sample-wise fit."""
-    for s in getattr(fit, "starts", None) or ():
-        if isinstance(s, dict) and "impact_fit" in s:
-            return s["impact_fit"]
-    return None
-
-
-def impact_verdict(ev_pts: Sequence[PreparedTest], cur_pred: Sequence[np.ndarray],
-                   cand_pred: Sequence[np.ndarray], harvester, n_params: int = 3) -> dict:
-    """Judge an impact-fitted contact on the evaluation (held-out) tests by the features
-    it was fitted on: the sample-wise error of a rattling contact is a lottery (at the
-    true parameters a 1e9 N/m contact's held-out force error was 63 % on one test and
-    45 % on nine, against 94 % and 85 % for the rigid model; parameters 7 % off the
-    truth gave 119 %), its transient energies and kinematic gaps are not.
-
-    Returns the objectives before (current model) and after (candidate), whether the
-    candidate earns (:data:`IMPACT_EARN_OBJECTIVE`, :data:`IMPACT_EARN_SHARE`) and a
-    ΔBIC on the features, n ln(after/before) + k ln n (n features), used to rank it
-    against sample-wise candidates."""
-    before = impact_objective(ev_pts, cur_pred, harvester)
-    after = impact_objective(ev_pts, cand_pred, harvester)
-    n = sum(5 if pt.y.shape[0] > 1 else 2 for pt in ev_pts)
-    ok = (math.isfinite(after) and math.isfinite(before) and after <= IMPACT_EARN_OBJECTIVE
-          and after <= IMPACT_EARN_SHARE * before)
-    dbic = (n * math.log(max(after, 1e-12) / max(before, 1e-12)) + n_params * math.log(n)
-            if math.isfinite(after) and math.isfinite(before) else math.inf)
-    return {"heldout_objective_before": before, "heldout_objective_after": after,
-            "earns": bool(ok), "feature_delta_bic": dbic}
-
-
-def judge_on_impacts(c: Any, res: Any, ev_pts: Sequence[PreparedTest],
-                     cur_pred: Sequence[np.ndarray], cand_pred: Sequence[np.ndarray],
-                     crig: Rig, say: Callable[[str], None]) -> None:
-    """Judge the impact-fitted candidate ``c`` (a :class:`~.results.CandidateResult` whose
-    fit ``res`` came from :func:`fit_candidate_on_impacts`) by :func:`impact_verdict` on
-    the evaluation tests: its ``earns``, ``earns_by`` and held-out ΔBIC (the smaller of
-    the sample-wise and the feature one) are set; the verdict is kept in the fit's
-    impact record."""
-    rec = impact_record(res)
-    n_params = len(crig.components[-1].parameters) if crig.components else 3
-    rec.update(impact_verdict(ev_pts, cur_pred, cand_pred, crig.harvester, n_params))
-    c.earns = bool(rec["earns"] and c.resolved)
-    c.earns_by = "transient energies and kinematic gaps" if c.earns else ""
-    c.delta_bic_heldout = min(c.delta_bic_heldout, rec["feature_delta_bic"])
-    say(f"{c.effect}: held-out feature objective {rec['heldout_objective_before']:.3g} -> "
-        f"{rec['heldout_objective_after']:.3g}" + (" EARNS" if c.earns else ""))
 
 
 class _Budget(Exception):
