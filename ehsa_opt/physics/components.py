@@ -147,8 +147,10 @@ class Backlash(Component):
     reference penetration p_ref = ``reference_m`` (10 µm).  n = 1.5 is Hertz's law for
     a ball on a race (point contact; the stiffness grows with the load, a ball screw's
     balls and an angular-contact bearing's are such contacts); n = 1 (default) is the
-    linear law of a lumped, preloaded or line contact.  The damping term is the same
-    in both.  Stored energy for n ≠ 1: k_c p_ref^(1−n) ramp^(n+1)/(n+1), whose derivative
+    linear law of a lumped, preloaded or line contact.  With the power law the damping is
+    Hunt and Crossley's, c_c (pen/p_ref)^n δ̇: it vanishes at first touch (no pull at
+    separation) and the coefficient of restitution falls with the impact speed;
+    c_c = k_c p_ref χ for their χ (s/m).  Stored energy for n ≠ 1: k_c p_ref^(1−n) ramp^(n+1)/(n+1), whose derivative
     is the elastic force (ramp^n times the smoothed step).
     """
 
@@ -188,7 +190,11 @@ class Backlash(Component):
         h = 0.5 * p["backlash_gap_m"]
         d, e = s["delta"], self.smoothing_m
         pen = self._law(d - h) - self._law(-d - h)
-        ind = smooth_step(d - h, e) + smooth_step(-d - h, e)
+        if self.contact_exponent == 1.0:
+            ind = smooth_step(d - h, e) + smooth_step(-d - h, e)
+        else:  # Hunt-Crossley: the damping grows with the penetration as the force does
+            r = self.reference_m
+            ind = (self._law(d - h) + self._law(-d - h)) / r
         return h, pen, ind
 
     def coupling_force(self, s: dict, p: dict) -> Any:

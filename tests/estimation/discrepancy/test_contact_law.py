@@ -92,3 +92,17 @@ def test_a_gap_shorter_than_its_contact_deflection_does_not_earn(gap, stiffness,
     other = CandidateResult("compliance", True, 1.0, 1.0)
     other.earns = True
     assert not refuse_unresolved_gap(other, pts, params) and other.earns
+
+
+def test_hertz_contact_damping_is_hunt_crossley():
+    """With the power law the damping force is c_c (p/p_ref)^1.5 dp/dt: zero at first
+    touch, c_c dp/dt at the reference penetration; its dissipated power is force x rate."""
+    p = {GAP: 2e-4, K: 1e7, C: 50.0}
+    comp = Backlash(contact_exponent=1.5)
+    s = {"delta": 1e-4 + 1e-5, "delta_dot": 0.3}
+    damping = float(comp.coupling_force(s, p)) - _force(comp, s["delta"], p)
+    assert math.isclose(damping, 50.0 * 0.3, rel_tol=2e-2)
+    s0 = {"delta": 1e-4, "delta_dot": 0.3}
+    at_touch = float(comp.coupling_force(s0, p)) - _force(comp, s0["delta"], p)
+    assert abs(at_touch) < 0.05 * 15.0  # the linear law's: half of 50 x 0.3 there
+    assert math.isclose(float(comp.dissipated_power(s, p)), damping * 0.3, rel_tol=1e-9)
