@@ -179,6 +179,12 @@ def with_contact_law(rig: Rig, exponent: float) -> Rig:
     return rig
 
 
+#: Hunt and Crossley's χ (s/m) at which a power-law contact enters the grid: the geometric
+#: middle of steel impacts' 0.1-1.5 s/m (χ ≈ 3 (1 − e) / (2 u) for a restitution e of
+#: 0.8-0.95 at impact speeds u of 0.1-1 m/s); Nelder-Mead moves it.
+_HUNT_CROSSLEY_CHI = 0.4
+
+
 def _best(history: Sequence[dict], law: float) -> dict:
     """The best evaluated point of the contact law ``law``."""
     return min((r for r in history if r["contact_exponent"] == law),
@@ -188,9 +194,10 @@ def _best(history: Sequence[dict], law: float) -> dict:
 def _choose_law(history: list[dict], others: Sequence[float], law: list[float],
                 cost: Callable[[np.ndarray], float], grid_point: Callable, share: float,
                 say: Callable[[str], None]) -> float:
-    """Each other contact law (exponent; 1.5: Hertz's ball-on-race law,
-    :class:`~ehsa_opt.physics.components.Backlash`) at every grid stiffness with the
-    damping that was better there under the first law; returns the law of the best grid
+    """Each other contact law (exponent; 1.5: Hertz's ball-on-race law with Hunt and
+    Crossley's damping, :class:`~ehsa_opt.physics.components.Backlash`) at every grid
+    stiffness, with the damping that was better there under the linear law or, for a
+    power law, that of :data:`_HUNT_CROSSLEY_CHI`; returns the law of the best grid
     point."""
     first = law[0]
     rows = [r for r in history if r["contact_exponent"] == first
@@ -200,6 +207,8 @@ def _choose_law(history: list[dict], others: Sequence[float], law: list[float],
         for lk in _GRID_LOG_K:
             at = [r for r in rows if abs(math.log10(r[STIFFNESS]) - lk) < 1e-9]
             lc = math.log10(min(at, key=lambda r: r["objective"])[DAMPING]) if at else 4.0
+            if n != 1.0:  # Hunt-Crossley: c_c = k_c p_ref chi
+                lc = lk + math.log10(1e-5 * _HUNT_CROSSLEY_CHI)
             try:
                 cost(grid_point(lk, lc, share))
             except _Budget:
