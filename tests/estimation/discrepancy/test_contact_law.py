@@ -3,6 +3,8 @@ its contact's deflection is not a resolved gap."""
 
 import math
 
+import numpy as np
+
 import pytest
 
 from ehsa_opt.physics import make_component
@@ -106,3 +108,33 @@ def test_hertz_contact_damping_is_hunt_crossley():
     at_touch = float(comp.coupling_force(s0, p)) - _force(comp, s0["delta"], p)
     assert abs(at_touch) < 0.05 * 15.0  # the linear law's: half of 50 x 0.3 there
     assert math.isclose(float(comp.dissipated_power(s, p)), damping * 0.3, rel_tol=1e-9)
+
+
+def test_heldout_verdict_is_widened_by_the_friction_uncertainty():
+    """The held-out features of an impact-fitted contact get the spread ±5 % friction
+    levels give them (as in the fit): the widened objective is never above the plain one,
+    and a contact 30 % too soft is still told from the truth."""
+    from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
+    from ehsa_opt.estimation.discrepancy.impact_verdict import (
+        friction_spread_of_features,
+        impact_verdict,
+    )
+    from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+    from ehsa_opt.estimation.discrepancy.rig import Rig, predict
+    truth = {GAP: 3e-4, K: 1e8, C: 8e3}
+    spec = SyntheticSpec(effects={"backlash": truth}, frequencies_hz=(2.0,),
+                         loads_ohm=(47.0, 109.0), seed=3)
+    pts = prepare_tests(generate_bench_tests(spec), True)
+    h = spec.harvester
+    rigid, crig = Rig(h, True, ()), Rig(h, True, (make_component("backlash"),))
+    p_true = {**spec.friction.as_dict(), **truth}
+    cur = predict(pts, rigid, p_true)
+    verdicts = {}
+    for name, p in (("truth", p_true), ("soft", {**p_true, K: 3e7})):
+        pred = predict(pts, crig, p)
+        widen, _ = friction_spread_of_features(pts, crig, p, pred)
+        assert all(np.all(w[0] >= 0) for w in widen)
+        verdicts[name] = v = impact_verdict(pts, cur, pred, h, 3, widen)
+        assert v["heldout_objective_after"] <= v["heldout_objective_after_unwidened"] + 1e-12
+    assert verdicts["truth"]["earns"]
+    assert verdicts["truth"]["heldout_objective_after"] < verdicts["soft"]["heldout_objective_after"]
