@@ -66,6 +66,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 from scipy.optimize import minimize
 
+from .deadline import past_deadline
 from .prepared import PreparedTest
 from .rig import Rig, predict
 from .impact_verdict import (
@@ -370,13 +371,21 @@ def _nelder_mead(cost: Callable[[np.ndarray], float], best: Mapping[str, float],
     q_best = np.array([best[GAP], math.log10(best[STIFFNESS]), math.log10(best[DAMPING]),
                        best["bearing_share"]])
     unit = np.array([_STEP[0] * best[GAP], _STEP[1], _STEP[2], _SHARE_STEP])
+
+    def f(z: np.ndarray) -> float:
+        if past_deadline():  # the run's time budget: keep the best point reached
+            raise _Deadline
+        return cost(q_best + np.append(z, np.zeros(4 - dim)) * unit)
+
     try:
-        res = minimize(lambda z: cost(q_best + np.append(z, np.zeros(4 - dim)) * unit),
+        res = minimize(f,
                        np.zeros(dim), method="Nelder-Mead",
                        options={"initial_simplex": np.vstack([np.zeros(dim), np.eye(dim)]),
                                 "xatol": 0.05, "fatol": 1e-2, "maxfev": max_evaluations})
     except _Budget:
         return False, "stopped at the simulation budget"
+    except _Deadline:
+        return False, "stopped at the run's deadline"
     return bool(res.success), ("converged" if res.success else str(res.message))
 
 
@@ -537,3 +546,7 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
 
 class _Budget(Exception):
     """Raised inside the search when the simulation budget is used up."""
+
+
+class _Deadline(Exception):
+    """Raised inside Nelder–Mead when the run's deadline (:mod:`.deadline`) has passed."""

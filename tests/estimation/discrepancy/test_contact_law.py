@@ -138,3 +138,24 @@ def test_heldout_verdict_is_widened_by_the_friction_uncertainty():
         assert v["heldout_objective_after"] <= v["heldout_objective_after_unwidened"] + 1e-12
     assert verdicts["truth"]["earns"]
     assert verdicts["truth"]["heldout_objective_after"] < verdicts["soft"]["heldout_objective_after"]
+
+
+def test_impact_fit_search_stops_at_the_runs_deadline():
+    """Past the run's deadline the Nelder-Mead stage stops at once with the best grid
+    point and says so (a budget that ends in a stated result)."""
+    from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
+    from ehsa_opt.estimation.discrepancy.deadline import deadline_set
+    from ehsa_opt.estimation.discrepancy.impacts import fit_impacts
+    from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+    from ehsa_opt.estimation.discrepancy.rig import Rig
+    truth = {GAP: 3e-4, K: 1e8, C: 8e3}
+    spec = SyntheticSpec(effects={"backlash": truth}, frequencies_hz=(2.0,),
+                         loads_ohm=(47.0,), seed=1)
+    pts = prepare_tests(generate_bench_tests(spec), True)
+    rig = Rig(spec.harvester, True, (make_component("backlash"),))
+    start = {**make_component("backlash").defaults(), **spec.friction.as_dict()}
+    with deadline_set(1e-6):
+        res = fit_impacts(pts, rig, start)
+    assert "deadline" in res.message and not res.success
+    assert res.evaluations == 16  # the grid only
+    assert res.objective == res.objective_start
