@@ -141,6 +141,17 @@ class Backlash(Component):
     ramp/step are smoothed over ``smoothing_m`` so the model stays smooth for IPOPT.
     At each reversal the rotor coasts through the gap, then the contact closes
     with a short force peak.
+
+    ``contact_exponent`` n ≠ 1 gives a power-law (Hertzian) contact,
+    k_c pen → k_c p_ref (pen/p_ref)^n, with k_c still in N/m: the secant stiffness at the
+    reference penetration p_ref = ``reference_m`` (10 µm).  n = 1.5 is Hertz's law for
+    a ball on a race (point contact; the stiffness grows with the load, a ball screw's
+    balls and an angular-contact bearing's are such contacts); n = 1 (default) is the
+    linear law of a lumped, preloaded or line contact.  With the power law the damping is
+    Hunt and Crossley's, c_c (pen/p_ref)^n δ̇: it vanishes at first touch (no pull at
+    separation) and the coefficient of restitution falls with the impact speed;
+    c_c = k_c p_ref χ for their χ (s/m).  Stored energy for n ≠ 1: k_c p_ref^(1−n) ramp^(n+1)/(n+1), whose derivative
+    is the elastic force (ramp^n times the smoothed step).
     """
 
     name = "backlash"
@@ -153,16 +164,37 @@ class Backlash(Component):
                   "contact damping c_c"),
     )
 
-    def __init__(self, smoothing_m: float = 2e-6) -> None:
+    def __init__(self, smoothing_m: float = 2e-6, contact_exponent: float = 1.0,
+                 reference_m: float = 1e-5) -> None:
         if not smoothing_m > 0:
             raise ValueError("Backlash: smoothing_m must be > 0 (m)")
+        if not 1.0 <= contact_exponent <= 2.0:
+            raise ValueError(f"Backlash: contact_exponent must be in [1, 2] (1 linear, 1.5 "
+                             f"Hertz), got {contact_exponent!r}")
+        if not reference_m > 0:
+            raise ValueError("Backlash: reference_m must be > 0 (m)")
         self.smoothing_m = smoothing_m
+        self.contact_exponent = float(contact_exponent)
+        self.reference_m = float(reference_m)
+
+    def _law(self, z: Any) -> Any:
+        """The contact's elastic force per unit stiffness (m) at an overlap ``z`` (m): the
+        smoothed ramp; for n ≠ 1 the derivative of p_ref^(1−n) ramp^(n+1)/(n+1), so the
+        stored energy is exact."""
+        n, r, e = self.contact_exponent, self.reference_m, self.smoothing_m
+        if n == 1.0:
+            return smooth_ramp(z, e)
+        return r * (smooth_ramp(z, e) / r) ** n * smooth_step(z, e)
 
     def _parts(self, s: dict, p: dict) -> tuple[Any, Any, Any]:
         h = 0.5 * p["backlash_gap_m"]
         d, e = s["delta"], self.smoothing_m
-        pen = smooth_ramp(d - h, e) - smooth_ramp(-d - h, e)
-        ind = smooth_step(d - h, e) + smooth_step(-d - h, e)
+        pen = self._law(d - h) - self._law(-d - h)
+        if self.contact_exponent == 1.0:
+            ind = smooth_step(d - h, e) + smooth_step(-d - h, e)
+        else:  # Hunt-Crossley: the damping grows with the penetration as the force does
+            r = self.reference_m
+            ind = (self._law(d - h) + self._law(-d - h)) / r
         return h, pen, ind
 
     def coupling_force(self, s: dict, p: dict) -> Any:
@@ -172,6 +204,10 @@ class Backlash(Component):
 
     def stored_energy(self, s: dict, p: dict) -> Any:
         h, e, d = 0.5 * p["backlash_gap_m"], self.smoothing_m, s["delta"]
+        n, r = self.contact_exponent, self.reference_m
+        if n != 1.0:
+            return p["backlash_contact_stiffness_N_per_m"] * r ** (1.0 - n) / (n + 1.0) * (
+                smooth_ramp(d - h, e) ** (n + 1.0) + smooth_ramp(-d - h, e) ** (n + 1.0))
         return p["backlash_contact_stiffness_N_per_m"] * (
             _ramp_energy(d - h, e) + _ramp_energy(-d - h, e))
 

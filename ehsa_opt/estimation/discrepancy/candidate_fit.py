@@ -408,6 +408,10 @@ def fit_member(a: tuple) -> tuple:
                                  effect_fit="simulation" if on_sim else cand.effect_fit,
                                  log_names=cand.log_names, impact_fit=cand.impact_fit)
     crig = rig.with_components([*rig.components, comp])
+    if cand.impact_fit:  # the contact law the impact-aware fit chose
+        from .impacts import impact_record, with_contact_law
+        rec = impact_record(res) or {}
+        crig = with_contact_law(crig, rec.get("contact_exponent", 1.0))
     if not res.parameters:
         return name, res, [], [], crig
     pf = predict(fit_pts, crig, res.parameters)

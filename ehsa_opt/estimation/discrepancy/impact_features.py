@@ -16,7 +16,7 @@ from .prepared import PreparedTest
 __all__ = ["transient_energies", "kinematic_gap", "impact_objective", "impact_energy_ratio",
            "ENERGY_LOG_SPREAD", "GAP_SPREAD", "FeatureData", "data_features", "Mismatch",
            "mismatch", "score", "friction_widening", "gap_step", "moved_friction",
-           "NUT_LEVELS", "BEARING_LEVELS"]
+           "NUT_LEVELS", "BEARING_LEVELS", "IMPACT_FRICTION_SPREAD", "IMPACT_FRICTION_DOMINATED"]
 
 
 def transient_energies(y: np.ndarray, sigma: np.ndarray | None = None,
@@ -98,6 +98,15 @@ def kinematic_gap(pt: PreparedTest, harvester, voltage_V: np.ndarray | None = No
     return float(vals_a.mean()), se, int(vals_a.size)
 
 
+#: Relative uncertainty of a rigid baseline's friction levels when the data hold impacts
+#: it does not model (each of the nut's and the bearing's levels moved by ± this share to
+#: see what it does to each test's features; :func:`~.impacts.fit_impacts` and the
+#: held-out verdict, :mod:`.impact_verdict`).
+IMPACT_FRICTION_SPREAD = 0.05
+#: A test whose log transient energy that uncertainty alone moves by more than this is
+#: left out of the contact fit and verdict (it says more about the friction than about
+#: the contact).
+IMPACT_FRICTION_DOMINATED = 1.0
 #: Spread allowed to a log transient energy between model and data (the chaotic
 #: redistribution of impacts changes a test's energies by ~5-20 % between tolerances).
 ENERGY_LOG_SPREAD = 0.2

@@ -66,9 +66,19 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 from scipy.optimize import minimize
 
+from .deadline import past_deadline
 from .prepared import PreparedTest
 from .rig import Rig, predict
+from .impact_verdict import (
+    IMPACT_EARN_OBJECTIVE,
+    IMPACT_EARN_SHARE,
+    impact_record,
+    impact_verdict,
+    judge_on_impacts,
+)
 from .impact_features import (
+    IMPACT_FRICTION_DOMINATED,
+    IMPACT_FRICTION_SPREAD,
     BEARING_LEVELS,
     NUT_LEVELS,
     FeatureData,
@@ -90,7 +100,7 @@ __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective
            "impact_verdict", "judge_on_impacts", "IMPACT_EARN_OBJECTIVE", "IMPACT_EARN_SHARE",
            "IMPACT_EVALUATIONS_WITH_SHARES", "IMPACT_FRICTION_SPREAD",
            "IMPACT_FRICTION_DOMINATED",
-           "IMPACT_EVALUATIONS", "IMPACT_ENERGY_RATIO", "GAP", "STIFFNESS",
+           "IMPACT_EVALUATIONS", "IMPACT_ENERGY_RATIO", "IMPACT_LAWS", "with_contact_law", "GAP", "STIFFNESS",
            "DAMPING"]
 
 GAP = "backlash_gap_m"
@@ -106,6 +116,8 @@ IMPACT_EVALUATIONS_WITH_SHARES = 72
 #: with a 1e8-1e9 N/m contact: 700-2200; the prototype's soft 0.1 mm / 5e6 N/m one: 2;
 #: a 5e7 N/m compliance: 2.3).
 IMPACT_ENERGY_RATIO = 30.0
+#: Contact laws the workflow's impact-aware fit compares (exponents: linear, Hertz).
+IMPACT_LAWS = (1.0, 1.5)
 #: Contact stiffnesses (log10 N/m) and dampings (log10 N s/m) of the starting grid.
 _GRID_LOG_K = (6.0, 6.5, 7.0, 7.5, 8.0, 8.5, 9.0, 9.5)
 _GRID_LOG_C = (3.0, 4.0)
@@ -114,13 +126,6 @@ _GRID_LOG_C = (3.0, 4.0)
 #: a rigid baseline lumps the friction into the nut, but the bearing's part brakes the
 #: rotor while it coasts through the gap, which sets the impact speeds.
 IMPACT_SHARES = (0.15, 0.3, 0.45)
-#: Relative uncertainty of a rigid baseline's friction levels when the data hold impacts
-#: it does not model (each of the nut's and the bearing's levels moved by ± this share to
-#: see what it does to each test's features; see :func:`fit_impacts`).
-IMPACT_FRICTION_SPREAD = 0.05
-#: A test whose log transient energy that uncertainty alone moves by more than this is
-#: left out of the contact fit (it says more about the friction than about the contact).
-IMPACT_FRICTION_DOMINATED = 1.0
 #: Contact stiffnesses (log10 N/m) at which the friction shares are compared.
 _SHARE_GRID_LOG_K = (7.0, 8.0, 9.0)
 #: Nelder–Mead unit of the bearing share (then a fourth search direction).
@@ -158,12 +163,70 @@ class ImpactFit:
     evaluations: int
     seconds: float
     history: list[dict] = field(default_factory=list)
+    contact_exponent: float = 1.0
+
+
+def with_contact_law(rig: Rig, exponent: float) -> Rig:
+    """``rig`` with its backlash (the last component of that name) on the contact law of
+    ``exponent`` (:class:`~ehsa_opt.physics.components.Backlash`)."""
+    from ...physics.components import Backlash
+    comps = list(rig.components)
+    for i in range(len(comps) - 1, -1, -1):
+        c = comps[i]
+        if isinstance(c, Backlash):
+            if c.contact_exponent != float(exponent):
+                comps[i] = Backlash(c.smoothing_m, float(exponent), c.reference_m)
+            return rig.with_components(comps)
+    return rig
+
+
+#: Hunt and Crossley's χ (s/m) at which a power-law contact enters the grid: the geometric
+#: middle of steel impacts' 0.1-1.5 s/m (χ ≈ 3 (1 − e) / (2 u) for a restitution e of
+#: 0.8-0.95 at impact speeds u of 0.1-1 m/s); Nelder-Mead moves it.
+_HUNT_CROSSLEY_CHI = 0.4
+
+
+def _best(history: Sequence[dict], law: float) -> dict:
+    """The best evaluated point of the contact law ``law``."""
+    return min((r for r in history if r["contact_exponent"] == law),
+               key=lambda r: r["objective"])
+
+
+def _choose_law(history: list[dict], others: Sequence[float], law: list[float],
+                cost: Callable[[np.ndarray], float], grid_point: Callable, share: float,
+                say: Callable[[str], None]) -> float:
+    """Each other contact law (exponent; 1.5: Hertz's ball-on-race law with Hunt and
+    Crossley's damping, :class:`~ehsa_opt.physics.components.Backlash`) at every grid
+    stiffness, with the damping that was better there under the linear law or, for a
+    power law, that of :data:`_HUNT_CROSSLEY_CHI`; returns the law of the best grid
+    point."""
+    first = law[0]
+    rows = [r for r in history if r["contact_exponent"] == first
+            and abs(r["bearing_share"] - share) < 1e-12]
+    for n in others:
+        law[0] = float(n)
+        for lk in _GRID_LOG_K:
+            at = [r for r in rows if abs(math.log10(r[STIFFNESS]) - lk) < 1e-9]
+            lc = math.log10(min(at, key=lambda r: r["objective"])[DAMPING]) if at else 4.0
+            if n != 1.0:  # Hunt-Crossley: c_c = k_c p_ref chi
+                lc = lk + math.log10(1e-5 * _HUNT_CROSSLEY_CHI)
+            try:
+                cost(grid_point(lk, lc, share))
+            except _Budget:
+                break
+    best = {n: min((r["objective"] for r in history if r["contact_exponent"] == n),
+                   default=math.inf) for n in (first, *map(float, others))}
+    chosen = min(best, key=best.get)
+    say("impact-aware fit: contact law " + ", ".join(
+        f"exponent {n:g} grid best {v:.3g}" for n, v in best.items())
+        + f"; continues with exponent {chosen:g}")
+    return chosen
 
 
 def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, float], *,
                 max_evaluations: int = IMPACT_EVALUATIONS, shares: Sequence[float] = (),
                 split: Callable | None = None, friction_spread: float = 0.0,
-                log: object = None) -> ImpactFit:
+                laws: Sequence[float] = (1.0,), log: object = None) -> ImpactFit:
     """Fit the gap, contact stiffness and damping of a backlash on chaos-robust features
     of the forward simulation (transient energies and kinematic gaps, module docstring).
 
@@ -178,21 +241,20 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         gap search starts from the data's kinematic gap (:func:`kinematic_gap`, less
         the contact deflection at each grid stiffness), not from ``start``'s gap.
     max_evaluations : int
-        Simulations of the fit tests allowed (a grid of 16, the shares, then
-        Nelder–Mead); the search stops there and says so.
+        Simulations allowed (grid, shares, Nelder–Mead); the search stops there, says so.
     shares : sequence of float
         Bearing shares of the start's rod-equivalent friction screened first (with 0, at
-        1e7, 1e8 and 1e9 N/m; e.g. :data:`IMPACT_SHARES` for a rigid baseline, which lumped
-        it all into the nut), then refined by Nelder–Mead (a fourth direction).
+        1e7-1e9 N/m; e.g. :data:`IMPACT_SHARES` for a rigid baseline, which lumped it all
+        into the nut), then refined by Nelder–Mead (a fourth direction).
     split : callable
         ``split(parameters, share, lead_m_per_rad)`` moving that share of the friction to
-        the bearing (:func:`~.candidate_fit.split_friction`); needed when ``shares`` is given.
+        the bearing (:func:`~.candidate_fit.split_friction`); needed with ``shares``.
     friction_spread : float
-        Relative uncertainty of the start's friction levels (e.g.
-        :data:`IMPACT_FRICTION_SPREAD` for a rigid baseline's; 0: known).  When > 0 the
+        Relative uncertainty of the start's friction levels (0: known).  When > 0 the
         features are widened by what it does to them, tests it dominates are left out
-        (:func:`_widen_by_friction`) and each grid stiffness gets a gap step
-        (:func:`_gap_steps`).
+        (:func:`_widen_by_friction`), each grid stiffness gets a gap step (:func:`_gap_steps`).
+    laws : sequence of float
+        Contact exponents (1 linear, 1.5 Hertz; :func:`_choose_law`), the best goes on.
     log : callable, optional
         Progress messages.
 
@@ -200,42 +262,40 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     -------
     ImpactFit
     """
-    lo, hi = _search_box(prepared, rig, max_evaluations)
+    lo, hi = _search_box(prepared, rig, max_evaluations, shares, split)
     t0 = time.perf_counter()
     say = log or (lambda msg: None)
     h = rig.harvester
     data = data_features(prepared, h)
     g_kin, f_push = _kinematic_start(prepared, data, h, start)
     g_kin = g_kin if math.isfinite(g_kin) else float(start[GAP])
-    history: list[dict] = []
-    cache: dict[tuple, float] = {}
-    mism: dict[tuple, Mismatch] = {}
+    history, cache, mism = [], {}, {}  # evaluated points; objectives, mismatches by key
     widen: list[tuple[np.ndarray, float]] | None = None
     extra, left_out = 0, []
     with_share = bool(shares)
-    if with_share and split is None:
-        raise ValueError("fit_impacts: shares need split (e.g. candidate_fit.split_friction)")
-    lo4 = np.append(lo, 0.0)
-    hi4 = np.append(hi, 0.9)
+    lo4, hi4 = np.append(lo, 0.0), np.append(hi, 0.9)
+    rigs = {float(n): with_contact_law(rig, n) for n in laws}
+    law = [float(laws[0])]  # the law of the search's current stage
 
     def friction(share: float) -> dict[str, float]:
         return dict(start) if share <= 0.0 else split(dict(start), share, h.lead_m_per_rad)
 
     def cost(q: np.ndarray) -> float:
         q = np.clip(np.asarray(q, dtype=float), lo4, hi4)
-        key = tuple(np.round(q, 12))
+        key = (*np.round(q, 12), law[0])
         if key in cache:
             return cache[key]
         if len(history) >= max_evaluations:
             raise _Budget
         p = {**friction(float(q[3])), GAP: float(q[0]), STIFFNESS: float(10 ** q[1]),
              DAMPING: float(10 ** q[2])}
-        mism[key] = mismatch(prepared, predict(prepared, rig, p), h, data)
+        mism[key] = mismatch(prepared, predict(prepared, rigs[law[0]], p), h, data)
         c = score(mism[key], widen)
         c = c if math.isfinite(c) else 1e6
         cache[key] = c
         history.append({GAP: p[GAP], STIFFNESS: p[STIFFNESS], DAMPING: p[DAMPING],
-                        "bearing_share": float(q[3]), "objective": c, "_key": key})
+                        "bearing_share": float(q[3]), "objective": c, "_key": key,
+                        "contact_exponent": law[0]})
         return c
 
     def grid_point(lk: float, lc: float, share: float) -> np.ndarray:
@@ -252,25 +312,27 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     for lk in _GRID_LOG_K:
         for lc in _GRID_LOG_C:
             cost(grid_point(lk, lc, share_best))
+    if len(rigs) > 1:
+        law[0] = _choose_law(history, laws[1:], law, cost, grid_point, share_best, say)
     if friction_spread > 0.0:
         centres = []
         for lk in _SPREAD_LOG_K:
             q = grid_point(lk, 4.0, share_best)
             cost(q)
-            centres.append((mism[tuple(np.round(np.clip(q, lo4, hi4), 12))],
+            centres.append((mism[(*np.round(np.clip(q, lo4, hi4), 12), law[0])],
                             {**friction(share_best), GAP: float(q[0]),
                              STIFFNESS: 10 ** float(q[1]), DAMPING: 10 ** float(q[2])}))
-        widen, left_out, extra = _widen_by_friction(prepared, rig, data, centres,
+        widen, left_out, extra = _widen_by_friction(prepared, rigs[law[0]], data, centres,
                                                     friction_spread, say)
         for r in history:  # every objective so far re-scored with the widened spreads
             r["objective"] = cache[r["_key"]] = score(mism[r["_key"]], widen)
-        _gap_steps(history, mism, widen, share_best, g_kin, cost)
-    best = min(history, key=lambda r: r["objective"])
+        _gap_steps(history, mism, widen, share_best, g_kin, cost, law[0])
+    best = _best(history, law[0])
     f_grid = best["objective"]
     say(f"impact-aware fit: kinematic gap {1e3 * g_kin:.4g} mm; grid best k "
         f"{best[STIFFNESS]:.3g} N/m, c {best[DAMPING]:.3g} N s/m (objective {f_grid:.3g})")
     converged, stop = _nelder_mead(cost, best, 4 if with_share else 3, max_evaluations)
-    best = min(history, key=lambda r: r["objective"])
+    best = _best(history, law[0])
     share_best = best["bearing_share"]
     params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
               DAMPING: best[DAMPING]}
@@ -279,7 +341,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     for r in history:
         r.pop("_key", None)
     return ImpactFit(converged, msg, params, best["objective"], f_grid, len(history) + extra,
-                     time.perf_counter() - t0, history)
+                     time.perf_counter() - t0, history, law[0])
 
 
 #: Contact stiffnesses (log10 N/m) at which the friction's effect on the features is taken.
@@ -295,7 +357,9 @@ def _fit_message(stop: str, sims: int, best: Mapping[str, float], f_grid: float,
         f"by the friction's uncertainty): {', '.join(left_out)}" if left_out else "")
     return (f"impact-aware fit ({stop}, {sims} simulations, bearing share of the friction "
             f"{best['bearing_share']:g}{note}): gap {1e3 * best[GAP]:.4g} mm, contact "
-            f"stiffness {best[STIFFNESS]:.3g} N/m, damping {best[DAMPING]:.3g} N s/m; "
+            + ("" if best.get("contact_exponent", 1.0) == 1.0 else
+               f"law exponent {best['contact_exponent']:g} (secant at 10 um) ")
+            + f"stiffness {best[STIFFNESS]:.3g} N/m, damping {best[DAMPING]:.3g} N s/m; "
             f"feature objective {f_grid:.3g} (grid) -> {best['objective']:.3g}")
 
 
@@ -307,13 +371,21 @@ def _nelder_mead(cost: Callable[[np.ndarray], float], best: Mapping[str, float],
     q_best = np.array([best[GAP], math.log10(best[STIFFNESS]), math.log10(best[DAMPING]),
                        best["bearing_share"]])
     unit = np.array([_STEP[0] * best[GAP], _STEP[1], _STEP[2], _SHARE_STEP])
+
+    def f(z: np.ndarray) -> float:
+        if past_deadline():  # the run's time budget: keep the best point reached
+            raise _Deadline
+        return cost(q_best + np.append(z, np.zeros(4 - dim)) * unit)
+
     try:
-        res = minimize(lambda z: cost(q_best + np.append(z, np.zeros(4 - dim)) * unit),
+        res = minimize(f,
                        np.zeros(dim), method="Nelder-Mead",
                        options={"initial_simplex": np.vstack([np.zeros(dim), np.eye(dim)]),
                                 "xatol": 0.05, "fatol": 1e-2, "maxfev": max_evaluations})
     except _Budget:
         return False, "stopped at the simulation budget"
+    except _Deadline:
+        return False, "stopped at the run's deadline"
     return bool(res.success), ("converged" if res.success else str(res.message))
 
 
@@ -356,7 +428,7 @@ def _widen_by_friction(prepared: Sequence[PreparedTest], rig: Rig, data: Feature
 
 def _gap_steps(history: list[dict], mism: Mapping[tuple, Mismatch],
                widen: Sequence[tuple[np.ndarray, float]] | None, share: float, g_kin: float,
-               cost: Callable[[np.ndarray], float]) -> None:
+               cost: Callable[[np.ndarray], float], law: float = 1.0) -> None:
     """Each grid stiffness at the gap whose simulated kinematic gap matches the data's
     (one step from its better damping's point, :func:`~.impact_features.gap_step`): a
     rotor bouncing on its face at mid-stroke biases the kinematic gap low (by up to 10 %
@@ -367,7 +439,7 @@ def _gap_steps(history: list[dict], mism: Mapping[tuple, Mismatch],
     rough objective (0.19 against 0.06 without them, stiffness +57 % against +12 %)."""
     for lk in _GRID_LOG_K:
         rows = [r for r in history if abs(math.log10(r[STIFFNESS]) - lk) < 1e-9
-                and abs(r["bearing_share"] - share) < 1e-12]
+                and abs(r["bearing_share"] - share) < 1e-12 and r["contact_exponent"] == law]
         if not rows:
             continue
         r0 = min(rows, key=lambda r: r["objective"])
@@ -380,9 +452,12 @@ def _gap_steps(history: list[dict], mism: Mapping[tuple, Mismatch],
                 return
 
 
-def _search_box(prepared: Sequence[PreparedTest], rig: Rig, max_evaluations: int
+def _search_box(prepared: Sequence[PreparedTest], rig: Rig, max_evaluations: int,
+                shares: Sequence[float] = (), split: Callable | None = None
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Checks of :func:`fit_impacts`' arguments; the bounds of (gap, log10 k, log10 c)."""
+    if shares and split is None:
+        raise ValueError("fit_impacts: shares need split (e.g. candidate_fit.split_friction)")
     n_grid = len(_GRID_LOG_K) * len(_GRID_LOG_C)
     if max_evaluations < n_grid + 4:
         raise ValueError(f"fit_impacts: max_evaluations must be >= {n_grid + 4}, "
@@ -441,7 +516,8 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     t0 = time.perf_counter()
     res = fit_impacts(fit_pts, crig, start, shares=IMPACT_SHARES, split=split,
                       max_evaluations=IMPACT_EVALUATIONS_WITH_SHARES,
-                      friction_spread=IMPACT_FRICTION_SPREAD, log=log)
+                      friction_spread=IMPACT_FRICTION_SPREAD, laws=IMPACT_LAWS, log=log)
+    crig = with_contact_law(crig, res.contact_exponent)
     pf = predict(fit_pts, crig, res.parameters)
     sse = float(sum(np.sum(((pt.y - yp) * pt.wnorm) ** 2) for pt, yp in zip(fit_pts, pf)))
     n_obs = sum(pt.y.size for pt in fit_pts)
@@ -462,69 +538,15 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
                                             "objective_grid": res.objective_start,
                                             "simulations": res.evaluations,
                                             "converged": res.success,
+                                            "contact_exponent": res.contact_exponent,
                                             "tolerance_change_rms_sigma": chaos}}],
                     seconds=time.perf_counter() - t0, path="impacts", sse=sse, n_obs=n_obs)
     return name, out, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
 
 
-#: An impact-fitted contact earns when its held-out feature objective is at most this
-#: (its transient energies and kinematic gaps match within ~3 allowed spreads rms; the
-#: true parameters give 1.7 on the fit tests of a 1e9 N/m campaign) ...
-IMPACT_EARN_OBJECTIVE = 10.0
-#: ... and at most this share of the current model's (which misses the impacts by
-#: orders of magnitude in energy).
-IMPACT_EARN_SHARE = 0.1
-
-
-def impact_record(fit: Any) -> dict | None:
-    """The impact-aware record of a candidate fit (:func:`fit_candidate_on_impacts`), or
-    None for a sample-wise fit."""
-    for s in getattr(fit, "starts", None) or ():
-        if isinstance(s, dict) and "impact_fit" in s:
-            return s["impact_fit"]
-    return None
-
-
-def impact_verdict(ev_pts: Sequence[PreparedTest], cur_pred: Sequence[np.ndarray],
-                   cand_pred: Sequence[np.ndarray], harvester, n_params: int = 3) -> dict:
-    """Judge an impact-fitted contact on the evaluation (held-out) tests by the features
-    it was fitted on: the sample-wise error of a rattling contact is a lottery (at the
-    true parameters a 1e9 N/m contact's held-out force error was 63 % on one test and
-    45 % on nine, against 94 % and 85 % for the rigid model; parameters 7 % off the
-    truth gave 119 %), its transient energies and kinematic gaps are not.
-
-    Returns the objectives before (current model) and after (candidate), whether the
-    candidate earns (:data:`IMPACT_EARN_OBJECTIVE`, :data:`IMPACT_EARN_SHARE`) and a
-    ΔBIC on the features, n ln(after/before) + k ln n (n features), used to rank it
-    against sample-wise candidates."""
-    before = impact_objective(ev_pts, cur_pred, harvester)
-    after = impact_objective(ev_pts, cand_pred, harvester)
-    n = sum(5 if pt.y.shape[0] > 1 else 2 for pt in ev_pts)
-    ok = (math.isfinite(after) and math.isfinite(before) and after <= IMPACT_EARN_OBJECTIVE
-          and after <= IMPACT_EARN_SHARE * before)
-    dbic = (n * math.log(max(after, 1e-12) / max(before, 1e-12)) + n_params * math.log(n)
-            if math.isfinite(after) and math.isfinite(before) else math.inf)
-    return {"heldout_objective_before": before, "heldout_objective_after": after,
-            "earns": bool(ok), "feature_delta_bic": dbic}
-
-
-def judge_on_impacts(c: Any, res: Any, ev_pts: Sequence[PreparedTest],
-                     cur_pred: Sequence[np.ndarray], cand_pred: Sequence[np.ndarray],
-                     crig: Rig, say: Callable[[str], None]) -> None:
-    """Judge the impact-fitted candidate ``c`` (a :class:`~.results.CandidateResult` whose
-    fit ``res`` came from :func:`fit_candidate_on_impacts`) by :func:`impact_verdict` on
-    the evaluation tests: its ``earns``, ``earns_by`` and held-out ΔBIC (the smaller of
-    the sample-wise and the feature one) are set; the verdict is kept in the fit's
-    impact record."""
-    rec = impact_record(res)
-    n_params = len(crig.components[-1].parameters) if crig.components else 3
-    rec.update(impact_verdict(ev_pts, cur_pred, cand_pred, crig.harvester, n_params))
-    c.earns = bool(rec["earns"] and c.resolved)
-    c.earns_by = "transient energies and kinematic gaps" if c.earns else ""
-    c.delta_bic_heldout = min(c.delta_bic_heldout, rec["feature_delta_bic"])
-    say(f"{c.effect}: held-out feature objective {rec['heldout_objective_before']:.3g} -> "
-        f"{rec['heldout_objective_after']:.3g}" + (" EARNS" if c.earns else ""))
-
-
 class _Budget(Exception):
     """Raised inside the search when the simulation budget is used up."""
+
+
+class _Deadline(Exception):
+    """Raised inside Nelder–Mead when the run's deadline (:mod:`.deadline`) has passed."""

@@ -1,0 +1,161 @@
+"""The backlash's contact law (linear or Hertzian) and the rule that a gap shorter than
+its contact's deflection is not a resolved gap."""
+
+import math
+
+import numpy as np
+
+import pytest
+
+from ehsa_opt.physics import make_component
+from ehsa_opt.physics.components import Backlash
+
+GAP, K, C = ("backlash_gap_m", "backlash_contact_stiffness_N_per_m",
+             "backlash_contact_damping_Ns_per_m")
+
+
+def _force(comp, delta, p):
+    return float(comp.coupling_force({"delta": delta, "delta_dot": 0.0}, p))
+
+
+def _energy(comp, delta, p):
+    return float(comp.stored_energy({"delta": delta, "delta_dot": 0.0}, p))
+
+
+@pytest.mark.parametrize("pen_m", [2e-5, 1e-4])
+def test_hertz_contact_force_grows_as_penetration_to_the_1_5(pen_m):
+    """k_c is the secant stiffness at 10 um: F = k_c 1e-5 (p/1e-5)^1.5 (within the 2 um
+    smoothing's share), on both faces, and its stored energy's derivative is the force."""
+    p = {GAP: 2e-4, K: 1e7, C: 0.0}
+    comp = Backlash(contact_exponent=1.5)
+    d = 1e-4 + pen_m
+    expected = 1e7 * 1e-5 * (pen_m / 1e-5) ** 1.5
+    assert math.isclose(_force(comp, d, p), expected, rel_tol=1e-2)
+    assert math.isclose(_force(comp, -d, p), -expected, rel_tol=1e-2)
+    h = 1e-9
+    dE = (_energy(comp, d + h, p) - _energy(comp, d - h, p)) / (2 * h)
+    assert math.isclose(dE, _force(comp, d, p), rel_tol=1e-4)
+    # inside the gap no force; the linear law is unchanged (k p)
+    assert abs(_force(comp, 0.0, p)) < 1e-6
+    assert math.isclose(_force(make_component("backlash"), d, p), 1e7 * pen_m, rel_tol=1e-2)
+
+
+def test_contact_law_option_is_checked():
+    with pytest.raises(ValueError, match="contact_exponent"):
+        Backlash(contact_exponent=3.0)
+
+
+def test_with_contact_law_replaces_only_the_backlash():
+    from ehsa_opt.datasets.synthetic import SyntheticSpec
+    from ehsa_opt.estimation.discrepancy.impacts import with_contact_law
+    from ehsa_opt.estimation.discrepancy.rig import Rig
+    rig = Rig(SyntheticSpec().harvester, True,
+              (make_component("cogging"), make_component("backlash")))
+    hz = with_contact_law(rig, 1.5)
+    assert type(hz.components[0]).__name__ == "Cogging"
+    assert hz.components[1].contact_exponent == 1.5
+    assert hz.model() is not rig.model()  # another law, another model
+    assert with_contact_law(hz, 1.0).model() is rig.model()
+
+
+def test_deflection_of_the_two_laws():
+    from ehsa_opt.estimation.discrepancy.gap_resolution import contact_deflection_m
+    assert math.isclose(contact_deflection_m(100.0, 5e6), 2e-5)
+    # Hertz: 100 N at a secant 1e7 N/m at 10 um (100 N there) -> exactly 10 um
+    assert math.isclose(contact_deflection_m(100.0, 1e7, 1.5), 1e-5)
+    assert math.isclose(contact_deflection_m(800.0, 1e7, 1.5), 4e-5)
+
+
+@pytest.mark.parametrize("gap,stiffness,refused", [(1e-4, 5e6, False), (1.26e-5, 5e6, True),
+                                                   (1.26e-5, 1e8, False)])
+def test_a_gap_shorter_than_its_contact_deflection_does_not_earn(gap, stiffness, refused):
+    """The prototype's 0.1 mm play at 5e6 N/m (deflection ~20 um under the ~100 N it
+    carries at mid-stroke) is a gap; a 12.6 um "gap" on the same spring is a series spring
+    (presliding, compliance) and its earning is withdrawn; the same 12.6 um on a 1e8 N/m
+    contact (1 um deflection) is resolved."""
+    from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
+    from ehsa_opt.estimation.discrepancy.gap_resolution import (refuse_unresolved_gap,
+                                                                transmitted_force_N)
+    from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+    from ehsa_opt.estimation.discrepancy.results import CandidateResult
+    truth = {GAP: 1e-4, K: 5e6, C: 8e3}
+    spec = SyntheticSpec(effects={"backlash": truth}, frequencies_hz=(2.0,),
+                         loads_ohm=(47.0, 109.0), seed=1)
+    pts = prepare_tests(generate_bench_tests(spec), True)
+    params = {**spec.friction.as_dict(), GAP: gap, K: stiffness, C: 8e3}
+    force = transmitted_force_N(pts, params)
+    assert 50.0 < force < 300.0
+    c = CandidateResult("backlash", True, 1.0, 1.0)
+    c.earns, c.earns_by = True, "total excess"
+    notes = []
+    assert refuse_unresolved_gap(c, pts, params, notes.append) is refused
+    assert c.earns is (not refused) and bool(notes) is refused
+    # another member is never judged by this rule
+    other = CandidateResult("compliance", True, 1.0, 1.0)
+    other.earns = True
+    assert not refuse_unresolved_gap(other, pts, params) and other.earns
+
+
+def test_hertz_contact_damping_is_hunt_crossley():
+    """With the power law the damping force is c_c (p/p_ref)^1.5 dp/dt: zero at first
+    touch, c_c dp/dt at the reference penetration; its dissipated power is force x rate."""
+    p = {GAP: 2e-4, K: 1e7, C: 50.0}
+    comp = Backlash(contact_exponent=1.5)
+    s = {"delta": 1e-4 + 1e-5, "delta_dot": 0.3}
+    damping = float(comp.coupling_force(s, p)) - _force(comp, s["delta"], p)
+    assert math.isclose(damping, 50.0 * 0.3, rel_tol=2e-2)
+    s0 = {"delta": 1e-4, "delta_dot": 0.3}
+    at_touch = float(comp.coupling_force(s0, p)) - _force(comp, s0["delta"], p)
+    assert abs(at_touch) < 0.05 * 15.0  # the linear law's: half of 50 x 0.3 there
+    assert math.isclose(float(comp.dissipated_power(s, p)), damping * 0.3, rel_tol=1e-9)
+
+
+def test_heldout_verdict_is_widened_by_the_friction_uncertainty():
+    """The held-out features of an impact-fitted contact get the spread ±5 % friction
+    levels give them (as in the fit): the widened objective is never above the plain one,
+    and a contact 30 % too soft is still told from the truth."""
+    from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
+    from ehsa_opt.estimation.discrepancy.impact_verdict import (
+        friction_spread_of_features,
+        impact_verdict,
+    )
+    from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+    from ehsa_opt.estimation.discrepancy.rig import Rig, predict
+    truth = {GAP: 3e-4, K: 1e8, C: 8e3}
+    spec = SyntheticSpec(effects={"backlash": truth}, frequencies_hz=(2.0,),
+                         loads_ohm=(47.0, 109.0), seed=3)
+    pts = prepare_tests(generate_bench_tests(spec), True)
+    h = spec.harvester
+    rigid, crig = Rig(h, True, ()), Rig(h, True, (make_component("backlash"),))
+    p_true = {**spec.friction.as_dict(), **truth}
+    cur = predict(pts, rigid, p_true)
+    verdicts = {}
+    for name, p in (("truth", p_true), ("soft", {**p_true, K: 3e7})):
+        pred = predict(pts, crig, p)
+        widen, _ = friction_spread_of_features(pts, crig, p, pred)
+        assert all(np.all(w[0] >= 0) for w in widen)
+        verdicts[name] = v = impact_verdict(pts, cur, pred, h, 3, widen)
+        assert v["heldout_objective_after"] <= v["heldout_objective_after_unwidened"] + 1e-12
+    assert verdicts["truth"]["earns"]
+    assert verdicts["truth"]["heldout_objective_after"] < verdicts["soft"]["heldout_objective_after"]
+
+
+def test_impact_fit_search_stops_at_the_runs_deadline():
+    """Past the run's deadline the Nelder-Mead stage stops at once with the best grid
+    point and says so (a budget that ends in a stated result)."""
+    from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
+    from ehsa_opt.estimation.discrepancy.deadline import deadline_set
+    from ehsa_opt.estimation.discrepancy.impacts import fit_impacts
+    from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+    from ehsa_opt.estimation.discrepancy.rig import Rig
+    truth = {GAP: 3e-4, K: 1e8, C: 8e3}
+    spec = SyntheticSpec(effects={"backlash": truth}, frequencies_hz=(2.0,),
+                         loads_ohm=(47.0,), seed=1)
+    pts = prepare_tests(generate_bench_tests(spec), True)
+    rig = Rig(spec.harvester, True, (make_component("backlash"),))
+    start = {**make_component("backlash").defaults(), **spec.friction.as_dict()}
+    with deadline_set(1e-6):
+        res = fit_impacts(pts, rig, start)
+    assert "deadline" in res.message and not res.success
+    assert res.evaluations == 16  # the grid only
+    assert res.objective == res.objective_start
