@@ -100,7 +100,9 @@ def _campaign(seed, force_change):
     return pts[:2], pts[2:], cur[:2], cur[2:], cand[:2], cand[2:]
 
 
-def _judge(member, force_change=0.05):
+def _judge(member, force_change=0.05, already=()):
+    """A winding-heating refit judged by ``judge_candidate``; ``already``: names of the
+    members in the current model before it."""
     fit_pts, held_pts, cf, ch, pf, ph = _campaign(0, force_change)
     comp = make_component("winding_heating")
     res = SimpleNamespace(parameters={"winding_heating_K_per_J": 3.0,
@@ -109,9 +111,11 @@ def _judge(member, force_change=0.05):
                           message="synthetic", seconds=0.0, starts=[])
     ch_sse0, ch_n = channel_sse(held_pts, ch)
     cur_err = force_error_percent(held_pts, ch)
-    c = CandidateResult("winding_heating", True, 0.5, 0.5, 1, error_before=cur_err)
+    c = CandidateResult("winding_heating", True, 0.5, 0.5, 1 + len(already),
+                        error_before=cur_err)
     said = []
-    judge_candidate(c, ("winding_heating", res, pf, ph, SimpleNamespace(components=[comp])),
+    crig = SimpleNamespace(components=[make_component(n) for n in already] + [comp])
+    judge_candidate(c, ("winding_heating", res, pf, ph, crig),
                     member=member, comps={"winding_heating": comp}, fit_pts=fit_pts,
                     held_pts=held_pts, sse_fit=normalised_sse(fit_pts, cf),
                     sse_held=normalised_sse(held_pts, ch),
@@ -152,22 +156,5 @@ def test_the_own_channel_route_is_for_the_first_generator_effect():
     assert not any(acts_on_generator(make_component(n))
                    for n in ("backlash", "compliance", "cogging", "asymmetric_friction"))
     # the same fit on top of a voltage drop already in the model: the force decides
-    fit_pts, held_pts, cf, ch, pf, ph = _campaign(0, 0.05)
-    comp = make_component("winding_heating")
-    res = SimpleNamespace(parameters={"winding_heating_K_per_J": 3.0,
-                                      "winding_cooling_time_s": 1.5},
-                          interval=lambda n: (2.5, 3.5) if n.endswith("K_per_J") else (1, 2),
-                          message="synthetic", seconds=0.0, starts=[])
-    ch_sse0, ch_n = channel_sse(held_pts, ch)
-    cur_err = force_error_percent(held_pts, ch)
-    c = CandidateResult("winding_heating", True, 0.5, 0.5, 2, error_before=cur_err)
-    crig = SimpleNamespace(components=[make_component("voltage_drop"), comp])
-    judge_candidate(c, ("winding_heating", res, pf, ph, crig),
-                    member=CANDIDATES["winding_heating"], comps={"winding_heating": comp},
-                    fit_pts=fit_pts, held_pts=held_pts, sse_fit=normalised_sse(fit_pts, cf),
-                    sse_held=normalised_sse(held_pts, ch),
-                    n_eff_fit=effective_samples(fit_pts, cf),
-                    n_eff_held=effective_samples(held_pts, ch), cur_err=cur_err,
-                    floor=force_noise_floor_percent(held_pts), ch_sse0=ch_sse0, ch_n=ch_n,
-                    say=lambda m: None, cur_ev_pred=ch)
+    c, _ = _judge(CANDIDATES["winding_heating"], already=("voltage_drop",))
     assert not c.earns
