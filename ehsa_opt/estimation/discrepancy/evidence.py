@@ -44,7 +44,6 @@ from scipy.stats import chi2
 from ...physics.components import Component
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
-from .gap_resolution import refuse_unresolved_gap
 from .impacts import impact_record, judge_on_impacts
 from .bounds import AT_BOUND_REL, at_bound, refuse_at_bound, unconstrained_step
 from .channels import (autocorrelation_time, channel_delta_bic, channel_effective_samples,
@@ -532,7 +531,6 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     step = (None if impact_record(res) is not None or not hasattr(crig, "model") else
             (lambda: unconstrained_step(fit_pts, crig, res.parameters, comp_params)))
     refuse_at_bound(c, comps[name].parameters, member, say, step)
-    refuse_unresolved_gap(c, fit_pts, res.parameters, say, crig)
     c.predictions = pf + ph
     c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
                         for y, pt in zip(c.predictions, fit_pts + held_pts)]
