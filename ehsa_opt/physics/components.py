@@ -150,8 +150,9 @@ class Backlash(Component):
     linear law of a lumped, preloaded or line contact.  With the power law the damping is
     Hunt and Crossley's, c_c (pen/p_ref)^n δ̇: it vanishes at first touch (no pull at
     separation) and the coefficient of restitution falls with the impact speed;
-    c_c = k_c p_ref χ for their χ (s/m).  Stored energy for n ≠ 1: k_c p_ref^(1−n) ramp^(n+1)/(n+1), whose derivative
-    is the elastic force (ramp^n times the smoothed step).
+    c_c = k_c p_ref χ for their χ (s/m).  Stored energy for n ≠ 1:
+    k_c p_ref^(1−n) ramp^(n+1)/(n+1), whose derivative is the elastic force (ramp^n times
+    the smoothed step).
     """
 
     name = "backlash"
