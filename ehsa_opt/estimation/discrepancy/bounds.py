@@ -141,10 +141,9 @@ def unconstrained_step(prepared: Sequence[PreparedTest], rig: Rig,
     names = list(names)
     pred = fit_predictor(rig)
     exact = getattr(pred, "jacobian", None)
-    out = exact(prepared, rig, parameters, names) if exact is not None else None
     try:
-        if out is not None:
-            preds, dpreds = out
+        if exact is not None:
+            preds, dpreds = exact(prepared, rig, parameters, names)
         else:
             preds = predict(prepared, rig, parameters)
             dpreds = [np.zeros((*p.shape, len(names))) for p in preds]

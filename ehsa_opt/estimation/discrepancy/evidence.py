@@ -518,12 +518,11 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     c.earns = bool((by_total or by_channel or by_own) and c.resolved)
     if (c.earns and impact_record(res) is None and comps[name].transmission
             and len(ch_n) > 1 and refuted_by_rotor_channel(
-                ch_sse0[1], channel_sse(ev_pts, ev_pred)[0][1], k,
-                n_eff_held if held_pts else n_eff_fit)):
+                ch_sse0[1], ch_sse1[1], k, n_eff_held if held_pts else n_eff_fit)):
         c.earns, c.earns_by = False, ""
         say(f"{name}: refuted by the voltage (the rotor's speed): its held-out voltage SSE "
             f"grows {ch_sse0[1] / ch_n[1]:.3g} -> "
-            f"{channel_sse(ev_pts, ev_pred)[0][1] / ch_n[1]:.3g} per sample")
+            f"{ch_sse1[1] / ch_n[1]:.3g} per sample")
     if impact_record(res) is not None and cur_ev_pred is not None:
         judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say)
         c.channel_dbic = []  # judged on impacts: its sample-wise channels are not evidence
