@@ -142,8 +142,11 @@ def unconstrained_step(prepared: Sequence[PreparedTest], rig: Rig,
     pred = fit_predictor(rig)
     exact = getattr(pred, "jacobian", None)
     try:
-        if exact is not None:
-            preds, dpreds = exact(prepared, rig, parameters, names)
+        # the exact sensitivities return None where they do not apply (a non-uniform
+        # grid): forward differences then
+        out = exact(prepared, rig, parameters, names) if exact is not None else None
+        if out is not None:
+            preds, dpreds = out
         else:
             preds = predict(prepared, rig, parameters)
             dpreds = [np.zeros((*p.shape, len(names))) for p in preds]
