@@ -157,9 +157,21 @@ class RigModel:
     nut: LuGre
     bearing: LuGre
     effects: Effects = field(default_factory=Effects)
-    method: str = "LSODA"
+    #: solve_ivp method; "auto": Radau on a rig with play, LSODA otherwise.  With a stiff
+    #: contact the sampled force k p^n amplifies any error of the interpolated states
+    #: at the sample times: LSODA's dense output put 3.5 MN bursts (at 0.05 m/s) into a
+    #: multisine record of a 2e10 contact whose integrated states were right; Radau's
+    #: collocation polynomial samples it within 0.01 % of a 20 µs-step reference.
+    method: str = "auto"
 
     # -- layout ------------------------------------------------------------------------
+    @property
+    def solver(self) -> str:
+        """The solve_ivp method used (see :attr:`method`)."""
+        if self.method == "auto":
+            return "Radau" if self.play else "LSODA"
+        return self.method
+
     @property
     def compliant(self) -> bool:
         return self.effects.mount_stiffness_N_per_m > 0
@@ -372,7 +384,7 @@ class RigModel:
         for a, b in zip(breaks[:-1], breaks[1:]):
             sel = np.nonzero((ts >= a) & (ts < b) | ((ts == b) & (b == t1)))[0]
             te = np.concatenate([ts[sel], [b]]) if not sel.size or ts[sel[-1]] < b else ts[sel]
-            sol = solve_ivp(fun, (a, b), y, method=self.method, rtol=rtol, atol=scale,
+            sol = solve_ivp(fun, (a, b), y, method=self.solver, rtol=rtol, atol=scale,
                             max_step=dt, t_eval=te)
             if not sol.success:
                 raise RuntimeError(f"second generator: integration failed at t = "

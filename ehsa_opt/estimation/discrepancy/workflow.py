@@ -76,6 +76,7 @@ from .results import (
     DiscrepancyResult,
     DiscrepancySettings,
 )
+from .lag_rival import lag_rival
 from .search import SearchState, SearchTests, run_rounds
 from .split import crop_test, load_split, spread_within
 from .terms import TermProposal, names_an_effect, propose_term
@@ -128,7 +129,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         say(note)
         notes.append(note)
     elif settings.discover and "force_lag" in settings.candidates:
-        state = name_force_lag(tests, base, state, settings, say, all_cands)
+        state = name_force_lag(tests, base, state, settings, say, all_cands, notes)
     state = run_rounds(tests, state, settings, say, notes, all_cands)
     term = None
     if settings.discover:
@@ -290,11 +291,14 @@ def check_voltage_skew(tests: SearchTests, base: Baseline, state: SearchState, s
 
 
 def name_force_lag(tests: SearchTests, base: Baseline, state: SearchState,
-                   settings: DiscrepancySettings, say, all_cands: list) -> SearchState:
+                   settings: DiscrepancySettings, say, all_cands: list,
+                   notes: list[str] | None = None) -> SearchState:
     """The ``force_lag`` member (:func:`~.candidates.force_lag.try_lag`) tried on the
     baseline; when it earns, the tests are re-aligned from here on (``tests`` and
     ``base``'s outputs changed in place: the report compares on the re-aligned tests)
-    and the state starts from the refitted baseline."""
+    and the state starts from the refitted baseline.  The delay is not named when a
+    member the first round would re-identify, fitted on the record as it is, earns and
+    leaves a lower held-out error (:func:`~.lag_rival.lag_rival`)."""
     if past_deadline():
         state.cut = (f"time budget {settings.budget_s:g} s reached before the force_lag "
                      f"member was tried: it was not tried")
@@ -309,6 +313,17 @@ def name_force_lag(tests: SearchTests, base: Baseline, state: SearchState,
     fit_pts, held_pts, base_l, cur_fit, cur_held, cur_err, fields = lagged
     cand = CandidateResult(**fields)
     all_cands.append(cand)
+    rival = lag_rival(tests, state, settings, cur_err, say, notes if notes is not None else [])
+    if rival is not None:
+        cand.earns = False
+        note = (f"force_lag: not named — {rival.effect}, fitted on the record as it is, "
+                f"earns and leaves {rival.error_after:.3f} % against the delay's "
+                f"{cur_err:.3f} %: the member's physics accounts for the lead without "
+                f"re-aligning the record")
+        say(note)
+        if notes is not None:
+            notes.append(note)
+        return state
     tests.fit_pts, tests.held_pts = fit_pts, held_pts
     state.params = dict(base_l.parameters)
     state.fit_pred, state.held_pred, state.error = cur_fit, cur_held, cur_err

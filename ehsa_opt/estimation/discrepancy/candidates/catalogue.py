@@ -107,6 +107,13 @@ class Candidate:
         (:func:`~ehsa_opt.estimation.discrepancy.candidate_fit.simulation_recipe`):
         Gauss–Newton has no collocation NLP to start near, so a member whose
         parameters are multimodal (a cogging's phase) gets a grid of them.
+    nests : tuple of str
+        Simpler members this one contains at a limit of its parameters (a backlash
+        with no gap is a compliance: the same series spring and damper).  When this
+        member earns, those are re-identified in the same round too, whatever their
+        rank, so that the choice between them
+        (:func:`~ehsa_opt.estimation.discrepancy.evidence.choose_winner`) is made on
+        fits, not on a linearised signature.
     """
 
     name: str
@@ -126,6 +133,7 @@ class Candidate:
     limits: tuple[tuple[str, str], ...] = ()
     family_probes: bool = False
     simulation_starts: tuple[dict, ...] = ()
+    nests: tuple[str, ...] = ()
 
     def applicable(self, rig: Rig) -> bool:
         if self.without_generator_only and rig.has_generator:
@@ -156,7 +164,7 @@ CANDIDATES: dict[str, Candidate] = {
         # contact's defects; Gauss-Newton from the screened start costs seconds
         effect_fit="simulation", full_refit="simulation",
         log_names=("backlash_contact_stiffness_N_per_m",), impact_fit=True,
-        family_probes=True,
+        family_probes=True, nests=("compliance",),
         # the rigid contact (at least this stiff) and the contact without rebound
         limits=(("backlash_contact_stiffness_N_per_m", "upper"),
                 ("backlash_contact_damping_Ns_per_m", "upper"))),
