@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from typing import Any, Sequence
 
-from .candidate_fit import fit_member
+from .candidate_fit import fit_member, judge_fit, not_fitted
 from .candidates import (
     CANDIDATES,
     MIN_RANK_VALUE,
@@ -27,7 +27,6 @@ from .evidence import (
     choose_winner,
     earns,
     effective_samples,
-    judge_candidate,
     normalised_sse,
     significant,
 )
@@ -43,6 +42,7 @@ def confounded(cands: Sequence[Any]) -> Any | None:
     fit ΔBIC −1005, held-out error 14.28 → 15.41 %); None when there is none."""
     pool = [c for c in cands if c.fitted and not c.earns and c.predictions is not None
             and not getattr(c, "at_bound", ())  # refused as unphysical, not confounded
+            and not getattr(c, "cut_at_deadline", "")  # cut at its start: not fitted
             and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0]
     return min(pool, key=lambda c: c.delta_bic_fit) if pool else None
 
@@ -56,6 +56,7 @@ def supported(c: Any) -> bool:
     the path is judged as a whole."""
     return bool(c.fitted and c.predictions is not None and getattr(c, "resolved", True)
                 and not getattr(c, "at_bound", ())  # an unphysical fit is no first step
+                and not getattr(c, "cut_at_deadline", "")  # cut at its start: not fitted
                 and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0)
 
 
@@ -103,10 +104,17 @@ def lookahead_winner(earning: Sequence[Any], blocked: Any, try_on_top: Any,
         if say:
             say(f"look-ahead: {blocked.effect} on top of {c.effect}: held-out error "
                 f"{c.error_before:.3f} -> {c.error_after:.3f} -> {step.error_after:.3f} %"
-                f"{' (the path earns)' if ok else ' (the path does not earn)'}")
+                f"{_verdict(ok, step)}")
         if ok and step.sse_heldout < best_sse:
             best, best_sse = c, step.sse_heldout
     return best
+
+
+def _verdict(ok: bool, step: Any) -> str:
+    """How a look-ahead path ended, for the progress message."""
+    if getattr(step, "cut_at_deadline", ""):
+        return " (the path is not decided: its second step was not fitted before the budget)"
+    return " (the path earns)" if ok else " (the path does not earn)"
 
 
 def _paths(pool: Sequence[Any], blocked: Any, attempt: Any, max_paths: int):
@@ -141,11 +149,13 @@ def member_key(args: tuple) -> tuple:
 
 
 def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd: int,
-               fitted: dict | None = None) -> Any:
+               fitted: dict | None = None, cuts: list | None = None) -> Any:
     """``blocked`` re-identified on the model with ``c`` and judged against it (the
     look-ahead of :func:`lookahead_winner`); None when incompatible.  ``fitted``
     (optional) keeps the member fit by :func:`member_key` (with the rig it was made on)
-    for the next round to reuse once ``c`` is added."""
+    for the next round to reuse once ``c`` is added.  A fit cut by the time budget at
+    its start point (:func:`~.candidate_fit.not_fitted`) is judged not earning and,
+    with ``cuts`` given, its path ("blocked on top of c") is appended there."""
     comp = judge["comps"][blocked.effect]
     if c.rig is None or c.fit is None or not compatible(c.rig, comp):
         return None
@@ -164,13 +174,15 @@ def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, 
     args = (blocked.effect, comp, CANDIDATES[blocked.effect].starts, sub_pts, fit_pts,
             held_pts, c.rig, dict(c.fit.parameters), max_iter)
     out = fit_member(args)
-    if fitted is not None:
+    if fitted is not None and not not_fitted(out[1]):
         fitted[member_key(args)] = (c.rig, out)
-    judge_candidate(step, out, member=CANDIDATES.get(blocked.effect), **{**judge, "sse_fit": sse_fit, "n_eff_fit": n_eff_fit,
+    judge_fit(step, out, member=CANDIDATES.get(blocked.effect), **{**judge, "sse_fit": sse_fit, "n_eff_fit": n_eff_fit,
                          "cur_ev_pred": ev_pred,
                          "sse_held": normalised_sse(held_pts, ph) if held_pts else math.nan,
                          "n_eff_held": effective_samples(held_pts, ph) if held_pts else math.nan,
                          "cur_err": c.error_after, "ch_sse0": ch_sse0, "ch_n": ch_n})
+    if step.cut_at_deadline and cuts is not None:
+        cuts.append(f"{blocked.effect} on top of {c.effect}")
     if step.predictions is None:
         return None
     amp = CANDIDATES[c.effect].amplitudes if c.effect in CANDIDATES else ()
@@ -262,7 +274,7 @@ def confounded_first(blocked: Any, others: Sequence[Any], try_on_blocked: Any,
         if say:
             say(f"look-ahead: {c.effect} on top of {blocked.effect}: held-out error "
                 f"{err_before:.3f} -> {blocked.error_after:.3f} -> {step.error_after:.3f} %"
-                f"{' (the path earns)' if ok else ' (the path does not earn)'}")
+                f"{_verdict(ok, step)}")
         if ok:
             return True
     return False

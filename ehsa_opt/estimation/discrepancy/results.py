@@ -132,6 +132,10 @@ class CandidateResult:
     own_channel: int | None = None
     channel_dbic: list[float] = field(default_factory=list)
     earns: bool = False
+    #: "" or why the run's time budget cut its fit at its start point
+    #: (:func:`~.candidate_fit.not_fitted`): then it is not fitted — it cannot earn,
+    #: open or complete a look-ahead path, and it is work left at the budget
+    cut_at_deadline: str = ""
     parameters: dict[str, float] = field(default_factory=dict)
     intervals: dict[str, tuple[float, float] | None] = field(default_factory=dict)
     per_test_after: list[float] = field(default_factory=list)
@@ -140,7 +144,9 @@ class CandidateResult:
 
     def as_dict(self) -> dict:
         return {"effect": self.effect, "round": self.round, "applicable": self.applicable,
-                "score": self.score, "chi2": self.chi2, "re_identified": bool(self.fitted),
+                "score": self.score, "chi2": self.chi2,
+                "re_identified": bool(self.fitted and not self.cut_at_deadline),
+                "cut_at_deadline": self.cut_at_deadline or None,
                 "error_before": self.error_before, "error_after": self.error_after,
                 "excess_error_reduction": self.excess_reduction,
                 "delta_bic_fit": self.delta_bic_fit, "delta_bic_heldout": self.delta_bic_heldout,
@@ -285,6 +291,9 @@ class DiscrepancyResult:
                 "validation": self.validation,
                 "notes": self.notes,
                 "partial": bool(self.cut), "cut": self.cut or None,
+                "not_fitted_at_budget": [{"effect": c.effect, "round": c.round,
+                                          "why": c.cut_at_deadline}
+                                         for c in self.candidates if c.cut_at_deadline],
                 "voltage_skew": self.voltage_skew,
                 "localisation_before": self.loc_before.as_dict(),
                 "localisation_after": self.loc_after.as_dict() if self.loc_after else None,

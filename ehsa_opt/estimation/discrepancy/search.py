@@ -23,7 +23,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .candidate_fit import fit_members
+from .candidate_fit import fit_members, judge_fit
 from .deadline import past_deadline
 from .candidates import (
     CANDIDATES,
@@ -45,7 +45,6 @@ from .evidence import (
     disturbance_masks,
     effective_samples,
     excess_reduction,
-    judge_candidate,
     normalised_sse,
     sse_can_earn,
 )
@@ -247,7 +246,8 @@ def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
     """The remaining members a next round could still name: ranked at or above
     :data:`MIN_RANK_VALUE` in this round and either not re-identified in it, or
     re-identified with some held-out evidence (ΔBIC < 0) that did not suffice to earn
-    (an effect the winner may have masked).  A member re-identified here whose held-out
+    (an effect the winner may have masked), or cut by the time budget at its start point
+    (not fitted, :func:`~.candidate_fit.not_fitted`).  A member re-identified here whose held-out
     ΔBIC was ≥ 0 had no held-out evidence at all and is not counted, nor one that
     cannot join the current rig (a gap once a mount spring is named: one transmission
     at most), which no next round could name."""
@@ -259,7 +259,8 @@ def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
         if n in rk.comps and not compatible(state.rig, rk.comps[n]):
             continue
         c = rk.cands.get(n)
-        if c is not None and c.fitted and not (c.delta_bic_heldout < 0):
+        if c is not None and c.fitted and not getattr(c, "cut_at_deadline", "") \
+                and not (c.delta_bic_heldout < 0):
             continue
         out.append(n)
     return out
@@ -367,12 +368,24 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
                          f"is judged again, not repeated")
         new = [x for x in args if x[0] not in {out[0] for out in done}]
         for out in done + fit_members(new, settings.jobs):
-            judge_candidate(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
+            judge_fit(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
+        cut = [n for n in names[a:a + step] if rk.cands[n].cut_at_deadline]
+        if cut:
+            left = cut + names[a + step:]
+            state.cut = (f"time budget {settings.budget_s:g} s reached in the round in "
+                         f"progress: {', '.join(cut)} cut at {'their' if len(cut) > 1 else 'its'} "
+                         f"start point (not fitted)"
+                         + (f", {', '.join(names[a + step:])} not re-identified"
+                            if names[a + step:] else "")
+                         + f"; the round is decided on the candidates fitted before the cut "
+                           f"(work left: {', '.join(left)})")
+            judge["say"](state.cut)
+            return
     if not with_flexibility or rk.flex_out is None:
         return
     # judged by the same rule, fitted by variable projection
-    judge_candidate(rk.cands["flexibility"], rk.flex_out, member=CANDIDATES.get("flexibility"),
-                    **judge)
+    judge_fit(rk.cands["flexibility"], rk.flex_out, member=CANDIDATES.get("flexibility"),
+              **judge)
     cf = rk.cands["flexibility"]
     if cf.parameters:  # the stiffness k = m (2π f)² and its interval, for the report
         w2 = (2 * math.pi * cf.parameters["flex_frequency_hz"]) ** 2
@@ -413,10 +426,11 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
     if blocked is None or state.cut:  # no look-ahead path after the time budget
         blocked = None
         return earning, first, blocked
+    cuts: list[str] = []  # look-ahead fits cut by the time budget at their start
     first = lookahead_winner(
         earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,
-                                               settings.max_iter, rnd, state.fitted), say,
-        first_steps=[c for c in cands.values() if supported(c)])
+                                               settings.max_iter, rnd, state.fitted, cuts),
+        say, first_steps=[c for c in cands.values() if supported(c)])
     # the second steps: what a round after `blocked` would re-identify, ranked on the
     # residual of the model with it (not among the members this round happened to fit)
     others = second_steps(blocked, [n for n in state.remaining if n != "flexibility"],
@@ -424,10 +438,15 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
     if first is None and confounded_first(
             blocked, others,
             lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd,
-                                 state.fitted),
+                                 state.fitted, cuts),
             state.error, tests.floor,
             choose_winner(earning).sse_heldout if earning else math.inf, say):
         first = blocked
+    if cuts:
+        state.cut = (f"time budget {settings.budget_s:g} s reached in the look-ahead of "
+                     f"round {rnd}: {', '.join(cuts)} cut at its start point (not fitted); "
+                     f"the round is decided without those paths")
+        say(state.cut)
     return earning, first, blocked
 
 
