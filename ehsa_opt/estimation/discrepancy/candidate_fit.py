@@ -28,7 +28,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .candidates import CANDIDATES, absorbed_columns
+from .candidates import CANDIDATES, absorbed_columns, signature_scores
 from .deadline import note_cut, past_deadline, recording_cuts
 from .evidence import judge_candidate, normalised_sse
 from ..fit_result import FitResult
@@ -38,7 +38,7 @@ from .rig import Rig, fit_predictor, map_suits, predict, uniform_grid
 from .polish import polish
 
 __all__ = ["fit_candidate", "not_fitted", "judge_fit", "CUT_RECORD", "screen_starts", "screen_sse", "split_friction",
-           "best_friction_share", "reproducibility", "fit_member", "fit_members",
+           "best_friction_share", "reproducibility", "fit_member", "fit_members", "signature_scores_in",
            "rig_on_simulation", "simulation_recipe", "SIMULATION_RECIPE_MIN_SAMPLES",
            "FRICTION_SHARES", "MISMATCH_RATIO", "REFINE_SUBSTEPS",
            "SIMULATION_REFIT_ITER"]
@@ -497,13 +497,68 @@ def fit_member(a: tuple) -> tuple:
     return name, res, pf, ph, crig
 
 
-def fit_members(args: list[tuple], jobs: int) -> list[tuple]:
+def fit_members(args: list[tuple], jobs: int, *, until_deadline: bool = False,
+                seconds: dict | None = None) -> list[tuple]:
     """:func:`fit_member` of each argument tuple, in ``jobs`` forked processes when
-    ``jobs`` > 1 and there is more than one."""
+    ``jobs`` > 1 and there is more than one; results in the order of ``args``.
+
+    The fits are scheduled one by one as workers free up (no batch waits for its
+    slowest member); ``until_deadline``: none starts once the run's deadline has passed
+    — the results then hold only the fits started (a prefix of ``args``).  ``seconds``
+    (optional) receives each member's wall time, s, by name."""
+    t0: dict[int, float] = {}
+    out: dict[int, tuple] = {}
+
+    def stop() -> bool:
+        return until_deadline and past_deadline()
+
+    def done(k: int, res: tuple) -> None:
+        out[k] = res
+        if seconds is not None:
+            seconds[args[k][0]] = time.perf_counter() - t0[k]
+
     if jobs > 1 and len(args) > 1:
         import multiprocessing as mp
+        from concurrent.futures import FIRST_COMPLETED, wait
         with ProcessPoolExecutor(max_workers=min(jobs, len(args)),
                                  mp_context=mp.get_context("fork")) as ex:
-            return list(ex.map(fit_member, args))
-    return [fit_member(a) for a in args]
+            pending, running = list(range(len(args))), {}
+            while pending or running:
+                while pending and len(running) < jobs and not stop():
+                    k = pending.pop(0)
+                    t0[k] = time.perf_counter()
+                    running[ex.submit(fit_member, args[k])] = k
+                if not running:
+                    break
+                finished, _ = wait(list(running), return_when=FIRST_COMPLETED)
+                for f in finished:
+                    done(running.pop(f), f.result())
+        return [out[k] for k in sorted(out)]
+    for k, a in enumerate(args):
+        if stop():
+            break
+        t0[k] = time.perf_counter()
+        done(k, fit_member(a))
+    return [out[k] for k in sorted(out)]
 
+
+def _scores_of(a: tuple) -> dict:
+    return signature_scores(*a)
+
+
+def signature_scores_in(jobs: int, prepared: Sequence[PreparedTest], rig: Rig,
+                        baseline: dict[str, float], baseline_pred: Sequence[np.ndarray],
+                        names: Sequence[str], components: dict) -> dict[str, dict]:
+    """:func:`~.candidates.signature_scores` of ``names``, one member per task in
+    ``jobs`` forked processes (each member's score depends on the residual and its own
+    probes only: the same numbers as one call; the probes' simulations are most of a
+    round's ranking)."""
+    names = list(names)
+    if jobs <= 1 or len(names) <= 1:
+        return signature_scores(prepared, rig, baseline, baseline_pred, names, components)
+    import multiprocessing as mp
+    tasks = [(prepared, rig, baseline, baseline_pred, [n], components) for n in names]
+    with ProcessPoolExecutor(max_workers=min(jobs, len(names)),
+                             mp_context=mp.get_context("fork")) as ex:
+        parts = list(ex.map(_scores_of, tasks))
+    return {n: part[n] for n, part in zip(names, parts)}
