@@ -121,3 +121,32 @@ def test_a_look_ahead_fit_cut_at_its_start_opens_and_completes_no_path():
     first = _stub("cogging", earns=True, error_before=err + 1.0, error_after=err,
                   sse_heldout=10.0, rig=rig)
     assert lookahead_winner([first], blocked, lambda c: step, said.append) is None
+
+
+def test_no_member_fit_starts_after_the_deadline():
+    from ehsa_opt.estimation.discrepancy.candidate_fit import fit_members
+    with deadline_set(1e-9):
+        time.sleep(0.01)
+        # (the argument tuples are never opened: nothing is started)
+        assert fit_members([("cogging",), ("backlash",)], 2, until_deadline=True) == []
+        assert fit_members([("cogging",)], 1, until_deadline=True) == []
+
+
+def test_the_ranking_one_member_per_process_gives_the_same_scores():
+    from ehsa_opt.estimation.discrepancy import fit_group, signature_scores
+    from ehsa_opt.estimation.discrepancy.candidate_fit import signature_scores_in
+    from ehsa_opt.estimation.discrepancy.candidates import components_for
+    from ehsa_opt.estimation.discrepancy.rig import linear_baseline
+    spec = SyntheticSpec(effects={"cogging": {"cogging_sin_Nm": 0.02}},
+                         frequencies_hz=(1.5,), loads_ohm=(15.0, 109.0), cycles=1.0, seed=3)
+    pts = prepare_tests(generate_bench_tests(spec))
+    rig = Rig(H, True, ())
+    base = fit_group(pts, rig, [linear_baseline(pts, rig)])
+    pred = predict(pts, rig, base.parameters)
+    names = ["cogging", "voltage_drop", "magnetic_saturation"]
+    comps = components_for(names, pts, pred, H.lead_m_per_rad)
+    one = signature_scores(pts, rig, base.parameters, pred, names, comps)
+    two = signature_scores_in(2, pts, rig, base.parameters, pred, names, comps)
+    assert list(two) == names
+    for n in names:
+        assert two[n]["score"] == one[n]["score"] and two[n]["chi2"] == one[n]["chi2"], n
