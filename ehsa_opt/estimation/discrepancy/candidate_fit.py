@@ -29,7 +29,7 @@ from typing import Sequence
 import numpy as np
 
 from .candidates import CANDIDATES, absorbed_columns, signature_scores
-from .deadline import note_cut, past_deadline, recording_cuts
+from .deadline import note_cut, past_deadline, recording_cuts, time_left_s
 from .evidence import judge_candidate, normalised_sse
 from ..fit_result import FitResult
 from .fit import fit_group
@@ -498,19 +498,25 @@ def fit_member(a: tuple) -> tuple:
 
 
 def fit_members(args: list[tuple], jobs: int, *, until_deadline: bool = False,
-                seconds: dict | None = None) -> list[tuple]:
+                seconds: dict | None = None, estimate=None) -> list[tuple]:
     """:func:`fit_member` of each argument tuple, in ``jobs`` forked processes when
     ``jobs`` > 1 and there is more than one; results in the order of ``args``.
 
     The fits are scheduled one by one as workers free up (no batch waits for its
-    slowest member); ``until_deadline``: none starts once the run's deadline has passed
-    — the results then hold only the fits started (a prefix of ``args``).  ``seconds``
-    (optional) receives each member's wall time, s, by name."""
+    slowest member); ``until_deadline``: none starts once the run's deadline has passed,
+    nor one whose estimated wall time (``estimate(name)``, s, when given) exceeds the
+    time left — it would be cut before it moved — so the results then hold only the fits
+    started (a prefix of ``args``).  ``seconds`` (optional) receives each member's wall
+    time, s, by name."""
     t0: dict[int, float] = {}
     out: dict[int, tuple] = {}
+    pending: list[int] = list(range(len(args)))
 
     def stop() -> bool:
-        return until_deadline and past_deadline()
+        if not until_deadline:
+            return False
+        need = estimate(args[pending[0]][0]) if estimate is not None and pending else 0.0
+        return past_deadline() or need > time_left_s()
 
     def done(k: int, res: tuple) -> None:
         out[k] = res
@@ -522,7 +528,7 @@ def fit_members(args: list[tuple], jobs: int, *, until_deadline: bool = False,
         from concurrent.futures import FIRST_COMPLETED, wait
         with ProcessPoolExecutor(max_workers=min(jobs, len(args)),
                                  mp_context=mp.get_context("fork")) as ex:
-            pending, running = list(range(len(args))), {}
+            running: dict = {}
             while pending or running:
                 while pending and len(running) < jobs and not stop():
                     k = pending.pop(0)
@@ -534,11 +540,10 @@ def fit_members(args: list[tuple], jobs: int, *, until_deadline: bool = False,
                 for f in finished:
                     done(running.pop(f), f.result())
         return [out[k] for k in sorted(out)]
-    for k, a in enumerate(args):
-        if stop():
-            break
+    while pending and not stop():
+        k = pending.pop(0)
         t0[k] = time.perf_counter()
-        done(k, fit_member(a))
+        done(k, fit_member(args[k]))
     return [out[k] for k in sorted(out)]
 
 

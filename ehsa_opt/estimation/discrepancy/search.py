@@ -273,6 +273,14 @@ def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
     return out
 
 
+def _estimate(state: SearchState, name: str) -> float:
+    """A member fit's expected wall time, s: its own last fit in this run, else the
+    median of the fits timed so far (0 before any: round 1 starts every fit)."""
+    if name in state.seconds:
+        return float(state.seconds[name])
+    return float(np.median(list(state.seconds.values()))) if state.seconds else 0.0
+
+
 def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySettings
                ) -> RoundRanking:
     """Rank the remaining candidates by their signature score on the current residual
@@ -377,7 +385,7 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
         t0 = time.perf_counter()
         # scheduled as workers free up, in rank order; none started after the deadline
         fits = fit_members(new, settings.jobs, until_deadline=settings.budget_s is not None,
-                           seconds=state.seconds)
+                           seconds=state.seconds, estimate=lambda n: _estimate(state, n))
         if fits:
             judge["say"](f"re-identified {len(fits)} member"
                          f"{'s' if len(fits) > 1 else ''} in {time.perf_counter() - t0:.1f} s "
@@ -394,7 +402,9 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
                          f"progress: "
                          + "; ".join(([f"{', '.join(cut)} cut at the start point (not "
                                        f"fitted)"] if cut else [])
-                                     + ([f"{', '.join(unstarted)} not re-identified"]
+                                     + ([f"{', '.join(unstarted)} not re-identified (not "
+                                         f"started: the fits timed in this run take longer "
+                                         f"than the {max(time_left_s(), 0.0):.0f} s left)"]
                                         if unstarted else []))
                          + "; the round is decided on the candidates fitted before the cut")
             judge["say"](state.cut)
