@@ -61,9 +61,12 @@ class DiscrepancySettings:
         Run the data-driven term discovery on the final residual.
     budget_s : float or None
         Wall-time budget of the workflow, s (None: none).  When it is reached no further
-        candidate fit starts: a round in progress is decided on the candidates already
-        re-identified (widening and look-ahead paths are skipped), no new round starts,
-        and the result says where it was cut (``success`` False, ``cut`` the reason).
+        candidate fit starts (nor one that the fits timed so far say cannot finish before
+        it): a round in progress is decided on the candidates already re-identified
+        (widening and look-ahead paths are skipped), no new round starts, and the result
+        says where it was cut (``success`` False, ``cut`` the reason).  A fit the budget
+        cut at its start point is not fitted (``CandidateResult.cut_at_deadline``): it
+        takes no decision and is named as work left.
     """
 
     candidates: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag")
