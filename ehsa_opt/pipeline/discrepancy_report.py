@@ -150,8 +150,10 @@ def _candidates_markdown(res: DiscrepancyResult, fig_prefix: str) -> list[str]:
         ex = (f"{_fmt(100 * c.excess_reduction, '.0f')} % / "
               f"{_fmt(100 * c.block_reduction, '.0f')} %" if c.fitted else "")
         by = f" ({c.earns_by})" if c.earns and c.earns_by else ""
+        refit = ("cut at the budget (not fitted)" if getattr(c, "cut_at_deadline", "")
+                 else "yes") if c.fitted else "no"
         L.append(f"| {k} | {c.effect} | {_fmt(c.score, '.3g')} | {_fmt(c.chi2, '.3g')} | "
-                 f"{'yes' if c.fitted else 'no'} | {_fmt(c.delta_bic_fit, '.1f')} | "
+                 f"{refit} | {_fmt(c.delta_bic_fit, '.1f')} | "
                  f"{_fmt(c.delta_bic_heldout, '.1f')} | {_fmt(c.error_before, '.3f')} | "
                  f"{_fmt(c.error_after, '.3f')} | {ex} | {'**yes**' + by if c.earns else 'no'} |")
     L.append(f"\n![ranking]({fig_prefix}discrepancy_ranking.png)\n")

@@ -28,17 +28,17 @@ from typing import Sequence
 
 import numpy as np
 
-from .candidates import CANDIDATES, absorbed_columns
-from .deadline import past_deadline
-from .evidence import normalised_sse
+from .candidates import CANDIDATES, absorbed_columns, signature_scores
+from .deadline import note_cut, past_deadline, recording_cuts, time_left_s
+from .evidence import judge_candidate, normalised_sse
 from ..fit_result import FitResult
 from .fit import fit_group
 from .prepared import PreparedTest
 from .rig import Rig, fit_predictor, map_suits, predict, uniform_grid
 from .polish import polish
 
-__all__ = ["fit_candidate", "screen_starts", "screen_sse", "split_friction",
-           "best_friction_share", "reproducibility", "fit_member", "fit_members",
+__all__ = ["fit_candidate", "not_fitted", "judge_fit", "CUT_RECORD", "screen_starts", "screen_sse", "split_friction",
+           "best_friction_share", "reproducibility", "fit_member", "fit_members", "signature_scores_in",
            "rig_on_simulation", "simulation_recipe", "SIMULATION_RECIPE_MIN_SAMPLES",
            "FRICTION_SHARES", "MISMATCH_RATIO", "REFINE_SUBSTEPS",
            "SIMULATION_REFIT_ITER"]
@@ -118,16 +118,55 @@ def screen_starts(fit_pts: Sequence[PreparedTest], rig: Rig, crig: Rig, starts: 
     for st in pool:  # at the run's deadline: the best of those simulated so far
         sses.append(cost(st))
         if past_deadline():
+            if len(sses) < len(pool) or refine:
+                note_cut("screening of starts", len(sses), True)
             break
     best, sbest = pool[int(np.nanargmin(sses))], float(np.nanmin(sses))
-    for over in refine:
+    for k, over in enumerate(refine):
         if past_deadline():
+            if k:  # (the cut of the pool was noted already when k == 0)
+                note_cut("screening of starts", len(sses) + k, True)
             break
         st = {**best, **over}
         c = cost(st)
         if c < sbest:
             best, sbest = st, c
     return best
+
+
+#: Where a fit's :attr:`FitResult.starts` records the stages the run's deadline cut
+#: (:func:`fit_candidate`, :func:`not_fitted`).
+CUT_RECORD = "cut_at_deadline"
+
+
+def not_fitted(res: FitResult | None) -> str:
+    """Why the fit ``res`` is *not fitted* — the run's deadline cut it before its
+    effect's parameters left their (screened) start point, i.e. before one Gauss–Newton
+    step of any stage that frees them was accepted (:func:`fit_candidate`) — or ``""``
+    when it is fitted (or was not cut).  Such a member is judged at its start point,
+    which says nothing about the effect: it cannot earn, cannot open or complete a
+    look-ahead path and is reported as work left at the budget."""
+    for rec in (res.starts if res is not None else ()):
+        cut = rec.get(CUT_RECORD) if isinstance(rec, dict) else None
+        if cut and not cut.get("moved", True):
+            stages = "; ".join(f"{c['stage']} after {c['simulations']} simulation"
+                               + ("s" if c["simulations"] != 1 else "")
+                               for c in cut.get("stages", ()))
+            return (f"its fit was cut by the time budget at its start point ({stages}): "
+                    f"not fitted")
+    return ""
+
+
+def judge_fit(c, out: tuple, **judge) -> None:
+    """:func:`~.evidence.judge_candidate` of the member fit ``out`` (:func:`fit_member`)
+    into the candidate result ``c``, then the deadline's verdict: a fit :func:`not_fitted`
+    (cut at its start point) keeps its measures for the report but does not earn
+    (``c.cut_at_deadline`` says why; the search counts it as work left at the budget)."""
+    judge_candidate(c, out, **judge)
+    why = not_fitted(out[1])
+    if why:
+        c.cut_at_deadline, c.earns, c.earns_by = why, False, ""
+        judge["say"](f"{out[0]}: {why} — it cannot earn; work left at the budget")
 
 
 def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequence[PreparedTest],
@@ -137,7 +176,42 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
                   effect_fit: str = "collocation", log_names: Sequence[str] = (),
                   impact_fit: bool = False
                   ) -> tuple[str, FitResult, list[np.ndarray], list[np.ndarray]]:
-    """Add ``component`` to ``rig`` (which may hold earlier effects) and re-identify.
+    """Add ``component`` to ``rig`` (which may hold earlier effects) and re-identify
+    (:func:`_fit_stages`).  Where the run's deadline cut a stage, the fit's ``starts``
+    gain a :data:`CUT_RECORD` entry (the stages cut, with their simulations, and
+    whether the effect's parameters left their screened start: ``moved``) and its
+    message says so; :func:`not_fitted` reads it."""
+    seen: dict = {}
+    with recording_cuts() as cuts:
+        name, res, pf, ph = _fit_stages(name, component, starts, fit_pts, held_pts, rig,
+                                        baseline, max_iter, shares=shares, refine=refine,
+                                        full_refit=full_refit, effect_fit=effect_fit,
+                                        log_names=log_names, impact_fit=impact_fit, seen=seen)
+    if "stopped at the run's deadline" in res.message:  # the impact-aware search
+        from .impact_verdict import impact_record
+        cuts.append({"stage": "impact-aware Nelder-Mead", "moved": True,
+                     "simulations": int((impact_record(res) or {}).get("simulations", 0))})
+    if not cuts:
+        return name, res, pf, ph
+    # moved: the effect's parameters left the screened start (a collocation stage, or one
+    # accepted Gauss-Newton step: a cut refinement that did not move returns its start)
+    start = seen.get("start")
+    moved = bool(res.parameters) and (start is None or any(
+        res.parameters.get(q.name) != start.get(q.name) for q in component.parameters))
+    res = replace(res, starts=[*res.starts, {CUT_RECORD: {"stages": cuts, "moved": moved}}],
+                  message=res.message + ("; cut by the time budget" if moved else
+                                         "; cut by the time budget at its start point"))
+    return name, res, pf, ph
+
+
+def _fit_stages(name: str, component, starts: Sequence[dict], fit_pts: Sequence[PreparedTest],
+                held_pts: Sequence[PreparedTest], rig: Rig, baseline: dict[str, float],
+                max_iter: int, *, shares: Sequence[float] = (0.0,),
+                refine: Sequence[dict] = (), full_refit: str = "collocation",
+                effect_fit: str = "collocation", log_names: Sequence[str] = (),
+                impact_fit: bool = False, seen: dict | None = None
+                ) -> tuple[str, FitResult, list[np.ndarray], list[np.ndarray]]:
+    """The stages of :func:`fit_candidate` (``seen["start"]``: the screened start).
 
     Starts (effect parameters) are screened by forward simulation (each at every
     bearing share of the friction in ``shares``, the best then varied by the
@@ -174,6 +248,8 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
     starts = [{**defaults, **baseline, **s} for s in starts] or [{**defaults, **baseline}]
     if len(starts) > 1 or len(shares) > 1 or refine:
         starts = [screen_starts(fit_pts, rig, crig, starts, shares, refine)]
+    if seen is not None:
+        seen["start"] = dict(starts[0])
     eff = [q.name for q in component.parameters]
 
     def stage1(start: dict) -> FitResult:
@@ -335,6 +411,7 @@ def _match_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, res: FitResult
     notes = [f"simulated SSE {sse:.4g} vs collocation {res.sse:.4g}"]
     if past_deadline():
         notes.append("not refined: the run's time budget was reached")
+        note_cut("refinement of the collocation fit", 0, True)
         return replace(res, starts=[*res.starts, {"refinement": notes}]), pf
     fine = fit_group(fit_pts, crig, [res.parameters], free=list(free), fixed=res.parameters,
                      max_iter=max_iter, substeps=REFINE_SUBSTEPS)
@@ -346,6 +423,7 @@ def _match_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, res: FitResult
             res, pf, sse = fine, pf_fine, sse_fine
     if sse > MISMATCH_RATIO * res.sse:
         po = polish(fit_pts, crig, res.parameters, list(free), predictor=sim)
+        # (a polish cut at the deadline noted itself; the collocation fit stands)
         notes.append(f"polish on simulation: SSE {po.sse_before:.4g} -> {po.sse_after:.4g} "
                      f"({po.nfev} simulations)")
         if po.sse_after < sse:
@@ -419,13 +497,73 @@ def fit_member(a: tuple) -> tuple:
     return name, res, pf, ph, crig
 
 
-def fit_members(args: list[tuple], jobs: int) -> list[tuple]:
+def fit_members(args: list[tuple], jobs: int, *, until_deadline: bool = False,
+                seconds: dict | None = None, estimate=None) -> list[tuple]:
     """:func:`fit_member` of each argument tuple, in ``jobs`` forked processes when
-    ``jobs`` > 1 and there is more than one."""
+    ``jobs`` > 1 and there is more than one; results in the order of ``args``.
+
+    The fits are scheduled one by one as workers free up (no batch waits for its
+    slowest member); ``until_deadline``: none starts once the run's deadline has passed,
+    nor one whose estimated wall time (``estimate(name)``, s, when given) exceeds the
+    time left — it would be cut before it moved — so the results then hold only the fits
+    started (a prefix of ``args``).  ``seconds`` (optional) receives each member's wall
+    time, s, by name."""
+    t0: dict[int, float] = {}
+    out: dict[int, tuple] = {}
+    pending: list[int] = list(range(len(args)))
+
+    def stop() -> bool:
+        if not until_deadline:
+            return False
+        need = estimate(args[pending[0]][0]) if estimate is not None and pending else 0.0
+        return past_deadline() or need > time_left_s()
+
+    def done(k: int, res: tuple) -> None:
+        out[k] = res
+        if seconds is not None:
+            seconds[args[k][0]] = time.perf_counter() - t0[k]
+
     if jobs > 1 and len(args) > 1:
         import multiprocessing as mp
+        from concurrent.futures import FIRST_COMPLETED, wait
         with ProcessPoolExecutor(max_workers=min(jobs, len(args)),
                                  mp_context=mp.get_context("fork")) as ex:
-            return list(ex.map(fit_member, args))
-    return [fit_member(a) for a in args]
+            running: dict = {}
+            while pending or running:
+                while pending and len(running) < jobs and not stop():
+                    k = pending.pop(0)
+                    t0[k] = time.perf_counter()
+                    running[ex.submit(fit_member, args[k])] = k
+                if not running:
+                    break
+                finished, _ = wait(list(running), return_when=FIRST_COMPLETED)
+                for f in finished:
+                    done(running.pop(f), f.result())
+        return [out[k] for k in sorted(out)]
+    while pending and not stop():
+        k = pending.pop(0)
+        t0[k] = time.perf_counter()
+        done(k, fit_member(args[k]))
+    return [out[k] for k in sorted(out)]
 
+
+def _scores_of(a: tuple) -> dict:
+    return signature_scores(*a)
+
+
+def signature_scores_in(jobs: int, prepared: Sequence[PreparedTest], rig: Rig,
+                        baseline: dict[str, float], baseline_pred: Sequence[np.ndarray],
+                        names: Sequence[str], components: dict) -> dict[str, dict]:
+    """:func:`~.candidates.signature_scores` of ``names``, one member per task in
+    ``jobs`` forked processes (each member's score depends on the residual and its own
+    probes only: the same numbers as one call; the probes' simulations are most of a
+    round's ranking)."""
+    names = list(names)
+    if jobs <= 1 or len(names) <= 1:
+        return signature_scores(prepared, rig, baseline, baseline_pred, names, components)
+    import multiprocessing as mp
+    tasks = [(prepared, rig, baseline, baseline_pred, [n], components) for n in names]
+    with ProcessPoolExecutor(max_workers=min(jobs, len(names)),
+                             mp_context=mp.get_context("fork")) as ex:
+        parts = list(ex.map(_scores_of, tasks))
+    return {n: part[n] for n, part in zip(names, parts)}

@@ -11,29 +11,31 @@ ends below the round's default winner decides which effect is added first.
 from __future__ import annotations
 
 import math
+import time
 from typing import Any, Sequence
 
-from .candidate_fit import fit_member
+from .candidate_fit import (fit_member, fit_members, judge_fit, not_fitted,
+                            signature_scores_in)
+from .deadline import time_left_s
 from .candidates import (
     CANDIDATES,
     MIN_RANK_VALUE,
     compatible,
     components_for,
     rank_value,
-    signature_scores,
 )
 from .evidence import (
     channel_sse,
     choose_winner,
     earns,
     effective_samples,
-    judge_candidate,
     normalised_sse,
     significant,
 )
 
 __all__ = ["confounded", "supported", "fit_on_top", "lookahead_winner", "confounded_first",
-           "second_steps", "member_key"]
+           "second_steps", "member_key", "on_top_args", "first_step_pool", "prefetch_on_top", "too_late",
+           "estimated_seconds"]
 
 
 def confounded(cands: Sequence[Any]) -> Any | None:
@@ -43,6 +45,7 @@ def confounded(cands: Sequence[Any]) -> Any | None:
     fit ΔBIC −1005, held-out error 14.28 → 15.41 %); None when there is none."""
     pool = [c for c in cands if c.fitted and not c.earns and c.predictions is not None
             and not getattr(c, "at_bound", ())  # refused as unphysical, not confounded
+            and not getattr(c, "cut_at_deadline", "")  # cut at its start: not fitted
             and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0]
     return min(pool, key=lambda c: c.delta_bic_fit) if pool else None
 
@@ -56,6 +59,7 @@ def supported(c: Any) -> bool:
     the path is judged as a whole."""
     return bool(c.fitted and c.predictions is not None and getattr(c, "resolved", True)
                 and not getattr(c, "at_bound", ())  # an unphysical fit is no first step
+                and not getattr(c, "cut_at_deadline", "")  # cut at its start: not fitted
                 and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0)
 
 
@@ -95,18 +99,31 @@ def lookahead_winner(earning: Sequence[Any], blocked: Any, try_on_top: Any,
         Further first steps (:func:`supported`), besides the earning candidates.
     """
     best, best_sse = None, choose_winner(earning).sse_heldout if earning else math.inf
-    pool = sorted(earning, key=lambda c: (c.delta_bic_heldout, c.sse_heldout)) + sorted(
-        (c for c in first_steps if c not in earning), key=lambda c: c.delta_bic_fit)
-    for c, step in _paths(pool, blocked, try_on_top, max_paths):
+    for c, step in _paths(first_step_pool(earning, first_steps), blocked, try_on_top,
+                          max_paths):
         ok = (step.earns and step.error_after < c.error_before
               and getattr(step, "first_resolved", True))
         if say:
             say(f"look-ahead: {blocked.effect} on top of {c.effect}: held-out error "
                 f"{c.error_before:.3f} -> {c.error_after:.3f} -> {step.error_after:.3f} %"
-                f"{' (the path earns)' if ok else ' (the path does not earn)'}")
+                f"{_verdict(ok, step)}")
         if ok and step.sse_heldout < best_sse:
             best, best_sse = c, step.sse_heldout
     return best
+
+
+def first_step_pool(earning: Sequence[Any], first_steps: Sequence[Any] = ()) -> list:
+    """The first steps :func:`lookahead_winner` tries, in order: the earning candidates
+    by held-out ΔBIC (then SSE), then the other ``first_steps`` by fit ΔBIC."""
+    return sorted(earning, key=lambda c: (c.delta_bic_heldout, c.sse_heldout)) + sorted(
+        (c for c in first_steps if c not in earning), key=lambda c: c.delta_bic_fit)
+
+
+def _verdict(ok: bool, step: Any) -> str:
+    """How a look-ahead path ended, for the progress message."""
+    if getattr(step, "cut_at_deadline", ""):
+        return " (the path is not decided: its second step was not fitted before the budget)"
+    return " (the path earns)" if ok else " (the path does not earn)"
 
 
 def _paths(pool: Sequence[Any], blocked: Any, attempt: Any, max_paths: int):
@@ -140,37 +157,106 @@ def member_key(args: tuple) -> tuple:
             repr(starts), int(max_iter))
 
 
-def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd: int,
-               fitted: dict | None = None) -> Any:
-    """``blocked`` re-identified on the model with ``c`` and judged against it (the
-    look-ahead of :func:`lookahead_winner`); None when incompatible.  ``fitted``
-    (optional) keeps the member fit by :func:`member_key` (with the rig it was made on)
-    for the next round to reuse once ``c`` is added."""
+def on_top_args(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int
+                ) -> tuple | None:
+    """The :func:`~.candidate_fit.fit_member` arguments of ``blocked`` re-identified on
+    the model with ``c`` (its component configured from the residual of that model: the
+    cogging period — the baseline's residual was dominated by what c explains); None
+    when incompatible."""
     comp = judge["comps"][blocked.effect]
     if c.rig is None or c.fit is None or not compatible(c.rig, comp):
         return None
     fit_pts, held_pts = judge["fit_pts"], judge["held_pts"]
+    comp = components_for([blocked.effect], fit_pts, c.predictions[:len(fit_pts)],
+                          c.rig.harvester.lead_m_per_rad)[blocked.effect]
+    return (blocked.effect, comp, CANDIDATES[blocked.effect].starts, sub_pts, fit_pts,
+            held_pts, c.rig, dict(c.fit.parameters), max_iter)
+
+
+def estimated_seconds(seconds: dict | None, *names: str) -> float:
+    """What a fit of one of ``names`` on top of the other is estimated to cost, s: the
+    longest of their own fits timed in the round (``seconds`` by name; 0 when none was
+    timed) — the member refits the same parameters and more, on the same tests."""
+    return max([seconds[n] for n in names if seconds and n in seconds], default=0.0)
+
+
+def too_late(c: Any, blocked: Any, seconds: dict | None, cuts: list | None) -> bool:
+    """Whether the fit of ``blocked`` on top of ``c`` would not finish before the run's
+    deadline (:func:`estimated_seconds` > :func:`~.deadline.time_left_s`); then it is
+    not started and, with ``cuts`` given, the path is appended there as work left."""
+    need, left = estimated_seconds(seconds, c.effect, blocked.effect), time_left_s()
+    if seconds is None or need <= left:
+        return False
+    if cuts is not None:
+        cuts.append(f"{blocked.effect} on top of {c.effect} (not started: about {need:.0f} s "
+                    f"of fitting, {max(left, 0.0):.0f} s left)")
+    return True
+
+
+def prefetch_on_top(pairs: Sequence[tuple], judge: dict, sub_pts: list, max_iter: int,
+                    fitted: dict, jobs: int, seconds: dict | None = None,
+                    cuts: list | None = None) -> None:
+    """Fit the look-ahead's members ``pairs`` = [(c, blocked), …] (``blocked`` on top of
+    ``c``) in ``jobs`` processes at once, into ``fitted`` (by :func:`member_key`, with the
+    rig), where :func:`fit_on_top` finds them; a pair that cannot finish before the
+    deadline (:func:`too_late`) is not started."""
+    todo = []
+    for c, blocked in pairs:
+        args = on_top_args(c, blocked, judge, sub_pts, max_iter)
+        if args is None or member_key(args) in fitted or too_late(c, blocked, seconds, None):
+            continue
+        todo.append(args)
+    if len(todo) < 2:
+        return  # nothing to run side by side: fit_on_top fits it when asked
+    for args, out in zip(todo, fit_members(todo, jobs, until_deadline=True, seconds=seconds)):
+        fitted[member_key(args)] = (args[6], out)
+
+
+def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd: int,
+               fitted: dict | None = None, cuts: list | None = None,
+               seconds: dict | None = None) -> Any:
+    """``blocked`` re-identified on the model with ``c`` and judged against it (the
+    look-ahead of :func:`lookahead_winner`); None when incompatible or, with ``seconds``
+    (the round's fit times by name), when it would not finish before the run's deadline
+    (:func:`too_late`).  ``fitted`` (optional) holds member fits by :func:`member_key`
+    (with the rig they were made on): one found there (:func:`prefetch_on_top`) is
+    judged, not repeated; a new one is kept for the next round to reuse once ``c`` is
+    added.  A fit cut by the time budget at its start point
+    (:func:`~.candidate_fit.not_fitted`) is judged not earning and, with ``cuts`` given,
+    its path ("blocked on top of c") is appended there."""
+    args = on_top_args(c, blocked, judge, sub_pts, max_iter)
+    if args is None:
+        return None
+    key = member_key(args)
+    hit = (fitted or {}).get(key)
+    if hit is not None and hit[0] is c.rig:
+        out = hit[1]
+    elif too_late(c, blocked, seconds, cuts):
+        return None
+    else:
+        t0 = time.perf_counter()
+        out = fit_member(args)
+        if seconds is not None:
+            seconds[blocked.effect] = time.perf_counter() - t0
+    if fitted is not None:
+        if not_fitted(out[1]):
+            fitted.pop(key, None)
+        else:
+            fitted[key] = (c.rig, out)
+    fit_pts, held_pts = judge["fit_pts"], judge["held_pts"]
     pf, ph = c.predictions[:len(fit_pts)], c.predictions[len(fit_pts):]
-    # configured from the residual of the model with c (the cogging period: the
-    # baseline's residual was dominated by what c explains)
-    comp = components_for([blocked.effect], fit_pts, pf, c.rig.harvester.lead_m_per_rad
-                          )[blocked.effect]
     ev_pts, ev_pred = (held_pts, ph) if held_pts else (fit_pts, pf)
-    sse_fit = normalised_sse(fit_pts, pf)
-    n_eff_fit = effective_samples(fit_pts, pf)
     ch_sse0, ch_n = channel_sse(ev_pts, ev_pred)
     step = type(blocked)(blocked.effect, True, blocked.score, blocked.chi2, rnd + 1,
-                           error_before=c.error_after)
-    args = (blocked.effect, comp, CANDIDATES[blocked.effect].starts, sub_pts, fit_pts,
-            held_pts, c.rig, dict(c.fit.parameters), max_iter)
-    out = fit_member(args)
-    if fitted is not None:
-        fitted[member_key(args)] = (c.rig, out)
-    judge_candidate(step, out, member=CANDIDATES.get(blocked.effect), **{**judge, "sse_fit": sse_fit, "n_eff_fit": n_eff_fit,
-                         "cur_ev_pred": ev_pred,
-                         "sse_held": normalised_sse(held_pts, ph) if held_pts else math.nan,
-                         "n_eff_held": effective_samples(held_pts, ph) if held_pts else math.nan,
-                         "cur_err": c.error_after, "ch_sse0": ch_sse0, "ch_n": ch_n})
+                         error_before=c.error_after)
+    judge_fit(step, out, member=CANDIDATES.get(blocked.effect),
+              **{**judge, "sse_fit": normalised_sse(fit_pts, pf),
+                 "n_eff_fit": effective_samples(fit_pts, pf), "cur_ev_pred": ev_pred,
+                 "sse_held": normalised_sse(held_pts, ph) if held_pts else math.nan,
+                 "n_eff_held": effective_samples(held_pts, ph) if held_pts else math.nan,
+                 "cur_err": c.error_after, "ch_sse0": ch_sse0, "ch_n": ch_n})
+    if step.cut_at_deadline and cuts is not None:
+        cuts.append(f"{blocked.effect} on top of {c.effect}")
     if step.predictions is None:
         return None
     amp = CANDIDATES[c.effect].amplitudes if c.effect in CANDIDATES else ()
@@ -178,9 +264,9 @@ def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, 
     return step
 
 
-
 def second_steps(blocked: Any, names: Sequence[str], fit_pts: Sequence[Any],
-                 sub_pts: Sequence[Any], lead_m_per_rad: float, say: Any = None) -> list:
+                 sub_pts: Sequence[Any], lead_m_per_rad: float, say: Any = None,
+                 jobs: int = 1) -> list:
     """The members a round after ``blocked`` would re-identify, as second steps of the
     reverse look-ahead (:func:`confounded_first`): ``names`` (other than ``blocked``)
     ranked by their signature on the residual of the model *with* ``blocked``
@@ -203,8 +289,8 @@ def second_steps(blocked: Any, names: Sequence[str], fit_pts: Sequence[Any],
     pf = blocked.predictions[:len(fit_pts)]
     sub_pred = [pf[next(k for k, q in enumerate(fit_pts) if q is p)] for p in sub_pts]
     comps = components_for(names, fit_pts, pf, lead_m_per_rad)
-    scores = signature_scores(sub_pts, blocked.rig, dict(blocked.fit.parameters), sub_pred,
-                              names, comps)
+    scores = signature_scores_in(jobs, sub_pts, blocked.rig, dict(blocked.fit.parameters),
+                                 sub_pred, names, comps)
     ok = [n for n in names if scores[n]["applicable"] and compatible(blocked.rig, comps[n])
           and rank_value(scores[n]) >= MIN_RANK_VALUE]
     ok.sort(key=lambda n: -rank_value(scores[n]))
@@ -262,7 +348,7 @@ def confounded_first(blocked: Any, others: Sequence[Any], try_on_blocked: Any,
         if say:
             say(f"look-ahead: {c.effect} on top of {blocked.effect}: held-out error "
                 f"{err_before:.3f} -> {blocked.error_after:.3f} -> {step.error_after:.3f} %"
-                f"{' (the path earns)' if ok else ' (the path does not earn)'}")
+                f"{_verdict(ok, step)}")
         if ok:
             return True
     return False

@@ -10,7 +10,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from .deadline import past_deadline
+from .deadline import note_cut, past_deadline
 from .prepared import PreparedTest
 from . import rig as _rig
 from .rig import BASE_SPECS, Rig, param_scale, predict, uniform_grid
@@ -39,6 +39,13 @@ class PolishOutcome:
     covariance : ndarray or None
         Gauss–Newton covariance of the refined parameters at the returned point,
         s² (JᵀJ)⁺ with s² = SSE/(N − k), in physical units (None when not refined).
+    cut_at_deadline : bool
+        The run's deadline stopped the refinement (the best point simulated so far is
+        returned, no covariance).
+    moved : bool
+        The returned point left the start by at least one accepted Gauss–Newton step
+        (a point that only a difference quotient's perturbation made better does not
+        count: the start is returned then).
     """
 
     success: bool
@@ -50,6 +57,8 @@ class PolishOutcome:
     seconds: float
     free: list[str] = field(default_factory=list)
     covariance: np.ndarray | None = None
+    cut_at_deadline: bool = False
+    moved: bool = True
 
 
 class _Stop(Exception):
@@ -155,11 +164,7 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
                             diff_step=diff_step, max_nfev=max_iter,
                             jac=jac if exact is not None else "2-point", ftol=ftol)
     except _Stop:  # the run's deadline: the best point simulated so far, no covariance
-        msg = f"stopped at the time budget after {counter[0]} simulations"
-        out = {**base, **{n: float(v) for n, v in zip(free, values(best[1]))}} \
-            if best[0] < sse0 else base
-        return PolishOutcome(True, msg, out, sse0, min(best[0], sse0), counter[0],
-                             time.perf_counter() - t0, free)
+        return _cut_outcome(base, free, z0, best, sse0, counter[0], diff_step, values, t0)
     except Exception as exc:  # noqa: BLE001 - a failed polish keeps the collocation fit
         return PolishOutcome(False, f"polish failed: {exc}", base, sse0, sse0, counter[0],
                              time.perf_counter() - t0, free)
@@ -174,6 +179,31 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
                                               f"sensitivity runs)" if exact else ""),
                          out, sse0, sse1, counter[0] + jac_counter[0],
                          time.perf_counter() - t0, free, cov)
+
+
+def _cut_outcome(base: dict, free: list[str], z0: np.ndarray, best: list, sse0: float,
+                 sims: int, diff_step: float, values: Callable, t0: float) -> PolishOutcome:
+    """What :func:`polish` returns when the run's deadline stopped it: the best point
+    simulated when it is one accepted step from the start (``moved``), else the start;
+    the cut is noted (:func:`~.deadline.note_cut`)."""
+    moved = bool(best[0] < sse0) and not _perturbation(best[1] - z0, z0, diff_step)
+    msg = (f"stopped at the time budget after {sims} simulations"
+           + ("" if moved else ", still at its start point"))
+    note_cut("Gauss-Newton on the simulation", sims, moved)
+    out = {**base, **{n: float(v) for n, v in zip(free, values(best[1]))}} if moved else base
+    return PolishOutcome(True, msg, out, sse0, best[0] if moved else sse0, sims,
+                         time.perf_counter() - t0, free, cut_at_deadline=True, moved=moved)
+
+
+def _perturbation(dz: np.ndarray, z0: np.ndarray, diff_step: float) -> bool:
+    """Whether ``z0 + dz`` is one of the forward-difference points around ``z0`` (one
+    coordinate moved by at most the difference step ``diff_step``·max(1, |z₀|)), not a
+    Gauss–Newton step."""
+    moved = np.flatnonzero(np.asarray(dz) != 0.0)
+    if moved.size == 0:
+        return True
+    i = int(moved[0])
+    return moved.size == 1 and abs(dz[i]) <= 1.01 * diff_step * max(1.0, abs(z0[i]))
 
 
 def _exact_sensitivities(predictor: Callable, prepared: Sequence[PreparedTest]

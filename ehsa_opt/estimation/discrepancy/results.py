@@ -61,9 +61,12 @@ class DiscrepancySettings:
         Run the data-driven term discovery on the final residual.
     budget_s : float or None
         Wall-time budget of the workflow, s (None: none).  When it is reached no further
-        candidate fit starts: a round in progress is decided on the candidates already
-        re-identified (widening and look-ahead paths are skipped), no new round starts,
-        and the result says where it was cut (``success`` False, ``cut`` the reason).
+        candidate fit starts (nor one that the fits timed so far say cannot finish before
+        it): a round in progress is decided on the candidates already re-identified
+        (widening and look-ahead paths are skipped), no new round starts, and the result
+        says where it was cut (``success`` False, ``cut`` the reason).  A fit the budget
+        cut at its start point is not fitted (``CandidateResult.cut_at_deadline``): it
+        takes no decision and is named as work left.
     """
 
     candidates: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag")
@@ -132,6 +135,10 @@ class CandidateResult:
     own_channel: int | None = None
     channel_dbic: list[float] = field(default_factory=list)
     earns: bool = False
+    #: "" or why the run's time budget cut its fit at its start point
+    #: (:func:`~.candidate_fit.not_fitted`): then it is not fitted — it cannot earn,
+    #: open or complete a look-ahead path, and it is work left at the budget
+    cut_at_deadline: str = ""
     parameters: dict[str, float] = field(default_factory=dict)
     intervals: dict[str, tuple[float, float] | None] = field(default_factory=dict)
     per_test_after: list[float] = field(default_factory=list)
@@ -140,7 +147,9 @@ class CandidateResult:
 
     def as_dict(self) -> dict:
         return {"effect": self.effect, "round": self.round, "applicable": self.applicable,
-                "score": self.score, "chi2": self.chi2, "re_identified": bool(self.fitted),
+                "score": self.score, "chi2": self.chi2,
+                "re_identified": bool(self.fitted and not self.cut_at_deadline),
+                "cut_at_deadline": self.cut_at_deadline or None,
                 "error_before": self.error_before, "error_after": self.error_after,
                 "excess_error_reduction": self.excess_reduction,
                 "delta_bic_fit": self.delta_bic_fit, "delta_bic_heldout": self.delta_bic_heldout,
@@ -285,6 +294,9 @@ class DiscrepancyResult:
                 "validation": self.validation,
                 "notes": self.notes,
                 "partial": bool(self.cut), "cut": self.cut or None,
+                "not_fitted_at_budget": [{"effect": c.effect, "round": c.round,
+                                          "why": c.cut_at_deadline}
+                                         for c in self.candidates if c.cut_at_deadline],
                 "voltage_skew": self.voltage_skew,
                 "localisation_before": self.loc_before.as_dict(),
                 "localisation_after": self.loc_after.as_dict() if self.loc_after else None,

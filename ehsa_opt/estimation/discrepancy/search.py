@@ -17,14 +17,15 @@ confounded candidate in :mod:`.lookahead`.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .candidate_fit import fit_members
-from .deadline import past_deadline
+from .candidate_fit import fit_members, judge_fit, signature_scores_in
+from .deadline import elapsed_s, past_deadline, time_left_s
 from .candidates import (
     CANDIDATES,
     compatible,
@@ -33,7 +34,6 @@ from .candidates import (
     flexibility_refusal,
     rank_value,
     MIN_RANK_VALUE,
-    signature_scores,
 )
 from .evidence import (
     MIN_EXCESS_OVER_FLOOR,
@@ -45,7 +45,6 @@ from .evidence import (
     disturbance_masks,
     effective_samples,
     excess_reduction,
-    judge_candidate,
     normalised_sse,
     sse_can_earn,
 )
@@ -55,7 +54,10 @@ from .impacts import impact_record
 from .lookahead import (
     confounded,
     confounded_first,
+    first_step_pool,
     fit_on_top,
+    on_top_args,
+    prefetch_on_top,
     lookahead_winner,
     member_key,
     second_steps,
@@ -127,6 +129,9 @@ class SearchState:
     #: member fits made by the look-ahead, by :func:`~.lookahead.member_key`, with the
     #: rig they were made on: reused when a round fits the same member on that model
     fitted: dict = field(default_factory=dict)
+    #: wall time of each member's last fit, s, by name (what a look-ahead fit is
+    #: estimated to cost, :func:`widen_round`)
+    seconds: dict = field(default_factory=dict)
 
     def snapshot(self) -> SearchState:
         """A copy that later rounds do not change."""
@@ -149,6 +154,7 @@ class RoundRanking:
     order: list[str]
     cands: dict[str, CandidateResult]
     chosen: list[str]
+    seconds: float = math.nan  # wall time of the ranking, s
 
 
 def run_rounds(tests: SearchTests, state: SearchState, settings: DiscrepancySettings,
@@ -272,7 +278,8 @@ def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
     """The remaining members a next round could still name: ranked at or above
     :data:`MIN_RANK_VALUE` in this round and either not re-identified in it, or
     re-identified with some held-out evidence (ΔBIC < 0) that did not suffice to earn
-    (an effect the winner may have masked).  A member re-identified here whose held-out
+    (an effect the winner may have masked), or cut by the time budget at its start point
+    (not fitted, :func:`~.candidate_fit.not_fitted`).  A member re-identified here whose held-out
     ΔBIC was ≥ 0 had no held-out evidence at all and is not counted, nor one that
     cannot join the current rig (a gap once a mount spring is named: one transmission
     at most), which no next round could name."""
@@ -284,10 +291,19 @@ def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
         if n in rk.comps and not compatible(state.rig, rk.comps[n]):
             continue
         c = rk.cands.get(n)
-        if c is not None and c.fitted and not (c.delta_bic_heldout < 0):
+        if c is not None and c.fitted and not getattr(c, "cut_at_deadline", "") \
+                and not (c.delta_bic_heldout < 0):
             continue
         out.append(n)
     return out
+
+
+def _estimate(state: SearchState, name: str) -> float:
+    """A member fit's expected wall time, s: its own last fit in this run, else the
+    median of the fits timed so far (0 before any: round 1 starts every fit)."""
+    if name in state.seconds:
+        return float(state.seconds[name])
+    return float(np.median(list(state.seconds.values()))) if state.seconds else 0.0
 
 
 def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySettings
@@ -295,13 +311,14 @@ def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySett
     """Rank the remaining candidates by their signature score on the current residual
     (the flexibility member by its variable-projection fit) and choose the ``top``
     applicable ones that can join the current rig."""
+    t0 = time.perf_counter()
     fit_pts, sub_pts, remaining = tests.fit_pts, tests.sub_pts, state.remaining
     comps = components_for(remaining, fit_pts, state.fit_pred, tests.lead_m_per_rad)
     sub_pred = [state.fit_pred[next(k for k, q in enumerate(fit_pts) if q is p)]
                 for p in sub_pts]
     flex = "flexibility" in remaining and not tests.rig.has_generator
-    scores = signature_scores(sub_pts, state.rig, state.params, sub_pred,
-                              [n for n in remaining if n != "flexibility"], comps)
+    scores = signature_scores_in(settings.jobs, sub_pts, state.rig, state.params, sub_pred,
+                                 [n for n in remaining if n != "flexibility"], comps)
     flex_out = None
     if "flexibility" in remaining:
         flex_out = fit_flexibility_member(fit_pts, state.fit_pred, tests.held_pts,
@@ -320,7 +337,8 @@ def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySett
     chosen = [n for n in order if scores[n]["applicable"] and n != "flexibility"
               and compatible(state.rig, comps[n])
               and rank_value(scores[n]) >= MIN_RANK_VALUE][:settings.top]
-    return RoundRanking(comps, scores, flex_out, order, cands, chosen)
+    return RoundRanking(comps, scores, flex_out, order, cands, chosen,
+                        time.perf_counter() - t0)
 
 
 def _judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRanking,
@@ -343,7 +361,8 @@ def _judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRa
                                         f"{rank_value(rk.scores[n]):.3g})"
                                         if rank_value(rk.scores[n])
                                         > np.nan_to_num(rk.scores[n]['score']) else "")
-                                     for n in rk.order))
+                                     for n in rk.order)
+        + f" (ranked in {rk.seconds:.1f} s, {elapsed_s():.0f} s into the run)")
     if not (can_earn(cur_err, floor, 0.0, 1.0) or sse_can_earn(ch_sse0, ch_n)):
         excess = math.sqrt(max(cur_err ** 2 - floor ** 2, 0.0))
         note = (f"round {rnd}: candidates not re-identified — the {tests.evaluation} force "
@@ -372,18 +391,15 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
     (:func:`~.evidence.judge_candidate`); ``with_flexibility``: the flexibility
     member's fit is judged by the same rule too."""
     names = list(names)
-    # with a time budget the fits go in batches of `jobs`, none started after the deadline
-    step = len(names) if settings.budget_s is None else settings.jobs
-    for a in range(0, len(names), max(step, 1)):
-        if past_deadline():
-            state.cut = (f"time budget {settings.budget_s:g} s reached in the round "
-                         f"in progress: {', '.join(names[a:])} not re-identified; the "
-                         f"round is decided on the candidates fitted before the cut")
-            judge["say"](state.cut)
-            return
+    if names and past_deadline():
+        state.cut = (f"time budget {settings.budget_s:g} s reached in the round in "
+                     f"progress: {', '.join(names)} not re-identified; the round is decided "
+                     f"on the candidates fitted before the cut")
+        judge["say"](state.cut)
+        return
+    elif names:
         args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
-                 tests.held_pts, state.rig, state.params, settings.max_iter)
-                for n in names[a:a + step]]
+                 tests.held_pts, state.rig, state.params, settings.max_iter) for n in names]
         # a member the look-ahead already fitted on this model (same inputs): reused
         done = [state.fitted.pop(member_key(x), (None, None)) for x in args]
         done = [out for rig, out in done if rig is state.rig and out is not None]
@@ -391,13 +407,38 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
             judge["say"](f"{out[0]}: the look-ahead's fit on this model (the same inputs) "
                          f"is judged again, not repeated")
         new = [x for x in args if x[0] not in {out[0] for out in done}]
-        for out in done + fit_members(new, settings.jobs):
-            judge_candidate(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
+        t0 = time.perf_counter()
+        # scheduled as workers free up, in rank order; none started after the deadline
+        fits = fit_members(new, settings.jobs, until_deadline=settings.budget_s is not None,
+                           seconds=state.seconds, estimate=lambda n: _estimate(state, n))
+        if fits:
+            judge["say"](f"re-identified {len(fits)} member"
+                         f"{'s' if len(fits) > 1 else ''} in {time.perf_counter() - t0:.1f} s "
+                         f"wall (" + ", ".join(f"{o[0]} {state.seconds[o[0]]:.1f} s"
+                                               for o in fits)
+                         + f"; {elapsed_s():.0f} s into the run)")
+        for out in done + fits:
+            judge_fit(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
+        started = {o[0] for o in done + fits}
+        cut = [n for n in names if n in started and rk.cands[n].cut_at_deadline]
+        unstarted = [n for n in names if n not in started]
+        if cut or unstarted:
+            state.cut = (f"time budget {settings.budget_s:g} s reached in the round in "
+                         f"progress: "
+                         + "; ".join(([f"{', '.join(cut)} cut at the start point (not "
+                                       f"fitted)"] if cut else [])
+                                     + ([f"{', '.join(unstarted)} not re-identified (not "
+                                         f"started: the fits timed in this run take longer "
+                                         f"than the {max(time_left_s(), 0.0):.0f} s left)"]
+                                        if unstarted else []))
+                         + "; the round is decided on the candidates fitted before the cut")
+            judge["say"](state.cut)
+            return
     if not with_flexibility or rk.flex_out is None:
         return
     # judged by the same rule, fitted by variable projection
-    judge_candidate(rk.cands["flexibility"], rk.flex_out, member=CANDIDATES.get("flexibility"),
-                    **judge)
+    judge_fit(rk.cands["flexibility"], rk.flex_out, member=CANDIDATES.get("flexibility"),
+              **judge)
     cf = rk.cands["flexibility"]
     if cf.parameters:  # the stiffness k = m (2π f)² and its interval, for the report
         w2 = (2 * math.pi * cf.parameters["flex_frequency_hz"]) ** 2
@@ -438,21 +479,42 @@ def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchSta
     if blocked is None or state.cut:  # no look-ahead path after the time budget
         blocked = None
         return earning, first, blocked
+    cuts: list[str] = []  # look-ahead fits cut by the time budget, or not started
+    t0 = time.perf_counter()
+    steps1 = [c for c in cands.values() if supported(c)]
+    if settings.jobs > 1:  # the (at most two) first steps' fits side by side
+        pairs = [(c, blocked) for c in first_step_pool(earning, steps1) if c is not blocked]
+        prefetch_on_top([p for p in pairs if on_top_args(*p, judge, tests.sub_pts,
+                                                            settings.max_iter)][:2],
+                        judge, tests.sub_pts, settings.max_iter, state.fitted, settings.jobs,
+                        state.seconds)
     first = lookahead_winner(
         earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,
-                                               settings.max_iter, rnd, state.fitted), say,
-        first_steps=[c for c in cands.values() if supported(c)])
+                                               settings.max_iter, rnd, state.fitted, cuts,
+                                               state.seconds),
+        say, first_steps=steps1)
     # the second steps: what a round after `blocked` would re-identify, ranked on the
     # residual of the model with it (not among the members this round happened to fit)
-    others = second_steps(blocked, [n for n in state.remaining if n != "flexibility"],
-                          tests.fit_pts, tests.sub_pts, tests.lead_m_per_rad, say)
+    others = [] if first is not None else second_steps(
+        blocked, [n for n in state.remaining if n != "flexibility"], tests.fit_pts,
+        tests.sub_pts, tests.lead_m_per_rad, say, settings.jobs)
+    if first is None and settings.jobs > 1:
+        prefetch_on_top([(blocked, c) for c in others[:settings.jobs]], judge, tests.sub_pts,
+                        settings.max_iter, state.fitted, settings.jobs, state.seconds)
     if first is None and confounded_first(
             blocked, others,
             lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd,
-                                 state.fitted),
+                                 state.fitted, cuts, state.seconds),
             state.error, tests.floor,
             choose_winner(earning).sse_heldout if earning else math.inf, say):
         first = blocked
+    say(f"round {rnd}: look-ahead through {blocked.effect} in "
+        f"{time.perf_counter() - t0:.1f} s ({elapsed_s():.0f} s into the run)")
+    if cuts:
+        state.cut = (f"time budget {settings.budget_s:g} s reached in the look-ahead of "
+                     f"round {rnd}: {'; '.join(cuts)} not fitted (the path is work left); "
+                     f"the round is decided without those paths")
+        say(state.cut)
     return earning, first, blocked
 
 
@@ -514,14 +576,6 @@ def add_winner(rnd: int, win: CandidateResult, first: CandidateResult | None,
 WIDEN_BELOW = 0.5
 
 
-
-
-
-
-
-
-
-
 def should_widen(earning: Sequence[Any], force_excess: bool = True) -> bool:
     """Whether to re-identify the remaining lower-ranked candidates before deciding.
 
@@ -556,15 +610,3 @@ def should_widen(earning: Sequence[Any], force_excess: bool = True) -> bool:
         use_sse = not force_excess and s is not None and math.isfinite(s)
         gains.append(max(g, s) if use_sse else g)
     return max(gains) < max(WIDEN_BELOW, MIN_EXCESS_REDUCTION)
-
-
-
-
-
-
-
-
-
-
-
-

@@ -111,5 +111,7 @@ def test_simulation_refinement_stops_at_the_deadline():
         time.sleep(0.01)
         po = polish(pts, rig, start, ["nut_coulomb_N"], max_iter=3)
     assert po.nfev == 1 and "time budget" in po.message and po.parameters == start
+    assert po.cut_at_deadline and not po.moved and "still at its start point" in po.message
     free = polish(pts, rig, start, ["nut_coulomb_N"], max_iter=3)
     assert free.nfev > 1 and free.sse_after < free.sse_before
+    assert not free.cut_at_deadline and free.moved
