@@ -11,7 +11,7 @@ A delay of the record is a property of the acquisition, not of the physics; a me
 that explains the same residual better *without* re-aligning anything is the simpler
 account.  So before the delay is named, the members the first round would re-identify
 (:func:`~.search.rank_round`, the same ranking and settings) are fitted on the record
-as it is and judged by the same rule (:func:`~.evidence.judge_candidate`); when one of
+as it is and judged by the same rule (:func:`~.candidate_fit.judge_fit`); when one of
 them earns and leaves a lower held-out force error than the delay's, the delay is not
 named and the rounds start from the baseline.  Those fits are kept in
 :attr:`~.search.SearchState.fitted`, so the first round reuses them instead of
@@ -22,13 +22,14 @@ from __future__ import annotations
 
 from typing import Callable
 
-from .candidate_fit import fit_members
+from .candidate_fit import fit_members, judge_fit
 from .candidates import CANDIDATES
 from .deadline import past_deadline
-from .evidence import choose_winner, judge_candidate
+from .evidence import choose_winner
 from .lookahead import member_key
 from .results import CandidateResult, DiscrepancySettings
-from .search import SearchState, SearchTests, _judge_context, nested_to_fit, rank_round
+from .nested import nested_to_fit
+from .search import SearchState, SearchTests, _judge_context, rank_round
 
 __all__ = ["lag_rival"]
 
@@ -58,8 +59,8 @@ def lag_rival(tests: SearchTests, state: SearchState, settings: DiscrepancySetti
                  tests.held_pts, state.rig, state.params, settings.max_iter) for n in names]
         for x, out in zip(args, fit_members(args, settings.jobs)):
             state.fitted[member_key(x)] = (state.rig, out)
-            judge_candidate(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
-        names = nested_to_fit(rk, state)  # a compliance when a gap-less backlash earns
+            judge_fit(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
+        names = nested_to_fit(rk.cands, rk.scores, rk.comps, state.rig, state.remaining)  # a compliance when a gap-less backlash earns
     earning = [c for c in rk.cands.values() if c.earns]
     if not earning:
         return None

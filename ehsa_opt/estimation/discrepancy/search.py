@@ -51,6 +51,7 @@ from .evidence import (
 from .prepared import PreparedTest
 from .rig import Rig
 from .impacts import impact_record
+from .nested import nested_to_fit
 from .lookahead import (
     confounded,
     confounded_first,
@@ -67,7 +68,7 @@ from .results import CandidateResult, DiscrepancySettings
 from .terms import FRICTION_LAW_GROUPS, TERM_PREFERENCE, propose_term
 
 __all__ = ["SearchTests", "SearchState", "RoundRanking", "run_rounds", "rank_round",
-           "judge_round", "widen_round", "add_winner", "should_widen", "nested_to_fit",
+           "judge_round", "widen_round", "add_winner", "should_widen",
            "WIDEN_BELOW"]
 
 
@@ -204,7 +205,7 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         say(note)
         notes.append(note)
     judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True)
-    nested = nested_to_fit(rk, state)
+    nested = nested_to_fit(rk.cands, rk.scores, rk.comps, state.rig, state.remaining)
     if nested and not past_deadline():
         judge["say"](f"round {rnd}: " + ", ".join(nested) + " re-identified too (nested in "
                      "an earning member: the choice is made on fits)")
@@ -253,25 +254,6 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         notes.append(stop)
         return False, joint
     return bool(state.remaining), joint
-
-
-def nested_to_fit(rk: RoundRanking, state: SearchState) -> list[str]:
-    """The simpler members nested in an earning candidate of the round
-    (:attr:`~.candidates.Candidate.nests`: a backlash with no gap is a compliance) that
-    the round has not re-identified and that can join the model.  A candidate judged
-    on its impacts is left out: a rattling contact is not a series spring, and its
-    sample-wise ΔBIC, which the choice between nested members reads, measures chaos."""
-    out: list[str] = []
-    for name, c in rk.cands.items():
-        if not c.earns or impact_record(c.fit) is not None:
-            continue
-        for m in getattr(CANDIDATES.get(name), "nests", ()):
-            cm = rk.cands.get(m)
-            if (cm is None or cm.fitted or m in out or m not in state.remaining
-                    or not rk.scores[m]["applicable"] or not compatible(state.rig, rk.comps[m])):
-                continue
-            out.append(m)
-    return out
 
 
 def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
