@@ -15,7 +15,7 @@ from .prepared import PreparedTest
 
 __all__ = ["transient_energies", "kinematic_gap", "impact_objective", "impact_energy_ratio",
            "ENERGY_LOG_SPREAD", "GAP_SPREAD", "FeatureData", "data_features", "Mismatch",
-           "mismatch", "score", "friction_widening", "gap_step", "moved_friction",
+           "mismatch", "score", "standardised_terms", "friction_widening", "gap_step", "moved_friction",
            "NUT_LEVELS", "BEARING_LEVELS", "IMPACT_FRICTION_SPREAD", "IMPACT_FRICTION_DOMINATED"]
 
 
@@ -176,6 +176,24 @@ def score(m: Mismatch, widen: Sequence[tuple[np.ndarray, float]] | None = None) 
                                    else 1e3]))
     t = np.concatenate(terms) if terms else np.zeros(0)
     return float(np.mean(t ** 2)) if t.size else math.nan
+
+
+def standardised_terms(m: Mismatch, widen: Sequence[tuple[np.ndarray, float]] | None = None
+                       ) -> list[np.ndarray | None]:
+    """Per test, the standardised mismatches :func:`score` averages (the log energies
+    force e₁, e₂, voltage e₁, e₂, then the gap when the test has one); None for a test
+    left out.  Shows which tests and features a large objective comes from."""
+    out: list[np.ndarray | None] = []
+    for i, (lr, g) in enumerate(zip(m.log_ratios, m.gaps)):
+        we, wg = widen[i] if widen is not None else (0.0, 0.0)
+        if not np.all(np.isfinite(we)):
+            out.append(None)
+            continue
+        z = list(lr / np.hypot(ENERGY_LOG_SPREAD, we))
+        if g is not None:
+            z.append(g[0] / math.hypot(g[1], wg) if math.isfinite(g[0]) else 1e3)
+        out.append(np.asarray(z, dtype=float))
+    return out
 
 
 def impact_objective(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray],

@@ -92,8 +92,10 @@ from .impact_features import (
     mismatch,
     moved_friction,
     score,
+    standardised_terms,
     transient_energies,
 )
+from .impact_stiffness import law_constant, stiffness_interval
 
 __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective",
            "impact_energy_ratio", "fit_impacts", "fit_candidate_on_impacts", "IMPACT_SHARES", "impact_record",
@@ -164,6 +166,9 @@ class ImpactFit:
     seconds: float
     history: list[dict] = field(default_factory=list)
     contact_exponent: float = 1.0
+    #: The stiffness bracket the evaluated points support and whether it identifies the
+    #: stiffness (:func:`~.impact_stiffness.stiffness_interval`).
+    stiffness: dict = field(default_factory=dict)
 
 
 def with_contact_law(rig: Rig, exponent: float) -> Rig:
@@ -336,12 +341,27 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     share_best = best["bearing_share"]
     params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
               DAMPING: best[DAMPING]}
+    n_feat = sum(z.size for z in standardised_terms(mism[best["_key"]], widen) if z is not None)
+    kint = stiffness_interval(history, law[0], max(n_feat, 1), STIFFNESS,
+                              (10 ** lo[1], 10 ** hi[1]))
     say(msg := _fit_message(stop, len(history) + extra, best, f_grid, friction_spread, extra,
-                            left_out))
+                            left_out) + _stiffness_note(kint, law[0]))
     for r in history:
         r.pop("_key", None)
     return ImpactFit(converged, msg, params, best["objective"], f_grid, len(history) + extra,
-                     time.perf_counter() - t0, history, law[0])
+                     time.perf_counter() - t0, history, law[0], kint)
+
+
+def _stiffness_note(kint: Mapping, law: float) -> str:
+    """The stiffness bracket in words (and in the law's own units for a power law)."""
+    lo_s = "open" if kint["open_below"] else f"{kint['lower_N_per_m']:.3g}"
+    hi_s = "open" if kint["open_above"] else f"{kint['upper_N_per_m']:.3g}"
+    own = ("" if law == 1.0 else f" (law constant {law_constant(kint['lower_N_per_m'], law):.3g}"
+           f"-{law_constant(kint['upper_N_per_m'], law):.3g} N/m^{law:g})")
+    return (f"; stiffness bracket {lo_s} to {hi_s} N/m{own} from "
+            f"{kint['consistent_points']} consistent points: "
+            + ("identified" if kint["identified"] else
+               "NOT identified (the impacts fix the gap and the impact energies, not this number)"))
 
 
 #: Contact stiffnesses (log10 N/m) at which the friction's effect on the features is taken.
@@ -539,6 +559,7 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
                                             "simulations": res.evaluations,
                                             "converged": res.success,
                                             "contact_exponent": res.contact_exponent,
+                                            "stiffness": res.stiffness,
                                             "tolerance_change_rms_sigma": chaos}}],
                     seconds=time.perf_counter() - t0, path="impacts", sse=sse, n_obs=n_obs)
     return name, out, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
