@@ -341,15 +341,22 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     share_best = best["bearing_share"]
     params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
               DAMPING: best[DAMPING]}
-    n_feat = sum(z.size for z in standardised_terms(mism[best["_key"]], widen) if z is not None)
-    kint = stiffness_interval(history, law[0], max(n_feat, 1), STIFFNESS,
-                              (10 ** lo[1], 10 ** hi[1]))
+    kint = _bracket(history, mism[best["_key"]], widen, law[0], lo, hi)
     say(msg := _fit_message(stop, len(history) + extra, best, f_grid, friction_spread, extra,
                             left_out) + _stiffness_note(kint, law[0]))
     for r in history:
         r.pop("_key", None)
     return ImpactFit(converged, msg, params, best["objective"], f_grid, len(history) + extra,
                      time.perf_counter() - t0, history, law[0], kint)
+
+
+def _bracket(history: Sequence[dict], best_mismatch: Mismatch,
+             widen: Sequence[tuple[np.ndarray, float]] | None, law: float, lo: np.ndarray,
+             hi: np.ndarray) -> dict:
+    """The stiffness bracket of ``history`` (:func:`~.impact_stiffness.stiffness_interval`)
+    with the number of standardised mismatches at the best point."""
+    n_feat = sum(z.size for z in standardised_terms(best_mismatch, widen) if z is not None)
+    return stiffness_interval(history, law, max(n_feat, 1), STIFFNESS, (10 ** lo[1], 10 ** hi[1]))
 
 
 def _stiffness_note(kint: Mapping, law: float) -> str:
