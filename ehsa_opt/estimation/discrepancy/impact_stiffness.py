@@ -26,7 +26,11 @@ from __future__ import annotations
 import math
 from typing import Mapping, Sequence
 
-__all__ = ["stiffness_interval", "law_constant", "STIFFNESS_IDENTIFIED_RATIO",
+import numpy as np
+
+from .impact_features import Mismatch, standardised_terms
+
+__all__ = ["stiffness_interval", "stiffness_bracket", "stiffness_note", "law_constant", "STIFFNESS_IDENTIFIED_RATIO",
            "PROFILE_CHI2"]
 
 #: χ²₁ 95 % quantile: a point whose objective exceeds the best by n (f − f_best)/f_best
@@ -90,3 +94,26 @@ def stiffness_interval(history: Sequence[Mapping[str, float]], exponent: float,
                       <= STIFFNESS_IDENTIFIED_RATIO)
     return {"lower_N_per_m": lower, "upper_N_per_m": upper, "open_below": not below,
             "open_above": not above, "consistent_points": len(ok), "identified": identified}
+
+
+def stiffness_bracket(history: Sequence[Mapping[str, float]], best_mismatch: Mismatch,
+                      widen: Sequence[tuple[np.ndarray, float]] | None, law: float,
+                      stiffness_key: str, box: tuple[np.ndarray, np.ndarray]) -> dict:
+    """:func:`stiffness_interval` of a search ``history`` with the number of standardised
+    mismatches the objective averages at its best point (``best_mismatch``, ``widen``);
+    ``box`` the search's (lower, upper) bounds of (gap, log10 k, log10 c)."""
+    n_feat = sum(z.size for z in standardised_terms(best_mismatch, widen) if z is not None)
+    bounds = (10.0 ** float(box[0][1]), 10.0 ** float(box[1][1]))
+    return stiffness_interval(history, law, max(n_feat, 1), stiffness_key, bounds)
+
+
+def stiffness_note(kint: Mapping, law: float) -> str:
+    """The stiffness bracket in words (and in the law's own units for a power law)."""
+    lo_s = "open" if kint["open_below"] else f"{kint['lower_N_per_m']:.3g}"
+    hi_s = "open" if kint["open_above"] else f"{kint['upper_N_per_m']:.3g}"
+    own = ("" if law == 1.0 else f" (law constant {law_constant(kint['lower_N_per_m'], law):.3g}"
+           f"-{law_constant(kint['upper_N_per_m'], law):.3g} N/m^{law:g})")
+    return (f"; stiffness bracket {lo_s} to {hi_s} N/m{own} from "
+            f"{kint['consistent_points']} consistent points: "
+            + ("identified" if kint["identified"] else
+               "NOT identified (the impacts fix the gap and the impact energies, not this number)"))
