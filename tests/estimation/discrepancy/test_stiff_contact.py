@@ -209,3 +209,19 @@ def test_a_rotor_rattling_in_the_fast_windows_has_no_kinematic_gap():
     rattling = dataclasses.replace(pt, y=y)
     assert kinematic_gap(rattling, h)[2] == 0
     assert kinematic_gap(rattling, h, require_rest=False)[2] >= 3
+
+
+def test_peak_force_ratio_of_the_truth_is_near_one_and_scales():
+    """The simulated over measured largest force: near 1 for the true contact (the same
+    sampling clock; the noise moves the measured peak by a few N), twice that for a
+    simulation of twice the force, far from 1 for a contact 30x too stiff (its 0.4 ms
+    impacts fall between the 1 kHz samples: the sampled peak is a third of the data's)."""
+    from ehsa_opt.estimation.discrepancy.impact_stiffness import peak_force_ratios
+    spec, truth, pts = _campaign(1e8, 3e-4, frequencies=(2.0,), loads=(47.0,))
+    rig = Rig(spec.harvester, True, (make_component("backlash"),))
+    p = {**spec.friction.as_dict(), **truth}
+    r = peak_force_ratios(pts, predict(pts, rig, p))
+    assert np.all(np.abs(r - 1.0) < 0.15)
+    assert np.allclose(peak_force_ratios(pts, [2 * pt.y for pt in pts]), 2.0)
+    stiff = peak_force_ratios(pts, predict(pts, rig, {**p, K: 3e9}))
+    assert np.all(np.abs(np.log(stiff)) > 0.5)
