@@ -122,6 +122,9 @@ IMPACT_LAWS = (1.0, 1.5)
 #: Contact stiffnesses (log10 N/m) and dampings (log10 N s/m) of the starting grid.
 _GRID_LOG_K = (6.0, 6.5, 7.0, 7.5, 8.0, 8.5, 9.0, 9.5)
 _GRID_LOG_C = (3.0, 4.0)
+#: The grid stiffnesses (the best at the last damping) at which the other dampings are
+#: also simulated: far from the best stiffness the damping does not decide anything.
+_DAMPED_STIFFNESSES = 3
 #: Bearing shares of the start's rod-equivalent friction screened first (at c = 1e4 N s/m
 #: and the stiffnesses of _SHARE_GRID_LOG_K, with the start's own split as share 0):
 #: a rigid baseline lumps the friction into the nut, but the bearing's part brakes the
@@ -318,9 +321,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
                   for sh in (0.0, *shares)}
         share_best = float(min(scores, key=scores.get))
         say(f"impact-aware fit: bearing share of the friction {share_best:g} (screen)")
-    for lk in _GRID_LOG_K:
-        for lc in _GRID_LOG_C:
-            cost(grid_point(lk, lc, share_best))
+    _grid(cost, grid_point, history, share_best)
     if len(rigs) > 1:
         law[0] = _choose_law(history, laws[1:], law, cost, grid_point, share_best, say)
     if friction_spread > 0.0:
@@ -356,6 +357,23 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
 
 #: Contact stiffnesses (log10 N/m) at which the friction's effect on the features is taken.
 _SPREAD_LOG_K = (8.0, 9.0)
+
+
+def _grid(cost: Callable[[np.ndarray], float], grid_point: Callable, history: Sequence[dict],
+          share: float) -> None:
+    """The stiffness grid at the last damping of :data:`_GRID_LOG_C`, then the other
+    dampings at the :data:`_DAMPED_STIFFNESSES` best grid stiffnesses (far from the best
+    stiffness the damping decides nothing: five simulations saved for Nelder-Mead)."""
+    for lk in _GRID_LOG_K:
+        cost(grid_point(lk, _GRID_LOG_C[-1], share))
+    best: dict[float, float] = {}
+    for r in history:
+        lk = round(math.log10(r[STIFFNESS]), 9)
+        if abs(r["bearing_share"] - share) < 1e-12 and lk in _GRID_LOG_K:
+            best[lk] = min(best.get(lk, math.inf), r["objective"])
+    for lk in sorted(best, key=best.get)[:_DAMPED_STIFFNESSES]:
+        for lc in _GRID_LOG_C[:-1]:
+            cost(grid_point(lk, lc, share))
 
 
 def _fit_message(stop: str, sims: int, best: Mapping[str, float], f_grid: float,
@@ -477,7 +495,7 @@ def _search_box(prepared: Sequence[PreparedTest], rig: Rig, max_evaluations: int
     """Checks of :func:`fit_impacts`' arguments; the bounds of (gap, log10 k, log10 c)."""
     if shares and split is None:
         raise ValueError("fit_impacts: shares need split (e.g. candidate_fit.split_friction)")
-    n_grid = len(_GRID_LOG_K) * len(_GRID_LOG_C)
+    n_grid = len(_GRID_LOG_K) + _DAMPED_STIFFNESSES * (len(_GRID_LOG_C) - 1)
     if max_evaluations < n_grid + 4:
         raise ValueError(f"fit_impacts: max_evaluations must be >= {n_grid + 4}, "
                          f"got {max_evaluations}")
