@@ -7,8 +7,9 @@ sampled ringing aliases; a rattling contact's energies move by 5-20 % between
 tolerances), and on a rig whose contact law is not one of ours (a Hunt-Crossley contact
 of another exponent, another damping law) a band of stiffnesses reproduces the impact
 energies equally well.  The search history already holds that profile: every evaluated
-(gap, k, c) and its objective.  The objective is a mean of n squared standardised
-mismatches, so (as a quasi-likelihood whose scale is the best point's mean square) a
+(gap, k, c) and its objective.  The objective is a mean of squared standardised
+mismatches over n tests whose features move together, so (as a quasi-likelihood whose
+scale is the best point's mean square, with the test as the unit of information) a
 point is consistent with the best when n (f − f_best)/f_best ≤ χ²₁(0.95) = 3.84.  The
 interval is the hull of the consistent points' stiffnesses, widened to the nearest
 evaluated inconsistent stiffness on each side (the profile is only sampled there; an
@@ -62,7 +63,8 @@ def stiffness_interval(history: Sequence[Mapping[str, float]], exponent: float,
     exponent : float
         The contact law whose points are used.
     n_features : int
-        Standardised mismatches the objective averages (> 0).
+        Independent units of information the objective averages (> 0; the tests,
+        :func:`stiffness_bracket`).
     stiffness_key : str
         The stiffness's key in the history rows (N/m).
     bounds : (float, float)
@@ -100,12 +102,16 @@ def stiffness_interval(history: Sequence[Mapping[str, float]], exponent: float,
 def stiffness_bracket(history: Sequence[Mapping[str, float]], best_mismatch: Mismatch,
                       widen: Sequence[tuple[np.ndarray, float]] | None, law: float,
                       stiffness_key: str, box: tuple[np.ndarray, np.ndarray]) -> dict:
-    """:func:`stiffness_interval` of a search ``history`` with the number of standardised
-    mismatches the objective averages at its best point (``best_mismatch``, ``widen``);
-    ``box`` the search's (lower, upper) bounds of (gap, log10 k, log10 c)."""
-    n_feat = sum(z.size for z in standardised_terms(best_mismatch, widen) if z is not None)
+    """:func:`stiffness_interval` of a search ``history`` with n the number of tests the
+    objective uses at its best point (``best_mismatch``, ``widen``; tests left out not
+    counted): a test's features move together (its impacts set all four energies and the
+    gap), so the test, not the feature, is the unit of independent information — with
+    the features' count the bracket of a Hertzian contact on the second generator was
+    1.25 wide and missed the truth by 34 %.  ``box``: the search's (lower, upper) bounds of
+    (gap, log10 k, log10 c)."""
+    n_tests = sum(1 for z in standardised_terms(best_mismatch, widen) if z is not None)
     bounds = (10.0 ** float(box[0][1]), 10.0 ** float(box[1][1]))
-    return stiffness_interval(history, law, max(n_feat, 1), stiffness_key, bounds)
+    return stiffness_interval(history, law, max(n_tests, 1), stiffness_key, bounds)
 
 
 def stiffness_note(kint: Mapping, law: float) -> str:
