@@ -15,8 +15,8 @@ from .prepared import PreparedTest
 
 __all__ = ["transient_energies", "kinematic_gap", "impact_objective", "impact_energy_ratio",
            "ENERGY_LOG_SPREAD", "GAP_SPREAD", "FeatureData", "data_features", "Mismatch",
-           "mismatch", "score", "friction_widening", "gap_step", "moved_friction",
-           "NUT_LEVELS", "BEARING_LEVELS", "IMPACT_FRICTION_SPREAD", "IMPACT_FRICTION_DOMINATED"]
+           "mismatch", "score", "standardised_terms", "quiet_noise_levels", "friction_widening", "gap_step", "moved_friction",
+           "NUT_LEVELS", "BEARING_LEVELS", "GAP_REST_SHARE", "IMPACT_FRICTION_SPREAD", "IMPACT_FRICTION_DOMINATED"]
 
 
 def transient_energies(y: np.ndarray, sigma: np.ndarray | None = None,
@@ -58,8 +58,18 @@ def transient_energies(y: np.ndarray, sigma: np.ndarray | None = None,
     return e, s
 
 
+#: A test's kinematic gap is a measurement of the gap only when the rotor rests on a face
+#: in the fast windows: the travel D's standard deviation within a window, averaged over
+#: the windows, must stay below this share of the gap it gives (a rotor rattling
+#: uniformly across a gap b has b/√12 = 0.29 b; resting, the deflection's change only).
+#: On a second generator's Hertzian contact the fast triangle strokes gave 0.3-1.2, every
+#: other test 0.02-0.10.
+GAP_REST_SHARE = 0.25
+
+
 def kinematic_gap(pt: PreparedTest, harvester, voltage_V: np.ndarray | None = None,
-                  fraction: float = 0.8) -> tuple[float, float, int]:
+                  fraction: float = 0.8, require_rest: bool = True
+                  ) -> tuple[float, float, int]:
     """The play the rotor takes up between strokes, from kinematics alone (m).
 
     The rotor-equivalent speed is w = r ω with ω = (R i + L di/dt)/K_e, i = V/R_e, so the
@@ -69,8 +79,11 @@ def kinematic_gap(pt: PreparedTest, harvester, voltage_V: np.ndarray | None = No
     behind it, so the mean of D changes by the gap b plus the contact deflection
     (|f_a| + |f_b|)/k between consecutive fast windows of opposite direction.  Returns
     the mean of that change over the test's window pairs (signed by the direction, m),
-    its standard error and the number of pairs (nan, nan, 0 when there is no pair).
-    ``voltage_V`` replaces the measured voltage (e.g. by a simulated one).
+    its standard error and the number of pairs (nan, nan, 0 when there is no pair, or,
+    with ``require_rest``, when the rotor does not rest on a face in the fast windows:
+    :data:`GAP_REST_SHARE`; the data decide whether a test has the feature, a simulation
+    of it is then measured as it is).  ``voltage_V`` replaces the measured voltage (e.g.
+    by a simulated one).
     """
     h = harvester
     V = pt.y[1] if voltage_V is None else np.asarray(voltage_V, dtype=float)
@@ -94,6 +107,9 @@ def kinematic_gap(pt: PreparedTest, harvester, voltage_V: np.ndarray | None = No
     if not vals:
         return math.nan, math.nan, 0
     vals_a = np.asarray(vals)
+    within = float(np.mean([np.std(D[a:b]) for a, b in wins]))
+    if require_rest and within > GAP_REST_SHARE * abs(float(vals_a.mean())):
+        return math.nan, math.nan, 0
     se = float(np.std(vals_a, ddof=1) / math.sqrt(vals_a.size)) if vals_a.size > 1 else math.nan
     return float(vals_a.mean()), se, int(vals_a.size)
 
@@ -123,10 +139,53 @@ class FeatureData:
     gaps: list[tuple[float, float, int]]
 
 
+#: Samples per block of :func:`quiet_noise_levels`, the quantile of the blocks' noise
+#: levels it takes and that quantile's expectation for pure Gaussian noise (white or
+#: AR(1) up to 0.9: 0.71 of the level, simulated), which it is divided by.  Where impacts
+#: fill a share c of the blocks the quantile is the noise's 0.05/(1 − c) one: 15 % high
+#: at c = 0.7, 40 % at c = 0.9.
+QUIET_BLOCK, QUIET_QUANTILE, QUIET_BIAS = 50, 0.05, 0.71
+
+
+def quiet_noise_levels(prepared: Sequence[PreparedTest]) -> np.ndarray:
+    """Each channel's noise level (the white-equivalent σ of its second differences) from
+    the quietest blocks of the campaign's tests.
+
+    A test's own robust level (the median absolute second difference, ``pt.sigma``) is
+    inflated by impacts where the rotor rattles through most of the record (4-30 x the
+    sensor's on a second generator's Hertzian contact), and subtracting that inflated
+    noise expectation from the data's transient energies, but not from a simulation's,
+    biased the data's second-difference energies low by up to 95 % on a slow test.  The
+    sensor is the same in every test of a campaign, so its level is taken where the
+    record is quiet: the :data:`QUIET_QUANTILE` quantile over all tests' blocks of
+    :data:`QUIET_BLOCK` resolved samples of the blocks' robust levels, divided by that
+    quantile's expectation for pure noise (:data:`QUIET_BIAS`).  Falls back to the tests'
+    smallest own level when there are fewer than twenty blocks."""
+    ny = min(pt.y.shape[0] for pt in prepared)
+    levels: list[list[float]] = [[] for _ in range(ny)]
+    for pt in prepared:
+        d2 = np.diff(pt.y[:ny], 2, axis=1)
+        ok = (pt.weight[2:] > 0) & (pt.weight[1:-1] > 0) & (pt.weight[:-2] > 0)
+        for a in range(0, d2.shape[1] - QUIET_BLOCK + 1, QUIET_BLOCK):
+            if not ok[a:a + QUIET_BLOCK].all():
+                continue
+            blk = d2[:, a:a + QUIET_BLOCK]
+            mad = np.median(np.abs(blk - np.median(blk, axis=1, keepdims=True)), axis=1)
+            for ch in range(ny):
+                levels[ch].append(1.4826 * float(mad[ch]) / math.sqrt(6.0))
+    own = np.min([pt.sigma[:ny] for pt in prepared], axis=0)
+    if min(len(lv) for lv in levels) < 20:
+        return own
+    return np.array([float(np.quantile(lv, QUIET_QUANTILE)) / QUIET_BIAS for lv in levels])
+
+
 def data_features(prepared: Sequence[PreparedTest], harvester) -> FeatureData:
-    """The measured features of each test: transient energies, their noise spreads and
-    the kinematic gap."""
-    out = [transient_energies(pt.y, pt.sigma, pt.weight) for pt in prepared]
+    """The measured features of each test: transient energies (less the noise expectation
+    of the campaign's quietest blocks, :func:`quiet_noise_levels`, or the test's own level
+    where that is lower), their noise spreads and the kinematic gap."""
+    quiet = quiet_noise_levels(prepared) if prepared else np.zeros(0)
+    out = [transient_energies(pt.y, np.minimum(pt.sigma[:quiet.size], quiet), pt.weight)
+           for pt in prepared]
     gaps = [kinematic_gap(pt, harvester) if pt.y.shape[0] > 1 else (math.nan, math.nan, 0)
             for pt in prepared]
     return FeatureData([e for e, _ in out], [s for _, s in out], gaps)
@@ -153,7 +212,7 @@ def mismatch(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray], harv
         floor = np.maximum(s, 1e-300)
         lrs.append(np.log((np.maximum(es, 0.0) + floor) / (np.maximum(e, 0.0) + floor)).ravel())
         if g[2] > 0 and yp.shape[0] > 1:
-            gs = kinematic_gap(pt, harvester, yp[1])[0]
+            gs = kinematic_gap(pt, harvester, yp[1], require_rest=False)[0]
             se = g[1] if math.isfinite(g[1]) else 0.0
             sd = math.hypot(se, GAP_SPREAD * abs(g[0])) or 1e-9
             gaps.append((gs - g[0] if math.isfinite(gs) else math.inf, sd))
@@ -176,6 +235,24 @@ def score(m: Mismatch, widen: Sequence[tuple[np.ndarray, float]] | None = None) 
                                    else 1e3]))
     t = np.concatenate(terms) if terms else np.zeros(0)
     return float(np.mean(t ** 2)) if t.size else math.nan
+
+
+def standardised_terms(m: Mismatch, widen: Sequence[tuple[np.ndarray, float]] | None = None
+                       ) -> list[np.ndarray | None]:
+    """Per test, the standardised mismatches :func:`score` averages (the log energies
+    force e₁, e₂, voltage e₁, e₂, then the gap when the test has one); None for a test
+    left out.  Shows which tests and features a large objective comes from."""
+    out: list[np.ndarray | None] = []
+    for i, (lr, g) in enumerate(zip(m.log_ratios, m.gaps)):
+        we, wg = widen[i] if widen is not None else (0.0, 0.0)
+        if not np.all(np.isfinite(we)):
+            out.append(None)
+            continue
+        z = list(lr / np.hypot(ENERGY_LOG_SPREAD, we))
+        if g is not None:
+            z.append(g[0] / math.hypot(g[1], wg) if math.isfinite(g[0]) else 1e3)
+        out.append(np.asarray(z, dtype=float))
+    return out
 
 
 def impact_objective(prepared: Sequence[PreparedTest], preds: Sequence[np.ndarray],

@@ -94,6 +94,7 @@ from .impact_features import (
     score,
     transient_energies,
 )
+from .impact_stiffness import peak_force_ratios, stiffness_bracket, stiffness_note
 
 __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective",
            "impact_energy_ratio", "fit_impacts", "fit_candidate_on_impacts", "IMPACT_SHARES", "impact_record",
@@ -121,6 +122,9 @@ IMPACT_LAWS = (1.0, 1.5)
 #: Contact stiffnesses (log10 N/m) and dampings (log10 N s/m) of the starting grid.
 _GRID_LOG_K = (6.0, 6.5, 7.0, 7.5, 8.0, 8.5, 9.0, 9.5)
 _GRID_LOG_C = (3.0, 4.0)
+#: The grid stiffnesses (the best at the last damping) at which the other dampings are
+#: also simulated: far from the best stiffness the damping does not decide anything.
+_DAMPED_STIFFNESSES = 3
 #: Bearing shares of the start's rod-equivalent friction screened first (at c = 1e4 N s/m
 #: and the stiffnesses of _SHARE_GRID_LOG_K, with the start's own split as share 0):
 #: a rigid baseline lumps the friction into the nut, but the bearing's part brakes the
@@ -132,6 +136,11 @@ _SHARE_GRID_LOG_K = (7.0, 8.0, 9.0)
 _SHARE_STEP = 0.05
 #: Nelder–Mead units: 10 % of the gap, a quarter decade of stiffness, 0.4 of damping.
 _STEP = (0.1, 0.25, 0.4)
+#: Nelder–Mead stops when the simplex is within this many units (2 % of the gap, 0.05
+#: decade of stiffness) and its objectives within this share of the best: the objective
+#: is rough at the 5-20 % level (a rattling contact's energies move that much between
+#: integration tolerances), so a tighter tolerance only spends the budget on that noise.
+_XATOL, _FATOL = 0.2, 0.02
 
 
 @dataclass
@@ -164,6 +173,9 @@ class ImpactFit:
     seconds: float
     history: list[dict] = field(default_factory=list)
     contact_exponent: float = 1.0
+    #: The stiffness bracket the evaluated points support and whether it identifies the
+    #: stiffness (:func:`~.impact_stiffness.stiffness_interval`).
+    stiffness: dict = field(default_factory=dict)
 
 
 def with_contact_law(rig: Rig, exponent: float) -> Rig:
@@ -309,9 +321,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
                   for sh in (0.0, *shares)}
         share_best = float(min(scores, key=scores.get))
         say(f"impact-aware fit: bearing share of the friction {share_best:g} (screen)")
-    for lk in _GRID_LOG_K:
-        for lc in _GRID_LOG_C:
-            cost(grid_point(lk, lc, share_best))
+    _grid(cost, grid_point, history, share_best)
     if len(rigs) > 1:
         law[0] = _choose_law(history, laws[1:], law, cost, grid_point, share_best, say)
     if friction_spread > 0.0:
@@ -336,16 +346,34 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     share_best = best["bearing_share"]
     params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
               DAMPING: best[DAMPING]}
+    kint = stiffness_bracket(history, mism[best["_key"]], widen, law[0], STIFFNESS, (lo, hi))
     say(msg := _fit_message(stop, len(history) + extra, best, f_grid, friction_spread, extra,
-                            left_out))
+                            left_out) + stiffness_note(kint, law[0]))
     for r in history:
         r.pop("_key", None)
     return ImpactFit(converged, msg, params, best["objective"], f_grid, len(history) + extra,
-                     time.perf_counter() - t0, history, law[0])
+                     time.perf_counter() - t0, history, law[0], kint)
 
 
 #: Contact stiffnesses (log10 N/m) at which the friction's effect on the features is taken.
 _SPREAD_LOG_K = (8.0, 9.0)
+
+
+def _grid(cost: Callable[[np.ndarray], float], grid_point: Callable, history: Sequence[dict],
+          share: float) -> None:
+    """The stiffness grid at the last damping of :data:`_GRID_LOG_C`, then the other
+    dampings at the :data:`_DAMPED_STIFFNESSES` best grid stiffnesses (far from the best
+    stiffness the damping decides nothing: five simulations saved for Nelder-Mead)."""
+    for lk in _GRID_LOG_K:
+        cost(grid_point(lk, _GRID_LOG_C[-1], share))
+    best: dict[float, float] = {}
+    for r in history:
+        lk = round(math.log10(r[STIFFNESS]), 9)
+        if abs(r["bearing_share"] - share) < 1e-12 and lk in _GRID_LOG_K:
+            best[lk] = min(best.get(lk, math.inf), r["objective"])
+    for lk in sorted(best, key=best.get)[:_DAMPED_STIFFNESSES]:
+        for lc in _GRID_LOG_C[:-1]:
+            cost(grid_point(lk, lc, share))
 
 
 def _fit_message(stop: str, sims: int, best: Mapping[str, float], f_grid: float,
@@ -381,7 +409,8 @@ def _nelder_mead(cost: Callable[[np.ndarray], float], best: Mapping[str, float],
         res = minimize(f,
                        np.zeros(dim), method="Nelder-Mead",
                        options={"initial_simplex": np.vstack([np.zeros(dim), np.eye(dim)]),
-                                "xatol": 0.05, "fatol": 1e-2, "maxfev": max_evaluations})
+                                "xatol": _XATOL, "fatol": max(_FATOL * best["objective"], 1e-2),
+                                "maxfev": max_evaluations})
     except _Budget:
         return False, "stopped at the simulation budget"
     except _Deadline:
@@ -426,6 +455,10 @@ def _widen_by_friction(prepared: Sequence[PreparedTest], rig: Rig, data: Feature
     return widen, left_out, sims
 
 
+#: Grid stiffnesses (the best) that get a gap step.
+_GAP_STEPS = 3
+
+
 def _gap_steps(history: list[dict], mism: Mapping[tuple, Mismatch],
                widen: Sequence[tuple[np.ndarray, float]] | None, share: float, g_kin: float,
                cost: Callable[[np.ndarray], float], law: float = 1.0) -> None:
@@ -436,13 +469,17 @@ def _gap_steps(history: list[dict], mism: Mapping[tuple, Mismatch],
     kinematic gap less the contact deflection) is short there and the stiff end of the
     grid was judged at the wrong gap.  Used with an uncertain friction only: with the
     true friction the steps moved a 0.3 mm / 3e8 N/m case into a worse basin of the
-    rough objective (0.19 against 0.06 without them, stiffness +57 % against +12 %)."""
+    rough objective (0.19 against 0.06 without them, stiffness +57 % against +12 %).
+    Only the :data:`_GAP_STEPS` best grid stiffnesses get a step (the others are far from
+    the optimum; their simulations go to the Nelder-Mead stage instead)."""
+    best_rows = []
     for lk in _GRID_LOG_K:
         rows = [r for r in history if abs(math.log10(r[STIFFNESS]) - lk) < 1e-9
                 and abs(r["bearing_share"] - share) < 1e-12 and r["contact_exponent"] == law]
-        if not rows:
-            continue
-        r0 = min(rows, key=lambda r: r["objective"])
+        if rows:
+            best_rows.append((lk, min(rows, key=lambda r: r["objective"])))
+    best_rows.sort(key=lambda kr: kr[1]["objective"])
+    for lk, r0 in best_rows[:_GAP_STEPS]:
         step = gap_step(mism[r0["_key"]], widen)
         if math.isfinite(step) and step != 0.0:
             try:
@@ -458,7 +495,7 @@ def _search_box(prepared: Sequence[PreparedTest], rig: Rig, max_evaluations: int
     """Checks of :func:`fit_impacts`' arguments; the bounds of (gap, log10 k, log10 c)."""
     if shares and split is None:
         raise ValueError("fit_impacts: shares need split (e.g. candidate_fit.split_friction)")
-    n_grid = len(_GRID_LOG_K) * len(_GRID_LOG_C)
+    n_grid = len(_GRID_LOG_K) + _DAMPED_STIFFNESSES * (len(_GRID_LOG_C) - 1)
     if max_evaluations < n_grid + 4:
         raise ValueError(f"fit_impacts: max_evaluations must be >= {n_grid + 4}, "
                          f"got {max_evaluations}")
@@ -526,8 +563,10 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     fine = predict(fit_pts, crig, res.parameters, rtol=1e-9)
     d = np.concatenate([((ya - yb) * pt.wnorm).ravel() for pt, ya, yb in zip(fit_pts, pf, fine)])
     chaos = float(np.sqrt(np.mean(d ** 2)))
+    peaks = peak_force_ratios(fit_pts, pf)
     note = (f"the force's transient energy is {ratio:.3g} x the current model's (impacts): "
-            f"{res.message}; sample-wise response reproducible to {chaos:.3g} noise std "
+            f"{res.message}; peak forces simulated/measured {np.nanmedian(peaks):.2f} (median; "
+            f"{np.nanmin(peaks):.2f}-{np.nanmax(peaks):.2f} over the fit tests); sample-wise response reproducible to {chaos:.3g} noise std "
             f"between tolerances 1e-7 and 1e-9"
             + (" (a rattling contact: fitted on transient energies and kinematic gaps, not "
                "sample by sample)" if chaos > 1.0 else ""))
@@ -539,6 +578,8 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
                                             "simulations": res.evaluations,
                                             "converged": res.success,
                                             "contact_exponent": res.contact_exponent,
+                                            "stiffness": res.stiffness,
+                                            "peak_force_ratios": peaks.tolist(),
                                             "tolerance_change_rms_sigma": chaos}}],
                     seconds=time.perf_counter() - t0, path="impacts", sse=sse, n_obs=n_obs)
     return name, out, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])

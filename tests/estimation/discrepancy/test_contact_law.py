@@ -119,5 +119,37 @@ def test_impact_fit_search_stops_at_the_runs_deadline():
     with deadline_set(1e-6):
         res = fit_impacts(pts, rig, start)
     assert "deadline" in res.message and not res.success
-    assert res.evaluations == 16  # the grid only
+    assert res.evaluations == 11  # the grid only (8 stiffnesses, 3 of them at a second damping)
     assert res.objective == res.objective_start
+    kint = res.stiffness  # a bracket around the best point, stated as such
+    assert kint["lower_N_per_m"] <= res.parameters[K] <= kint["upper_N_per_m"]
+    assert str(kint["identified"] and "identified" or "NOT identified") in res.message
+
+
+def _profile(k_true, width_dec, ks, n=40):
+    """History rows of a quadratic profile in log k (objective 2 at the truth)."""
+    return [{K: k, "objective": 2.0 * (1.0 + (math.log10(k / k_true) / width_dec) ** 2),
+             "contact_exponent": 1.5} for k in ks]
+
+
+def test_stiffness_interval_brackets_a_sharp_profile_and_flags_a_flat_one():
+    """A sharp profile in log k is bracketed by its grid neighbours and identified; a flat
+    one (every stiffness within the spread of the best) is an open, unidentified bracket;
+    the law's own constant of a Hertzian secant stiffness is K = k_c p_ref^-0.5."""
+    from ehsa_opt.estimation.discrepancy.impact_stiffness import (
+        law_constant,
+        stiffness_interval,
+    )
+    ks = [10 ** (6 + 0.25 * i) for i in range(15)]  # 1e6 .. 3.2e9
+    sharp = stiffness_interval(_profile(1e8, 0.1, ks), 1.5, 40, K, (1e4, 1e10))
+    assert sharp["identified"] and not sharp["open_below"] and not sharp["open_above"]
+    assert sharp["lower_N_per_m"] < 1e8 < sharp["upper_N_per_m"]
+    assert sharp["upper_N_per_m"] / sharp["lower_N_per_m"] < 4.0
+    flat = stiffness_interval(_profile(1e8, 30.0, ks), 1.5, 40, K, (1e4, 1e10))
+    assert not flat["identified"] and flat["open_below"] and flat["open_above"]
+    assert (flat["lower_N_per_m"], flat["upper_N_per_m"]) == (1e4, 1e10)
+    # rows of another law are not used
+    with pytest.raises(ValueError, match="exponent 1"):
+        stiffness_interval(_profile(1e8, 0.1, ks), 1.0, 40, K)
+    assert law_constant(1e7, 1.5) == pytest.approx(1e7 / math.sqrt(1e-5))
+    assert law_constant(3e8, 1.0) == 3e8
