@@ -442,19 +442,24 @@ def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff:
 def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse_fit,
                     sse_held,
                     n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say,
-                    cur_ev_pred=None, masks=None) -> None:
+                    cur_ev_pred=None, masks=None, presliding=None) -> None:
     """Fill the :class:`~.results.CandidateResult` ``c`` from one re-identification
     ``out`` (``(name, FitResult, fit outputs, held-out outputs, rig)``,
     :func:`~.candidate_fit.fit_member`) and judge it by :func:`earns` (force error,
     ΔBIC on the fit and held-out tests, SSE alternative per channel,
     :func:`channel_sse_excess_reduction`) or by its own evidence per block.
     ``member`` is the catalogue entry (:class:`~.candidates.Candidate`: the channels
-    a rigid-rig effect can change, its amplitudes)."""
+    a rigid-rig effect can change, its amplitudes).  ``presliding``: the base model's
+    presliding law (:class:`~.presliding.PreslidingLaw`); when adopted, the candidate's
+    predictions get their own presliding term before anything here measures them
+    (the current model's measures were taken on its corrected predictions)."""
     name, res, pf, ph, crig = out
     c.fitted, c.fit, c.rig = True, res, crig
     if not pf:
         say(f"{name}: re-identification failed ({res.message})")
         return
+    if presliding is not None:
+        pf, ph = presliding.correct(fit_pts, pf, held_pts, ph)
     comp_params = [q.name for q in comps[name].parameters]
     k = len(comp_params)
     c.parameters = {n: res.parameters[n] for n in comp_params}

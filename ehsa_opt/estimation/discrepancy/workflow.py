@@ -78,12 +78,14 @@ from .results import (
 )
 from .search import SearchState, SearchTests, run_rounds
 from .split import crop_test, load_split, spread_within
+from .presliding import PreslidingLaw, adopt_presliding
 from .terms import TermProposal, names_an_effect, propose_term
 from .voltage_skew import VoltageSkew, find_voltage_skew, realign_voltage
 
 __all__ = ["run_discrepancy", "load_data", "prepare_search_tests", "fit_baseline", "Baseline",
            "name_force_lag", "name_drive_lag", "assemble_result", "BASELINE_MAX_SAMPLES",
-           "CANDIDATE_MAX_SAMPLES", "baseline_decimation", "check_voltage_skew"]
+           "CANDIDATE_MAX_SAMPLES", "baseline_decimation", "check_voltage_skew",
+           "adopt_base_presliding"]
 
 
 def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings | None = None,
@@ -129,6 +131,9 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         notes.append(note)
     elif settings.discover and "force_lag" in settings.candidates:
         state = name_force_lag(tests, base, state, settings, say, all_cands)
+    law = None
+    if settings.presliding:
+        law = adopt_base_presliding(tests, base, state, say, notes)
     state = run_rounds(tests, state, settings, say, notes, all_cands)
     term = None
     if settings.discover:
@@ -139,8 +144,43 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
             say(f"term: {term.description}; {tests.evaluation} error "
                 f"{term.error_before:.3f} -> {term.error_after:.3f} % "
                 f"({'earns' if term.earns else 'does not earn'})")
-    return assemble_result(data, tests, base, state, all_cands, term, notes,
-                           time.perf_counter() - t_start, raw, skew)
+    res = assemble_result(data, tests, base, state, all_cands, term, notes,
+                          time.perf_counter() - t_start, raw, skew)
+    res.baseline_presliding = law.as_dict() if law is not None else None
+    if law is not None and law.adopted:
+        res.message += (f"; the base model's friction has a presliding transition "
+                        f"({tests.evaluation} error without it {law.error_before:.3f} %)")
+    return res
+
+
+def adopt_base_presliding(tests: SearchTests, base: Baseline, state: SearchState, say,
+                          notes: list[str]) -> PreslidingLaw:
+    """The presliding transition of the base model's friction law
+    (:func:`~.presliding.adopt_presliding`), tried on the model that enters the rounds.
+    When adopted, the state's and the baseline's predictions get their presliding term
+    (``state`` and ``base`` changed in place: the error, the effective sample sizes and
+    the localisation are of the corrected model) and ``tests.presliding`` carries the
+    law to every model the search judges."""
+    law = adopt_presliding(tests.fit_pts, state.fit_pred, tests.held_pts, state.held_pred,
+                           tests.floor, state.n_eff_fit, state.n_eff_held)
+    say(law.message)
+    notes.append(law.message)
+    if not law.adopted:
+        return law
+    tests.presliding = law
+    fit_pts, held_pts = tests.fit_pts, tests.held_pts
+    state.fit_pred, state.held_pred = law.correct(fit_pts, state.fit_pred, held_pts,
+                                                  state.held_pred)
+    state.error = force_error_percent(tests.eval_pts, state.eval_pred())
+    state.n_eff_fit = effective_samples(fit_pts, state.fit_pred)
+    state.n_eff_held = effective_samples(held_pts, state.held_pred) if held_pts else math.nan
+    if not state.effects:
+        base.error = state.error
+    base.fit_pred, base.held_pred = law.correct(fit_pts, base.fit_pred, held_pts,
+                                                base.held_pred)
+    base.localisation = localise(fit_pts + held_pts, base.fit_pred + base.held_pred,
+                                 lead_m_per_rad=tests.lead_m_per_rad)
+    return law
 
 
 def load_data(data: BenchData | str | Path, say, notes: list[str]) -> BenchData:
