@@ -8,6 +8,11 @@ round after round, then propose a data-driven term for what no catalogue effect 
    uses all data — the result says so.
 2. **Baseline**: identify the base model (friction; inertia and offset without
    generator) on the fit tests, started from a linear least-squares solution.
+   Before the rounds (after the channel members below), the base model's friction
+   law is offered a presliding transition (:func:`~.presliding.adopt_presliding`:
+   a force term sign(v) exp(−s/ℓ) after each reversal, adopted when it earns by the
+   rule of step 6); once adopted every model judged has its own such term
+   (:meth:`~.presliding.PreslidingLaw.correct`), so no member earns for it.
 3. **Localise** the residual (:func:`~.localise.localise`) and read initial
    values off it (the cogging period from the residual's spectrum in rotor angle,
    :func:`~.localise.best_rotor_period`).
@@ -44,7 +49,8 @@ round after round, then propose a data-driven term for what no catalogue effect 
 
 :func:`run_discrepancy` runs these as named phases: :func:`load_data`,
 :func:`prepare_search_tests` (1), :func:`fit_baseline` (2–3), :func:`name_force_lag`
-(the ``force_lag`` member, before the rounds), :func:`~.search.run_rounds` (4–7),
+(the ``force_lag`` member, before the rounds), :func:`adopt_base_presliding` (the
+presliding transition), :func:`~.search.run_rounds` (4–7),
 :func:`~.terms.propose_term` (8) and :func:`assemble_result`.
 """
 
