@@ -19,7 +19,8 @@ search judges:
   model parameter), ℓ on :data:`PRESLIDING_LENGTHS_M`;
 * :func:`fit_amplitudes`: their amplitudes, one set shared by all tests (one friction
   law), by noise-weighted least squares on the fit tests' force residual of the model
-  being judged (the fits' weights: resolved samples over the force's σ);
+  being judged (the fits' weights: resolved samples over the force's σ), each ≤ 0 (a
+  friction that builds up after a reversal, never above the static map's);
 * :func:`corrected`: a model's force predictions with its own presliding term — the
   amplitudes fitted on its fit-test residual, applied to fit and held-out predictions
   alike (so the held-out tests judge the law, not a fit to them);
@@ -45,6 +46,7 @@ from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
+from scipy.optimize import nnls
 
 from .evidence import (delta_bic, earns, excess_reduction, force_error_percent,
                        normalised_sse)
@@ -103,7 +105,16 @@ def fit_amplitudes(pts: Sequence[PreparedTest], preds: Sequence[np.ndarray],
                    cache: dict | None = None) -> np.ndarray:
     """Amplitudes (N, one per length, shared by all tests) of the presliding columns
     that best explain the force residual y − ŷ of ``preds`` on ``pts``, by least
-    squares weighted like the fits (resolved samples over the force's σ)."""
+    squares weighted like the fits (resolved samples over the force's σ), each
+    amplitude ≤ 0.
+
+    The sign is the physics of presliding: after a reversal the friction *builds up*
+    from the opposite direction's level to the static map's, it never exceeds it, so
+    the model's force is too large in the sliding direction there (y − ŷ opposes
+    sign(v)), and Σ a_ℓ exp(−s/ℓ) with every a_ℓ ≤ 0 is such a monotone build-up.
+    Unconstrained, the two columns fit an overshoot (+111 N at 10 µm, −145 N at 30 µm
+    on a campaign with a mount spring of 3e6 N/m): the ringing of a spring, which is
+    the member's to explain, not the friction law's."""
     Xs, rs = [], []
     for pt, yp in zip(pts, preds):
         w = pt.wnorm[0]
@@ -115,7 +126,15 @@ def fit_amplitudes(pts: Sequence[PreparedTest], preds: Sequence[np.ndarray],
     keep = np.any(X != 0, axis=0)  # a length no sample reaches (no reversal) stays 0
     coef = np.zeros(X.shape[1])
     if keep.any():
-        coef[keep] = np.linalg.lstsq(X[:, keep], r, rcond=None)[0]
+        # a_ℓ ≤ 0: non-negative least squares on −X (the normal equations' Cholesky
+        # factor stands in for the tall matrix: the same solution, k × k)
+        A = -X[:, keep]
+        G, b = A.T @ A, A.T @ r
+        try:
+            L = np.linalg.cholesky(G + 1e-12 * np.trace(G) * np.eye(G.shape[0]))
+        except np.linalg.LinAlgError:
+            return coef
+        coef[keep] = -nnls(L.T, np.linalg.solve(L, b))[0]
     return coef
 
 

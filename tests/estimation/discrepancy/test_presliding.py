@@ -168,3 +168,12 @@ def test_a_member_with_an_effect_of_its_own_still_earns_beside_the_law():
     c, said = _judge(fp, fpr, hp, hpr, cf, chh, law)
     assert c.earns, said
     assert math.isfinite(c.error_after) and c.error_after < 0.6 * c.error_before
+
+
+def test_a_force_above_the_static_map_after_reversals_is_not_presliding():
+    """Presliding builds the friction up after a reversal (amplitudes ≤ 0); a force
+    that overshoots there (a spring's ringing) is not fitted by the law."""
+    fp, fpr, hp, hpr = _case(_presliding(+30.0, 0.0))
+    coef = fit_amplitudes(fp, fpr)
+    assert np.all(coef <= 0.0) and np.all(np.abs(coef) < 3.0), coef
+    assert not _adopt(fp, fpr, hp, hpr).adopted
