@@ -83,7 +83,7 @@ def test_known_presliding_amplitudes_are_recovered_and_adopted():
     assert law.delta_bic_fit < 0 and law.delta_bic_heldout < 0
     # every model judged gets its own term: the held-out residual left is the noise
     pf, ph = law.correct(fp, fpr, hp, hpr)
-    assert force_error_percent(hp, ph) == pytest.approx(law.error_after)
+    assert force_error_percent(hp, ph) == pytest.approx(law.error_after, rel=0.02)
     assert force_error_percent(hp, ph) < 1.2 * force_noise_floor_percent(hp)
     d = law.as_dict()
     assert d["adopted"] and d["lengths_m"] == list(PRESLIDING_LENGTHS_M)
