@@ -72,7 +72,7 @@ PRESLIDING_LENGTHS_M: tuple[float, ...] = (1e-5, 3e-5)
 #: on top, then judged those compromises rather than the members (a winding heating
 #: whose voltage fit removed 49 % of the voltage's excess was refuted by its force,
 #: 9.88 → 10.20 %, the same heating 11.95 → 12.02 % without the transition).
-FRICTION_COLUMNS = 2
+FRICTION_COLUMNS = 0
 
 
 #: Velocity scale of the Coulomb column tanh(v/u) re-estimated with the transition
