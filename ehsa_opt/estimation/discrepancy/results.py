@@ -67,7 +67,10 @@ class DiscrepancySettings:
     presliding : bool
         Offer the base model's friction law a presliding transition (adopted only when
         it earns on the baseline, :func:`~.presliding.adopt_presliding`; every model
-        judged then has its own presliding term).  False: the static friction map only.
+        judged then has its own presliding term).  False (default): the static friction
+        map only — with the candidates' parameters fitted without the term, a member
+        fitted to the voltage (a winding heating) can end with a friction compromise
+        that the term then counts against it (see :mod:`.presliding`).
     """
 
     candidates: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag")
@@ -81,7 +84,7 @@ class DiscrepancySettings:
     jobs: int = 1
     discover: bool = True
     budget_s: float | None = None
-    presliding: bool = True
+    presliding: bool = False
 
     def __post_init__(self) -> None:
         if self.budget_s is not None and not (isinstance(self.budget_s, (int, float))
