@@ -40,6 +40,16 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
              f"({len(res.fit_tests)} fit tests, {len(res.heldout_tests)} held-out)."
              + (f" The true parameters (truth.toml) simulate to {floor:.3f} % on the same "
                 f"tests." if floor is not None else "") + "\n")
+    bp = getattr(res, "baseline_presliding", None)
+    if bp:
+        amps = ", ".join(f"{a:+.3g} N at {1e6 * ell:.0f} µm"
+                         for a, ell in zip(bp["amplitudes_N"], bp["lengths_m"]))
+        L.append(f"**Base friction law:** presliding transition sign(v) exp(−s/ℓ) "
+                 f"{'adopted' if bp['adopted'] else 'not adopted'} ({amps}; {res.evaluation} "
+                 f"error of the baseline {bp['error_before']:.3f} % without it, "
+                 f"{bp['error_after']:.3f} % with it)"
+                 + (" — every model judged below has its own presliding term.\n"
+                    if bp["adopted"] else ".\n"))
     L.append(_decision_rule_markdown(res))
     for note in getattr(res, "notes", []):
         L.append(f"- {note[0].upper()}{note[1:]}.")

@@ -442,19 +442,24 @@ def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff:
 def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse_fit,
                     sse_held,
                     n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say,
-                    cur_ev_pred=None, masks=None) -> None:
+                    cur_ev_pred=None, masks=None, presliding=None) -> None:
     """Fill the :class:`~.results.CandidateResult` ``c`` from one re-identification
     ``out`` (``(name, FitResult, fit outputs, held-out outputs, rig)``,
     :func:`~.candidate_fit.fit_member`) and judge it by :func:`earns` (force error,
     ΔBIC on the fit and held-out tests, SSE alternative per channel,
     :func:`channel_sse_excess_reduction`) or by its own evidence per block.
     ``member`` is the catalogue entry (:class:`~.candidates.Candidate`: the channels
-    a rigid-rig effect can change, its amplitudes)."""
+    a rigid-rig effect can change, its amplitudes).  ``presliding``: the base model's
+    presliding law (:class:`~.presliding.PreslidingLaw`); when adopted, the candidate's
+    predictions get their own presliding term before anything here measures them
+    (the current model's measures were taken on its corrected predictions)."""
     name, res, pf, ph, crig = out
     c.fitted, c.fit, c.rig = True, res, crig
     if not pf:
         say(f"{name}: re-identification failed ({res.message})")
         return
+    if presliding is not None:
+        pf, ph = presliding.correct(fit_pts, pf, held_pts, ph)
     comp_params = [q.name for q in comps[name].parameters]
     k = len(comp_params)
     c.parameters = {n: res.parameters[n] for n in comp_params}
@@ -479,9 +484,16 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     # offered where the force error has no excess beyond noise left, or where another
     # channel's excess over its noise expectation (SSE/N − 1) exceeds the force's;
     # where the force's excess dominates (a gap at 11 %), the force decides
+    # — except for a second generator effect: the voltage's leftover excess is then the
+    # first one's misfit of another law as much as a second effect (a winding heating
+    # took 13 % of it after a constant drop fitted to a Shockley diode once the
+    # presliding transition had lowered the force's excess), see acts_on_generator
     exc = [s0 / n0 - 1.0 if n0 > 0 else -math.inf for s0, n0 in zip(ch_sse0, ch_n)]
+    comps_c = list(getattr(crig, "components", ()))
+    second_gen = bool(comps_c) and acts_on_generator(comps_c[-1]) and any(
+        acts_on_generator(q) for q in comps_c[:-1])
     c.sse_route = (not can_earn(cur_err, floor, 0.0, 1.0)
-                   or (len(exc) > 1 and max(exc[1:]) > exc[0]))
+                   or (len(exc) > 1 and max(exc[1:]) > exc[0] and not second_gen))
     n_force = sum(pt.y.shape[1] for pt in ev_pts)
     by_total = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
                           c.sse_reduction if c.sse_route else None, n_force=n_force))

@@ -67,6 +67,13 @@ class DiscrepancySettings:
         says where it was cut (``success`` False, ``cut`` the reason).  A fit the budget
         cut at its start point is not fitted (``CandidateResult.cut_at_deadline``): it
         takes no decision and is named as work left.
+    presliding : bool
+        Offer the base model's friction law a presliding transition (adopted only when
+        it earns on the baseline, :func:`~.presliding.adopt_presliding`; every model
+        judged then has its own presliding term).  False (default): the static friction
+        map only — with the candidates' parameters fitted without the term, a member
+        fitted to the voltage (a winding heating) can end with a friction compromise
+        that the term then counts against it (see :mod:`.presliding`).
     """
 
     candidates: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag")
@@ -80,6 +87,7 @@ class DiscrepancySettings:
     jobs: int = 1
     discover: bool = True
     budget_s: float | None = None
+    presliding: bool = False
 
     def __post_init__(self) -> None:
         if self.budget_s is not None and not (isinstance(self.budget_s, (int, float))
@@ -205,6 +213,13 @@ class DiscrepancyResult:
         was not run (no voltage channel).  When found, the voltage was re-aligned by
         ``delay_s`` before the rounds; None also when no delay of the grid fits better
         than none.
+    baseline_presliding : dict or None
+        The presliding transition of the base model's friction law
+        (:meth:`~.presliding.PreslidingLaw.as_dict`: ``adopted``, ``lengths_m``, the
+        baseline's ``amplitudes_N``, its ``error_before``/``error_after`` without / with
+        the transition, %, ``excess_reduction``, ΔBIC, ``message``); None when not
+        tried.  When adopted, ``error_before`` and every error, SSE and ΔBIC of the
+        search are of models with their own presliding term.
     """
 
     success: bool
@@ -232,6 +247,7 @@ class DiscrepancyResult:
     notes: list[str] = field(default_factory=list)
     cut: str = ""
     voltage_skew: dict | None = None
+    baseline_presliding: dict | None = None
 
     @property
     def winner(self) -> CandidateResult | None:
@@ -298,6 +314,7 @@ class DiscrepancyResult:
                                           "why": c.cut_at_deadline}
                                          for c in self.candidates if c.cut_at_deadline],
                 "voltage_skew": self.voltage_skew,
+                "baseline_presliding": self.baseline_presliding,
                 "localisation_before": self.loc_before.as_dict(),
                 "localisation_after": self.loc_after.as_dict() if self.loc_after else None,
                 "per_test": self.per_test_errors(),

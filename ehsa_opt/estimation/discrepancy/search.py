@@ -99,6 +99,8 @@ class SearchTests:
     floor: float
     evaluation: str
     validation_dir: Path | None = None
+    #: the base model's presliding law (:class:`~.presliding.PreslidingLaw`; None: none)
+    presliding: Any = None
 
     @property
     def eval_pts(self) -> list[PreparedTest]:
@@ -362,7 +364,7 @@ def _judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRa
     return dict(comps=rk.comps, fit_pts=fit_pts, held_pts=held_pts, sse_fit=sse_fit,
                 sse_held=sse_held, n_eff_fit=state.n_eff_fit, n_eff_held=state.n_eff_held,
                 cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say,
-                cur_ev_pred=state.eval_pred(), masks=masks)
+                cur_ev_pred=state.eval_pred(), masks=masks, presliding=tests.presliding)
 
 
 def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,

@@ -53,6 +53,7 @@ import numpy as np
 from .evidence import WHITE_P, autocorrelation_time, delta_bic, earns, effective_samples, residual_is_white
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
+from .presliding import travel_since_reversal_m
 
 __all__ = ["TermProposal", "shifted_force", "names_an_effect", "travel_since_reversal_m",
            "FRICTION_LAW_GROUPS",
@@ -178,20 +179,6 @@ def feature_library(pt: PreparedTest, pred: np.ndarray, *, lead_m_per_rad: float
     for ell in PRESLIDING_LENGTHS_M:
         add(np.sign(v) * np.exp(-s / ell), f"sign(v)*exp(-s/{1e6 * ell:.0f} um)", "presliding")
     return np.column_stack(cols), names, groups
-
-
-def travel_since_reversal_m(x: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """|x − x at the last reversal| per sample (m); infinite before the first reversal
-    (the record starts in motion: no transition is known to be under way)."""
-    sg = np.sign(v)
-    idx = np.flatnonzero((sg[1:] != sg[:-1]) & (sg[1:] != 0)) + 1
-    last = np.full(x.size, -1)
-    last[idx] = idx
-    last = np.maximum.accumulate(last)
-    out = np.full(x.size, np.inf)
-    k = last >= 0
-    out[k] = np.abs(x[k] - x[last[k]])
-    return out
 
 
 def _stack(pts, preds, lead, centres, width):

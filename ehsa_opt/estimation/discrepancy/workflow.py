@@ -8,6 +8,11 @@ round after round, then propose a data-driven term for what no catalogue effect 
    uses all data — the result says so.
 2. **Baseline**: identify the base model (friction; inertia and offset without
    generator) on the fit tests, started from a linear least-squares solution.
+   Before the rounds (after the channel members below), the base model's friction
+   law is offered a presliding transition (:func:`~.presliding.adopt_presliding`:
+   a force term sign(v) exp(−s/ℓ) after each reversal, adopted when it earns by the
+   rule of step 6); once adopted every model judged has its own such term
+   (:meth:`~.presliding.PreslidingLaw.correct`), so no member earns for it.
 3. **Localise** the residual (:func:`~.localise.localise`) and read initial
    values off it (the cogging period from the residual's spectrum in rotor angle,
    :func:`~.localise.best_rotor_period`).
@@ -44,7 +49,8 @@ round after round, then propose a data-driven term for what no catalogue effect 
 
 :func:`run_discrepancy` runs these as named phases: :func:`load_data`,
 :func:`prepare_search_tests` (1), :func:`fit_baseline` (2–3), :func:`name_force_lag`
-(the ``force_lag`` member, before the rounds), :func:`~.search.run_rounds` (4–7),
+(the ``force_lag`` member, before the rounds), :func:`adopt_base_presliding` (the
+presliding transition), :func:`~.search.run_rounds` (4–7),
 :func:`~.terms.propose_term` (8) and :func:`assemble_result`.
 """
 
@@ -79,12 +85,14 @@ from .results import (
 from .lag_rival import lag_rival
 from .search import SearchState, SearchTests, run_rounds
 from .split import crop_test, load_split, spread_within
+from .presliding import PreslidingLaw, adopt_presliding
 from .terms import TermProposal, names_an_effect, propose_term
 from .voltage_skew import VoltageSkew, find_voltage_skew, realign_voltage
 
 __all__ = ["run_discrepancy", "load_data", "prepare_search_tests", "fit_baseline", "Baseline",
            "name_force_lag", "name_drive_lag", "assemble_result", "BASELINE_MAX_SAMPLES",
-           "CANDIDATE_MAX_SAMPLES", "baseline_decimation", "check_voltage_skew"]
+           "CANDIDATE_MAX_SAMPLES", "baseline_decimation", "check_voltage_skew",
+           "adopt_base_presliding"]
 
 
 def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings | None = None,
@@ -130,6 +138,9 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         notes.append(note)
     elif settings.discover and "force_lag" in settings.candidates:
         state = name_force_lag(tests, base, state, settings, say, all_cands, notes)
+    law = None
+    if settings.presliding:
+        law = adopt_base_presliding(tests, base, state, say, notes)
     state = run_rounds(tests, state, settings, say, notes, all_cands)
     term = None
     if settings.discover:
@@ -140,8 +151,43 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
             say(f"term: {term.description}; {tests.evaluation} error "
                 f"{term.error_before:.3f} -> {term.error_after:.3f} % "
                 f"({'earns' if term.earns else 'does not earn'})")
-    return assemble_result(data, tests, base, state, all_cands, term, notes,
-                           time.perf_counter() - t_start, raw, skew)
+    res = assemble_result(data, tests, base, state, all_cands, term, notes,
+                          time.perf_counter() - t_start, raw, skew)
+    res.baseline_presliding = law.as_dict() if law is not None else None
+    if law is not None and law.adopted:
+        res.message += (f"; the base model's friction has a presliding transition "
+                        f"({tests.evaluation} error without it {law.error_before:.3f} %)")
+    return res
+
+
+def adopt_base_presliding(tests: SearchTests, base: Baseline, state: SearchState, say,
+                          notes: list[str]) -> PreslidingLaw:
+    """The presliding transition of the base model's friction law
+    (:func:`~.presliding.adopt_presliding`), tried on the model that enters the rounds.
+    When adopted, the state's and the baseline's predictions get their presliding term
+    (``state`` and ``base`` changed in place: the error, the effective sample sizes and
+    the localisation are of the corrected model) and ``tests.presliding`` carries the
+    law to every model the search judges."""
+    law = adopt_presliding(tests.fit_pts, state.fit_pred, tests.held_pts, state.held_pred,
+                           tests.floor, state.n_eff_fit, state.n_eff_held)
+    say(law.message)
+    notes.append(law.message)
+    if not law.adopted:
+        return law
+    tests.presliding = law
+    fit_pts, held_pts = tests.fit_pts, tests.held_pts
+    state.fit_pred, state.held_pred = law.correct(fit_pts, state.fit_pred, held_pts,
+                                                  state.held_pred)
+    state.error = force_error_percent(tests.eval_pts, state.eval_pred())
+    state.n_eff_fit = effective_samples(fit_pts, state.fit_pred)
+    state.n_eff_held = effective_samples(held_pts, state.held_pred) if held_pts else math.nan
+    if not state.effects:
+        base.error = state.error
+    base.fit_pred, base.held_pred = law.correct(fit_pts, base.fit_pred, held_pts,
+                                                base.held_pred)
+    base.localisation = localise(fit_pts + held_pts, base.fit_pred + base.held_pred,
+                                 lead_m_per_rad=tests.lead_m_per_rad)
+    return law
 
 
 def load_data(data: BenchData | str | Path, say, notes: list[str]) -> BenchData:
