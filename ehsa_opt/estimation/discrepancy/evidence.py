@@ -484,16 +484,9 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     # offered where the force error has no excess beyond noise left, or where another
     # channel's excess over its noise expectation (SSE/N − 1) exceeds the force's;
     # where the force's excess dominates (a gap at 11 %), the force decides
-    # — except for a second generator effect: the voltage's leftover excess is then the
-    # first one's misfit of another law as much as a second effect (a winding heating
-    # took 13 % of it after a constant drop fitted to a Shockley diode once the
-    # presliding transition had lowered the force's excess), see acts_on_generator
     exc = [s0 / n0 - 1.0 if n0 > 0 else -math.inf for s0, n0 in zip(ch_sse0, ch_n)]
-    comps_c = list(getattr(crig, "components", ()))
-    second_gen = bool(comps_c) and acts_on_generator(comps_c[-1]) and any(
-        acts_on_generator(q) for q in comps_c[:-1])
     c.sse_route = (not can_earn(cur_err, floor, 0.0, 1.0)
-                   or (len(exc) > 1 and max(exc[1:]) > exc[0] and not second_gen))
+                   or (len(exc) > 1 and max(exc[1:]) > exc[0]))
     n_force = sum(pt.y.shape[1] for pt in ev_pts)
     by_total = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
                           c.sse_reduction if c.sse_route else None, n_force=n_force))
