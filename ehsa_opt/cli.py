@@ -182,7 +182,7 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
     from .datasets.embedded import load_truth
     load_truth(args.data_dir)  # a truth.toml that cannot be used is refused before the work
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
-                                   max_tests=args.max_tests)
+                                   max_tests=args.max_tests, presliding=args.presliding)
     return run_with_budget(args.data_dir, args.out, settings, args.budget_s,
                            lambda m: print(m, flush=True))
 
@@ -333,6 +333,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--budget-s", type=_NON_NEGATIVE_FLOAT, default=170.0,
                    help="wall-time budget, s (default 170; 0: none): when reached, a "
                         "partial answer (effects of the completed rounds), exit 1")
+    d.add_argument("--presliding", action="store_true",
+                   help="offer the base friction law a presliding transition (adopted only "
+                        "when it earns on the baseline; off by default)")
     d.set_defaults(func=_cmd_discrepancy)
 
     r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data "
