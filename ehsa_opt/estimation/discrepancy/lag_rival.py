@@ -29,7 +29,7 @@ from .evidence import choose_winner
 from .lookahead import member_key
 from .results import CandidateResult, DiscrepancySettings
 from .nested import nested_to_fit
-from .search import SearchState, SearchTests, _judge_context, rank_round
+from .search import SearchState, SearchTests, judge_context, rank_round
 
 __all__ = ["lag_rival"]
 
@@ -50,7 +50,7 @@ def lag_rival(tests: SearchTests, state: SearchState, settings: DiscrepancySetti
         return None
     say("force_lag: the members the first round would re-identify ("
         + ", ".join(rk.chosen) + ") fitted on the record as it is, against the delay")
-    judge = _judge_context(1, tests, state, rk, say, notes)
+    judge = judge_context(1, tests, state, rk, say, notes)
     if judge is None:
         return None
     names = list(rk.chosen)

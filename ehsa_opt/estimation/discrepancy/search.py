@@ -68,7 +68,7 @@ from .results import CandidateResult, DiscrepancySettings
 from .terms import FRICTION_LAW_GROUPS, TERM_PREFERENCE, propose_term
 
 __all__ = ["SearchTests", "SearchState", "RoundRanking", "run_rounds", "rank_round",
-           "judge_round", "widen_round", "add_winner", "should_widen",
+           "judge_round", "judge_context", "widen_round", "add_winner", "should_widen",
            "WIDEN_BELOW"]
 
 
@@ -196,7 +196,7 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
     """One round on ``state`` (changed in place when a winner is added).  Returns
     whether to go on and the look-ahead path's start (see :func:`run_rounds`)."""
     rk = rank_round(tests, state, settings)
-    judge = _judge_context(rnd, tests, state, rk, say, notes)
+    judge = judge_context(rnd, tests, state, rk, say, notes)
     if judge is None:  # nothing can earn: the round is not re-identified
         all_cands += [rk.cands[n] for n in rk.order]
         return False, joint
@@ -325,7 +325,7 @@ def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySett
                         time.perf_counter() - t0)
 
 
-def _judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRanking,
+def judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRanking,
                    say, notes: list[str]) -> dict | None:
     """The current model's measures every candidate of the round is judged against
     (keyword arguments of :func:`~.evidence.judge_candidate`); None when no refit can
