@@ -15,6 +15,7 @@ from ehsa_opt.estimation.discrepancy.localise import reversal_times
 from ehsa_opt.physics import COMPONENTS
 from ehsa_opt.physics.params import HarvesterParams
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests, write_synthetic
+from tests.estimation.discrepancy.residual_cases import residual_case
 
 H = HarvesterParams()
 
@@ -463,17 +464,7 @@ def test_a_confounded_candidate_is_added_first_when_a_path_over_it_earns():
 def _residual_case(extra, seed=3):
     """Clean tests with a known term added to the measured force; the 'model' is the
     noise-free simulation (so the residual is the term plus noise)."""
-    tests = generate_bench_tests(SyntheticSpec(frequencies_hz=(0.8, 2.0, 3.2),
-                                               loads_ohm=(22.0, 100.0), cycles=1.0, seed=seed,
-                                               noise_force_N=0.0, noise_voltage_V=0.0))
-    pts = prepare_tests(tests)
-    rng = np.random.default_rng(seed)
-    preds = [pt.y.copy() for pt in pts]
-    for pt in pts:
-        pt.y = pt.y.copy()
-        pt.y[0] = pt.y[0] + extra(pt) + rng.normal(0, 2.0, pt.y.shape[1])
-        pt.sigma = np.array([2.0, 0.05])
-    return pts, preds
+    return residual_case(extra, seed)
 
 
 def test_term_discovery_names_a_rough_spot_in_words():

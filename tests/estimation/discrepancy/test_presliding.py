@@ -29,6 +29,8 @@ from ehsa_opt.estimation.discrepancy.presliding import (
 from ehsa_opt.estimation.discrepancy.results import CandidateResult
 from ehsa_opt.physics import make_component
 
+from tests.estimation.discrepancy.residual_cases import residual_case
+
 
 def _presliding(a10, a30):
     def extra(pt):
@@ -39,20 +41,8 @@ def _presliding(a10, a30):
 
 
 def _case(extra, seed=5, sigma=2.0):
-    """Sine tests whose measured force is the noise-free model plus ``extra(test)`` and
-    white noise of ``sigma`` N; the 'model' is the noise-free simulation.  Returns fit
-    tests, their model outputs, held-out tests, theirs."""
-    tests = generate_bench_tests(SyntheticSpec(frequencies_hz=(0.8, 2.0, 3.2),
-                                               loads_ohm=(22.0, 100.0), cycles=1.0, seed=seed,
-                                               noise_force_N=0.0, noise_voltage_V=0.0))
-    pts = prepare_tests(tests)
-    rng = np.random.default_rng(seed)
-    preds = [pt.y.copy() for pt in pts]
-    for pt in pts:
-        pt.y = pt.y.copy()
-        pt.y[0] = pt.y[0] + extra(pt) + rng.normal(0, sigma, pt.y.shape[1])
-        pt.y[1] = pt.y[1] + rng.normal(0, 0.05, pt.y.shape[1])
-        pt.sigma = np.array([sigma, 0.05])
+    """Fit tests, their model outputs, held-out tests, theirs (every other test)."""
+    pts, preds = residual_case(extra, seed, sigma, voltage_noise_V=0.05)
     return pts[::2], preds[::2], pts[1::2], preds[1::2]
 
 

@@ -15,6 +15,7 @@ from ehsa_opt.estimation.discrepancy.terms import (
     propose_term,
     travel_since_reversal_m,
 )
+from tests.estimation.discrepancy.residual_cases import residual_case
 
 LEAD = 0.01 / (2 * math.pi)
 
@@ -75,16 +76,7 @@ def test_travel_since_reversal():
 
 
 def _residual_case(extra, seed=5):
-    tests = generate_bench_tests(SyntheticSpec(frequencies_hz=(0.8, 2.0, 3.2),
-                                               loads_ohm=(22.0, 100.0), cycles=1.0, seed=seed,
-                                               noise_force_N=0.0, noise_voltage_V=0.0))
-    pts = prepare_tests(tests)
-    rng = np.random.default_rng(seed)
-    preds = [pt.y.copy() for pt in pts]
-    for pt in pts:
-        pt.y = pt.y.copy()
-        pt.y[0] = pt.y[0] + extra(pt) + rng.normal(0, 2.0, pt.y.shape[1])
-        pt.sigma = np.array([2.0, 0.05])
+    pts, preds = residual_case(extra, seed)
     return pts[:4], preds[:4], pts[4:], preds[4:]
 
 
