@@ -1,4 +1,4 @@
-"""Held-out check of the bench physics checks (issue 15).
+"""Held-out check of the bench physics checks.
 
 The tolerances of ``ehsa_opt.datasets.checks`` were set on the embedded prototype data
 (seed 2019, backlash, the paper's 7 x 3 grid).  Here they are run on data they were not

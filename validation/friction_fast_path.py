@@ -1,7 +1,7 @@
 """Benchmark: the friction-aware fast path (stochastic equivalent linearisation,
 ``ehsa_opt.vehicle.fast_path.linearisation``) against the exact time-domain simulation.
 
-Validation set (issue 14):
+Validation set:
   designs   prototype, paper optimum (§4.2), our optimum (goal attainment of
             problems/paper_design.toml, frictionless) and the 16 corners of the
             Table 3 box (design.PAPER_BOX)                                  -> 19

@@ -1,4 +1,4 @@
-"""The estimation core (issue 11/16): one NLP per structure, rigid fast path and
+"""The estimation core: one NLP per structure, rigid fast path and
 collocation agree, backlash through collocation, IPOPT failure reported."""
 
 import math

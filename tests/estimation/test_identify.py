@@ -1,4 +1,4 @@
-"""Friction identification (issue 3): metrics, recovery from synthetic data, EMPS,
+"""Friction identification: metrics, recovery from synthetic data, EMPS,
 failure handling, components, CLI."""
 
 import json
@@ -171,7 +171,7 @@ def test_cli_identify_contract_and_bad_data(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_full_matrix_acceptance(tmp_path):
-    """Issue 3 acceptance: 21 clean tests, 4 starts; rod friction within 3 % (median) and
+    """Acceptance: 21 clean tests, 4 starts; rod friction within 3 % (median) and
     10 % (worst) over 0.1–1 × peak velocity; the nut/bearing split flagged."""
     write_synthetic(tmp_path / "d", SyntheticSpec(effects={}))
     rep = identify(tmp_path / "d", starts=4, jobs=2, joint=False)

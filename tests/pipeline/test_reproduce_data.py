@@ -1,4 +1,4 @@
-"""reproduce on a user's bench directory (issue 13 item 3): Context threading, CSV tables."""
+"""reproduce on a user's bench directory: Context threading, CSV tables."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 15: every bad input a new user tried, through the CLI: exit status 2, a message
+"""Every bad input a new user tried, through the CLI: exit status 2, a message
 that names the file (row or key) and the fix, never a traceback."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 15: kill -9 and resume gives the uninterrupted results byte for byte; the step
+"""Kill -9 and resume gives the uninterrupted results byte for byte; the step
 cache refuses truncated, altered and foreign entries; checkpoints cannot be altered
 silently; pool workers die with their parent."""
 

@@ -1,4 +1,4 @@
-"""The catalogue members ``position_friction`` and ``magnetic_saturation`` (issue 12):
+"""The catalogue members ``position_friction`` and ``magnetic_saturation``:
 energy closes with each, the quasi-static saturated current is exact, the stroke
 window is found in the residual, and a synthetic data set with each effect is
 named by the workflow with a lower held-out error."""
