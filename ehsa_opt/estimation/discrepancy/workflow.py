@@ -8,8 +8,9 @@ round after round, then propose a data-driven term for what no catalogue effect 
    uses all data — the result says so.
 2. **Baseline**: identify the base model (friction; inertia and offset without
    generator) on the fit tests, started from a linear least-squares solution.
-   Before the rounds (after the channel members below), the base model's friction
-   law is offered a presliding transition (:func:`~.presliding.adopt_presliding`:
+   With ``DiscrepancySettings.presliding`` (opt-in, ``--presliding``), before the
+   rounds (after the channel members below) the base model's friction law is offered
+   a presliding transition (:func:`~.presliding.adopt_presliding`:
    a force term sign(v) exp(−s/ℓ) after each reversal, adopted when it earns by the
    rule of step 6); once adopted every model judged has its own such term
    (:meth:`~.presliding.PreslidingLaw.correct`), so no member earns for it.
