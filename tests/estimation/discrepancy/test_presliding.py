@@ -8,7 +8,6 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
 from ehsa_opt.estimation.discrepancy.evidence import (
     channel_sse,
@@ -18,7 +17,6 @@ from ehsa_opt.estimation.discrepancy.evidence import (
     judge_candidate,
     normalised_sse,
 )
-from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
 from ehsa_opt.estimation.discrepancy.presliding import (
     PRESLIDING_LENGTHS_M,
     adopt_presliding,

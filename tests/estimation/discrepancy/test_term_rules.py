@@ -7,8 +7,6 @@ import math
 import numpy as np
 import pytest
 
-from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
-from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
 from ehsa_opt.estimation.discrepancy.terms import (
     discover_term,
     names_an_effect,
@@ -23,17 +21,7 @@ LEAD = 0.01 / (2 * math.pi)
 def _delayed_case(delay_of, seed=3):
     """Clean tests whose measured force is the noise-free model delayed by
     ``delay_of(test)`` plus 2 N white noise; the 'model' is the noise-free simulation."""
-    tests = generate_bench_tests(SyntheticSpec(frequencies_hz=(0.8, 2.0, 3.2),
-                                               loads_ohm=(22.0, 100.0), cycles=1.0, seed=seed,
-                                               noise_force_N=0.0, noise_voltage_V=0.0))
-    pts = prepare_tests(tests)
-    rng = np.random.default_rng(seed)
-    preds = [pt.y.copy() for pt in pts]
-    for pt in pts:
-        d = delay_of(pt.test)
-        pt.y = pt.y.copy()
-        pt.y[0] = np.interp(pt.time_s - d, pt.time_s, pt.y[0]) + rng.normal(0, 2.0, pt.y.shape[1])
-        pt.sigma = np.array([2.0, 0.05])
+    pts, preds = residual_case(lambda pt: 0.0, seed, delay_of=delay_of)
     fit = [0, 2, 4, 5]  # every frequency in the fit set, the held-out tests beside them
     held = [1, 3]
     return [pts[k] for k in fit], [preds[k] for k in fit], [pts[k] for k in held], \
