@@ -11,7 +11,7 @@ A delay of the record is a property of the acquisition, not of the physics; a me
 that explains the same residual better *without* re-aligning anything is the simpler
 account.  So before the delay is named, the members the first round would re-identify
 (:func:`~.search.rank_round`, the same ranking and settings) are fitted on the record
-as it is and judged by the same rule (:func:`~.candidate_fit.judge_fit`); when one of
+as it is and judged by the same rule (:func:`~.search.judge_round`); when one of
 them earns and leaves a lower held-out force error than the delay's, the delay is not
 named and the rounds start from the baseline.  Those fits are kept in
 :attr:`~.search.SearchState.fitted`, so the first round reuses them instead of
@@ -22,14 +22,11 @@ from __future__ import annotations
 
 from typing import Callable
 
-from .candidate_fit import fit_members, judge_fit
-from .candidates import CANDIDATES
 from .deadline import past_deadline
 from .evidence import choose_winner
-from .lookahead import member_key
 from .results import CandidateResult, DiscrepancySettings
 from .nested import nested_to_fit
-from .search import SearchState, SearchTests, judge_context, rank_round
+from .search import SearchState, SearchTests, judge_context, judge_round, rank_round
 
 __all__ = ["lag_rival"]
 
@@ -39,10 +36,11 @@ def lag_rival(tests: SearchTests, state: SearchState, settings: DiscrepancySetti
               ) -> CandidateResult | None:
     """The member the first round would add (:func:`~.evidence.choose_winner` among the
     earning ones of its re-identification on the record as it is, the simpler members
-    nested in them included: :func:`~.search.nested_to_fit`), when it leaves a lower
+    nested in them included: :func:`~.nested.nested_to_fit`), when it leaves a lower
     held-out force error (%) than ``lag_error`` (the delay's); else None.  ``state`` is
     the baseline's (not changed, except that the member fits are stored in
-    ``state.fitted`` for the first round to reuse)."""
+    ``state.fitted`` for the first round to reuse, and ``state.cut`` says so when the
+    time budget cut them)."""
     if past_deadline():
         return None
     rk = rank_round(tests, state, settings)
@@ -53,14 +51,10 @@ def lag_rival(tests: SearchTests, state: SearchState, settings: DiscrepancySetti
     judge = judge_context(1, tests, state, rk, say, notes)
     if judge is None:
         return None
-    names = list(rk.chosen)
-    while names and not past_deadline():
-        args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
-                 tests.held_pts, state.rig, state.params, settings.max_iter) for n in names]
-        for x, out in zip(args, fit_members(args, settings.jobs)):
-            state.fitted[member_key(x)] = (state.rig, out)
-            judge_fit(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
-        names = nested_to_fit(rk.cands, rk.scores, rk.comps, state.rig, state.remaining)  # a compliance when a gap-less backlash earns
+    judge_round(rk, rk.chosen, tests, state, settings, judge, keep=True)
+    nested = nested_to_fit(rk.cands, rk.scores, rk.comps, state.rig, state.remaining)
+    if nested and not past_deadline():  # a compliance when a gap-less backlash earns
+        judge_round(rk, nested, tests, state, settings, judge, keep=True)
     earning = [c for c in rk.cands.values() if c.earns]
     if not earning:
         return None

@@ -369,11 +369,12 @@ def judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRan
 
 def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
                 state: SearchState, settings: DiscrepancySettings, judge: dict,
-                with_flexibility: bool = False) -> None:
+                with_flexibility: bool = False, keep: bool = False) -> None:
     """Re-identify the candidates ``names`` on the current model
     (:func:`~.candidate_fit.fit_members`) and judge each
     (:func:`~.evidence.judge_candidate`); ``with_flexibility``: the flexibility
-    member's fit is judged by the same rule too."""
+    member's fit is judged by the same rule too; ``keep``: the new fits are kept in
+    ``state.fitted`` for a later round on the same model to reuse."""
     names = list(names)
     if names and past_deadline():
         state.cut = (f"time budget {settings.budget_s:g} s reached in the round in "
@@ -401,6 +402,8 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
                          f"wall (" + ", ".join(f"{o[0]} {state.seconds[o[0]]:.1f} s"
                                                for o in fits)
                          + f"; {elapsed_s():.0f} s into the run)")
+        for x, out in zip(new, fits) if keep else ():
+            state.fitted[member_key(x)] = (state.rig, out)
         for out in done + fits:
             judge_fit(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
         started = {o[0] for o in done + fits}
