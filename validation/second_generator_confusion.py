@@ -43,7 +43,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from validation.second_generator import Campaign, write_campaign  # noqa: E402
-from validation.second_generator_cases import CASES, TUNING, TUNING2  # noqa: E402
+from validation.second_generator_cases import CASES, TUNING, TUNING2, TUNING3  # noqa: E402
 
 BUDGET_S, BUDGET_MB = 180.0, 1024.0
 NO_NAME = ("none", "none of the catalogue")
@@ -196,7 +196,7 @@ def summary(rows: list[dict]) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--set", choices=("cases", "tuning", "tuning2"), default="cases")
+    ap.add_argument("--set", choices=("cases", "tuning", "tuning2", "tuning3"), default="cases")
     ap.add_argument("--cases", default=None,
                     help="comma-separated case ids, or a substring of the ids")
     ap.add_argument("--jobs", type=int, default=2, help="--jobs of ehsa-opt discrepancy")
@@ -211,7 +211,7 @@ def main(argv=None) -> int:
     ap.add_argument("--runs-root", default=str(ROOT / "results" / "second_generator" / "runs"))
     ap.add_argument("--out", default=None, help="also write the rows as JSON")
     args = ap.parse_args(argv)
-    cases = {"cases": CASES, "tuning": TUNING, "tuning2": TUNING2}[args.set]
+    cases = {"cases": CASES, "tuning": TUNING, "tuning2": TUNING2, "tuning3": TUNING3}[args.set]
     if args.cases:
         ids = args.cases.split(",")
         cases = [c for c in cases if c[0] in ids] or \
