@@ -195,6 +195,36 @@ def substeps_for(model: BenchModel, u: np.ndarray, p: np.ndarray, h: float) -> i
     return int(min(MAX_SUBSTEPS, max(lo, math.ceil(im * h / OSCILLATION_STEP))))
 
 
+def _record_map(model: BenchModel, kind: str, intervals: int, substeps: int) -> ca.Function:
+    """The whole record's map (cached on the model by its size): ``substeps`` sub-steps
+    folded into one sample interval (only the state at each sample leaves the compiled
+    loop), accumulated over ``intervals`` sample intervals; ``kind`` "state" (the
+    sub-step of :func:`_substep_function`) or "sens" (with the sensitivities,
+    :func:`_sensitivity_substep_function`).  The same sub-step calls on the same inputs
+    in the same order as one accumulation over every sub-step: the same numbers."""
+    cache: dict = model.__dict__.setdefault("_map_cache", {})
+    key = ("record", kind, intervals, substeps)
+    if key not in cache:
+        fold_key = ("interval", kind, substeps)
+        if fold_key not in cache:
+            step = _substep_function(model) if kind == "state" else \
+                _sensitivity_substep_function(model)
+            cache[fold_key] = step if substeps == 1 else step.fold(substeps)
+        cache[key] = cache[fold_key].mapaccum(intervals)
+    return cache[key]
+
+
+def _sample_map(model: BenchModel, kind: str, n: int) -> ca.Function:
+    """The model's outputs (``kind`` "outputs") or their Jacobians ("out_jac",
+    :func:`_output_jacobians`) mapped over ``n`` samples (cached on the model)."""
+    cache: dict = model.__dict__.setdefault("_map_cache", {})
+    key = ("samples", kind, n)
+    if key not in cache:
+        f = model.outputs if kind == "outputs" else _output_jacobians(model)
+        cache[key] = f.map(n)
+    return cache[key]
+
+
 def _check_grid(grid: Any) -> tuple[np.ndarray, float]:
     grid = np.asarray(grid, dtype=float)
     if grid.ndim != 1 or grid.size < 2 or np.any(np.diff(grid) <= 0):
@@ -242,18 +272,14 @@ def simulate_map_sensitivity(model: BenchModel, motion: Any, p: Any, grid: np.nd
         pj[j] += dp
         S0[:, j] = (model.initial_state(uu[:, 0], pj) - x0) / dp
     m = int(substeps) if substeps else substeps_for(model, uu, p, h)
-    n = (N - 1) * m
-    cache: dict = model.__dict__.setdefault("_map_cache", {})
-    key = ("sens_acc", n)
-    if key not in cache:
-        cache[key] = _sensitivity_substep_function(model).mapaccum(n)
     z0 = np.concatenate([x0, S0.ravel(order="F")])
-    Zs = np.array(cache[key](z0, stage_inputs(motion, grid, m), p, h / m))
-    Z = np.hstack([z0[:, None], Zs[:, m - 1::m]])
+    Zs = np.array(_record_map(model, "sens", N - 1, m)(z0, stage_inputs(motion, grid, m), p,
+                                                       h / m))
+    Z = np.hstack([z0[:, None], Zs])
     X = Z[:nx]
     S = Z[nx:].reshape(nx, npar, N, order="F")  # S[:, :, k] = ∂x_k/∂p
-    y = np.array(model.outputs.map(N)(X, uu, p))
-    dyx, dyp = _output_jacobians(model).map(N)(X, uu, p)
+    y = np.array(_sample_map(model, "outputs", N)(X, uu, p))
+    dyx, dyp = _sample_map(model, "out_jac", N)(X, uu, p)
     dyx = np.array(dyx).reshape(2, N, nx).transpose(0, 2, 1)   # 2 × nx × N
     dyp = np.array(dyp).reshape(2, N, npar)                     # 2 × N × np
     dy = dyp + np.einsum("ikn,kjn->inj", dyx, S)
@@ -275,13 +301,8 @@ def simulate_map(model: BenchModel, motion: Any, p: Any, grid: np.ndarray,
         X = np.zeros((0, grid.size))
     else:
         m = int(substeps) if substeps else substeps_for(model, uu, p, h)
-        n = (grid.size - 1) * m
-        cache: dict = model.__dict__.setdefault("_map_cache", {})
-        key = ("acc", n)
-        if key not in cache:
-            cache[key] = _substep_function(model).mapaccum(n)
-        Xs = np.array(cache[key](np.asarray(x0, float), stage_inputs(motion, grid, m), p,
-                                 h / m))
-        X = np.hstack([np.reshape(x0, (-1, 1)), Xs[:, m - 1::m]])
-    y = np.array(model.outputs.map(grid.size)(X, uu, p))
+        Xs = np.array(_record_map(model, "state", grid.size - 1, m)(
+            np.asarray(x0, float), stage_inputs(motion, grid, m), p, h / m))
+        X = np.hstack([np.reshape(x0, (-1, 1)), Xs])
+    y = np.array(_sample_map(model, "outputs", grid.size)(X, uu, p))
     return y, X
