@@ -134,10 +134,27 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         if np.all(np.isfinite(r)) and float(r @ r) < best[0]:
             best[0], best[1] = float(r @ r), np.array(z, dtype=float)
 
+    exact, jac_counter = _exact_sensitivities(predictor, prepared), [0]
+    # with exact sensitivities every residual comes from a sensitivity run (the same
+    # outputs as the predictor's, bit for bit) whose Jacobian is kept for its point:
+    # least_squares asks for the Jacobian where it accepted a step, i.e. at the point
+    # just simulated, and for the residual at the start that polish simulated itself
+    last: dict = {}
+
     def resid(z: np.ndarray) -> np.ndarray:
+        key = np.asarray(z, dtype=float).tobytes()
+        if last.get("key") == key:
+            return last["r"].copy()
         if counter[0] and past_deadline():
             raise _Stop
         counter[0] += 1
+        if exact is not None:
+            raw, J = _exact_residual_jacobian(prepared, rig, base, free, values(z), is_log,
+                                              scales, exact)
+            r = np.nan_to_num(raw, nan=1e6, posinf=1e6, neginf=-1e6)
+            last.update(key=key, r=r, J=J)
+            seen(z, r)
+            return r.copy()
         vals = {**base, **{n: float(v) for n, v in zip(free, values(z))}}
         preds = predictor(prepared, rig, vals)
         r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
@@ -146,14 +163,17 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         seen(z, r)
         return r
 
-    exact, jac_counter = _exact_sensitivities(predictor, prepared), [0]
-
     def jac(z: np.ndarray) -> np.ndarray:
         if past_deadline():
             raise _Stop
         jac_counter[0] += 1
-        return _exact_residual_jacobian(prepared, rig, base, free, values(z), is_log,
-                                        scales, exact, lambda r: seen(z, r))
+        if "J" in last and last["key"] == np.asarray(z, dtype=float).tobytes():
+            return last.pop("J")  # (itself, not a copy: the same array as a fresh run)
+        counter[0] += 1
+        raw, J = _exact_residual_jacobian(prepared, rig, base, free, values(z), is_log,
+                                          scales, exact)
+        seen(z, raw)
+        return J
 
     x0 = np.array([base[n] for n in free], dtype=float)
     z0 = np.clip(np.where(is_log, np.log10(np.maximum(x0, 1e-300)), x0 / scales), lb, ub)
@@ -177,7 +197,7 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     cov = _final_covariance(sol, x1, is_log, scales, prepared, r0.size)
     return PolishOutcome(True, sol.message + (f" (exact Jacobian, {jac_counter[0]} "
                                               f"sensitivity runs)" if exact else ""),
-                         out, sse0, sse1, counter[0] + jac_counter[0],
+                         out, sse0, sse1, counter[0],
                          time.perf_counter() - t0, free, cov)
 
 
@@ -218,20 +238,19 @@ def _exact_sensitivities(predictor: Callable, prepared: Sequence[PreparedTest]
 
 def _exact_residual_jacobian(prepared: Sequence[PreparedTest], rig: Rig,
                              base: Mapping[str, float], free: Sequence[str], x: np.ndarray,
-                             is_log: np.ndarray, scales: np.ndarray, exact: Callable,
-                             seen: Callable[[np.ndarray], None]) -> np.ndarray:
-    """Jacobian of the noise-normalised residuals with respect to the scaled (or log10)
-    parameters at the physical values ``x`` of ``free``, from the predictor's exact
-    sensitivities ``exact`` (chain rule: ∂x/∂z = scale, or x ln 10 for a log10 name);
-    ``seen`` gets the residuals of the same run."""
+                             is_log: np.ndarray, scales: np.ndarray, exact: Callable
+                             ) -> tuple[np.ndarray, np.ndarray]:
+    """The noise-normalised residuals and their Jacobian with respect to the scaled (or
+    log10) parameters at the physical values ``x`` of ``free``, from one run of the
+    predictor's exact sensitivities ``exact`` (chain rule: ∂x/∂z = scale, or x ln 10
+    for a log10 name)."""
     vals = {**base, **{n: float(v) for n, v in zip(free, x)}}
     preds, dpreds = exact(prepared, rig, vals, free)
-    seen(np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
-                         for pt, yp in zip(prepared, preds)]))
+    r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel() for pt, yp in zip(prepared, preds)])
     dxdz = np.where(is_log, np.log(10.0) * x, scales)
     J = np.concatenate([-(dy * pt.wnorm[:, :, None]).reshape(-1, len(free))
                         for pt, dy in zip(prepared, dpreds)])
-    return np.nan_to_num(J * dxdz[None, :], nan=0.0, posinf=0.0, neginf=0.0)
+    return r, np.nan_to_num(J * dxdz[None, :], nan=0.0, posinf=0.0, neginf=0.0)
 
 
 def _final_covariance(sol, x1: np.ndarray, is_log: np.ndarray, scales: np.ndarray,
