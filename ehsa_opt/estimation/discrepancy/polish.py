@@ -15,7 +15,12 @@ from .prepared import PreparedTest
 from . import rig as _rig
 from .rig import BASE_SPECS, Rig, param_scale, predict, uniform_grid
 
-__all__ = ["PolishOutcome", "polish", "gauss_newton_covariance"]
+__all__ = ["PolishOutcome", "polish", "gauss_newton_covariance", "REUSE_SENSITIVITIES"]
+
+#: False: with exact sensitivities, residuals come from the plain predictor and each
+#: Jacobian from a sensitivity run of its own (the reference path, for benchmarks and
+#: tests; the same iterates, about one run more per accepted step).
+REUSE_SENSITIVITIES = True
 
 
 @dataclass
@@ -148,7 +153,7 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         if counter[0] and past_deadline():
             raise _Stop
         counter[0] += 1
-        if exact is not None:
+        if exact is not None and REUSE_SENSITIVITIES:
             raw, J = _exact_residual_jacobian(prepared, rig, base, free, values(z), is_log,
                                               scales, exact)
             r = np.nan_to_num(raw, nan=1e6, posinf=1e6, neginf=-1e6)

@@ -90,3 +90,39 @@ def test_cogging_by_the_simulation_recipe_recovers_amplitude_and_phase(monkeypat
     assert res.path == "simulation"
     for n, v in truth.items():
         assert res.parameters[n] == pytest.approx(v, abs=0.15 * abs(truth["cogging_sin_Nm"]))
+
+
+def test_polish_reuses_the_sensitivity_run_of_the_accepted_point(monkeypatch):
+    """With exact sensitivities every residual comes from a sensitivity run whose
+    Jacobian serves the point least_squares accepted: the iterates are those of the
+    reference path (residuals from the plain map, each Jacobian from a run of its own),
+    bit for bit, with one run per distinct point and fewer runs in all."""
+    import ehsa_opt.estimation.discrepancy.polish as pol
+    truth = {"cogging_sin_Nm": 0.01, "cogging_cos_Nm": -0.004}
+    pts = _campaign({"cogging": truth}, 5)[:2]
+    comp = make_component("cogging")
+    rig = Rig(H, True, (comp,))
+    start = {**FR.as_dict(), **comp.defaults(), "cogging_sin_Nm": 0.004,
+             "cogging_cos_Nm": 0.0}
+    free = list(truth)
+    runs = {True: [], False: []}
+    out = {}
+    for reuse in (True, False):
+        def predictor(prepared, r, vals, **kw):
+            runs[reuse].append(("plain", tuple(vals[n] for n in free)))
+            return predict_map(prepared, r, vals, **kw)
+
+        def sensitivities(prepared, r, vals, names, **kw):
+            runs[reuse].append(("sens", tuple(vals[n] for n in free)))
+            return predict_map_jacobian(prepared, r, vals, names, **kw)
+        predictor.jacobian = sensitivities
+        monkeypatch.setattr(pol, "REUSE_SENSITIVITIES", reuse)
+        out[reuse] = polish(pts, rig, start, free, predictor=predictor)
+    a, b = out[True], out[False]
+    assert a.parameters == b.parameters and a.sse_after == b.sse_after
+    assert a.message == b.message
+    assert abs(a.parameters["cogging_sin_Nm"] - 0.01) < 1e-3
+    points = [p for kind, p in runs[True]]
+    assert {kind for kind, _ in runs[True]} == {"sens"}
+    assert len(points) == len(set(points)) == a.nfev  # one run per distinct point
+    assert len(runs[False]) > len(runs[True])
