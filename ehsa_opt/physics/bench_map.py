@@ -41,7 +41,7 @@ from .bench_model import BenchModel
 from .motion import FilteredMotion, SampledMotion, SineMotion
 
 __all__ = ["RADAU_A", "RADAU_C", "NEWTON_ITERATIONS", "OSCILLATION_STEP", "MAX_SUBSTEPS",
-           "TRANSMISSION_MIN_SUBSTEPS",
+           "TRANSMISSION_MIN_SUBSTEPS", "FOLD_SUBSTEPS",
            "simulate_map", "simulate_map_sensitivity", "substeps_for", "stage_inputs"]
 
 _S6 = math.sqrt(6.0)
@@ -64,6 +64,10 @@ OSCILLATION_STEP = 0.3
 TRANSMISSION_MIN_SUBSTEPS = 2
 #: At most this many sub-steps per sample interval.
 MAX_SUBSTEPS = 64
+#: False: one accumulation over every sub-step of the record, the states at the
+#: samples picked from it afterwards (the reference path, for benchmarks; the same
+#: numbers, m times the states leaving the compiled loop).
+FOLD_SUBSTEPS = True
 
 
 def _compile_options(level: str = "-O2") -> dict:
@@ -214,6 +218,24 @@ def _record_map(model: BenchModel, kind: str, intervals: int, substeps: int) -> 
     return cache[key]
 
 
+def _run_record(model: BenchModel, kind: str, z0: np.ndarray, U: np.ndarray, p: np.ndarray,
+                h: float, substeps: int) -> np.ndarray:
+    """The states (``kind`` "state") or states and sensitivities ("sens") at the samples
+    after the first, from ``z0``: the stage inputs ``U`` (:func:`stage_inputs`),
+    ``substeps`` sub-steps of ``h`` (s) per sample interval (:func:`_record_map`, or
+    every sub-step accumulated when :data:`FOLD_SUBSTEPS` is False)."""
+    intervals = U.shape[1] // (3 * substeps)
+    if FOLD_SUBSTEPS:
+        return np.array(_record_map(model, kind, intervals, substeps)(z0, U, p, h))
+    cache: dict = model.__dict__.setdefault("_map_cache", {})
+    key = ("every", kind, intervals * substeps)
+    if key not in cache:
+        step = _substep_function(model) if kind == "state" else \
+            _sensitivity_substep_function(model)
+        cache[key] = step.mapaccum(intervals * substeps)
+    return np.array(cache[key](z0, U, p, h))[:, substeps - 1::substeps]
+
+
 def _sample_map(model: BenchModel, kind: str, n: int) -> ca.Function:
     """The model's outputs (``kind`` "outputs") or their Jacobians ("out_jac",
     :func:`_output_jacobians`) mapped over ``n`` samples (cached on the model)."""
@@ -273,8 +295,7 @@ def simulate_map_sensitivity(model: BenchModel, motion: Any, p: Any, grid: np.nd
         S0[:, j] = (model.initial_state(uu[:, 0], pj) - x0) / dp
     m = int(substeps) if substeps else substeps_for(model, uu, p, h)
     z0 = np.concatenate([x0, S0.ravel(order="F")])
-    Zs = np.array(_record_map(model, "sens", N - 1, m)(z0, stage_inputs(motion, grid, m), p,
-                                                       h / m))
+    Zs = _run_record(model, "sens", z0, stage_inputs(motion, grid, m), p, h / m, m)
     Z = np.hstack([z0[:, None], Zs])
     X = Z[:nx]
     S = Z[nx:].reshape(nx, npar, N, order="F")  # S[:, :, k] = ∂x_k/∂p
@@ -301,8 +322,8 @@ def simulate_map(model: BenchModel, motion: Any, p: Any, grid: np.ndarray,
         X = np.zeros((0, grid.size))
     else:
         m = int(substeps) if substeps else substeps_for(model, uu, p, h)
-        Xs = np.array(_record_map(model, "state", grid.size - 1, m)(
-            np.asarray(x0, float), stage_inputs(motion, grid, m), p, h / m))
+        Xs = _run_record(model, "state", np.asarray(x0, float), stage_inputs(motion, grid, m),
+                         p, h / m, m)
         X = np.hstack([np.reshape(x0, (-1, 1)), Xs])
     y = np.array(_sample_map(model, "outputs", grid.size)(X, uu, p))
     return y, X

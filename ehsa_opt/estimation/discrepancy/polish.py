@@ -127,59 +127,15 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
     lb = np.where(is_log, np.log10(np.maximum(lo, 1e-300)), lo / scales)
     ub = np.where(is_log, np.log10(np.maximum(hi, 1e-300)), hi / scales)
     base = dict(parameters)
-    counter = [0]
-    best: list = [np.inf, None]  # lowest SSE simulated so far and its point
 
     def values(z: np.ndarray) -> np.ndarray:
         out = np.asarray(z, dtype=float) * scales   # 10**z only where refined in log10
         out[is_log] = 10.0 ** np.asarray(z, dtype=float)[is_log]
         return out
 
-    def seen(z: np.ndarray, r: np.ndarray) -> None:  # keep the lowest SSE simulated
-        if np.all(np.isfinite(r)) and float(r @ r) < best[0]:
-            best[0], best[1] = float(r @ r), np.array(z, dtype=float)
-
-    exact, jac_counter = _exact_sensitivities(predictor, prepared), [0]
-    # with exact sensitivities every residual comes from a sensitivity run (the same
-    # outputs as the predictor's, bit for bit) whose Jacobian is kept for its point:
-    # least_squares asks for the Jacobian where it accepted a step, i.e. at the point
-    # just simulated, and for the residual at the start that polish simulated itself
-    last: dict = {}
-
-    def resid(z: np.ndarray) -> np.ndarray:
-        key = np.asarray(z, dtype=float).tobytes()
-        if last.get("key") == key:
-            return last["r"].copy()
-        if counter[0] and past_deadline():
-            raise _Stop
-        counter[0] += 1
-        if exact is not None and REUSE_SENSITIVITIES:
-            raw, J = _exact_residual_jacobian(prepared, rig, base, free, values(z), is_log,
-                                              scales, exact)
-            r = np.nan_to_num(raw, nan=1e6, posinf=1e6, neginf=-1e6)
-            last.update(key=key, r=r, J=J)
-            seen(z, r)
-            return r.copy()
-        vals = {**base, **{n: float(v) for n, v in zip(free, values(z))}}
-        preds = predictor(prepared, rig, vals)
-        r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
-                            for pt, yp in zip(prepared, preds)])
-        r = np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=-1e6)
-        seen(z, r)
-        return r
-
-    def jac(z: np.ndarray) -> np.ndarray:
-        if past_deadline():
-            raise _Stop
-        jac_counter[0] += 1
-        if "J" in last and last["key"] == np.asarray(z, dtype=float).tobytes():
-            return last.pop("J")  # (itself, not a copy: the same array as a fresh run)
-        counter[0] += 1
-        raw, J = _exact_residual_jacobian(prepared, rig, base, free, values(z), is_log,
-                                          scales, exact)
-        seen(z, raw)
-        return J
-
+    exact = _exact_sensitivities(predictor, prepared)
+    res = _Residuals(prepared, rig, base, free, values, is_log, scales, predictor, exact)
+    resid, jac, best = res.resid, res.jac, res.best
     x0 = np.array([base[n] for n in free], dtype=float)
     z0 = np.clip(np.where(is_log, np.log10(np.maximum(x0, 1e-300)), x0 / scales), lb, ub)
     r0 = resid(z0)
@@ -189,21 +145,85 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
                             diff_step=diff_step, max_nfev=max_iter,
                             jac=jac if exact is not None else "2-point", ftol=ftol)
     except _Stop:  # the run's deadline: the best point simulated so far, no covariance
-        return _cut_outcome(base, free, z0, best, sse0, counter[0], diff_step, values, t0)
+        return _cut_outcome(base, free, z0, best, sse0, res.runs, diff_step, values, t0)
     except Exception as exc:  # noqa: BLE001 - a failed polish keeps the collocation fit
-        return PolishOutcome(False, f"polish failed: {exc}", base, sse0, sse0, counter[0],
+        return PolishOutcome(False, f"polish failed: {exc}", base, sse0, sse0, res.runs,
                              time.perf_counter() - t0, free)
     sse1 = float(2.0 * sol.cost)
     if not sse1 < sse0:
-        return PolishOutcome(True, "no improvement", base, sse0, sse0, counter[0],
+        return PolishOutcome(True, "no improvement", base, sse0, sse0, res.runs,
                              time.perf_counter() - t0, free)
     x1 = values(sol.x)
     out = {**base, **{n: float(v) for n, v in zip(free, x1)}}
     cov = _final_covariance(sol, x1, is_log, scales, prepared, r0.size)
-    return PolishOutcome(True, sol.message + (f" (exact Jacobian, {jac_counter[0]} "
+    return PolishOutcome(True, sol.message + (f" (exact Jacobian, {res.jacobians} "
                                               f"sensitivity runs)" if exact else ""),
-                         out, sse0, sse1, counter[0],
+                         out, sse0, sse1, res.runs,
                          time.perf_counter() - t0, free, cov)
+
+
+class _Residuals:
+    """The noise-normalised residuals of :func:`polish` (``resid``) and, with the
+    predictor's exact sensitivities ``exact``, their Jacobian (``jac``) in the scaled
+    parameters z (``values(z)``: the physical values of ``free``).
+
+    With exact sensitivities (and :data:`REUSE_SENSITIVITIES`) every residual comes from
+    a sensitivity run — the same outputs as the plain predictor's, bit for bit — whose
+    Jacobian is kept for its point: least_squares asks for the Jacobian where it
+    accepted a step, i.e. at the point just simulated, and for the residual at the
+    start that :func:`polish` simulated itself.  ``runs``: simulations of the group;
+    ``jacobians``: Jacobians handed out; ``best``: the lowest SSE simulated and its z.
+    """
+
+    def __init__(self, prepared, rig, base, free, values, is_log, scales, predictor,
+                 exact):
+        self.prepared, self.rig, self.base, self.free = prepared, rig, base, free
+        self.values, self.is_log, self.scales = values, is_log, scales
+        self.predictor, self.exact = predictor, exact
+        self.runs, self.jacobians = 0, 0
+        self.best: list = [np.inf, None]
+        self.last: dict = {}
+
+    def seen(self, z: np.ndarray, r: np.ndarray) -> None:  # keep the lowest SSE simulated
+        if np.all(np.isfinite(r)) and float(r @ r) < self.best[0]:
+            self.best[0], self.best[1] = float(r @ r), np.array(z, dtype=float)
+
+    def _sensitivity_run(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return _exact_residual_jacobian(self.prepared, self.rig, self.base, self.free,
+                                        self.values(z), self.is_log, self.scales,
+                                        self.exact)
+
+    def resid(self, z: np.ndarray) -> np.ndarray:
+        key = np.asarray(z, dtype=float).tobytes()
+        if self.last.get("key") == key:
+            return self.last["r"].copy()
+        if self.runs and past_deadline():
+            raise _Stop
+        self.runs += 1
+        if self.exact is not None and REUSE_SENSITIVITIES:
+            raw, J = self._sensitivity_run(z)
+            r = np.nan_to_num(raw, nan=1e6, posinf=1e6, neginf=-1e6)
+            self.last = {"key": key, "r": r, "J": J}
+            self.seen(z, r)
+            return r.copy()
+        vals = {**self.base, **{n: float(v) for n, v in zip(self.free, self.values(z))}}
+        preds = self.predictor(self.prepared, self.rig, vals)
+        r = np.concatenate([((pt.y - yp) * pt.wnorm).ravel()
+                            for pt, yp in zip(self.prepared, preds)])
+        r = np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=-1e6)
+        self.seen(z, r)
+        return r
+
+    def jac(self, z: np.ndarray) -> np.ndarray:
+        if past_deadline():
+            raise _Stop
+        self.jacobians += 1
+        if "J" in self.last and self.last["key"] == np.asarray(z, dtype=float).tobytes():
+            return self.last.pop("J")  # (itself, not a copy: the same array as a fresh run)
+        self.runs += 1
+        raw, J = self._sensitivity_run(z)
+        self.seen(z, raw)
+        return J
 
 
 def _cut_outcome(base: dict, free: list[str], z0: np.ndarray, best: list, sse0: float,
