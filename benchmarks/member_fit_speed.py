@@ -20,6 +20,8 @@ before either is timed (they are cached on the model and shared by both).
 
     PYTHONPATH=. flock /tmp/ehsa-heavy.lock python benchmarks/member_fit_speed.py \\
         --data /tmp/lead/data_tuning3/t3-heating-c [--members winding_heating,compliance,cogging]
+
+``--only reference`` / ``--only current`` runs one path alone (whole-process timings).
 """
 
 from __future__ import annotations
@@ -58,9 +60,13 @@ def main(argv=None) -> int:
     ap.add_argument("--members", default="winding_heating,compliance,cogging")
     ap.add_argument("--order", default="reference,current",
                     help="which path runs first for each member")
+    ap.add_argument("--only", choices=sorted(PATHS),
+                    help="run this path alone (to time whole processes against each other)")
     args = ap.parse_args(argv)
     order = [p.strip() for p in args.order.split(",")]
-    if sorted(order) != sorted(PATHS):
+    if args.only:
+        order = [args.only]
+    elif sorted(order) != sorted(PATHS):
         raise SystemExit("--order: reference and current, in some order")
     sys.stdout.reconfigure(line_buffering=True)
     settings = DiscrepancySettings()
@@ -93,11 +99,15 @@ def main(argv=None) -> int:
                 print(f"  {name:<18} {path:<9} {sec:7.1f} s  fit SSE {out[path][2]:.10g}  "
                       f"held-out SSE {out[path][3]:.10g}")
             _set("current")
+            if args.only:
+                continue
             (s0, p0, f0, h0), (s1, p1, f1, h1) = out["reference"], out["current"]
             dp = max((abs(p1[n] - v) / max(abs(v), 1e-300) for n, v in p0.items()), default=0.0)
             print(f"  {name:<18} ratio {s0 / s1:4.2f}x; largest relative parameter change "
                   f"{dp:.1e}; fit SSE {abs(f1 - f0) / f0:.1e}, held-out {abs(h1 - h0) / h0:.1e}")
             rows.append((name, s0, s1))
+    if args.only:
+        return 0
     print("summary: " + "; ".join(f"{n} {a:.1f} s -> {b:.1f} s ({a / b:.2f}x)"
                                   for n, a, b in rows))
     return 0
