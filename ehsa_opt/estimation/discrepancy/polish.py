@@ -108,8 +108,10 @@ def polish(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str, 
         compiled Radau IIA map, for a smooth rig).  A predictor with a ``jacobian``
         attribute (``predict_map``: :func:`~.rig.predict_map_jacobian`) gives the
         Gauss–Newton exact sensitivities (one sensitivity run per iteration instead
-        of ``len(free)`` differenced simulations; chain rule for the log10 names);
-        otherwise, or on a non-uniform grid, forward differences.
+        of ``len(free)`` differenced simulations; chain rule for the log10 names):
+        every point is then simulated once, by a sensitivity run whose Jacobian serves
+        the step if it is accepted (:class:`_Residuals`); otherwise, or on a
+        non-uniform grid, forward differences.
     """
     from scipy.optimize import least_squares
     t0 = time.perf_counter()
