@@ -42,12 +42,23 @@ def confounded(cands: Sequence[Any]) -> Any | None:
     """The fitted candidate that explains the fit tests best (lowest ΔBIC there, < 0)
     but does not earn on the held-out tests — a sign that its refit absorbed another
     effect's residual on the fit tests (a gap taking up a 12-per-rev cogging ripple:
-    fit ΔBIC −1005, held-out error 14.28 → 15.41 %); None when there is none."""
+    fit ΔBIC −1005, held-out error 14.28 → 15.41 %); None when there is none.
+
+    "Best" is over every fitted candidate, the earning ones included: a candidate that
+    fails on the held-out tests while an earning one explains the fit tests better
+    (a mount spring at fit ΔBIC −197 beside a winding heating at −355) shows nothing
+    that the earning one does not account for — no sign of an absorbed effect, and no
+    look-ahead through it (each of whose fits costs what that member's own fit did)."""
     pool = [c for c in cands if c.fitted and not c.earns and c.predictions is not None
             and not getattr(c, "at_bound", ())  # refused as unphysical, not confounded
             and not getattr(c, "cut_at_deadline", "")  # cut at its start: not fitted
             and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0]
-    return min(pool, key=lambda c: c.delta_bic_fit) if pool else None
+    if not pool:
+        return None
+    best = min(pool, key=lambda c: c.delta_bic_fit)
+    earned = [c.delta_bic_fit for c in cands if c.fitted and c.earns
+              and math.isfinite(c.delta_bic_fit)]
+    return best if not earned or best.delta_bic_fit < min(earned) else None
 
 
 def supported(c: Any) -> bool:

@@ -72,3 +72,27 @@ def test_member_key_tells_identical_fit_calls_from_different_ones():
         changed = list(args)
         changed[i] = other
         assert member_key(tuple(changed)) != member_key(args), i
+
+
+def test_no_candidate_is_confounded_when_an_earning_one_explains_the_fit_tests_better():
+    """A mount spring failing on the held-out tests beside an earning winding heating
+    that explains the fit tests better (fit ΔBIC −197 against −355) is no sign of an
+    absorbed effect: no look-ahead through it.  Once it explains the fit tests best of
+    all (−400), it is the confounded candidate again."""
+    from types import SimpleNamespace as NS
+
+    from ehsa_opt.estimation.discrepancy.lookahead import confounded
+
+    def cand(effect, earns, dbic_fit):
+        return NS(effect=effect, fitted=True, earns=earns, predictions=[],
+                  delta_bic_fit=dbic_fit, delta_bic_heldout=-10.0 if earns else 9.0)
+    heat = cand("winding_heating", True, -355.0)
+    sat = cand("magnetic_saturation", True, -294.0)
+    spring = cand("compliance", False, -197.0)
+    assert confounded([heat, sat, spring]) is None
+    spring.delta_bic_fit = -400.0
+    assert confounded([heat, sat, spring]) is spring
+    # candidates that do not earn are not compared with: the best of them is confounded
+    heat.earns = sat.earns = False
+    spring.delta_bic_fit = -197.0
+    assert confounded([heat, sat, spring]) is heat
