@@ -59,7 +59,7 @@ from .terms import FRICTION_LAW_GROUPS, TERM_PREFERENCE, propose_term
 
 __all__ = ["SearchTests", "SearchState", "RoundRanking", "run_rounds", "rank_round",
            "judge_round", "judge_context", "widen_round", "add_winner", "should_widen",
-           "WIDEN_BELOW"]
+           "WIDEN_BELOW", "ranked_ahead"]
 
 
 @dataclass
@@ -125,6 +125,11 @@ class SearchState:
     #: wall time of each member's last fit, s, by name (what a look-ahead fit is
     #: estimated to cost, :func:`widen_round`)
     seconds: dict = field(default_factory=dict)
+    #: the next round's ranking, made (and its members fitted into ``fitted``) before
+    #: the round started — the delay's rival check (:func:`~.lag_rival.lag_rival`) —
+    #: with the rig and remaining members it was made on; the round reuses it
+    #: (:func:`ranked_ahead`) and is decided on those fits even after the deadline
+    ranking: tuple | None = None
 
     def snapshot(self) -> SearchState:
         """A copy that later rounds do not change."""
@@ -162,7 +167,7 @@ def run_rounds(tests: SearchTests, state: SearchState, settings: DiscrepancySett
     # (state before the look-ahead first step, its error before) until it is completed
     joint: tuple | None = None
     for rnd in range(1, settings.max_effects + 1):
-        if past_deadline():
+        if past_deadline() and ranked_ahead(state) is None:
             state.cut = state.cut or (f"time budget {settings.budget_s:g} s reached before "
                                       f"round {rnd}: no further round run")
             say(state.cut)
@@ -185,7 +190,7 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
            ) -> tuple[bool, tuple | None]:
     """One round on ``state`` (changed in place when a winner is added).  Returns
     whether to go on and the look-ahead path's start (see :func:`run_rounds`)."""
-    rk = rank_round(tests, state, settings)
+    rk = ranked_ahead(state, pop=True) or rank_round(tests, state, settings)
     judge = judge_context(rnd, tests, state, rk, say, notes)
     if judge is None:  # nothing can earn: the round is not re-identified
         all_cands += [rk.cands[n] for n in rk.order]
@@ -198,7 +203,7 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         notes.append(note)
     judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True)
     nested = nested_to_fit(rk.cands, rk.scores, rk.comps, state.rig, state.remaining)
-    if nested and not past_deadline():
+    if nested:  # after the deadline: fits made ahead are reused, the others are a cut
         judge["say"](f"round {rnd}: " + ", ".join(nested) + " re-identified too (nested in "
                      "an earning member: the choice is made on fits)")
         judge_round(rk, nested, tests, state, settings, judge)
@@ -248,6 +253,18 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         notes.append(stop)
         return False, joint
     return bool(state.remaining), joint
+
+
+def ranked_ahead(state: SearchState, pop: bool = False) -> RoundRanking | None:
+    """The ranking of the next round made before it started (``state.ranking``) when it
+    was made on the current model (the same rig, the same remaining members), else None;
+    ``pop``: it is taken (a round uses it once)."""
+    got = state.ranking
+    if pop:
+        state.ranking = None
+    if got is None or got[0] is not state.rig or list(got[1]) != list(state.remaining):
+        return None
+    return got[2]
 
 
 def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
@@ -368,13 +385,7 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
     member's fit is judged by the same rule too; ``keep``: the new fits are kept in
     ``state.fitted`` for a later round on the same model to reuse."""
     names = list(names)
-    if names and past_deadline():
-        state.cut = (f"time budget {settings.budget_s:g} s reached in the round in "
-                     f"progress: {', '.join(names)} not re-identified; the round is decided "
-                     f"on the candidates fitted before the cut")
-        judge["say"](state.cut)
-        return
-    elif names:
+    if names:
         args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
                  tests.held_pts, state.rig, state.params, settings.max_iter) for n in names]
         # a member the look-ahead already fitted on this model (same inputs): reused
@@ -386,8 +397,10 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
         new = [x for x in args if x[0] not in {out[0] for out in done}]
         t0 = time.perf_counter()
         # scheduled as workers free up, in rank order; none started after the deadline
-        fits = fit_members(new, settings.jobs, until_deadline=settings.budget_s is not None,
-                           seconds=state.seconds, estimate=lambda n: _estimate(state, n))
+        # (fits made before it, reused above, are judged all the same)
+        fits = [] if new and past_deadline() else fit_members(
+            new, settings.jobs, until_deadline=settings.budget_s is not None,
+            seconds=state.seconds, estimate=lambda n: _estimate(state, n))
         if fits:
             judge["say"](f"re-identified {len(fits)} member"
                          f"{'s' if len(fits) > 1 else ''} in {time.perf_counter() - t0:.1f} s "
