@@ -7,16 +7,29 @@ a ln N_eff charge per parameter) is only fair when both were fitted.  The simple
 member's linearised signature may rank it out of the round (a mount spring of 3e5 N/m
 scored 0 on its rotor channel while a 6 µm "backlash" with a 3e5 N/m contact earned),
 so :func:`nested_to_fit` names the ones a round must re-identify too.
+
+When both earn, the richer member is added only when its extra parameters show
+evidence of their own (:func:`prefer_nested`): a 1 µm "gap" with a 3e5 N/m contact beat
+the 3e5 N/m mount spring it stands for by 0.5 in held-out ΔBIC (−1902.9 against
+−1902.4), less than :data:`NESTED_EVIDENCE`, and the simpler member is named.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, Mapping, Sequence
 
 from .candidates import CANDIDATES, compatible
+from .evidence import own_channel_dbic
 from .impact_verdict import impact_record
 
-__all__ = ["nested_to_fit"]
+__all__ = ["nested_to_fit", "prefer_nested", "NESTED_EVIDENCE"]
+
+#: Held-out ΔBIC (natural-log likelihood units, the ln N_eff charge per parameter
+#: included) by which a member must beat an earning member nested in it to be added
+#: instead: a BIC difference below 2 is "not worth more than a bare mention" (Kass and
+#: Raftery, 1995) — no evidence for the richer member's extra parameters.
+NESTED_EVIDENCE = 2.0
 
 
 def nested_to_fit(cands: Mapping[str, Any], scores: Mapping[str, dict],
@@ -38,3 +51,37 @@ def nested_to_fit(cands: Mapping[str, Any], scores: Mapping[str, dict],
                 continue
             out.append(m)
     return out
+
+
+def _dbic(c: Any, other: Any) -> tuple[float, float]:
+    """The held-out ΔBIC of ``c`` and ``other`` on the scale :func:`~.evidence.choose_winner`
+    compares them: each on its own channel when both are known, else on every channel."""
+    a, b = own_channel_dbic(c), own_channel_dbic(other)
+    if math.isfinite(a) and math.isfinite(b):
+        return a, b
+    return float(c.delta_bic_heldout), float(other.delta_bic_heldout)
+
+
+def prefer_nested(win: Any, cands: Mapping[str, Any], say: Any = None) -> Any:
+    """The round's winner, or the simpler member nested in it (name →
+    :class:`~.results.CandidateResult` in ``cands``) when that one earns too and the
+    winner's held-out ΔBIC is not lower than its by :data:`NESTED_EVIDENCE` — its extra
+    parameters (a gap beside the contact's stiffness) are then not shown by the data.
+    Of several such nested members, the one with the lowest held-out ΔBIC."""
+    simpler = [cands[m] for m in getattr(CANDIDATES.get(win.effect), "nests", ())
+               if m in cands and cands[m].earns and not getattr(cands[m], "at_bound", ())]
+    close = []
+    for c in simpler:
+        d_simple, d_win = _dbic(c, win)
+        if math.isfinite(d_simple) and math.isfinite(d_win) \
+                and d_simple - d_win < NESTED_EVIDENCE:
+            close.append(c)
+    if not close:
+        return win
+    best = min(close, key=lambda c: c.delta_bic_heldout)
+    if say is not None:
+        w, b = _dbic(best, win)
+        say(f"{best.effect} is nested in {win.effect} and earns too: {win.effect}'s held-out "
+            f"ΔBIC {b:.1f} against {w:.1f} is not lower by {NESTED_EVIDENCE:g} — no evidence "
+            f"for its extra parameters; {best.effect} is added")
+    return best

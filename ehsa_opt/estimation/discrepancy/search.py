@@ -51,7 +51,7 @@ from .evidence import (
 from .prepared import PreparedTest
 from .rig import Rig
 from .impacts import impact_record
-from .nested import nested_to_fit
+from .nested import nested_to_fit, prefer_nested
 from .lookahead import member_key
 from .widen import WIDEN_BELOW, should_widen, widen_round
 from .results import CandidateResult, DiscrepancySettings
@@ -231,7 +231,7 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         first.earns = True
     if not earning and first is None:
         return False, joint
-    win = first or choose_winner(earning)
+    win = first or prefer_nested(choose_winner(earning), rk.cands, say)
     if settings.discover and _term_preferred(rnd, win, tests, state, settings, say):
         win.earns = False
         return False, joint

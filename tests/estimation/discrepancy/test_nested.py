@@ -37,3 +37,33 @@ def test_compliance_is_fitted_when_a_backlash_earns(monkeypatch):
     assert nested_to_fit(_cands(), scores, comps, None, ["backlash", "cogging"]) == []
     monkeypatch.setattr(nested_mod, "compatible", lambda rig, comp: False)
     assert nested_to_fit(_cands(), scores, comps, None, remaining) == []
+
+
+def test_the_simpler_nested_member_is_added_when_the_richer_shows_no_evidence_more():
+    """A 1 µm gap with a 3e5 N/m contact beat the mount spring it stands for by 0.5 in
+    held-out ΔBIC: the spring is added.  By 2 or more (the gap's parameters shown by the
+    data) the backlash stays; a spring that does not earn, or another member, is no
+    alternative."""
+    from types import SimpleNamespace as NS
+
+    from ehsa_opt.estimation.discrepancy.nested import NESTED_EVIDENCE, prefer_nested
+
+    def cand(effect, dbic, earns=True):
+        return NS(effect=effect, earns=earns, delta_bic_heldout=dbic, at_bound=[],
+                  own_channel=None, channel_dbic=None)
+    gap, spring = cand("backlash", -1902.9), cand("compliance", -1902.4)
+    said = []
+    assert prefer_nested(gap, {"backlash": gap, "compliance": spring}, said.append) is spring
+    assert said and "compliance is added" in said[0]
+    gap.delta_bic_heldout = spring.delta_bic_heldout - NESTED_EVIDENCE - 0.1
+    assert prefer_nested(gap, {"backlash": gap, "compliance": spring}) is gap
+    gap.delta_bic_heldout = -1902.9
+    spring.earns = False
+    assert prefer_nested(gap, {"backlash": gap, "compliance": spring}) is gap
+    cog = cand("cogging", -1902.0)  # nests nothing
+    assert prefer_nested(cog, {"cogging": cog, "compliance": cand("compliance", -1902.4)}) is cog
+    # judged on the own channel when both know theirs
+    spring.earns = True
+    gap.own_channel = spring.own_channel = 0
+    gap.channel_dbic, spring.channel_dbic = [-500.0, 0.0], [-490.0, 0.0]
+    assert prefer_nested(gap, {"backlash": gap, "compliance": spring}) is gap
