@@ -20,7 +20,6 @@ import math
 from typing import Any, Mapping, Sequence
 
 from .candidates import CANDIDATES, compatible
-from .evidence import own_channel_dbic
 from .impact_verdict import impact_record
 
 __all__ = ["nested_to_fit", "prefer_nested", "NESTED_EVIDENCE"]
@@ -53,26 +52,23 @@ def nested_to_fit(cands: Mapping[str, Any], scores: Mapping[str, dict],
     return out
 
 
-def _dbic(c: Any, other: Any) -> tuple[float, float]:
-    """The held-out ΔBIC of ``c`` and ``other`` on the scale :func:`~.evidence.choose_winner`
-    compares them: each on its own channel when both are known, else on every channel."""
-    a, b = own_channel_dbic(c), own_channel_dbic(other)
-    if math.isfinite(a) and math.isfinite(b):
-        return a, b
-    return float(c.delta_bic_heldout), float(other.delta_bic_heldout)
-
-
 def prefer_nested(win: Any, cands: Mapping[str, Any], say: Any = None) -> Any:
     """The round's winner, or the simpler member nested in it (name →
     :class:`~.results.CandidateResult` in ``cands``) when that one earns too and the
     winner's held-out ΔBIC is not lower than its by :data:`NESTED_EVIDENCE` — its extra
     parameters (a gap beside the contact's stiffness) are then not shown by the data.
-    Of several such nested members, the one with the lowest held-out ΔBIC."""
+    Of several such nested members, the one with the lowest held-out ΔBIC.
+
+    The two are compared on every channel (``delta_bic_heldout``), not each on its own
+    channel as :func:`~.evidence.choose_winner` compares different effects: they are one
+    physics, the simpler the richer at a limit, and a channel told apart by each one's
+    linearised signature (the gap's force, the spring's voltage) would compare
+    −1951.5 on the one against −1863.4 on the other for fits alike on both."""
     simpler = [cands[m] for m in getattr(CANDIDATES.get(win.effect), "nests", ())
                if m in cands and cands[m].earns and not getattr(cands[m], "at_bound", ())]
     close = []
     for c in simpler:
-        d_simple, d_win = _dbic(c, win)
+        d_simple, d_win = float(c.delta_bic_heldout), float(win.delta_bic_heldout)
         if math.isfinite(d_simple) and math.isfinite(d_win) \
                 and d_simple - d_win < NESTED_EVIDENCE:
             close.append(c)
@@ -80,7 +76,7 @@ def prefer_nested(win: Any, cands: Mapping[str, Any], say: Any = None) -> Any:
         return win
     best = min(close, key=lambda c: c.delta_bic_heldout)
     if say is not None:
-        w, b = _dbic(best, win)
+        w, b = best.delta_bic_heldout, win.delta_bic_heldout
         say(f"{best.effect} is nested in {win.effect} and earns too: {win.effect}'s held-out "
             f"ΔBIC {b:.1f} against {w:.1f} is not lower by {NESTED_EVIDENCE:g} — no evidence "
             f"for its extra parameters; {best.effect} is added")

@@ -62,8 +62,10 @@ def test_the_simpler_nested_member_is_added_when_the_richer_shows_no_evidence_mo
     assert prefer_nested(gap, {"backlash": gap, "compliance": spring}) is gap
     cog = cand("cogging", -1902.0)  # nests nothing
     assert prefer_nested(cog, {"cogging": cog, "compliance": cand("compliance", -1902.4)}) is cog
-    # judged on the own channel when both know theirs
+    # compared on every channel, not each on its own (the gap's force channel against
+    # the spring's voltage channel would favour the gap by 88)
     spring.earns = True
-    gap.own_channel = spring.own_channel = 0
-    gap.channel_dbic, spring.channel_dbic = [-500.0, 0.0], [-490.0, 0.0]
-    assert prefer_nested(gap, {"backlash": gap, "compliance": spring}) is gap
+    gap.own_channel, spring.own_channel = 0, 1
+    gap.channel_dbic = [-1951.5, -1863.4]
+    spring.channel_dbic = [-1950.2, -1863.4]
+    assert prefer_nested(gap, {"backlash": gap, "compliance": spring}) is spring
