@@ -28,7 +28,8 @@ from .deadline import past_deadline
 from .evidence import choose_winner
 from .results import CandidateResult, DiscrepancySettings
 from .nested import nested_to_fit
-from .search import SearchState, SearchTests, judge_context, judge_round, rank_round
+from .search import (SearchState, SearchTests, fitted_ahead, judge_context, judge_round,
+                     rank_round)
 
 __all__ = ["lag_rival"]
 
@@ -54,7 +55,8 @@ def lag_rival(tests: SearchTests, state: SearchState, settings: DiscrepancySetti
     if judge is None:
         return None
     cut = state.cut
-    judge_round(rk, rk.chosen, tests, state, settings, judge, keep=True)
+    judge_round(rk, rk.chosen, tests, state, settings, judge, keep=True,
+                spare=fitted_ahead(rk, state))
     nested = nested_to_fit(rk.cands, rk.scores, rk.comps, state.rig, state.remaining)
     if nested:  # a compliance when a gap-less backlash earns (a cut when past the deadline)
         judge_round(rk, nested, tests, state, settings, judge, keep=True)

@@ -22,7 +22,7 @@ from typing import Any, Mapping, Sequence
 from .candidates import CANDIDATES, compatible
 from .impact_verdict import impact_record
 
-__all__ = ["nested_to_fit", "prefer_nested", "NESTED_EVIDENCE"]
+__all__ = ["nested_to_fit", "nested_in", "prefer_nested", "NESTED_EVIDENCE"]
 
 #: Held-out ΔBIC (natural-log likelihood units, the ln N_eff charge per parameter
 #: included) by which a member must beat an earning member nested in it to be added
@@ -39,14 +39,25 @@ def nested_to_fit(cands: Mapping[str, Any], scores: Mapping[str, dict],
     component (``comps``).  A candidate judged on its impacts is left out: a rattling
     contact is not a series spring, and its sample-wise ΔBIC, which the choice between
     nested members reads, measures chaos."""
+    return nested_in([name for name, c in cands.items()
+                      if c.earns and impact_record(c.fit) is None],
+                     scores, comps, rig, remaining,
+                     fitted=[name for name, c in cands.items() if c.fitted])
+
+
+def nested_in(names: Sequence[str], scores: Mapping[str, dict], comps: Mapping[str, Any],
+              rig: Any, remaining: Sequence[str], fitted: Sequence[str] = ()) -> list[str]:
+    """The simpler members nested in the members ``names`` (in their order), other than
+    ``names`` and ``fitted``, applicable (``scores``), still ``remaining`` and able to
+    join ``rig`` with their configured component (``comps``): what a round asks for
+    when one of ``names`` earns (:func:`nested_to_fit`), and so what it may fit ahead
+    (:mod:`.idle_fits`)."""
     out: list[str] = []
-    for name, c in cands.items():
-        if not c.earns or impact_record(c.fit) is not None:
-            continue
+    for name in names:
         for m in getattr(CANDIDATES.get(name), "nests", ()):
-            cm = cands.get(m)
-            if (cm is None or cm.fitted or m in out or m not in remaining
-                    or not scores[m]["applicable"] or not compatible(rig, comps[m])):
+            if (m in out or m in names or m in fitted or m not in remaining
+                    or m not in scores or not scores[m]["applicable"]
+                    or m not in comps or not compatible(rig, comps[m])):
                 continue
             out.append(m)
     return out

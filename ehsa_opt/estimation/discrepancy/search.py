@@ -25,7 +25,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .candidate_fit import fit_members, judge_fit, signature_scores_in
+from .candidate_fit import judge_fit, not_fitted, signature_scores_in
+from .idle_fits import fit_with_spares
 from .deadline import elapsed_s, past_deadline, time_left_s
 from .candidates import (
     CANDIDATES,
@@ -51,15 +52,15 @@ from .evidence import (
 from .prepared import PreparedTest
 from .rig import Rig
 from .impacts import impact_record
-from .nested import nested_to_fit, prefer_nested
+from .nested import nested_in, nested_to_fit, prefer_nested
 from .lookahead import member_key
-from .widen import WIDEN_BELOW, should_widen, widen_round
+from .widen import WIDEN_BELOW, should_widen, widen_candidates, widen_round
 from .results import CandidateResult, DiscrepancySettings
 from .terms import FRICTION_LAW_GROUPS, TERM_PREFERENCE, propose_term
 
 __all__ = ["SearchTests", "SearchState", "RoundRanking", "run_rounds", "rank_round",
            "judge_round", "judge_context", "widen_round", "add_winner", "should_widen",
-           "WIDEN_BELOW", "ranked_ahead"]
+           "WIDEN_BELOW", "ranked_ahead", "fitted_ahead"]
 
 
 @dataclass
@@ -201,7 +202,8 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
                 f"of its range, or worsens the rotor's channel): none re-identified")
         say(note)
         notes.append(note)
-    judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True)
+    judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True,
+                spare=fitted_ahead(rk, state))
     nested = nested_to_fit(rk.cands, rk.scores, rk.comps, state.rig, state.remaining)
     if nested:  # after the deadline: fits made ahead are reused, the others are a cut
         judge["say"](f"round {rnd}: " + ", ".join(nested) + " re-identified too (nested in "
@@ -299,6 +301,22 @@ def _estimate(state: SearchState, name: str) -> float:
     return float(np.median(list(state.seconds.values()))) if state.seconds else 0.0
 
 
+def fitted_ahead(rk: RoundRanking, state: SearchState) -> list[str]:
+    """The members a round may ask for after its chosen ones, fitted ahead on idle
+    workers (:mod:`.idle_fits`): the simpler members nested in a chosen one
+    (:func:`~.nested.nested_in`), then those a widened round re-identifies
+    (:func:`~.widen.widen_candidates`)."""
+    nested = nested_in(rk.chosen, rk.scores, rk.comps, state.rig, state.remaining)
+    return nested + [n for n in widen_candidates(rk, state) if n not in nested]
+
+
+def _member_args(name: str, rk: RoundRanking, tests: SearchTests, state: SearchState,
+                 settings: DiscrepancySettings) -> tuple:
+    """The :func:`~.candidate_fit.fit_member` arguments of ``name`` on the current model."""
+    return (name, rk.comps[name], CANDIDATES[name].starts, tests.sub_pts, tests.fit_pts,
+            tests.held_pts, state.rig, state.params, settings.max_iter)
+
+
 def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySettings
                ) -> RoundRanking:
     """Rank the remaining candidates by their signature score on the current residual
@@ -378,29 +396,42 @@ def judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRan
 
 def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
                 state: SearchState, settings: DiscrepancySettings, judge: dict,
-                with_flexibility: bool = False, keep: bool = False) -> None:
+                with_flexibility: bool = False, keep: bool = False,
+                spare: Sequence[str] = ()) -> None:
     """Re-identify the candidates ``names`` on the current model
     (:func:`~.candidate_fit.fit_members`) and judge each
     (:func:`~.evidence.judge_candidate`); ``with_flexibility``: the flexibility
     member's fit is judged by the same rule too; ``keep``: the new fits are kept in
-    ``state.fitted`` for a later round on the same model to reuse."""
+    ``state.fitted`` for a later round on the same model to reuse.  ``spare``: members
+    the round may ask for next, fitted only on workers the fits of ``names`` leave idle
+    (:func:`~.idle_fits.fit_with_spares`) and kept in ``state.fitted``, not judged."""
     names = list(names)
     if names:
-        args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
-                 tests.held_pts, state.rig, state.params, settings.max_iter) for n in names]
-        # a member the look-ahead already fitted on this model (same inputs): reused
+        args = [_member_args(n, rk, tests, state, settings) for n in names]
+        # a member fitted ahead on this model (same inputs: by the look-ahead, on an
+        # idle worker, or by the delay's rival check): reused
         done = [state.fitted.pop(member_key(x), (None, None)) for x in args]
         done = [out for rig, out in done if rig is state.rig and out is not None]
         for out in done:
-            judge["say"](f"{out[0]}: the look-ahead's fit on this model (the same inputs) "
-                         f"is judged again, not repeated")
+            judge["say"](f"{out[0]}: the fit made ahead on this model (the same inputs) "
+                         f"is judged, not repeated")
         new = [x for x in args if x[0] not in {out[0] for out in done}]
+        ahead = [_member_args(n, rk, tests, state, settings) for n in spare
+                 if n not in names and n in rk.comps]
+        ahead = [x for x in ahead if member_key(x) not in state.fitted]
         t0 = time.perf_counter()
         # scheduled as workers free up, in rank order; none started after the deadline
         # (fits made before it, reused above, are judged all the same)
-        fits = [] if new and past_deadline() else fit_members(
-            new, settings.jobs, until_deadline=settings.budget_s is not None,
+        fits, extra = ([], []) if new and past_deadline() else fit_with_spares(
+            new, ahead, settings.jobs, until_deadline=settings.budget_s is not None,
             seconds=state.seconds, estimate=lambda n: _estimate(state, n))
+        for x in ahead:
+            out = next((o for o in extra if o[0] == x[0]), None)
+            if out is not None and not not_fitted(out[1]):
+                state.fitted[member_key(x)] = (state.rig, out)
+        if extra:
+            judge["say"]("fitted ahead on an idle worker: " + ", ".join(
+                f"{o[0]} {state.seconds[o[0]]:.1f} s" for o in extra))
         if fits:
             judge["say"](f"re-identified {len(fits)} member"
                          f"{'s' if len(fits) > 1 else ''} in {time.perf_counter() - t0:.1f} s "

@@ -21,7 +21,7 @@ from .lookahead import (confounded, confounded_first, first_step_pool, fit_on_to
                         supported)
 from .results import CandidateResult
 
-__all__ = ["widen_round", "should_widen", "WIDEN_BELOW"]
+__all__ = ["widen_round", "widen_candidates", "should_widen", "WIDEN_BELOW"]
 
 
 #: When the best earning candidate of a round removes less than this share of the
@@ -66,6 +66,16 @@ def should_widen(earning: Sequence[Any], force_excess: bool = True) -> bool:
     return max(gains) < max(WIDEN_BELOW, MIN_EXCESS_REDUCTION)
 
 
+def widen_candidates(rk: Any, state: Any) -> list[str]:
+    """The members a widened round re-identifies besides its chosen ones (``rk``, a
+    :class:`~.search.RoundRanking` of ``state``'s model): the other applicable ones
+    ranked at or above :data:`~.candidates.MIN_RANK_VALUE` that can join its rig, in
+    rank order."""
+    return [n for n in rk.order if n not in rk.chosen and rk.scores[n]["applicable"]
+            and n != "flexibility" and compatible(state.rig, rk.comps[n])
+            and rank_value(rk.scores[n]) >= MIN_RANK_VALUE]
+
+
 def widen_round(rnd: int, rk: Any, tests: Any, state: Any, settings: Any, judge: dict,
                 say, refit: Callable[[list], None]
                 ) -> tuple[list, CandidateResult | None, CandidateResult | None]:
@@ -86,9 +96,7 @@ def widen_round(rnd: int, rk: Any, tests: Any, state: Any, settings: Any, judge:
         # a rattling contact earned on its impacts: the sample-wise share of the excess
         # it removes measures the chaos, not what is left unexplained
         return earning, first, blocked
-    more = [n for n in order if n not in rk.chosen and rk.scores[n]["applicable"]
-            and n != "flexibility" and compatible(state.rig, rk.comps[n])
-            and rank_value(rk.scores[n]) >= MIN_RANK_VALUE]
+    more = widen_candidates(rk, state)
     if not more:
         return earning, first, blocked
     best = max(earning, key=lambda c: c.excess_reduction)
