@@ -69,3 +69,22 @@ def test_the_simpler_nested_member_is_added_when_the_richer_shows_no_evidence_mo
     gap.channel_dbic = [-1951.5, -1863.4]
     spring.channel_dbic = [-1950.2, -1863.4]
     assert prefer_nested(gap, {"backlash": gap, "compliance": spring}) is spring
+
+
+def test_members_nested_in_the_chosen_ones_are_what_a_round_may_fit_ahead():
+    from ehsa_opt.estimation.discrepancy import CANDIDATES, Rig
+    from ehsa_opt.estimation.discrepancy.nested import nested_in
+    from ehsa_opt.physics.params import HarvesterParams
+
+    names = ["backlash", "cogging", "compliance"]
+    scores = {n: {"applicable": True} for n in names}
+    comps = {n: CANDIDATES[n].component() for n in names}
+    rig = Rig(HarvesterParams(), True, ())
+    assert nested_in(["backlash", "cogging"], scores, comps, rig, names) == ["compliance"]
+    assert nested_in(["cogging"], scores, comps, rig, names) == []
+    assert nested_in(["backlash"], scores, comps, rig, names, fitted=["compliance"]) == []
+    assert nested_in(["backlash", "compliance"], scores, comps, rig, names) == []  # chosen
+    assert nested_in(["backlash"], scores, comps, rig, ["backlash"]) == []  # not remaining
+    # a spring cannot join a rig that already has a transmission member
+    with_gap = Rig(HarvesterParams(), True, (comps["backlash"],))
+    assert nested_in(["backlash"], scores, comps, with_gap, names) == []
