@@ -17,8 +17,8 @@ from .deadline import elapsed_s
 from .evidence import MIN_EXCESS_REDUCTION, can_earn, choose_winner
 from .impacts import impact_record
 from .lookahead import (confounded, confounded_first, first_step_pool, fit_on_top,
-                        lookahead_winner, on_top_args, prefetch_on_top, second_steps,
-                        supported)
+                        lookahead_winner, not_judged, on_top_args, prefetch_on_top,
+                        second_steps, supported)
 from .results import CandidateResult
 
 __all__ = ["widen_round", "widen_candidates", "should_widen", "WIDEN_BELOW"]
@@ -118,16 +118,18 @@ def widen_round(rnd: int, rk: Any, tests: Any, state: Any, settings: Any, judge:
                                                             settings.max_iter)][:2],
                         judge, tests.sub_pts, settings.max_iter, state.fitted, settings.jobs,
                         state.seconds)
+    judged: list[str] = []  # first steps whose joint model with `blocked` was judged
     first = lookahead_winner(
         earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,
                                                settings.max_iter, rnd, state.fitted, cuts,
                                                state.seconds),
-        say, first_steps=steps1)
+        say, first_steps=steps1, judged=judged)
     # the second steps: what a round after `blocked` would re-identify, ranked on the
-    # residual of the model with it (not among the members this round happened to fit)
-    others = [] if first is not None else second_steps(
+    # residual of the model with it (not among the members this round happened to fit),
+    # less those whose model with it the forward paths already judged
+    others = [] if first is not None else not_judged(second_steps(
         blocked, [n for n in state.remaining if n != "flexibility"], tests.fit_pts,
-        tests.sub_pts, tests.lead_m_per_rad, say, settings.jobs)
+        tests.sub_pts, tests.lead_m_per_rad, say, settings.jobs), judged, blocked, say)
     if first is None and settings.jobs > 1:
         prefetch_on_top([(blocked, c) for c in others[:settings.jobs]], judge, tests.sub_pts,
                         settings.max_iter, state.fitted, settings.jobs, state.seconds)
