@@ -14,7 +14,8 @@ Modules, one concept each:
   ``flexibility``), signature scores;
 * :mod:`.candidate_fit`: re-identifying one candidate on the current model;
 * :mod:`.evidence`: the statistics and the decision rule;
-* :mod:`.search`: the forward-selection rounds; :mod:`.lookahead`: the look-ahead
+* :mod:`.search`: the forward-selection rounds; :mod:`.widen`: widening a round;
+  :mod:`.lookahead`: the look-ahead
   through a confounded candidate;
 * :mod:`.terms`: a data-driven term for what no catalogue effect explains;
 * :mod:`.openloop`: the open-loop validation of the EMPS benchmark;

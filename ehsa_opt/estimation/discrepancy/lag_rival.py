@@ -14,8 +14,10 @@ account.  So before the delay is named, the members the first round would re-ide
 as it is and judged by the same rule (:func:`~.search.judge_round`); when one of
 them earns and leaves a lower held-out force error than the delay's, the delay is not
 named and the rounds start from the baseline.  Those fits are kept in
-:attr:`~.search.SearchState.fitted`, so the first round reuses them instead of
-repeating them.
+:attr:`~.search.SearchState.fitted` and the ranking in
+:attr:`~.search.SearchState.ranking`, so the first round reuses them instead of
+repeating them — and is decided on them even when the deadline has passed before it
+starts (what it could not fit is then its stated cut).
 """
 
 from __future__ import annotations
@@ -26,7 +28,8 @@ from .deadline import past_deadline
 from .evidence import choose_winner
 from .results import CandidateResult, DiscrepancySettings
 from .nested import nested_to_fit
-from .search import SearchState, SearchTests, judge_context, judge_round, rank_round
+from .search import (SearchState, SearchTests, fitted_ahead, judge_context, judge_round,
+                     rank_round)
 
 __all__ = ["lag_rival"]
 
@@ -51,12 +54,17 @@ def lag_rival(tests: SearchTests, state: SearchState, settings: DiscrepancySetti
     judge = judge_context(1, tests, state, rk, say, notes)
     if judge is None:
         return None
-    judge_round(rk, rk.chosen, tests, state, settings, judge, keep=True)
+    cut = state.cut
+    judge_round(rk, rk.chosen, tests, state, settings, judge, keep=True,
+                spare=fitted_ahead(rk, state))
     nested = nested_to_fit(rk.cands, rk.scores, rk.comps, state.rig, state.remaining)
-    if nested and not past_deadline():  # a compliance when a gap-less backlash earns
+    if nested:  # a compliance when a gap-less backlash earns (a cut when past the deadline)
         judge_round(rk, nested, tests, state, settings, judge, keep=True)
     earning = [c for c in rk.cands.values() if c.earns]
-    if not earning:
-        return None
-    best = choose_winner(earning)
-    return best if best.error_after < lag_error else None
+    best = choose_winner(earning) if earning else None
+    if best is None or not best.error_after < lag_error:
+        return None  # the delay is named on this check (a cut of it stays stated)
+    # the first round starts from this model: it reuses this ranking and these fits,
+    # fits what was left and states its own cut, if any
+    state.ranking, state.cut = (state.rig, list(state.remaining), rk), cut
+    return best

@@ -34,6 +34,7 @@ from .evidence import (
 )
 
 __all__ = ["confounded", "supported", "fit_on_top", "lookahead_winner", "confounded_first",
+           "not_judged",
            "second_steps", "member_key", "on_top_args", "first_step_pool", "prefetch_on_top", "too_late",
            "estimated_seconds"]
 
@@ -42,12 +43,23 @@ def confounded(cands: Sequence[Any]) -> Any | None:
     """The fitted candidate that explains the fit tests best (lowest ΔBIC there, < 0)
     but does not earn on the held-out tests — a sign that its refit absorbed another
     effect's residual on the fit tests (a gap taking up a 12-per-rev cogging ripple:
-    fit ΔBIC −1005, held-out error 14.28 → 15.41 %); None when there is none."""
+    fit ΔBIC −1005, held-out error 14.28 → 15.41 %); None when there is none.
+
+    "Best" is over every fitted candidate, the earning ones included: a candidate that
+    fails on the held-out tests while an earning one explains the fit tests better
+    (a mount spring at fit ΔBIC −197 beside a winding heating at −355) shows nothing
+    that the earning one does not account for — no sign of an absorbed effect, and no
+    look-ahead through it (each of whose fits costs what that member's own fit did)."""
     pool = [c for c in cands if c.fitted and not c.earns and c.predictions is not None
             and not getattr(c, "at_bound", ())  # refused as unphysical, not confounded
             and not getattr(c, "cut_at_deadline", "")  # cut at its start: not fitted
             and math.isfinite(c.delta_bic_fit) and c.delta_bic_fit < 0]
-    return min(pool, key=lambda c: c.delta_bic_fit) if pool else None
+    if not pool:
+        return None
+    best = min(pool, key=lambda c: c.delta_bic_fit)
+    earned = [c.delta_bic_fit for c in cands if c.fitted and c.earns
+              and math.isfinite(c.delta_bic_fit)]
+    return best if not earned or best.delta_bic_fit < min(earned) else None
 
 
 def supported(c: Any) -> bool:
@@ -64,8 +76,8 @@ def supported(c: Any) -> bool:
 
 
 def lookahead_winner(earning: Sequence[Any], blocked: Any, try_on_top: Any,
-                     say: Any = None, max_paths: int = 2, first_steps: Sequence[Any] = ()
-                     ) -> Any | None:
+                     say: Any = None, max_paths: int = 2, first_steps: Sequence[Any] = (),
+                     judged: list | None = None) -> Any | None:
     """A first step C that lets the confounded candidate ``blocked`` earn on top of
     it, preferred to the round's default winner.
 
@@ -97,12 +109,19 @@ def lookahead_winner(earning: Sequence[Any], blocked: Any, try_on_top: Any,
         At most this many first steps are tried.
     first_steps : sequence of CandidateResult
         Further first steps (:func:`supported`), besides the earning candidates.
+    judged : list, optional
+        Receives the effect of every earning first step C whose path was decided (its
+        joint fit with ``blocked`` made, not cut by the budget): the model with both is
+        then judged, and the reverse look-ahead need not re-identify it from
+        ``blocked``'s side (:func:`not_judged`).
     """
     best, best_sse = None, choose_winner(earning).sse_heldout if earning else math.inf
     for c, step in _paths(first_step_pool(earning, first_steps), blocked, try_on_top,
                           max_paths):
         ok = (step.earns and step.error_after < c.error_before
               and getattr(step, "first_resolved", True))
+        if judged is not None and c in earning and not getattr(step, "cut_at_deadline", ""):
+            judged.append(c.effect)
         if say:
             say(f"look-ahead: {blocked.effect} on top of {c.effect}: held-out error "
                 f"{c.error_before:.3f} -> {c.error_after:.3f} -> {step.error_after:.3f} %"
@@ -110,6 +129,28 @@ def lookahead_winner(earning: Sequence[Any], blocked: Any, try_on_top: Any,
         if ok and step.sse_heldout < best_sse:
             best, best_sse = c, step.sse_heldout
     return best
+
+
+def not_judged(others: Sequence[Any], judged: Sequence[str], blocked: Any,
+               say: Any = None) -> list:
+    """The second steps ``others`` of the reverse look-ahead (:func:`confounded_first`)
+    whose model with ``blocked`` was not already judged by the forward look-ahead
+    (``judged``, :func:`lookahead_winner`).
+
+    The two paths re-identify the same model — both members added, all their
+    parameters free — from two starts: C's own fit, or ``blocked``'s.  The reverse
+    start exists for an effect that cannot be fitted alone (a cogging beside a gap
+    finds nothing alone, or too little to start from); for a C that earned alone, whose
+    own fit already led the joint fit and whose path was judged against the round's
+    default winner, a second joint fit of the same model (50 s each for a mount spring
+    with a generator member) would decide nothing new."""
+    left = [c for c in others if c.effect not in judged]
+    same = [c.effect for c in others if c.effect in judged]
+    if same and say:
+        say(f"look-ahead: {', '.join(same)} not re-identified on top of {blocked.effect}: "
+            f"the model with both was re-identified from {'their' if len(same) > 1 else 'its'}"
+            f" own fit and judged above")
+    return left
 
 
 def first_step_pool(earning: Sequence[Any], first_steps: Sequence[Any] = ()) -> list:

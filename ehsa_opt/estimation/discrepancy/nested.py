@@ -7,16 +7,28 @@ a ln N_eff charge per parameter) is only fair when both were fitted.  The simple
 member's linearised signature may rank it out of the round (a mount spring of 3e5 N/m
 scored 0 on its rotor channel while a 6 µm "backlash" with a 3e5 N/m contact earned),
 so :func:`nested_to_fit` names the ones a round must re-identify too.
+
+When both earn, the richer member is added only when its extra parameters show
+evidence of their own (:func:`prefer_nested`): a 1 µm "gap" with a 3e5 N/m contact beat
+the 3e5 N/m mount spring it stands for by 0.5 in held-out ΔBIC (−1902.9 against
+−1902.4), less than :data:`NESTED_EVIDENCE`, and the simpler member is named.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, Mapping, Sequence
 
 from .candidates import CANDIDATES, compatible
 from .impact_verdict import impact_record
 
-__all__ = ["nested_to_fit"]
+__all__ = ["nested_to_fit", "nested_in", "prefer_nested", "NESTED_EVIDENCE"]
+
+#: Held-out ΔBIC (natural-log likelihood units, the ln N_eff charge per parameter
+#: included) by which a member must beat an earning member nested in it to be added
+#: instead: a BIC difference below 2 is "not worth more than a bare mention" (Kass and
+#: Raftery, 1995) — no evidence for the richer member's extra parameters.
+NESTED_EVIDENCE = 2.0
 
 
 def nested_to_fit(cands: Mapping[str, Any], scores: Mapping[str, dict],
@@ -27,14 +39,56 @@ def nested_to_fit(cands: Mapping[str, Any], scores: Mapping[str, dict],
     component (``comps``).  A candidate judged on its impacts is left out: a rattling
     contact is not a series spring, and its sample-wise ΔBIC, which the choice between
     nested members reads, measures chaos."""
+    return nested_in([name for name, c in cands.items()
+                      if c.earns and impact_record(c.fit) is None],
+                     scores, comps, rig, remaining,
+                     fitted=[name for name, c in cands.items() if c.fitted])
+
+
+def nested_in(names: Sequence[str], scores: Mapping[str, dict], comps: Mapping[str, Any],
+              rig: Any, remaining: Sequence[str], fitted: Sequence[str] = ()) -> list[str]:
+    """The simpler members nested in the members ``names`` (in their order), other than
+    ``names`` and ``fitted``, applicable (``scores``), still ``remaining`` and able to
+    join ``rig`` with their configured component (``comps``): what a round asks for
+    when one of ``names`` earns (:func:`nested_to_fit`), and so what it may fit ahead
+    (:mod:`.idle_fits`)."""
     out: list[str] = []
-    for name, c in cands.items():
-        if not c.earns or impact_record(c.fit) is not None:
-            continue
+    for name in names:
         for m in getattr(CANDIDATES.get(name), "nests", ()):
-            cm = cands.get(m)
-            if (cm is None or cm.fitted or m in out or m not in remaining
-                    or not scores[m]["applicable"] or not compatible(rig, comps[m])):
+            if (m in out or m in names or m in fitted or m not in remaining
+                    or m not in scores or not scores[m]["applicable"]
+                    or m not in comps or not compatible(rig, comps[m])):
                 continue
             out.append(m)
     return out
+
+
+def prefer_nested(win: Any, cands: Mapping[str, Any], say: Any = None) -> Any:
+    """The round's winner, or the simpler member nested in it (name →
+    :class:`~.results.CandidateResult` in ``cands``) when that one earns too and the
+    winner's held-out ΔBIC is not lower than its by :data:`NESTED_EVIDENCE` — its extra
+    parameters (a gap beside the contact's stiffness) are then not shown by the data.
+    Of several such nested members, the one with the lowest held-out ΔBIC.
+
+    The two are compared on every channel (``delta_bic_heldout``), not each on its own
+    channel as :func:`~.evidence.choose_winner` compares different effects: they are one
+    physics, the simpler the richer at a limit, and a channel told apart by each one's
+    linearised signature (the gap's force, the spring's voltage) would compare
+    −1951.5 on the one against −1863.4 on the other for fits alike on both."""
+    simpler = [cands[m] for m in getattr(CANDIDATES.get(win.effect), "nests", ())
+               if m in cands and cands[m].earns and not getattr(cands[m], "at_bound", ())]
+    close = []
+    for c in simpler:
+        d_simple, d_win = float(c.delta_bic_heldout), float(win.delta_bic_heldout)
+        if math.isfinite(d_simple) and math.isfinite(d_win) \
+                and d_simple - d_win < NESTED_EVIDENCE:
+            close.append(c)
+    if not close:
+        return win
+    best = min(close, key=lambda c: c.delta_bic_heldout)
+    if say is not None:
+        w, b = best.delta_bic_heldout, win.delta_bic_heldout
+        say(f"{best.effect} is nested in {win.effect} and earns too: {win.effect}'s held-out "
+            f"ΔBIC {b:.1f} against {w:.1f} is not lower by {NESTED_EVIDENCE:g} — no evidence "
+            f"for its extra parameters; {best.effect} is added")
+    return best

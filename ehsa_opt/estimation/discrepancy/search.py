@@ -6,8 +6,9 @@ and add the winner; look ahead where one effect hides another.
   the :class:`SearchTests`; a round is ranked (:func:`rank_round`), its candidates
   fitted and judged (:func:`judge_round`), widened and looked ahead when the best
   explains little (:func:`widen_round`), and its winner added (:func:`add_winner`);
-* :func:`should_widen`: whether the round re-identifies the lower-ranked candidates
-  too before deciding (the best earning candidate explains little of the excess).
+* :func:`~.widen.should_widen`, :func:`~.widen.widen_round` (in :mod:`.widen`): whether
+  the round re-identifies the lower-ranked candidates too before deciding, and the
+  widened round's look-ahead.
 
 The statistics, the rule each candidate is judged by and the choice of the winner
 (:func:`~.evidence.choose_winner`) are in :mod:`.evidence`; the look-ahead through a
@@ -24,7 +25,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .candidate_fit import fit_members, judge_fit, signature_scores_in
+from .candidate_fit import judge_fit, not_fitted, signature_scores_in
+from .idle_fits import fit_with_spares
 from .deadline import elapsed_s, past_deadline, time_left_s
 from .candidates import (
     CANDIDATES,
@@ -37,7 +39,6 @@ from .candidates import (
 )
 from .evidence import (
     MIN_EXCESS_OVER_FLOOR,
-    MIN_EXCESS_REDUCTION,
     MIN_SSE_EXCESS,
     can_earn,
     channel_sse,
@@ -51,25 +52,15 @@ from .evidence import (
 from .prepared import PreparedTest
 from .rig import Rig
 from .impacts import impact_record
-from .nested import nested_to_fit
-from .lookahead import (
-    confounded,
-    confounded_first,
-    first_step_pool,
-    fit_on_top,
-    on_top_args,
-    prefetch_on_top,
-    lookahead_winner,
-    member_key,
-    second_steps,
-    supported,
-)
+from .nested import nested_in, nested_to_fit, prefer_nested
+from .lookahead import member_key
+from .widen import WIDEN_BELOW, should_widen, widen_candidates, widen_round
 from .results import CandidateResult, DiscrepancySettings
 from .terms import FRICTION_LAW_GROUPS, TERM_PREFERENCE, propose_term
 
 __all__ = ["SearchTests", "SearchState", "RoundRanking", "run_rounds", "rank_round",
            "judge_round", "judge_context", "widen_round", "add_winner", "should_widen",
-           "WIDEN_BELOW"]
+           "WIDEN_BELOW", "ranked_ahead", "fitted_ahead"]
 
 
 @dataclass
@@ -135,6 +126,11 @@ class SearchState:
     #: wall time of each member's last fit, s, by name (what a look-ahead fit is
     #: estimated to cost, :func:`widen_round`)
     seconds: dict = field(default_factory=dict)
+    #: the next round's ranking, made (and its members fitted into ``fitted``) before
+    #: the round started — the delay's rival check (:func:`~.lag_rival.lag_rival`) —
+    #: with the rig and remaining members it was made on; the round reuses it
+    #: (:func:`ranked_ahead`) and is decided on those fits even after the deadline
+    ranking: tuple | None = None
 
     def snapshot(self) -> SearchState:
         """A copy that later rounds do not change."""
@@ -172,7 +168,7 @@ def run_rounds(tests: SearchTests, state: SearchState, settings: DiscrepancySett
     # (state before the look-ahead first step, its error before) until it is completed
     joint: tuple | None = None
     for rnd in range(1, settings.max_effects + 1):
-        if past_deadline():
+        if past_deadline() and ranked_ahead(state) is None:
             state.cut = state.cut or (f"time budget {settings.budget_s:g} s reached before "
                                       f"round {rnd}: no further round run")
             say(state.cut)
@@ -195,7 +191,7 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
            ) -> tuple[bool, tuple | None]:
     """One round on ``state`` (changed in place when a winner is added).  Returns
     whether to go on and the look-ahead path's start (see :func:`run_rounds`)."""
-    rk = rank_round(tests, state, settings)
+    rk = ranked_ahead(state, pop=True) or rank_round(tests, state, settings)
     judge = judge_context(rnd, tests, state, rk, say, notes)
     if judge is None:  # nothing can earn: the round is not re-identified
         all_cands += [rk.cands[n] for n in rk.order]
@@ -206,9 +202,10 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
                 f"of its range, or worsens the rotor's channel): none re-identified")
         say(note)
         notes.append(note)
-    judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True)
+    judge_round(rk, rk.chosen, tests, state, settings, judge, with_flexibility=True,
+                spare=fitted_ahead(rk, state))
     nested = nested_to_fit(rk.cands, rk.scores, rk.comps, state.rig, state.remaining)
-    if nested and not past_deadline():
+    if nested:  # after the deadline: fits made ahead are reused, the others are a cut
         judge["say"](f"round {rnd}: " + ", ".join(nested) + " re-identified too (nested in "
                      "an earning member: the choice is made on fits)")
         judge_round(rk, nested, tests, state, settings, judge)
@@ -216,7 +213,9 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         note = flexibility_refusal(rk.cands["flexibility"], rk.flex_out[1], rnd)
         say(note)
         notes.append(note)
-    earning, first, blocked = widen_round(rnd, rk, tests, state, settings, judge, say)
+    earning, first, blocked = widen_round(
+        rnd, rk, tests, state, settings, judge, say,
+        lambda names: judge_round(rk, names, tests, state, settings, judge))
     all_cands += [rk.cands[n] for n in rk.order]
     if first is not None and not first.earns and (rnd == settings.max_effects
                                                   or len(state.remaining) < 2
@@ -234,7 +233,7 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         first.earns = True
     if not earning and first is None:
         return False, joint
-    win = first or choose_winner(earning)
+    win = first or prefer_nested(choose_winner(earning), rk.cands, say)
     if settings.discover and _term_preferred(rnd, win, tests, state, settings, say):
         win.earns = False
         return False, joint
@@ -256,6 +255,18 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
         notes.append(stop)
         return False, joint
     return bool(state.remaining), joint
+
+
+def ranked_ahead(state: SearchState, pop: bool = False) -> RoundRanking | None:
+    """The ranking of the next round made before it started (``state.ranking``) when it
+    was made on the current model (the same rig, the same remaining members), else None;
+    ``pop``: it is taken (a round uses it once)."""
+    got = state.ranking
+    if pop:
+        state.ranking = None
+    if got is None or got[0] is not state.rig or list(got[1]) != list(state.remaining):
+        return None
+    return got[2]
 
 
 def _ranked_above(rk: RoundRanking, state: SearchState) -> list[str]:
@@ -288,6 +299,22 @@ def _estimate(state: SearchState, name: str) -> float:
     if name in state.seconds:
         return float(state.seconds[name])
     return float(np.median(list(state.seconds.values()))) if state.seconds else 0.0
+
+
+def fitted_ahead(rk: RoundRanking, state: SearchState) -> list[str]:
+    """The members a round may ask for after its chosen ones, fitted ahead on idle
+    workers (:mod:`.idle_fits`): the simpler members nested in a chosen one
+    (:func:`~.nested.nested_in`), then those a widened round re-identifies
+    (:func:`~.widen.widen_candidates`)."""
+    nested = nested_in(rk.chosen, rk.scores, rk.comps, state.rig, state.remaining)
+    return nested + [n for n in widen_candidates(rk, state) if n not in nested]
+
+
+def _member_args(name: str, rk: RoundRanking, tests: SearchTests, state: SearchState,
+                 settings: DiscrepancySettings) -> tuple:
+    """The :func:`~.candidate_fit.fit_member` arguments of ``name`` on the current model."""
+    return (name, rk.comps[name], CANDIDATES[name].starts, tests.sub_pts, tests.fit_pts,
+            tests.held_pts, state.rig, state.params, settings.max_iter)
 
 
 def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySettings
@@ -369,33 +396,42 @@ def judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRan
 
 def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
                 state: SearchState, settings: DiscrepancySettings, judge: dict,
-                with_flexibility: bool = False, keep: bool = False) -> None:
+                with_flexibility: bool = False, keep: bool = False,
+                spare: Sequence[str] = ()) -> None:
     """Re-identify the candidates ``names`` on the current model
     (:func:`~.candidate_fit.fit_members`) and judge each
     (:func:`~.evidence.judge_candidate`); ``with_flexibility``: the flexibility
     member's fit is judged by the same rule too; ``keep``: the new fits are kept in
-    ``state.fitted`` for a later round on the same model to reuse."""
+    ``state.fitted`` for a later round on the same model to reuse.  ``spare``: members
+    the round may ask for next, fitted only on workers the fits of ``names`` leave idle
+    (:func:`~.idle_fits.fit_with_spares`) and kept in ``state.fitted``, not judged."""
     names = list(names)
-    if names and past_deadline():
-        state.cut = (f"time budget {settings.budget_s:g} s reached in the round in "
-                     f"progress: {', '.join(names)} not re-identified; the round is decided "
-                     f"on the candidates fitted before the cut")
-        judge["say"](state.cut)
-        return
-    elif names:
-        args = [(n, rk.comps[n], CANDIDATES[n].starts, tests.sub_pts, tests.fit_pts,
-                 tests.held_pts, state.rig, state.params, settings.max_iter) for n in names]
-        # a member the look-ahead already fitted on this model (same inputs): reused
+    if names:
+        args = [_member_args(n, rk, tests, state, settings) for n in names]
+        # a member fitted ahead on this model (same inputs: by the look-ahead, on an
+        # idle worker, or by the delay's rival check): reused
         done = [state.fitted.pop(member_key(x), (None, None)) for x in args]
         done = [out for rig, out in done if rig is state.rig and out is not None]
         for out in done:
-            judge["say"](f"{out[0]}: the look-ahead's fit on this model (the same inputs) "
-                         f"is judged again, not repeated")
+            judge["say"](f"{out[0]}: the fit made ahead on this model (the same inputs) "
+                         f"is judged, not repeated")
         new = [x for x in args if x[0] not in {out[0] for out in done}]
+        ahead = [_member_args(n, rk, tests, state, settings) for n in spare
+                 if n not in names and n in rk.comps]
+        ahead = [x for x in ahead if member_key(x) not in state.fitted]
         t0 = time.perf_counter()
         # scheduled as workers free up, in rank order; none started after the deadline
-        fits = fit_members(new, settings.jobs, until_deadline=settings.budget_s is not None,
-                           seconds=state.seconds, estimate=lambda n: _estimate(state, n))
+        # (fits made before it, reused above, are judged all the same)
+        fits, extra = ([], []) if new and past_deadline() else fit_with_spares(
+            new, ahead, settings.jobs, until_deadline=settings.budget_s is not None,
+            seconds=state.seconds, estimate=lambda n: _estimate(state, n))
+        for x in ahead:
+            out = next((o for o in extra if o[0] == x[0]), None)
+            if out is not None and not not_fitted(out[1]):
+                state.fitted[member_key(x)] = (state.rig, out)
+        if extra:
+            judge["say"]("fitted ahead on an idle worker: " + ", ".join(
+                f"{o[0]} {state.seconds[o[0]]:.1f} s" for o in extra))
         if fits:
             judge["say"](f"re-identified {len(fits)} member"
                          f"{'s' if len(fits) > 1 else ''} in {time.perf_counter() - t0:.1f} s "
@@ -432,77 +468,6 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
         cf.parameters["flex_stiffness_N_per_m"] = cf.parameters["flex_load_mass_kg"] * w2
         iv = cf.intervals.get("flex_load_mass_kg")
         cf.intervals["flex_stiffness_N_per_m"] = (iv[0] * w2, iv[1] * w2) if iv else None
-
-
-def widen_round(rnd: int, rk: RoundRanking, tests: SearchTests, state: SearchState,
-                settings: DiscrepancySettings, judge: dict, say
-                ) -> tuple[list, CandidateResult | None, CandidateResult | None]:
-    """When the best earning candidate explains little (:func:`should_widen`),
-    re-identify the remaining applicable ones too, and look ahead through the
-    confounded candidate (:func:`lookahead_winner`, :func:`confounded_first`).
-    Returns the earning candidates, the first step of a look-ahead path (or None)
-    and the confounded candidate (or None)."""
-    cands, order = rk.cands, rk.order
-    earning = [c for c in cands.values() if c.earns]
-    first = blocked = None
-    if state.cut or not should_widen(earning, can_earn(state.error, tests.floor, 0.0, 1.0)):
-        return earning, first, blocked
-    if any(impact_record(c.fit) is not None for c in earning):
-        # a rattling contact earned on its impacts: the sample-wise share of the excess
-        # it removes measures the chaos, not what is left unexplained
-        return earning, first, blocked
-    more = [n for n in order if n not in rk.chosen and rk.scores[n]["applicable"]
-            and n != "flexibility" and compatible(state.rig, rk.comps[n])
-            and rank_value(rk.scores[n]) >= MIN_RANK_VALUE]
-    if not more:
-        return earning, first, blocked
-    best = max(earning, key=lambda c: c.excess_reduction)
-    say(f"round {rnd}: the best earning candidate ({best.effect}) removes only "
-        f"{100 * best.excess_reduction:.0f} % of the excess (< "
-        f"{100 * WIDEN_BELOW:.0f} %): also re-identifying {', '.join(more)}")
-    judge_round(rk, more, tests, state, settings, judge)
-    earning = [c for c in cands.values() if c.earns]
-    blocked = confounded(list(cands.values()))
-    if blocked is None or state.cut:  # no look-ahead path after the time budget
-        blocked = None
-        return earning, first, blocked
-    cuts: list[str] = []  # look-ahead fits cut by the time budget, or not started
-    t0 = time.perf_counter()
-    steps1 = [c for c in cands.values() if supported(c)]
-    if settings.jobs > 1:  # the (at most two) first steps' fits side by side
-        pairs = [(c, blocked) for c in first_step_pool(earning, steps1) if c is not blocked]
-        prefetch_on_top([p for p in pairs if on_top_args(*p, judge, tests.sub_pts,
-                                                            settings.max_iter)][:2],
-                        judge, tests.sub_pts, settings.max_iter, state.fitted, settings.jobs,
-                        state.seconds)
-    first = lookahead_winner(
-        earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,
-                                               settings.max_iter, rnd, state.fitted, cuts,
-                                               state.seconds),
-        say, first_steps=steps1)
-    # the second steps: what a round after `blocked` would re-identify, ranked on the
-    # residual of the model with it (not among the members this round happened to fit)
-    others = [] if first is not None else second_steps(
-        blocked, [n for n in state.remaining if n != "flexibility"], tests.fit_pts,
-        tests.sub_pts, tests.lead_m_per_rad, say, settings.jobs)
-    if first is None and settings.jobs > 1:
-        prefetch_on_top([(blocked, c) for c in others[:settings.jobs]], judge, tests.sub_pts,
-                        settings.max_iter, state.fitted, settings.jobs, state.seconds)
-    if first is None and confounded_first(
-            blocked, others,
-            lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd,
-                                 state.fitted, cuts, state.seconds),
-            state.error, tests.floor,
-            choose_winner(earning).sse_heldout if earning else math.inf, say):
-        first = blocked
-    say(f"round {rnd}: look-ahead through {blocked.effect} in "
-        f"{time.perf_counter() - t0:.1f} s ({elapsed_s():.0f} s into the run)")
-    if cuts:
-        state.cut = (f"time budget {settings.budget_s:g} s reached in the look-ahead of "
-                     f"round {rnd}: {'; '.join(cuts)} not fitted (the path is work left); "
-                     f"the round is decided without those paths")
-        say(state.cut)
-    return earning, first, blocked
 
 
 def _term_preferred(rnd: int, win: CandidateResult, tests: SearchTests, state: SearchState,
@@ -555,45 +520,3 @@ def add_winner(rnd: int, win: CandidateResult, first: CandidateResult | None,
         joint = None
     say(f"round {rnd}: added {win.effect}, {tests.evaluation} error {state.error:.3f} %")
     return joint
-
-
-#: When the best earning candidate of a round removes less than this share of the
-#: held-out force error's excess over the noise floor, the round re-identifies every
-#: remaining applicable candidate before deciding (see :func:`should_widen`).
-WIDEN_BELOW = 0.5
-
-
-def should_widen(earning: Sequence[Any], force_excess: bool = True) -> bool:
-    """Whether to re-identify the remaining lower-ranked candidates before deciding.
-
-    True when some candidate earns but the best earning one removes less than
-    :data:`WIDEN_BELOW` of the held-out force error's excess over the noise floor
-    (when the force has no excess beyond noise, ``force_excess`` False: of the SSE
-    alternative's excess — a voltage-seen effect): most of what the model
-    misses is then unexplained by the top-ranked candidates, and the ranking (a
-    linearised score on the fit tests) may have put the effect that explains it
-    below ``top`` — a 12-per-rev cogging beside a 0.1 mm gap ranked 5th, the gap's
-    refit absorbed the ripple on the fit tests and failed on the held-out ones, and
-    a compliance earning 11 % of the excess took the only transmission slot.
-
-    Parameters
-    ----------
-    earning : sequence of CandidateResult
-        The earning candidates of the round (``excess_reduction`` set; an optional
-        ``sse_reduction`` attribute holds the SSE alternative's share).
-    force_excess : bool
-        Whether the force error's excess over the noise floor is beyond noise
-        (:func:`~.evidence.can_earn` on the force alone).  Then the force gain decides
-        alone: a compliance beside a gap plus a cogging removed 11 % of the force
-        excess but more than half of the voltage channel's, and the round was not
-        widened.
-    """
-    if not earning:
-        return False
-    gains = []
-    for c in earning:
-        g = c.excess_reduction if math.isfinite(c.excess_reduction) else -math.inf
-        s = getattr(c, "sse_reduction", None)
-        use_sse = not force_excess and s is not None and math.isfinite(s)
-        gains.append(max(g, s) if use_sse else g)
-    return max(gains) < max(WIDEN_BELOW, MIN_EXCESS_REDUCTION)

@@ -30,12 +30,14 @@ round after round, then propose a data-driven term for what no catalogue effect 
    effect seen in the voltage channel the same share of that channel's SSE excess,
    the force error not growing by more than the data resolve (e_n/√(2N)).  Among
    the earning candidates the one with the lowest held-out ΔBIC is added
-   (:func:`~.evidence.choose_winner`: between nested effects that fit equally well,
-   the simpler).  When the best earning candidate removes less than
-   :data:`~.search.WIDEN_BELOW` of the excess, the remaining lower-ranked
-   candidates are re-identified too before deciding (:func:`~.search.should_widen`),
-   and a candidate that fits the fit tests but fails on the held-out ones (it
-   absorbed another effect's residual) is re-identified on top of the others, or
+   (:func:`~.evidence.choose_winner`; between nested effects the simpler unless the
+   richer's ΔBIC is lower by :data:`~.nested.NESTED_EVIDENCE`,
+   :func:`~.nested.prefer_nested`).  When the best earning candidate removes less than
+   :data:`~.widen.WIDEN_BELOW` of the excess, the remaining lower-ranked
+   candidates are re-identified too before deciding (:func:`~.widen.should_widen`;
+   fitted ahead on the workers the round's own fits leave idle, :mod:`.idle_fits`),
+   and a candidate that explains the fit tests best of all but fails on the held-out
+   ones (it absorbed another effect's residual) is re-identified on top of the others, or
    they on top of it: a two-step path that earns as a whole and ends below the
    default winner decides which is added first (:func:`~.lookahead.lookahead_winner`,
    :func:`~.lookahead.confounded_first`).
