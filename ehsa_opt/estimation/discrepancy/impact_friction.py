@@ -16,9 +16,10 @@ can coast through a gap with:
   that bump brakes the coasting rotor with hundreds of newtons, and no contact
   reproduces the impacts: at the true contact the held-out feature objective
   (:mod:`.impact_verdict`, unwidened) was 26 with the start's friction, 33 with a tenth
-  of it on the rotor; with the bump capped at :data:`BREAKAWAY_RATIO` times the Coulomb
-  level, 5.9 with half and 4.1 with all of it on the rotor.  The fit therefore screens
-  the start's friction and, where its bump exceeds that ratio, the capped one
+  of it on the rotor; with the bump reshaped to :data:`BREAKAWAY_RATIO` times the Coulomb
+  level (the map's mean friction over the fit tests' speeds kept), 3.1 with all of it on
+  the rotor (4.1 with the breakaway merely capped, the Coulomb level unchanged).  The fit therefore screens
+  the start's friction and, where its bump exceeds that ratio, the reshaped one
   (:func:`friction_variants`); the better one goes on.
 
 What the friction's remaining uncertainty does to each test's features widens them
@@ -42,6 +43,7 @@ from .impact_features import (
     mismatch,
     moved_friction,
 )
+from ...physics.friction import simscape_friction
 from .prepared import PreparedTest
 from .rig import Rig, predict
 
@@ -61,30 +63,64 @@ IMPACT_SHARES = (0.15, 0.3, 0.45, 1.0)
 #: (static over Coulomb 1.6-1.7) on the campaign above; not tuned further.
 BREAKAWAY_RATIO = 1.5
 
-_PAIRS = (("nut_breakaway_N", "nut_coulomb_N"), ("bearing_breakaway_Nm", "bearing_coulomb_Nm"))
+#: (breakaway, Coulomb, breakaway velocity, the speed's scale from the rod velocity: the
+#: nut's at the rod velocity, the bearing's at the rotor speed v/r on a rigid transmission)
+_PAIRS = (("nut_breakaway_N", "nut_coulomb_N", "nut_breakaway_velocity_m_per_s", False),
+          ("bearing_breakaway_Nm", "bearing_coulomb_Nm", "bearing_breakaway_velocity_rad_per_s",
+           True))
 
 
-def capped_breakaway(p: Mapping[str, float], ratio: float = BREAKAWAY_RATIO
+def capped_breakaway(p: Mapping[str, float], speeds_m_per_s: np.ndarray,
+                     lead_m_per_rad: float, ratio: float = BREAKAWAY_RATIO
                      ) -> dict[str, float]:
-    """``p`` with each breakaway level at most ``ratio`` times its Coulomb level (the
-    nut's in N, the bearing's in N m); the breakaway velocities and viscous terms kept."""
+    """``p`` with each breakaway level above ``ratio`` times its Coulomb level reshaped to
+    exactly that ratio, its Coulomb level chosen so that the map's mean friction (less
+    the viscous part) over ``speeds_m_per_s`` (the fit tests' rod velocities, m/s) is
+    kept: the friction the rigid model identified stays, only its bump goes.  The
+    breakaway velocities and viscous terms are kept.
+
+    Parameters
+    ----------
+    p : dict
+        Model parameters with the eight friction levels.
+    speeds_m_per_s : ndarray
+        Rod velocities the mean is taken over (m/s; the bearing's at v / r).
+    lead_m_per_rad : float
+        r, m/rad.
+    ratio : float
+        Breakaway over Coulomb level of a reshaped pair (>= 1).
+    """
     if not ratio >= 1.0:
         raise ValueError(f"capped_breakaway: ratio must be >= 1, got {ratio!r}")
+    v = np.asarray(speeds_m_per_s, dtype=float)
+    if v.size == 0 or not np.any(v != 0):
+        raise ValueError("capped_breakaway: needs the rod velocities of the fit tests")
     out = dict(p)
-    for brk, coul in _PAIRS:
-        out[brk] = min(float(p[brk]), ratio * max(float(p[coul]), 0.0))
+    for brk, coul, vel, on_rotor in _PAIRS:
+        fb, fc = float(p[brk]), max(float(p[coul]), 0.0)
+        if fb <= ratio * fc:
+            continue
+        u = v / lead_m_per_rad if on_rotor else v
+        now = np.mean(np.abs(simscape_friction(u, fb, fc, float(p[vel]), 0.0)))
+        unit = np.mean(np.abs(simscape_friction(u, ratio, 1.0, float(p[vel]), 0.0)))
+        out[coul] = float(now / unit)
+        out[brk] = ratio * out[coul]
     return out
 
 
-def friction_variants(start: Mapping[str, float], ratio: float = BREAKAWAY_RATIO
+def friction_variants(start: Mapping[str, float], prepared: Sequence[PreparedTest],
+                      lead_m_per_rad: float, ratio: float = BREAKAWAY_RATIO
                       ) -> list[tuple[str, dict[str, float]]]:
     """The frictions the impact-aware fit screens: the start's, and — when a breakaway
-    level exceeds ``ratio`` times its Coulomb level — the start's with its breakaway
-    capped there (:func:`capped_breakaway`).  (label, parameters) pairs."""
+    level exceeds ``ratio`` times its Coulomb level — the start's reshaped to that ratio
+    with its mean friction over the fit tests' resolved rod velocities kept
+    (:func:`capped_breakaway`).  (label, parameters) pairs."""
     out = [("start's friction", dict(start))]
-    capped = capped_breakaway(start, ratio)
-    if any(capped[b] < float(start[b]) for b, _ in _PAIRS):
-        out.append((f"breakaway capped at {ratio:g} x Coulomb", capped))
+    if all(float(start[b]) <= ratio * max(float(start[c]), 0.0) for b, c, _, _ in _PAIRS):
+        return out
+    v = np.concatenate([pt.u[1][pt.weight > 0] for pt in prepared])
+    out.append((f"breakaway reshaped to {ratio:g} x Coulomb (mean friction kept)",
+                capped_breakaway(start, v, lead_m_per_rad, ratio)))
     return out
 
 

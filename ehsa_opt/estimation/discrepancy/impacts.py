@@ -280,15 +280,14 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     with_share = bool(shares)
     lo4, hi4 = np.append(lo, 0.0), np.append(hi, 1.0)
     rigs = {float(n): with_contact_law(rig, n) for n in laws}
-    law = [float(laws[0])]  # the law of the search's current stage
-
-    variants = friction_variants(start) if with_share else [("start's friction", dict(start))]
-    var = [0]  # the friction variant of the search's current stage
+    law, var = [float(laws[0])], [0]  # the contact law and friction variant of the stage
+    variants = (friction_variants(start, prepared, h.lead_m_per_rad) if with_share
+                else [("start's friction", dict(start))])
     dropped: list[dict] = []  # screened points of the variants not chosen
 
     def friction(share: float) -> dict[str, float]:
-        f0 = variants[var[0]][1]
-        return dict(f0) if share <= 0.0 else split(dict(f0), share, h.lead_m_per_rad)
+        f0 = dict(variants[var[0]][1])
+        return f0 if share <= 0.0 else split(f0, share, h.lead_m_per_rad)
 
     def cost(q: np.ndarray) -> float:
         q = np.clip(np.asarray(q, dtype=float), lo4, hi4)
@@ -312,22 +311,9 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         # each stiffness with the gap its contact deflection leaves of the kinematic gap
         return np.array([max(g_kin - 2.0 * f_push / 10 ** lk, 0.2 * g_kin), lk, lc, share])
 
-    share_best = 0.0
-    if with_share:
-        # the friction split first, on a coarse grid (the impact speeds depend on it)
-        # (and the breakaway level: impact_friction.friction_variants)
-        scores = {}
-        for var[0] in range(len(variants)):
-            for sh in (0.0, *shares):
-                scores[var[0], sh] = min(cost(grid_point(lk, 4.0, sh)) for lk in _SHARE_GRID_LOG_K)
-        var[0], share_best = min(scores, key=scores.get)
-        share_best = float(share_best)
-        dropped += [r for r in history if r["_key"][-1] != var[0]]
-        history[:] = [r for r in history if r["_key"][-1] == var[0]]
-        say(f"impact-aware fit: bearing share of the friction {share_best:g}, "
-            f"{variants[var[0]][0]} (screen" + (", objectives " + ", ".join(
-                f"{variants[v][0]}: {min(c for (w, _), c in scores.items() if w == v):.3g}"
-                for v in range(len(variants))) if len(variants) > 1 else "") + ")")
+    # the friction (split, breakaway) first, on a coarse grid (the impact speeds depend on it)
+    share_best = _screen_friction(cost, grid_point, history, dropped, variants, var, shares,
+                                  say) if with_share else 0.0
     _grid(cost, grid_point, history, share_best)
     if len(rigs) > 1:
         law[0] = _choose_law(history, laws[1:], law, cost, grid_point, share_best, say)
@@ -362,6 +348,29 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     return ImpactFit(converged, msg, params, best["objective"], f_grid,
                      len(history) + len(dropped) + extra,
                      time.perf_counter() - t0, history, law[0], kint)
+
+
+def _screen_friction(cost: Callable[[np.ndarray], float], grid_point: Callable,
+                     history: list[dict], dropped: list[dict],
+                     variants: Sequence[tuple[str, dict]], var: list[int],
+                     shares: Sequence[float], say: Callable[[str], None]) -> float:
+    """The friction's screen of :func:`fit_impacts`: each variant
+    (:func:`~.impact_friction.friction_variants`) at each bearing share (0 and
+    ``shares``) at the stiffnesses of :data:`_SHARE_GRID_LOG_K`; sets ``var[0]`` to the
+    best variant, moves the other variants' points from ``history`` to ``dropped`` (the
+    search goes on with one friction) and returns the best share."""
+    scores = {}
+    for var[0] in range(len(variants)):
+        for sh in (0.0, *shares):
+            scores[var[0], sh] = min(cost(grid_point(lk, 4.0, sh)) for lk in _SHARE_GRID_LOG_K)
+    var[0], share_best = min(scores, key=scores.get)
+    dropped += [r for r in history if r["_key"][-1] != var[0]]
+    history[:] = [r for r in history if r["_key"][-1] == var[0]]
+    say(f"impact-aware fit: bearing share of the friction {share_best:g}, "
+        f"{variants[var[0]][0]} (screen" + (", objectives " + ", ".join(
+            f"{variants[v][0]}: {min(c for (w, _), c in scores.items() if w == v):.3g}"
+            for v in range(len(variants))) if len(variants) > 1 else "") + ")")
+    return float(share_best)
 
 
 #: Contact stiffnesses (log10 N/m) at which the friction's effect on the features is taken.
