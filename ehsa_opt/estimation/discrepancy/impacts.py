@@ -45,7 +45,7 @@ The objective (:func:`impact_objective`) is the mean squared standardised mismat
 these features between the forward simulation and the data — never sample by sample.
 :func:`fit_impacts` minimises it over (gap, log k, log c): a screen of the bearing share
 of the friction (a rigid baseline lumps it into the nut, but the bearing brakes the
-coasting rotor), a grid of stiffnesses 1e6–3e9 N/m in half decades (the aliasing makes
+coasting rotor) and of its breakaway bump (:mod:`.impact_friction`), a grid of stiffnesses 1e6–3e9 N/m in half decades (the aliasing makes
 the objective multimodal in k) and two dampings at the kinematic gap, then
 Nelder–Mead, within a fixed budget of simulations (a stated stop, never an open-ended
 search).  From a rigid baseline's friction (the workflow) the features are widened by
