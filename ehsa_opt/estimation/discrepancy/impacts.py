@@ -90,7 +90,17 @@ from .impact_features import (
     score,
     transient_energies,
 )
-from .impact_friction import IMPACT_SHARES, friction_variants, widen_by_friction
+from .impact_friction import (
+    DAMPING,
+    GAP,
+    IMPACT_SHARES,
+    STIFFNESS,
+    SimulationBudget,
+    confirm_friction,
+    friction_variants,
+    screen_friction,
+    widen_by_friction,
+)
 from .impact_stiffness import peak_force_ratios, stiffness_bracket, stiffness_note
 
 __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective",
@@ -101,9 +111,6 @@ __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective
            "IMPACT_EVALUATIONS", "IMPACT_ENERGY_RATIO", "IMPACT_LAWS", "with_contact_law", "GAP", "STIFFNESS",
            "DAMPING"]
 
-GAP = "backlash_gap_m"
-STIFFNESS = "backlash_contact_stiffness_N_per_m"
-DAMPING = "backlash_contact_damping_Ns_per_m"
 
 #: Simulations of the fit tests one impact-aware fit may use (grid + Nelder–Mead).
 IMPACT_EVALUATIONS = 48
@@ -280,10 +287,8 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     with_share = bool(shares)
     lo4, hi4 = np.append(lo, 0.0), np.append(hi, 1.0)
     rigs = {float(n): with_contact_law(rig, n) for n in laws}
-    law, var = [float(laws[0])], [0]  # the contact law and friction variant of the stage
-    variants = (friction_variants(start, prepared, h.lead_m_per_rad) if with_share
-                else [("start's friction", dict(start))])
-    dropped: list[dict] = []  # screened points of the variants not chosen
+    law, var, dropped = [float(laws[0])], [0], []  # law, friction variant; points dropped
+    variants = friction_variants(start, prepared, h.lead_m_per_rad)[:2 if with_share else 1]
 
     def friction(share: float) -> dict[str, float]:
         f0 = dict(variants[var[0]][1])
@@ -311,9 +316,9 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         # each stiffness with the gap its contact deflection leaves of the kinematic gap
         return np.array([max(g_kin - 2.0 * f_push / 10 ** lk, 0.2 * g_kin), lk, lc, share])
 
-    # the friction (split, breakaway) first, on a coarse grid (the impact speeds depend on it)
-    share_best = _screen_friction(cost, grid_point, history, dropped, variants, var, shares,
-                                  say) if with_share else 0.0
+    shares_of: dict[int, float] = {}  # each friction variant's screened share
+    share_best = screen_friction(cost, grid_point, history, dropped, variants, var, shares,
+                                 say, shares_of, _SHARE_GRID_LOG_K) if with_share else 0.0
     _grid(cost, grid_point, history, share_best)
     if len(rigs) > 1:
         law[0] = _choose_law(history, laws[1:], law, cost, grid_point, share_best, say)
@@ -330,6 +335,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         for r in history:  # every objective so far re-scored with the widened spreads
             r["objective"] = cache[r["_key"]] = score(mism[r["_key"]], widen)
         _gap_steps(history, mism, widen, share_best, g_kin, cost, law[0])
+    confirm_friction(history, dropped, var, shares_of, cost, law[0], [v for v, _ in variants], say)
     best = _best(history, law[0])
     f_grid = best["objective"]
     say(f"impact-aware fit: kinematic gap {1e3 * g_kin:.4g} mm; grid best k "
@@ -348,29 +354,6 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     return ImpactFit(converged, msg, params, best["objective"], f_grid,
                      len(history) + len(dropped) + extra,
                      time.perf_counter() - t0, history, law[0], kint)
-
-
-def _screen_friction(cost: Callable[[np.ndarray], float], grid_point: Callable,
-                     history: list[dict], dropped: list[dict],
-                     variants: Sequence[tuple[str, dict]], var: list[int],
-                     shares: Sequence[float], say: Callable[[str], None]) -> float:
-    """The friction's screen of :func:`fit_impacts`: each variant
-    (:func:`~.impact_friction.friction_variants`) at each bearing share (0 and
-    ``shares``) at the stiffnesses of :data:`_SHARE_GRID_LOG_K`; sets ``var[0]`` to the
-    best variant, moves the other variants' points from ``history`` to ``dropped`` (the
-    search goes on with one friction) and returns the best share."""
-    scores = {}
-    for var[0] in range(len(variants)):
-        for sh in (0.0, *shares):
-            scores[var[0], sh] = min(cost(grid_point(lk, 4.0, sh)) for lk in _SHARE_GRID_LOG_K)
-    var[0], share_best = min(scores, key=scores.get)
-    dropped += [r for r in history if r["_key"][-1] != var[0]]
-    history[:] = [r for r in history if r["_key"][-1] == var[0]]
-    say(f"impact-aware fit: bearing share of the friction {share_best:g}, "
-        f"{variants[var[0]][0]} (screen" + (", objectives " + ", ".join(
-            f"{variants[v][0]}: {min(c for (w, _), c in scores.items() if w == v):.3g}"
-            for v in range(len(variants))) if len(variants) > 1 else "") + ")")
-    return float(share_best)
 
 
 #: Contact stiffnesses (log10 N/m) at which the friction's effect on the features is taken.
@@ -566,8 +549,7 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     return name, out, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
 
 
-class _Budget(Exception):
-    """Raised inside the search when the simulation budget is used up."""
+_Budget = SimulationBudget  # raised inside the search when the budget is used up
 
 
 class _Deadline(Exception):
