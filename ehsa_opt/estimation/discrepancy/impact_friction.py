@@ -180,8 +180,9 @@ def screen_friction(cost: Callable[[np.ndarray], float], grid_point: Callable,
     (:func:`~.impact_friction.friction_variants`) at each bearing share (0 and
     ``shares``) at the stiffnesses ``grid_log_k`` (log10 N/m); sets ``var[0]`` to the
     best variant, moves the other variants' points from ``history`` to ``dropped`` (the
-    search goes on with one friction), notes each variant's best share in ``shares_of``
-    and returns the best share."""
+    search goes on with one friction; marked ``"screen"``: they do not count against the
+    search's budget), notes each variant's best share in ``shares_of`` and returns the best
+    share."""
     scores = {}
     for var[0] in range(len(variants)):
         for sh in (0.0, *shares):
@@ -189,7 +190,7 @@ def screen_friction(cost: Callable[[np.ndarray], float], grid_point: Callable,
     var[0], share_best = min(scores, key=scores.get)
     for v in range(len(variants)):
         shares_of[v] = float(min((k for k in scores if k[0] == v), key=scores.get)[1])
-    dropped += [r for r in history if r["_key"][-1] != var[0]]
+    dropped += [{**r, "screen": True} for r in history if r["_key"][-1] != var[0]]
     history[:] = [r for r in history if r["_key"][-1] == var[0]]
     say(f"impact-aware fit: bearing share of the friction {share_best:g}, "
         f"{variants[var[0]][0]} (screen" + (", objectives " + ", ".join(
@@ -211,8 +212,9 @@ def confirm_friction(history: list[dict], dropped: list[dict], var: list[int],
     here the other variant (at its screened share) is simulated at the
     :data:`_CONFIRM_POINTS` best points of the chosen one (its law, gap, stiffness,
     damping), and the search goes on with the other variant when its best is lower
-    (``history`` then holds only its points; a rig-B campaign's 0.2 mm gap ended 18 %
-    long with the variant the screen chose, 0.7 % with the other)."""
+    (``history`` then holds only its points; the points dropped here still count against
+    the budget; a rig-B campaign's 0.2 mm gap ended 18 % long with the variant the screen
+    chose, 0.7 % with the other)."""
     if len(labels) < 2 or not shares_of:
         return
     mine, other = var[0], 1 - var[0]

@@ -299,8 +299,8 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         key = (*np.round(q, 12), law[0], var[0])
         if key in cache:
             return cache[key]
-        if len(history) >= max_evaluations:
-            raise _Budget
+        if len(history) + sum("screen" not in r for r in dropped) >= max_evaluations:
+            raise _Budget  # (the other friction variant's screen comes on top)
         p = {**friction(float(q[3])), GAP: float(q[0]), STIFFNESS: float(10 ** q[1]),
              DAMPING: float(10 ** q[2])}
         mism[key] = mismatch(prepared, predict(prepared, rigs[law[0]], p), h, data)
