@@ -206,7 +206,8 @@ _CONFIRM_POINTS = 3
 
 def confirm_friction(history: list[dict], dropped: list[dict], var: list[int],
                       shares_of: Mapping[int, float], cost: Callable[[np.ndarray], float],
-                      law: float, labels: Sequence[str], say: Callable[[str], None]) -> None:
+                      law: float, variants: Sequence[tuple[str, dict]],
+                     say: Callable[[str], None]) -> bool:
     """The friction variant confirmed where it matters: the screen compares the variants
     on a coarse linear-law grid before the contact law, the widening and the gap steps;
     here the other variant (at its screened share) is simulated at the
@@ -214,9 +215,11 @@ def confirm_friction(history: list[dict], dropped: list[dict], var: list[int],
     damping), and the search goes on with the other variant when its best is lower
     (``history`` then holds only its points; the points dropped here still count against
     the budget; a rig-B campaign's 0.2 mm gap ended 18 % long with the variant the screen
-    chose, 0.7 % with the other)."""
+    chose, 0.7 % with the other).  Returns whether it switched (the caller then gives
+    the new variant's best grid points their gap steps)."""
+    labels = [lbl for lbl, _ in variants]
     if len(labels) < 2 or not shares_of:
-        return
+        return False
     mine, other = var[0], 1 - var[0]
     top = sorted((r for r in history if r["contact_exponent"] == law),
                  key=lambda r: r["objective"])[:_CONFIRM_POINTS]
@@ -236,4 +239,5 @@ def confirm_friction(history: list[dict], dropped: list[dict], var: list[int],
     history[:] = keep
     say(f"impact-aware fit: friction confirmed at the {len(top)} best points: "
         f"{labels[mine]} {f_old:.3g}, {labels[other]} {f_new:.3g}; goes on with {labels[var[0]]}")
+    return var[0] != mine
 

@@ -335,7 +335,8 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         for r in history:  # every objective so far re-scored with the widened spreads
             r["objective"] = cache[r["_key"]] = score(mism[r["_key"]], widen)
         _gap_steps(history, mism, widen, share_best, g_kin, cost, law[0])
-    confirm_friction(history, dropped, var, shares_of, cost, law[0], [v for v, _ in variants], say)
+    if confirm_friction(history, dropped, var, shares_of, cost, law[0], variants, say):
+        _gap_steps(history, mism, widen, shares_of[var[0]], g_kin, cost, law[0])
     best = _best(history, law[0])
     f_grid = best["objective"]
     say(f"impact-aware fit: kinematic gap {1e3 * g_kin:.4g} mm; grid best k "
