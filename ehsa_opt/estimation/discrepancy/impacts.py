@@ -45,7 +45,7 @@ The objective (:func:`impact_objective`) is the mean squared standardised mismat
 these features between the forward simulation and the data — never sample by sample.
 :func:`fit_impacts` minimises it over (gap, log k, log c): a screen of the bearing share
 of the friction (a rigid baseline lumps it into the nut, but the bearing brakes the
-coasting rotor), a grid of stiffnesses 1e6–3e9 N/m in half decades (the aliasing makes
+coasting rotor) and of its breakaway bump (:mod:`.impact_friction`), a grid of stiffnesses 1e6–3e9 N/m in half decades (the aliasing makes
 the objective multimodal in k) and two dampings at the kinematic gap, then
 Nelder–Mead, within a fixed budget of simulations (a stated stop, never an open-ended
 search).  From a rigid baseline's friction (the workflow) the features are widened by
@@ -79,20 +79,27 @@ from .impact_verdict import (
 from .impact_features import (
     IMPACT_FRICTION_DOMINATED,
     IMPACT_FRICTION_SPREAD,
-    BEARING_LEVELS,
-    NUT_LEVELS,
     FeatureData,
     Mismatch,
     data_features,
-    friction_widening,
     gap_step,
     impact_energy_ratio,
     impact_objective,
     kinematic_gap,
     mismatch,
-    moved_friction,
     score,
     transient_energies,
+)
+from .impact_friction import (
+    DAMPING,
+    GAP,
+    IMPACT_SHARES,
+    STIFFNESS,
+    SimulationBudget,
+    confirm_friction,
+    friction_variants,
+    screen_friction,
+    widen_by_friction,
 )
 from .impact_stiffness import peak_force_ratios, stiffness_bracket, stiffness_note
 
@@ -104,14 +111,12 @@ __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective
            "IMPACT_EVALUATIONS", "IMPACT_ENERGY_RATIO", "IMPACT_LAWS", "with_contact_law", "GAP", "STIFFNESS",
            "DAMPING"]
 
-GAP = "backlash_gap_m"
-STIFFNESS = "backlash_contact_stiffness_N_per_m"
-DAMPING = "backlash_contact_damping_Ns_per_m"
 
 #: Simulations of the fit tests one impact-aware fit may use (grid + Nelder–Mead).
 IMPACT_EVALUATIONS = 48
-#: ... and with a screen of friction shares (4 shares x 3 stiffnesses more).
-IMPACT_EVALUATIONS_WITH_SHARES = 72
+#: ... and with a screen of friction shares (5 shares x 3 stiffnesses more; a second
+#: friction variant's screen, :func:`~.impact_friction.friction_variants`, comes on top).
+IMPACT_EVALUATIONS_WITH_SHARES = 75
 #: The data's sampled force transient energy must exceed the current model's by this
 #: factor for the impact-aware fit to be used: impacts the model has not (a 0.3 mm gap
 #: with a 1e8-1e9 N/m contact: 700-2200; the prototype's soft 0.1 mm / 5e6 N/m one: 2;
@@ -125,11 +130,6 @@ _GRID_LOG_C = (3.0, 4.0)
 #: The grid stiffnesses (the best at the last damping) at which the other dampings are
 #: also simulated: far from the best stiffness the damping does not decide anything.
 _DAMPED_STIFFNESSES = 3
-#: Bearing shares of the start's rod-equivalent friction screened first (at c = 1e4 N s/m
-#: and the stiffnesses of _SHARE_GRID_LOG_K, with the start's own split as share 0):
-#: a rigid baseline lumps the friction into the nut, but the bearing's part brakes the
-#: rotor while it coasts through the gap, which sets the impact speeds.
-IMPACT_SHARES = (0.15, 0.3, 0.45)
 #: Contact stiffnesses (log10 N/m) at which the friction shares are compared.
 _SHARE_GRID_LOG_K = (7.0, 8.0, 9.0)
 #: Nelder–Mead unit of the bearing share (then a fourth search direction).
@@ -264,7 +264,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     friction_spread : float
         Relative uncertainty of the start's friction levels (0: known).  When > 0 the
         features are widened by what it does to them, tests it dominates are left out
-        (:func:`_widen_by_friction`), each grid stiffness gets a gap step (:func:`_gap_steps`).
+        (:func:`~.impact_friction.widen_by_friction`), each grid stiffness gets a gap step (:func:`_gap_steps`).
     laws : sequence of float
         Contact exponents (1 linear, 1.5 Hertz; :func:`_choose_law`), the best goes on.
     log : callable, optional
@@ -285,20 +285,22 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     widen: list[tuple[np.ndarray, float]] | None = None
     extra, left_out = 0, []
     with_share = bool(shares)
-    lo4, hi4 = np.append(lo, 0.0), np.append(hi, 0.9)
+    lo4, hi4 = np.append(lo, 0.0), np.append(hi, 1.0)
     rigs = {float(n): with_contact_law(rig, n) for n in laws}
-    law = [float(laws[0])]  # the law of the search's current stage
+    law, var, dropped = [float(laws[0])], [0], []  # law, friction variant; points dropped
+    variants = friction_variants(start, prepared, h.lead_m_per_rad)[:2 if with_share else 1]
 
     def friction(share: float) -> dict[str, float]:
-        return dict(start) if share <= 0.0 else split(dict(start), share, h.lead_m_per_rad)
+        f0 = dict(variants[var[0]][1])
+        return f0 if share <= 0.0 else split(f0, share, h.lead_m_per_rad)
 
     def cost(q: np.ndarray) -> float:
         q = np.clip(np.asarray(q, dtype=float), lo4, hi4)
-        key = (*np.round(q, 12), law[0])
+        key = (*np.round(q, 12), law[0], var[0])
         if key in cache:
             return cache[key]
-        if len(history) >= max_evaluations:
-            raise _Budget
+        if len(history) + sum("screen" not in r for r in dropped) >= max_evaluations:
+            raise _Budget  # (the other friction variant's screen comes on top)
         p = {**friction(float(q[3])), GAP: float(q[0]), STIFFNESS: float(10 ** q[1]),
              DAMPING: float(10 ** q[2])}
         mism[key] = mismatch(prepared, predict(prepared, rigs[law[0]], p), h, data)
@@ -314,13 +316,9 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         # each stiffness with the gap its contact deflection leaves of the kinematic gap
         return np.array([max(g_kin - 2.0 * f_push / 10 ** lk, 0.2 * g_kin), lk, lc, share])
 
-    share_best = 0.0
-    if with_share:
-        # the friction split first, on a coarse grid (the impact speeds depend on it)
-        scores = {sh: min(cost(grid_point(lk, 4.0, sh)) for lk in _SHARE_GRID_LOG_K)
-                  for sh in (0.0, *shares)}
-        share_best = float(min(scores, key=scores.get))
-        say(f"impact-aware fit: bearing share of the friction {share_best:g} (screen)")
+    shares_of: dict[int, float] = {}  # each friction variant's screened share
+    share_best = screen_friction(cost, grid_point, history, dropped, variants, var, shares,
+                                 say, shares_of, _SHARE_GRID_LOG_K) if with_share else 0.0
     _grid(cost, grid_point, history, share_best)
     if len(rigs) > 1:
         law[0] = _choose_law(history, laws[1:], law, cost, grid_point, share_best, say)
@@ -329,14 +327,16 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
         for lk in _SPREAD_LOG_K:
             q = grid_point(lk, 4.0, share_best)
             cost(q)
-            centres.append((mism[(*np.round(np.clip(q, lo4, hi4), 12), law[0])],
+            centres.append((mism[(*np.round(np.clip(q, lo4, hi4), 12), law[0], var[0])],
                             {**friction(share_best), GAP: float(q[0]),
                              STIFFNESS: 10 ** float(q[1]), DAMPING: 10 ** float(q[2])}))
-        widen, left_out, extra = _widen_by_friction(prepared, rigs[law[0]], data, centres,
+        widen, left_out, extra = widen_by_friction(prepared, rigs[law[0]], data, centres,
                                                     friction_spread, say)
         for r in history:  # every objective so far re-scored with the widened spreads
             r["objective"] = cache[r["_key"]] = score(mism[r["_key"]], widen)
         _gap_steps(history, mism, widen, share_best, g_kin, cost, law[0])
+    if confirm_friction(history, dropped, var, shares_of, cost, law[0], variants, say):
+        _gap_steps(history, mism, widen, shares_of[var[0]], g_kin, cost, law[0])
     best = _best(history, law[0])
     f_grid = best["objective"]
     say(f"impact-aware fit: kinematic gap {1e3 * g_kin:.4g} mm; grid best k "
@@ -347,11 +347,13 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
               DAMPING: best[DAMPING]}
     kint = stiffness_bracket(history, mism[best["_key"]], widen, law[0], STIFFNESS, (lo, hi))
-    say(msg := _fit_message(stop, len(history) + extra, best, f_grid, friction_spread, extra,
-                            left_out) + stiffness_note(kint, law[0]))
+    say(msg := _fit_message(stop, len(history) + len(dropped) + extra, best, f_grid,
+                            friction_spread, extra, left_out) + stiffness_note(kint, law[0])
+        + ("" if var[0] == 0 else f"; friction: {variants[var[0]][0]}"))
     for r in history:
         r.pop("_key", None)
-    return ImpactFit(converged, msg, params, best["objective"], f_grid, len(history) + extra,
+    return ImpactFit(converged, msg, params, best["objective"], f_grid,
+                     len(history) + len(dropped) + extra,
                      time.perf_counter() - t0, history, law[0], kint)
 
 
@@ -416,43 +418,6 @@ def _nelder_mead(cost: Callable[[np.ndarray], float], best: Mapping[str, float],
     except _Deadline:
         return False, "stopped at the run's deadline"
     return bool(res.success), ("converged" if res.success else str(res.message))
-
-
-def _widen_by_friction(prepared: Sequence[PreparedTest], rig: Rig, data: FeatureData,
-                       centres: Sequence[tuple[Mismatch, dict]], spread: float,
-                       say: Callable[[str], None]
-                       ) -> tuple[list[tuple[np.ndarray, float]], list[str], int]:
-    """What the friction's own uncertainty does to each test's features: at each centre
-    (its mismatch and parameters, grid points across the stiff range — the sensitivity
-    depends on the stiffness: whether the rotor leaves its face on a slow stroke is a
-    balance of the friction against the rod's deceleration), the nut's and the bearing's
-    levels are each moved by ± ``spread``; the largest change of each feature over the
-    members and centres widens its allowed spread.  A test whose log transient energy
-    that moves by more than :data:`IMPACT_FRICTION_DOMINATED` (a factor e) says more about
-    the friction than about the contact and is left out (an infinite spread; all kept if
-    fewer than two would remain).  Returns the widening per test, the files left out
-    and the simulations used."""
-    h = rig.harvester
-    per_k, sims = [], 0
-    for centre, p0 in centres:
-        members = [moved_friction(p0, names, 1.0 + sgn * spread)
-                   for names in (NUT_LEVELS, BEARING_LEVELS) for sgn in (-1.0, 1.0)]
-        moved = [mismatch(prepared, predict(prepared, rig, pm), h, data) for pm in members]
-        sims += len(members)
-        per_k.append(friction_widening(centre, moved))
-    widen = [(np.max([w[i][0] for w in per_k], axis=0), max(w[i][1] for w in per_k))
-             for i in range(len(prepared))]
-    shown = ", ".join(f"{float(np.max(w)):.2g}" for w, _ in widen)
-    dominated = [i for i, (we, _) in enumerate(widen)
-                 if float(np.max(we)) > IMPACT_FRICTION_DOMINATED]
-    keep = len(prepared) - len(dominated) >= 2
-    widen = [(np.full_like(w[0], np.inf), math.inf) if keep and i in dominated else w
-             for i, w in enumerate(widen)]
-    left_out = [prepared[i].test.file for i in dominated] if keep else []
-    say(f"impact-aware fit: features' spread under ±{100 * spread:g} % friction levels "
-        f"(log energy, per test): {shown}"
-        + (f"; left out as friction-dominated: {', '.join(left_out)}" if left_out else ""))
-    return widen, left_out, sims
 
 
 #: Grid stiffnesses (the best) that get a gap step.
@@ -585,8 +550,7 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
     return name, out, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
 
 
-class _Budget(Exception):
-    """Raised inside the search when the simulation budget is used up."""
+_Budget = SimulationBudget  # raised inside the search when the budget is used up
 
 
 class _Deadline(Exception):
