@@ -346,8 +346,7 @@ def fit_impacts(prepared: Sequence[PreparedTest], rig: Rig, start: Mapping[str, 
     share_best = best["bearing_share"]
     params = {**friction(share_best), GAP: best[GAP], STIFFNESS: best[STIFFNESS],
               DAMPING: best[DAMPING]}
-    kint = stiffness_bracket(history, [mism[r["_key"]] for r in history], widen, law[0],
-                             STIFFNESS, (lo, hi))
+    kint = stiffness_bracket(history, [mism[r["_key"]] for r in history], widen, law[0], STIFFNESS, (lo, hi))
     say(msg := _fit_message(stop, len(history) + len(dropped) + extra, best, f_grid,
                             friction_spread, extra, left_out) + stiffness_note(kint, law[0])
         + ("" if var[0] == 0 else f"; friction: {variants[var[0]][0]}"))
