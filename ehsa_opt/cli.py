@@ -182,8 +182,10 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
     from .datasets.embedded import load_truth
     load_truth(args.data_dir)  # a truth.toml that cannot be used is refused before the work
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
-                                   max_tests=args.max_tests, presliding=args.presliding)
-    return run_with_budget(args.data_dir, args.out, settings, args.budget_s,
+                                   max_tests=args.max_tests, presliding=args.presliding,
+                                   **({} if args.max_fits is None
+                                      else {"max_member_fits": args.max_fits or None}))
+    return run_with_budget(args.data_dir, args.out, settings, args.wall_cap_s,
                            lambda m: print(m, flush=True))
 
 
@@ -330,9 +332,16 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--top", type=_POSITIVE, default=3, help="candidates re-identified (default 3)")
     d.add_argument("--max-tests", type=_POSITIVE, default=None,
                    help="use at most this many tests, spread over the grid")
-    d.add_argument("--budget-s", type=_NON_NEGATIVE_FLOAT, default=170.0,
-                   help="wall-time budget, s (default 170; 0: none): when reached, a "
-                        "partial answer (effects of the completed rounds), exit 1")
+    d.add_argument("--max-fits", type=_NON_NEGATIVE, default=None,
+                   help="work budget: member fits the search may start (default: the "
+                        "library's, DiscrepancySettings.max_member_fits; 0: none); the same "
+                        "answer for any --jobs and machine load; when spent, a partial "
+                        "answer, exit 1")
+    d.add_argument("--wall-cap-s", "--budget-s", dest="wall_cap_s", type=_NON_NEGATIVE_FLOAT,
+                   default=1800.0,
+                   help="wall-time safety cap, s (default 1800; 0: none): not a budget — when "
+                        "it binds, a partial answer that says it depends on the machine's "
+                        "speed and load, exit 1")
     d.add_argument("--presliding", action="store_true",
                    help="offer the base friction law a presliding transition (adopted only "
                         "when it earns on the baseline; off by default)")

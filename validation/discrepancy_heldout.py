@@ -248,7 +248,8 @@ def oracle(res, effects: dict, post: tuple | None, friction) -> dict:
     what the held-out data can show (the detection limit): no method could name it
     by this rule.  Not defined for the force-channel lag (not a model component)."""
     from ehsa_opt.estimation.discrepancy.rig import predict
-    from ehsa_opt.estimation.discrepancy.evidence import earns, force_error_percent
+    from ehsa_opt.estimation.discrepancy.evidence import force_error_percent
+    from ehsa_opt.estimation.discrepancy.judge import earns
     from ehsa_opt.physics import make_component
     if post and post[0] == "lag_s" or not res.heldout_tests:
         return {"error_true": None, "truth_earns": None}
@@ -262,7 +263,8 @@ def oracle(res, effects: dict, post: tuple | None, friction) -> dict:
     pred = predict(held, res.rig.with_components(comps), values)
     base = res.baseline_pred[len(res.fit_tests):]
     e0, e1 = force_error_percent(held, base), force_error_percent(held, pred)
-    from ehsa_opt.estimation.discrepancy.evidence import channel_sse, channel_sse_excess_reduction
+    from ehsa_opt.estimation.discrepancy.evidence import channel_sse
+    from ehsa_opt.estimation.discrepancy.judge import channel_sse_excess_reduction
     s0, n = channel_sse(held, base)
     sse_red = channel_sse_excess_reduction(s0, channel_sse(held, pred)[0], n)
     return {"error_true": e1, "truth_earns": bool(earns(
@@ -330,7 +332,8 @@ def main() -> None:
                                    for a in answers))
     cat = [r for r in rows if not r["truth"].startswith("out:")]
     out = [r for r in rows if r["truth"].startswith("out:")]
-    from ehsa_opt.estimation.discrepancy.evidence import MIN_EXCESS_REDUCTION
+    from ehsa_opt.estimation.discrepancy.criterion import DEFAULT_CRITERION
+    MIN_EXCESS_REDUCTION = DEFAULT_CRITERION.min_excess_reduction
     worse = [r for r in rows for (_, e0, e1, *sse) in r["named_gains"]
              if not (e1 < e0 or (sse and sse[0] is not None
                                  and sse[0] >= MIN_EXCESS_REDUCTION))]

@@ -106,9 +106,10 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
 
 def _decision_rule_markdown(res: DiscrepancyResult) -> str:
     """The decision rule in words, with the noise floor and the share of this run."""
-    from ..estimation.discrepancy.evidence import MIN_EXCESS_REDUCTION
-    return (f"Decision rule: an effect is named only if its refit removes at least "
-             f"{100 * MIN_EXCESS_REDUCTION:.0f} % of the {res.evaluation} relative force error "
+    crit = res.criterion
+    return (f"Decision rule (every threshold is the run's criterion; table in the theory "
+            f"page): an effect is named only if its refit removes at least "
+             f"{100 * crit.min_excess_reduction:.0f} % of the {res.evaluation} relative force error "
              f"*above the noise floor* ({_fmt(res.noise_floor, '.3f')} %: what the measurement "
              "noise alone gives), 1 − √(e₁² − e_n²)/√(e₀² − e_n²), **and** "
              "ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff < 0 on the fit tests and on the "
@@ -124,9 +125,10 @@ def _decision_rule_markdown(res: DiscrepancyResult) -> str:
              "error within that resolution, or its SSE not growing by more than the member's "
              "parameters are charged). **Or, on its own evidence**: the same ΔBIC < 0 on both, the "
              "held-out error not growing, and a median over contiguous blocks of the held-out "
-             "records (8 per test; documented disturbances masked) of the share of each block's "
+             f"records ({crit.blocks_per_test} per test; documented disturbances masked) of the "
+             "share of each block's "
              "excess removed of at least the same "
-             f"{100 * MIN_EXCESS_REDUCTION:.0f} % — so that an effect another one dominates in a "
+             f"{100 * crit.min_excess_reduction:.0f} % — so that an effect another one dominates in a "
              "few blocks is not vetoed by a share of the total. An effect's size must be resolved "
              "(the ≈95 % interval of one of its amplitudes excludes zero; intervals are "
              "Newey–West sandwich intervals, which respect the residual's autocorrelation). "
@@ -286,7 +288,7 @@ def write_report(res: DiscrepancyResult, out_dir: str | Path) -> tuple[Path, Pat
     return js, md
 
 
-#: Seconds of ``--budget-s`` kept after the workflow's own deadline (no candidate fit
+#: Seconds of the wall-time safety cap (``--wall-cap-s``) kept after the workflow's own cap (no candidate fit
 #: starts after it) for what still runs then: the fits in progress (they stop their
 #: screens and refinements at the deadline; a contact fit started 25 s before it ran on
 #: 40 s past it), then the data-driven term (~1 s), the result and the report with its
@@ -306,14 +308,16 @@ def inner_budget_s(budget_s: float) -> float:
 
 def run_with_budget(data_dir: str | Path, out_dir: str | Path, settings: DiscrepancySettings,
                     budget_s: float | None, say) -> int:
-    """``ehsa-opt discrepancy``: the workflow and its report, within a wall-time budget.
+    """``ehsa-opt discrepancy``: the workflow and its report, within its work budget and a
+    wall-time safety cap.
 
     The run goes to a forked worker (:func:`~ehsa_opt.utils.process.run_with_deadline`)
     that is killed when ``budget_s`` is reached; the report is then the partial answer of
     :func:`write_partial_report`.  Syntax and layout errors of the data are raised here,
     before any work.  Returns the exit code: 0 done, 1 cut at the budget (by the kill or
     by the workflow's own deadline, :func:`inner_budget_s`).
-    ``budget_s`` 0 or None: no budget, the run stays in this process."""
+    ``budget_s`` (the wall-time safety cap, s) 0 or None: none, the run stays in this
+    process; the work budget is ``settings.max_member_fits``."""
     def job(send) -> None:
         res = run_discrepancy(data_dir, settings, log=send)
         js, md = write_report(res, out_dir)
@@ -337,10 +341,12 @@ def run_with_budget(data_dir: str | Path, out_dir: str | Path, settings: Discrep
     # answer decided on what was fitted); the kill at the budget is the backstop for a
     # fit or baseline that overruns
     inner = inner_budget_s(budget_s)
-    if settings.budget_s is None or settings.budget_s > inner:
-        settings = dataclasses.replace(settings, budget_s=inner)
-    say(f"time budget {budget_s:g} s (--budget-s; 0 for none): no candidate fit starts "
-        f"after {inner:.0f} s")
+    if settings.wall_cap_s is None or settings.wall_cap_s > inner:
+        settings = dataclasses.replace(settings, wall_cap_s=inner)
+    say(f"wall-time safety cap {budget_s:g} s (--wall-cap-s; 0 for none): no candidate fit "
+        f"starts after {inner:.0f} s; work budget "
+        + (f"{settings.max_member_fits} member fits" if settings.max_member_fits else "none")
+        + " (--max-fits)")
     run = run_with_deadline(job, budget_s, say)
     if run.error is not None:
         raise ValueError(f"discrepancy on {data_dir}: {run.error[0]}: {run.error[1]}")
@@ -385,11 +391,12 @@ def write_partial_report(out_dir: str | Path, data_dir: str | Path, messages: li
              "after the baseline fit, before the first round" if based
              else "before the first round (baseline fit)")
     answer = " + ".join(named) if named else "undecided"
-    msg = (f"time budget of {budget_s:.0f} s reached {where} after {seconds:.0f} s: partial "
+    msg = (f"wall-time safety cap of {budget_s:.0f} s reached {where} after {seconds:.0f} s "
+           f"(this partial answer depends on the machine's speed and load): partial "
            f"answer `{answer}` (" + (f"named in the completed rounds; error "
                                      f"{before:.3f} % -> {steps[-1]['error_after']:.3f} %"
                                      if named else "no round completed with a named effect")
-           + "); raise --budget-s, or reduce the data (--max-tests) for a full answer")
+           + "); raise --wall-cap-s, or reduce the data (--max-tests) for a full answer")
     doc = {"effect": answer, "effects": named, "steps": steps, "success": False,
            "partial": True, "message": msg, "budget_s": budget_s, "seconds": seconds,
            "error_before": before, "error_after": steps[-1]["error_after"] if steps else before,
@@ -398,7 +405,7 @@ def write_partial_report(out_dir: str | Path, data_dir: str | Path, messages: li
     js = out / "discrepancy.json"
     atomic_write_json(js, doc, indent=2)
     atomic_write_text(out / "report.md",
-                      f"# Model-discrepancy report: {data_dir}\n\n**Cut at the time budget.** "
+                      f"# Model-discrepancy report: {data_dir}\n\n**Cut at the wall-time safety cap.** "
                       f"{msg}.\n\nLast progress message: `{doc['last_message']}`\n\n"
                       "Progress of the run:\n\n" + "\n".join(f"- {m}" for m in messages) + "\n")
     return js, msg
@@ -437,20 +444,22 @@ def truth_error(res: DiscrepancyResult, truth: dict | None) -> float | None:
     return force_error_percent(res.eval_tests, predict(res.eval_tests, rig, values))
 
 
-#: Budget of the discrepancy step of ``reproduce --quick --data DIR``, s: no candidate fit
-#: starts after it (the step runs beside the others; the whole command stays < 3 min).
-QUICK_BUDGET_S = 90.0
+#: Work budget of the discrepancy step of ``reproduce --quick --data DIR``, in member
+#: fits: no candidate fit starts once they are charged (the same answer on any machine;
+#: a quick round re-identifies its top member, widened up to every applicable one, so
+#: 12 fits cover a widened round and its look-ahead).
+QUICK_MAX_MEMBER_FITS = 12
 
 
 def step_discrepancy(ctx: Context) -> StepOutput:
     """Reproduce step: the workflow on ``bench_prototype`` (hidden backlash), or on the
     user's data directory of ``reproduce --data``."""
     quick = ctx.quick
-    # quick on the user's data: a time budget (partial answer, stated, when it is reached)
+    # quick on the user's data: a work budget (partial answer, stated, when it is spent)
     settings = DiscrepancySettings(max_tests=6 if quick else 9, top=1 if quick else 3,
                                    jobs=ctx.jobs,
-                                   budget_s=QUICK_BUDGET_S if quick and ctx.custom_data
-                                   else None)
+                                   **({"max_member_fits": QUICK_MAX_MEMBER_FITS}
+                                      if quick and ctx.custom_data else {}))
     return _run_sets(ctx, [("data" if ctx.custom_data else "bench_prototype", settings)])
 
 
@@ -491,7 +500,7 @@ def _run_sets(ctx: Context, runs: list[tuple[str, DiscrepancySettings]]) -> Step
             results[name]["error_true_parameters"] = _floor(res)
             md.append(f"The workflow on `{ctx.bench_dir}`"
                       + (f" (quick: at most 6 tests, the top-ranked candidate re-identified, "
-                         f"no candidate fit started after {QUICK_BUDGET_S:.0f} s)."
+                         f"at most {QUICK_MAX_MEMBER_FITS} member fits)."
                          if quick else " (at most 9 tests, top 3 candidates).")
                       + (f" **Partial answer:** {res.cut}." if getattr(res, "cut", "") else "")
                       + "\n")

@@ -1,7 +1,7 @@
 """Physical parameters of a fitted member: whether an effect parameter ended on the
 edge of the member's physical range with that edge *active* (:func:`at_bound`, the
 unconstrained step :func:`unconstrained_step`), and the rule that such a fit does not
-earn (:func:`refuse_at_bound`)."""
+earn (:func:`at_bound_names`; the verdict is :mod:`.judge`'s)."""
 
 from __future__ import annotations
 
@@ -10,16 +10,17 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from .criterion import DEFAULT_CRITERION
 from .prepared import PreparedTest
 from .rig import Rig, fit_predictor, predict
 
-__all__ = ["AT_BOUND_REL", "at_bound", "refuse_at_bound", "unconstrained_step",
+__all__ = ["AT_BOUND_REL", "at_bound", "at_bound_names", "unconstrained_step",
            "STEP_RCOND"]
 
 
 #: A fitted effect parameter within this share of a bound's magnitude of that bound is
 #: "at bound" (:func:`at_bound`).
-AT_BOUND_REL = 0.05
+AT_BOUND_REL = DEFAULT_CRITERION.at_bound_rel
 
 
 def at_bound(parameters: dict[str, float], specs: Sequence[Any],
@@ -91,33 +92,28 @@ def at_bound(parameters: dict[str, float], specs: Sequence[Any],
     return out
 
 
-def refuse_at_bound(c: Any, specs: Sequence[Any], member: Any, say: Any = None,
-                    step: Callable[[], Mapping[str, float] | None] | None = None) -> bool:
-    """Set ``c.at_bound`` (:func:`at_bound` of its fitted ``parameters`` with the
-    member's physical ``limits``) and withdraw its ``earns`` when it is not empty: an
-    unphysical fit does not earn.  ``step``: called only when a parameter is within
-    :data:`AT_BOUND_REL` of a bound, it returns the unconstrained step
-    (:func:`unconstrained_step`) that decides whether that bound is active.  Returns
-    whether it was at a bound."""
+def at_bound_names(c: Any, specs: Sequence[Any], member: Any, say: Any = None,
+                   step: Callable[[], Mapping[str, float] | None] | None = None,
+                   rel: float = AT_BOUND_REL) -> list[str]:
+    """Set and return ``c.at_bound``: :func:`at_bound` (within ``rel`` of a bound) of its
+    fitted ``parameters`` with the member's physical ``limits`` — an unphysical fit, which
+    the judge (:mod:`.judge`) does not let earn.  ``step``: called only when a parameter
+    is near a bound, it returns the unconstrained step (:func:`unconstrained_step`) that
+    decides whether that bound is active."""
     limits = getattr(member, "limits", ())
-    c.at_bound = at_bound(c.parameters, specs, limits)
+    c.at_bound = at_bound(c.parameters, specs, limits, rel=rel)
     if c.at_bound and step is not None:
         d = step()
         if d is not None:
             inside = [n for n in c.at_bound if n not in at_bound(c.parameters, specs, limits,
-                                                                  step=d)]
+                                                                  rel=rel, step=d)]
             c.at_bound = [n for n in c.at_bound if n not in inside]
             if inside and say is not None:
                 say(f"{c.effect}: {', '.join(inside)} near the edge of its range, the "
                     f"unconstrained step stays inside (" + ", ".join(
                         f"{n} {c.parameters[n]:.3g} {d[n]:+.3g}" for n in inside)
                     + "): the bound is not active")
-    if c.at_bound and c.earns:
-        c.earns, c.earns_by = False, ""
-        if say is not None:
-            say(f"{c.effect}: at bound ({', '.join(c.at_bound)} on the edge of its "
-                f"physical range): an unphysical fit, not earned")
-    return bool(c.at_bound)
+    return list(c.at_bound)
 
 
 #: Singular values of the column-normalised Jacobian below this share of the largest

@@ -29,8 +29,10 @@ from typing import Sequence
 import numpy as np
 
 from .candidates import CANDIDATES, absorbed_columns, signature_scores
-from .deadline import note_cut, past_deadline, recording_cuts, time_left_s
-from .evidence import judge_candidate, normalised_sse
+from .criterion import DEFAULT_POLICY
+from .budget import note_cut, past_deadline, recording_cuts, time_left_s
+from .evidence import normalised_sse
+from .judge import judge_candidate, withdraw
 from ..fit_result import FitResult
 from .fit import fit_group
 from .prepared import PreparedTest
@@ -158,15 +160,15 @@ def not_fitted(res: FitResult | None) -> str:
 
 
 def judge_fit(c, out: tuple, **judge) -> None:
-    """:func:`~.evidence.judge_candidate` of the member fit ``out`` (:func:`fit_member`)
+    """:func:`~.judge.judge_candidate` of the member fit ``out`` (:func:`fit_member`)
     into the candidate result ``c``, then the deadline's verdict: a fit :func:`not_fitted`
     (cut at its start point) keeps its measures for the report but does not earn
     (``c.cut_at_deadline`` says why; the search counts it as work left at the budget)."""
     judge_candidate(c, out, **judge)
     why = not_fitted(out[1])
     if why:
-        c.cut_at_deadline, c.earns, c.earns_by = why, False, ""
-        judge["say"](f"{out[0]}: {why} — it cannot earn; work left at the budget")
+        c.cut_at_deadline = why
+        withdraw(c, f"{out[0]}: {why} — it cannot earn; work left at the budget", judge["say"])
 
 
 def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequence[PreparedTest],
@@ -384,7 +386,7 @@ def _refit_on_simulation(name: str, fit_pts: Sequence[PreparedTest],
 
 #: A collocation fit whose simulated SSE exceeds its collocation SSE by more than
 #: this factor is refined (finer collocation grid, then :func:`polish`).
-MISMATCH_RATIO = 1.15
+MISMATCH_RATIO = DEFAULT_POLICY.mismatch_ratio
 #: Collocation sub-intervals per sample interval for the refinement.
 REFINE_SUBSTEPS = 3
 

@@ -26,7 +26,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Callable, Sequence
 
 from .candidate_fit import fit_member, fit_members
-from .deadline import past_deadline, time_left_s
+from .budget import past_deadline, time_left_s
 
 __all__ = ["fit_with_spares", "POLL_S"]
 

@@ -1,4 +1,4 @@
-"""The verdict on an impact-fitted contact (:mod:`.impacts`): its held-out transient
+"""The evidence on an impact-fitted contact (:mod:`.impacts`): its held-out transient
 energies and kinematic gaps against the current model's, each feature standardised by
 the spread it is allowed — the noise's, the chaotic redistribution of impacts
 (:data:`~.impact_features.ENERGY_LOG_SPREAD`) and, as in the fit, what the friction's own
@@ -7,8 +7,8 @@ levels; a test it dominates is left out).
 
 What the limit means.  The objective is a mean of squared standardised mismatches: ≈ 1
 when the contact reproduces the held-out features within the spreads the data and the
-model's other parameters allow, whatever the contact's law; :data:`IMPACT_EARN_OBJECTIVE`
-(10, ~3 allowed spreads rms) leaves room for a contact law that is not the rig's (a
+model's other parameters allow, whatever the contact's law; the criterion's
+``impact_earn_objective`` (10, ~3 allowed spreads rms; the verdict is :mod:`.judge`'s) leaves room for a contact law that is not the rig's (a
 linear spring for a Hertzian ball contact) as long as the impact energies it predicts on
 unseen tests are right within a factor ~2.  Without the friction's spread on the held-out
 tests (as before), a held-out test whose impacts the friction decides — a slow stroke on a
@@ -45,8 +45,8 @@ from .impact_features import (
 from .prepared import PreparedTest
 from .rig import Rig, predict
 
-__all__ = ["IMPACT_EARN_OBJECTIVE", "IMPACT_EARN_SHARE", "impact_record", "impact_verdict",
-           "judge_on_impacts", "friction_spread_of_features"]
+__all__ = ["impact_record", "impact_verdict", "impact_verdict_record",
+           "friction_spread_of_features"]
 
 
 def friction_spread_of_features(prepared: Sequence[PreparedTest], rig: Rig,
@@ -76,15 +76,6 @@ def friction_spread_of_features(prepared: Sequence[PreparedTest], rig: Rig,
     return widen, [prepared[i].test.file for i in dominated]
 
 
-#: An impact-fitted contact earns when its held-out feature objective is at most this
-#: (its transient energies and kinematic gaps match within ~3 allowed spreads rms; the
-#: true parameters give 1.7 on the fit tests of a 1e9 N/m campaign) ...
-IMPACT_EARN_OBJECTIVE = 10.0
-#: ... and at most this share of the current model's (which misses the impacts by
-#: orders of magnitude in energy).
-IMPACT_EARN_SHARE = 0.1
-
-
 def impact_record(fit: Any) -> dict | None:
     """The impact-aware record of a candidate fit (:func:`fit_candidate_on_impacts`), or
     None for a sample-wise fit."""
@@ -103,8 +94,8 @@ def impact_verdict(ev_pts: Sequence[PreparedTest], cur_pred: Sequence[np.ndarray
     45 % on nine, against 94 % and 85 % for the rigid model; parameters 7 % off the
     truth gave 119 %), its transient energies and kinematic gaps are not.
 
-    Returns the objectives before (current model) and after (candidate), whether the
-    candidate earns (:data:`IMPACT_EARN_OBJECTIVE`, :data:`IMPACT_EARN_SHARE`) and a
+    Returns the objectives before (current model) and after (candidate; the verdict on
+    them is :func:`~.judge.impact_earns`) and a
     ΔBIC on the features, n ln(after/before) + k ln n (n features), used to rank it
     against sample-wise candidates.  ``widen`` (per test, :func:`friction_spread_of_features`
     at the candidate's parameters) widens the candidate's features as in its fit; the
@@ -117,40 +108,37 @@ def impact_verdict(ev_pts: Sequence[PreparedTest], cur_pred: Sequence[np.ndarray
     terms = [None if z is None else [round(float(v), 3) for v in z]
              for z in standardised_terms(m_after, widen)]
     n = sum(5 if pt.y.shape[0] > 1 else 2 for pt in ev_pts)
-    ok = (math.isfinite(after) and math.isfinite(before) and after <= IMPACT_EARN_OBJECTIVE
-          and after <= IMPACT_EARN_SHARE * before)
     dbic = (n * math.log(max(after, 1e-12) / max(before, 1e-12)) + n_params * math.log(n)
             if math.isfinite(after) and math.isfinite(before) else math.inf)
     return {"heldout_objective_before": before, "heldout_objective_after": after,
             "heldout_objective_after_unwidened": plain,
-            "earns": bool(ok), "feature_delta_bic": dbic,
+            "feature_delta_bic": dbic,
             "heldout_terms": {pt.test.file: z for pt, z in zip(ev_pts, terms)}}
 
 
-def judge_on_impacts(c: Any, res: Any, ev_pts: Sequence[PreparedTest],
-                     cur_pred: Sequence[np.ndarray], cand_pred: Sequence[np.ndarray],
-                     crig: Rig, say: Callable[[str], None]) -> None:
-    """Judge the impact-fitted candidate ``c`` (a :class:`~.results.CandidateResult` whose
-    fit ``res`` came from :func:`fit_candidate_on_impacts`) by :func:`impact_verdict` on
-    the evaluation tests: its ``earns``, ``earns_by`` and held-out ΔBIC (the smaller of
-    the sample-wise and the feature one) are set; the verdict is kept in the fit's
-    impact record.  The held-out features are widened by the friction's uncertainty as
-    the fit's were (:func:`friction_spread_of_features`, four simulations of the
-    evaluation tests)."""
+def impact_verdict_record(c: Any, res: Any, ev_pts: Sequence[PreparedTest],
+                          cur_pred: Sequence[np.ndarray], cand_pred: Sequence[np.ndarray],
+                          crig: Rig, say: Callable[[str], None]) -> dict:
+    """The evidence on the impact-fitted candidate ``c`` (a :class:`~.results.CandidateResult`
+    whose fit ``res`` came from :func:`fit_candidate_on_impacts`): :func:`impact_verdict`
+    on the evaluation tests, kept in the fit's impact record (returned); the candidate's
+    held-out ΔBIC becomes the smaller of the sample-wise and the feature one.  The
+    held-out features are widened by the friction's uncertainty as the fit's were
+    (:func:`friction_spread_of_features`, four simulations of the evaluation tests).
+    The verdict is :func:`~.judge.judge_on_impacts`'s."""
     rec = impact_record(res)
     n_params = len(crig.components[-1].parameters) if crig.components else 3
     widen, left_out = friction_spread_of_features(ev_pts, crig, res.parameters, cand_pred)
     rec.update(impact_verdict(ev_pts, cur_pred, cand_pred, crig.harvester, n_params, widen))
     rec["heldout_left_out"] = left_out
-    c.earns = bool(rec["earns"] and c.resolved)
-    c.earns_by = "transient energies and kinematic gaps" if c.earns else ""
     c.delta_bic_heldout = min(c.delta_bic_heldout, rec["feature_delta_bic"])
     say(f"{c.effect}: held-out feature objective {rec['heldout_objective_before']:.3g} -> "
         f"{rec['heldout_objective_after']:.3g} (widened by ±"
         f"{100 * IMPACT_FRICTION_SPREAD:g} % friction levels; unwidened "
         f"{rec['heldout_objective_after_unwidened']:.3g}"
         + (f"; left out as friction-dominated: {', '.join(left_out)}" if left_out else "")
-        + ")" + (" EARNS" if c.earns else ""))
+        + ")")
     say(f"{c.effect}: held-out standardised mismatches (force e1, e2, voltage e1, e2, gap): "
         + "; ".join(f"{f}: " + ("left out" if z is None else ", ".join(f"{v:.2g}" for v in z))
                     for f, z in rec["heldout_terms"].items()))
+    return rec

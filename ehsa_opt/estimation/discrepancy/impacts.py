@@ -66,16 +66,10 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 from scipy.optimize import minimize
 
-from .deadline import past_deadline
+from .budget import past_deadline
 from .prepared import PreparedTest
 from .rig import Rig, predict
-from .impact_verdict import (
-    IMPACT_EARN_OBJECTIVE,
-    IMPACT_EARN_SHARE,
-    impact_record,
-    impact_verdict,
-    judge_on_impacts,
-)
+from .impact_verdict import impact_record, impact_verdict
 from .impact_features import (
     IMPACT_FRICTION_DOMINATED,
     IMPACT_FRICTION_SPREAD,
@@ -105,7 +99,7 @@ from .impact_stiffness import peak_force_ratios, stiffness_bracket, stiffness_no
 
 __all__ = ["ImpactFit", "transient_energies", "kinematic_gap", "impact_objective",
            "impact_energy_ratio", "fit_impacts", "fit_candidate_on_impacts", "IMPACT_SHARES", "impact_record",
-           "impact_verdict", "judge_on_impacts", "IMPACT_EARN_OBJECTIVE", "IMPACT_EARN_SHARE",
+           "impact_verdict",
            "IMPACT_EVALUATIONS_WITH_SHARES", "IMPACT_FRICTION_SPREAD",
            "IMPACT_FRICTION_DOMINATED",
            "IMPACT_EVALUATIONS", "IMPACT_ENERGY_RATIO", "IMPACT_LAWS", "with_contact_law", "GAP", "STIFFNESS",

@@ -24,8 +24,8 @@ from __future__ import annotations
 
 from typing import Callable
 
-from .deadline import past_deadline
-from .evidence import choose_winner
+from .budget import budget_reached
+from .judge import choose_winner
 from .results import CandidateResult, DiscrepancySettings
 from .nested import nested_to_fit
 from .search import (SearchState, SearchTests, fitted_ahead, judge_context, judge_round,
@@ -37,21 +37,21 @@ __all__ = ["lag_rival"]
 def lag_rival(tests: SearchTests, state: SearchState, settings: DiscrepancySettings,
               lag_error: float, say: Callable[[str], None], notes: list[str]
               ) -> CandidateResult | None:
-    """The member the first round would add (:func:`~.evidence.choose_winner` among the
+    """The member the first round would add (:func:`~.judge.choose_winner` among the
     earning ones of its re-identification on the record as it is, the simpler members
     nested in them included: :func:`~.nested.nested_to_fit`), when it leaves a lower
     held-out force error (%) than ``lag_error`` (the delay's); else None.  ``state`` is
     the baseline's (not changed, except that the member fits are stored in
     ``state.fitted`` for the first round to reuse, and ``state.cut`` says so when the
     time budget cut them)."""
-    if past_deadline():
+    if budget_reached():
         return None
     rk = rank_round(tests, state, settings)
     if not rk.chosen:
         return None
     say("force_lag: the members the first round would re-identify ("
         + ", ".join(rk.chosen) + ") fitted on the record as it is, against the delay")
-    judge = judge_context(1, tests, state, rk, say, notes)
+    judge = judge_context(1, tests, state, rk, say, notes, settings.criterion)
     if judge is None:
         return None
     cut = state.cut

@@ -16,7 +16,7 @@ from typing import Any, Sequence
 
 from .candidate_fit import (fit_member, fit_members, judge_fit, not_fitted,
                             signature_scores_in)
-from .deadline import time_left_s
+from .budget import charge_fits, time_left_s, work_spent
 from .candidates import (
     CANDIDATES,
     MIN_RANK_VALUE,
@@ -24,14 +24,9 @@ from .candidates import (
     components_for,
     rank_value,
 )
-from .evidence import (
-    channel_sse,
-    choose_winner,
-    earns,
-    effective_samples,
-    normalised_sse,
-    significant,
-)
+from .criterion import DEFAULT_CRITERION, Criterion
+from .evidence import channel_sse, effective_samples, normalised_sse, significant
+from .judge import choose_winner, earns
 
 __all__ = ["confounded", "supported", "fit_on_top", "lookahead_winner", "confounded_first",
            "not_judged",
@@ -223,7 +218,7 @@ def estimated_seconds(seconds: dict | None, *names: str) -> float:
 
 def too_late(c: Any, blocked: Any, seconds: dict | None, cuts: list | None) -> bool:
     """Whether the fit of ``blocked`` on top of ``c`` would not finish before the run's
-    deadline (:func:`estimated_seconds` > :func:`~.deadline.time_left_s`); then it is
+    safety cap (:func:`estimated_seconds` > :func:`~.budget.time_left_s`); then it is
     not started and, with ``cuts`` given, the path is appended there as work left."""
     need, left = estimated_seconds(seconds, c.effect, blocked.effect), time_left_s()
     if seconds is None or need <= left:
@@ -242,6 +237,8 @@ def prefetch_on_top(pairs: Sequence[tuple], judge: dict, sub_pts: list, max_iter
     rig), where :func:`fit_on_top` finds them; a pair that cannot finish before the
     deadline (:func:`too_late`) is not started."""
     todo = []
+    if work_spent():
+        return  # fit_on_top would not be allowed to use them
     for c, blocked in pairs:
         args = on_top_args(c, blocked, judge, sub_pts, max_iter)
         if args is None or member_key(args) in fitted or too_late(c, blocked, seconds, None):
@@ -270,6 +267,11 @@ def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, 
         return None
     key = member_key(args)
     hit = (fitted or {}).get(key)
+    if not charge_fits(1):  # the work budget: charged whether made now or ahead
+        if cuts is not None:
+            cuts.append(f"{blocked.effect} on top of {c.effect} (not started: work budget "
+                        f"spent)")
+        return None
     if hit is not None and hit[0] is c.rig:
         out = hit[1]
     elif too_late(c, blocked, seconds, cuts):
@@ -346,7 +348,7 @@ def second_steps(blocked: Any, names: Sequence[str], fit_pts: Sequence[Any],
 
 def confounded_first(blocked: Any, others: Sequence[Any], try_on_blocked: Any,
                      err_before: float, floor: float, best_sse: float, say: Any = None,
-                     max_paths: int = 4) -> bool:
+                     max_paths: int = 4, criterion: Criterion = DEFAULT_CRITERION) -> bool:
     """Whether the confounded candidate ``blocked`` should be added first: some other
     candidate C, re-identified on top of it (C's own and ``blocked``'s parameters
     free), completes a path ``blocked`` → C that earns as a whole.
@@ -356,7 +358,7 @@ def confounded_first(blocked: Any, others: Sequence[Any], try_on_blocked: Any,
     0.1 mm gap: fitted alone on the baseline it finds nothing, fit ΔBIC > 0), the
     joint refit on top of ``blocked`` can still separate them.  A path earns when C
     earns on top of ``blocked`` (``step.earns``, its size resolved), the path as a
-    whole earns against the current model by :func:`~.evidence.earns` (held-out force
+    whole earns against the current model by :func:`~.judge.earns` (held-out force
     error ``err_before`` → the path's, ΔBIC summed over the two steps) and its
     held-out SSE ends below ``best_sse`` (the default winner's, or ∞).
 
@@ -380,11 +382,13 @@ def confounded_first(blocked: Any, others: Sequence[Any], try_on_blocked: Any,
         Progress messages.
     max_paths : int
         At most this many second steps are tried.
+    criterion : Criterion
+        The thresholds of the verdict.
     """
     for c, step in _paths(others, blocked, try_on_blocked, max_paths):
         whole = earns(err_before, step.error_after, floor,
                       blocked.delta_bic_fit + step.delta_bic_fit,
-                      blocked.delta_bic_heldout + step.delta_bic_heldout)
+                      blocked.delta_bic_heldout + step.delta_bic_heldout, criterion=criterion)
         ok = step.earns and whole and step.sse_heldout < best_sse
         if say:
             say(f"look-ahead: {c.effect} on top of {blocked.effect}: held-out error "

@@ -2,7 +2,7 @@
 
 A member that contains a simpler one at a limit of its parameters
 (:attr:`~.candidates.Candidate.nests`) can earn on what the simpler one explains as well;
-the choice between them (:func:`~.evidence.choose_winner`, the lower held-out ΔBIC with
+the choice between them (:func:`~.judge.choose_winner`, the lower held-out ΔBIC with
 a ln N_eff charge per parameter) is only fair when both were fitted.  The simpler
 member's linearised signature may rank it out of the round (a mount spring of 3e5 N/m
 scored 0 on its rotor channel while a 6 µm "backlash" with a 3e5 N/m contact earned),
@@ -11,7 +11,7 @@ so :func:`nested_to_fit` names the ones a round must re-identify too.
 When both earn, the richer member is added only when its extra parameters show
 evidence of their own (:func:`prefer_nested`): a 1 µm "gap" with a 3e5 N/m contact beat
 the 3e5 N/m mount spring it stands for by 0.5 in held-out ΔBIC (−1902.9 against
-−1902.4), less than :data:`NESTED_EVIDENCE`, and the simpler member is named.
+−1902.4), less than the criterion's ``nested_evidence``, and the simpler member is named.
 """
 
 from __future__ import annotations
@@ -20,15 +20,11 @@ import math
 from typing import Any, Mapping, Sequence
 
 from .candidates import CANDIDATES, compatible
+from .criterion import DEFAULT_CRITERION
 from .impact_verdict import impact_record
 
-__all__ = ["nested_to_fit", "nested_in", "prefer_nested", "NESTED_EVIDENCE"]
+__all__ = ["nested_to_fit", "nested_in", "prefer_nested"]
 
-#: Held-out ΔBIC (natural-log likelihood units, the ln N_eff charge per parameter
-#: included) by which a member must beat an earning member nested in it to be added
-#: instead: a BIC difference below 2 is "not worth more than a bare mention" (Kass and
-#: Raftery, 1995) — no evidence for the richer member's extra parameters.
-NESTED_EVIDENCE = 2.0
 
 
 def nested_to_fit(cands: Mapping[str, Any], scores: Mapping[str, dict],
@@ -63,15 +59,16 @@ def nested_in(names: Sequence[str], scores: Mapping[str, dict], comps: Mapping[s
     return out
 
 
-def prefer_nested(win: Any, cands: Mapping[str, Any], say: Any = None) -> Any:
+def prefer_nested(win: Any, cands: Mapping[str, Any], say: Any = None,
+                  nested_evidence: float = DEFAULT_CRITERION.nested_evidence) -> Any:
     """The round's winner, or the simpler member nested in it (name →
     :class:`~.results.CandidateResult` in ``cands``) when that one earns too and the
-    winner's held-out ΔBIC is not lower than its by :data:`NESTED_EVIDENCE` — its extra
+    winner's held-out ΔBIC is not lower than its by the criterion's ``nested_evidence`` — its extra
     parameters (a gap beside the contact's stiffness) are then not shown by the data.
     Of several such nested members, the one with the lowest held-out ΔBIC.
 
     The two are compared on every channel (``delta_bic_heldout``), not each on its own
-    channel as :func:`~.evidence.choose_winner` compares different effects: they are one
+    channel as :func:`~.judge.choose_winner` compares different effects: they are one
     physics, the simpler the richer at a limit, and a channel told apart by each one's
     linearised signature (the gap's force, the spring's voltage) would compare
     −1951.5 on the one against −1863.4 on the other for fits alike on both."""
@@ -81,7 +78,7 @@ def prefer_nested(win: Any, cands: Mapping[str, Any], say: Any = None) -> Any:
     for c in simpler:
         d_simple, d_win = float(c.delta_bic_heldout), float(win.delta_bic_heldout)
         if math.isfinite(d_simple) and math.isfinite(d_win) \
-                and d_simple - d_win < NESTED_EVIDENCE:
+                and d_simple - d_win < nested_evidence:
             close.append(c)
     if not close:
         return win
@@ -89,6 +86,6 @@ def prefer_nested(win: Any, cands: Mapping[str, Any], say: Any = None) -> Any:
     if say is not None:
         w, b = best.delta_bic_heldout, win.delta_bic_heldout
         say(f"{best.effect} is nested in {win.effect} and earns too: {win.effect}'s held-out "
-            f"ΔBIC {b:.1f} against {w:.1f} is not lower by {NESTED_EVIDENCE:g} — no evidence "
+            f"ΔBIC {b:.1f} against {w:.1f} is not lower by {nested_evidence:g} — no evidence "
             f"for its extra parameters; {best.effect} is added")
     return best

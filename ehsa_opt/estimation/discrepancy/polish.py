@@ -10,7 +10,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from .deadline import note_cut, past_deadline
+from .budget import note_cut, past_deadline
 from .prepared import PreparedTest
 from . import rig as _rig
 from .rig import BASE_SPECS, Rig, param_scale, predict, uniform_grid

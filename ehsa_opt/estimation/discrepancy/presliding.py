@@ -26,8 +26,8 @@ search judges:
   alike (so the held-out tests judge the law, not a fit to them);
 * :func:`adopt_presliding`: whether the base model's friction has the transition —
   adopted only when the term earns on the baseline by the rule a catalogue member must
-  meet (:func:`~.evidence.earns`: held-out excess reduction ≥
-  :data:`~.evidence.MIN_EXCESS_REDUCTION`, ΔBIC < 0 on the fit and held-out tests
+  meet (:func:`~.judge.earns`: held-out excess reduction ≥
+  the criterion's ``min_excess_reduction``, ΔBIC < 0 on the fit and held-out tests
   with its k columns charged);
 * :class:`PreslidingLaw`: the decision and, once adopted, :meth:`PreslidingLaw.correct`
   — the one correction applied to every model's predictions before any error, SSE,
@@ -48,8 +48,9 @@ from typing import Sequence
 import numpy as np
 from scipy.optimize import lsq_linear
 
-from .evidence import (delta_bic, earns, excess_reduction, force_error_percent,
-                       normalised_sse)
+from .criterion import DEFAULT_CRITERION, Criterion
+from .evidence import delta_bic, force_error_percent, normalised_sse
+from .judge import earns, excess_reduction
 from .prepared import PreparedTest
 
 __all__ = ["PRESLIDING_LENGTHS_M", "PreslidingLaw", "presliding_columns", "fit_amplitudes",
@@ -243,10 +244,11 @@ class PreslidingLaw:
 def adopt_presliding(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.ndarray],
                      held_pts: Sequence[PreparedTest], held_pred: Sequence[np.ndarray],
                      floor: float, n_eff_fit: float, n_eff_held: float,
-                     lengths_m: Sequence[float] = PRESLIDING_LENGTHS_M) -> PreslidingLaw:
+                     lengths_m: Sequence[float] = PRESLIDING_LENGTHS_M,
+                     criterion: Criterion = DEFAULT_CRITERION) -> PreslidingLaw:
     """Whether the baseline (``fit_pred``, ``held_pred``) gains the presliding
     transition: its amplitudes fitted on the fit tests, judged on the evaluation tests
-    (the held-out ones; the fit tests when none is held out) by :func:`~.evidence.earns`
+    (the held-out ones; the fit tests when none is held out) by :func:`~.judge.earns`
     with ``len(lengths_m)`` parameters charged.
 
     Parameters
@@ -276,9 +278,9 @@ def adopt_presliding(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.ndar
         law.delta_bic_heldout = law.delta_bic_fit
     law.error_before = force_error_percent(ev_pts, ev0)
     law.error_after = force_error_percent(ev_pts, ev1)
-    law.excess_reduction = excess_reduction(law.error_before, law.error_after, floor)
-    law.adopted = bool(earns(law.error_before, law.error_after, floor, law.delta_bic_fit,
-                             law.delta_bic_heldout))
+    law.excess_reduction = excess_reduction(law.error_before, law.error_after, floor, criterion)
+    law.adopted = earns(law.error_before, law.error_after, floor, law.delta_bic_fit,
+                        law.delta_bic_heldout, criterion=criterion)
     amps = ", ".join(f"{a:+.3g} N at {1e6 * ell:.0f} µm" for a, ell in
                      zip(law.amplitudes_N, law.lengths_m))
     law.message = (

@@ -6,6 +6,7 @@ returns; ``.plot()`` returns the figures and ``.write()`` writes them, both dele
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,7 +19,8 @@ from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 from .rig import Rig
 from .localise import Localisation
-from .evidence import MIN_EXCESS_REDUCTION
+from .budget import MAX_MEMBER_FITS
+from .criterion import DEFAULT_CRITERION, Criterion
 from .terms import TermProposal
 
 __all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "NONE_OF_CATALOGUE",
@@ -59,12 +61,18 @@ class DiscrepancySettings:
         Parallel processes for the candidate re-identifications.
     discover : bool
         Run the data-driven term discovery on the final residual.
-    budget_s : float or None
-        Wall-time budget of the workflow, s (None: none).  When it is reached no further
-        candidate fit starts (nor one that the fits timed so far say cannot finish before
-        it): a round in progress is decided on the candidates already re-identified
+    max_member_fits : int or None
+        The work budget: member fits the search may start (default
+        :data:`~.budget.MAX_MEMBER_FITS`; None: none), charged in the
+        order the search asks for them (:mod:`.budget`), so the answer is the same for
+        any ``jobs`` and any machine load.  When it is spent no further member fit
+        starts: a round in progress is decided on the members already re-identified
         (widening and look-ahead paths are skipped), no new round starts, and the result
-        says where it was cut (``success`` False, ``cut`` the reason).  A fit the budget
+        says where it was cut (``success`` False, ``cut`` the reason).
+    wall_cap_s : float or None
+        A wall-time safety cap, s (None: none).  Not a budget: when it binds, fits stop
+        at the best point reached and no further fit starts, like the work budget, and
+        the answer says that it depends on the machine's speed and load.  A fit the cap
         cut at its start point is not fitted (``CandidateResult.cut_at_deadline``): it
         takes no decision and is named as work left.
     presliding : bool
@@ -74,6 +82,9 @@ class DiscrepancySettings:
         map only — with the candidates' parameters fitted without the term, a member
         fitted to the voltage (a winding heating) can end with a friction compromise
         that the term then counts against it (see :mod:`.presliding`).
+    criterion : Criterion
+        The thresholds every verdict is decided by (:class:`~.criterion.Criterion`,
+        validated at its construction; the default is the documented one).
     """
 
     candidates: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag")
@@ -86,14 +97,25 @@ class DiscrepancySettings:
     seed: int = 0
     jobs: int = 1
     discover: bool = True
-    budget_s: float | None = None
+    max_member_fits: int | None = MAX_MEMBER_FITS
+    wall_cap_s: float | None = None
     presliding: bool = False
+    criterion: Criterion = DEFAULT_CRITERION
 
     def __post_init__(self) -> None:
-        if self.budget_s is not None and not (isinstance(self.budget_s, (int, float))
-                                              and self.budget_s > 0):
-            raise ValueError(f"DiscrepancySettings: budget_s must be None or a number of "
-                             f"seconds > 0, got {self.budget_s!r}")
+        if not isinstance(self.criterion, Criterion):
+            raise ValueError(f"DiscrepancySettings: criterion must be a Criterion, got "
+                             f"{type(self.criterion).__name__}")
+        if self.wall_cap_s is not None and not (
+                isinstance(self.wall_cap_s, (int, float)) and not isinstance(self.wall_cap_s, bool)
+                and math.isfinite(self.wall_cap_s) and self.wall_cap_s > 0):
+            raise ValueError(f"DiscrepancySettings: wall_cap_s must be None or a number of "
+                             f"seconds > 0, got {self.wall_cap_s!r}")
+        if self.max_member_fits is not None and not (
+                isinstance(self.max_member_fits, int) and not isinstance(self.max_member_fits, bool)
+                and self.max_member_fits >= 1):
+            raise ValueError(f"DiscrepancySettings: max_member_fits must be None or an "
+                             f"integer >= 1 (member fits), got {self.max_member_fits!r}")
         unknown = [c for c in self.candidates if c not in CANDIDATES
                    and c not in ("drive_lag", "force_lag")]
         if unknown:
@@ -204,7 +226,8 @@ class DiscrepancyResult:
         Bench checks the data failed (used anyway) and why a round was not run
         (e.g. the residual is already at the noise floor).
     cut : str
-        Empty, or where the time budget (``settings.budget_s``) cut the run: the answer
+        Empty, or where the work budget (``settings.max_member_fits``) or the wall-time
+        safety cap (``settings.wall_cap_s``) cut the run: the answer
         is then partial (the named effects are those the completed work supports).
     voltage_skew : dict or None
         The voltage-skew check of the baseline (``found``, ``delay_s`` in s, > 0 when
@@ -248,6 +271,8 @@ class DiscrepancyResult:
     cut: str = ""
     voltage_skew: dict | None = None
     baseline_presliding: dict | None = None
+    #: the criterion the verdicts were decided by
+    criterion: Criterion = DEFAULT_CRITERION
 
     @property
     def winner(self) -> CandidateResult | None:
@@ -304,7 +329,7 @@ class DiscrepancyResult:
                             "of the excess removed at least min_excess_reduction; an "
                             "effect's amplitude interval (Newey-West) must exclude zero; a "
                             "data-driven term only when the residual is not white (Ljung-Box)",
-                    "min_excess_reduction": MIN_EXCESS_REDUCTION,
+                    "criterion": dataclasses.asdict(self.criterion),
                     "noise_floor_percent": self.noise_floor},
                 "term": self.term.as_dict() if self.term else None,
                 "validation": self.validation,

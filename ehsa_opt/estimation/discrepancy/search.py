@@ -11,7 +11,7 @@ and add the winner; look ahead where one effect hides another.
   widened round's look-ahead.
 
 The statistics, the rule each candidate is judged by and the choice of the winner
-(:func:`~.evidence.choose_winner`) are in :mod:`.evidence`; the look-ahead through a
+(:func:`~.judge.choose_winner`) are in :mod:`.evidence`; the look-ahead through a
 confounded candidate in :mod:`.lookahead`.
 """
 
@@ -27,40 +27,31 @@ import numpy as np
 
 from .candidate_fit import judge_fit, not_fitted, signature_scores_in
 from .idle_fits import fit_with_spares
-from .deadline import elapsed_s, past_deadline, time_left_s
+from .budget import budget_reached, charge_fits, cut_reason, elapsed_s, past_deadline, time_left_s
 from .candidates import (
     CANDIDATES,
+    MIN_RANK_VALUE,
     compatible,
     components_for,
     fit_flexibility_member,
     flexibility_refusal,
     rank_value,
-    MIN_RANK_VALUE,
 )
-from .evidence import (
-    MIN_EXCESS_OVER_FLOOR,
-    MIN_SSE_EXCESS,
-    can_earn,
-    channel_sse,
-    choose_winner,
-    disturbance_masks,
-    effective_samples,
-    excess_reduction,
-    normalised_sse,
-    sse_can_earn,
-)
+from .evidence import channel_sse, disturbance_masks, effective_samples, normalised_sse
+from .judge import can_earn, choose_winner, excess_reduction, record_verdict, sse_can_earn, withdraw
+from .criterion import Criterion
 from .prepared import PreparedTest
 from .rig import Rig
 from .impacts import impact_record
 from .nested import nested_in, nested_to_fit, prefer_nested
 from .lookahead import member_key
-from .widen import WIDEN_BELOW, should_widen, widen_candidates, widen_round
+from .widen import should_widen, widen_candidates, widen_round
 from .results import CandidateResult, DiscrepancySettings
-from .terms import FRICTION_LAW_GROUPS, TERM_PREFERENCE, propose_term
+from .terms import FRICTION_LAW_GROUPS, propose_term
 
 __all__ = ["SearchTests", "SearchState", "RoundRanking", "run_rounds", "rank_round",
            "judge_round", "judge_context", "widen_round", "add_winner", "should_widen",
-           "WIDEN_BELOW", "ranked_ahead", "fitted_ahead"]
+           "ranked_ahead", "fitted_ahead"]
 
 
 @dataclass
@@ -168,9 +159,9 @@ def run_rounds(tests: SearchTests, state: SearchState, settings: DiscrepancySett
     # (state before the look-ahead first step, its error before) until it is completed
     joint: tuple | None = None
     for rnd in range(1, settings.max_effects + 1):
-        if past_deadline() and ranked_ahead(state) is None:
-            state.cut = state.cut or (f"time budget {settings.budget_s:g} s reached before "
-                                      f"round {rnd}: no further round run")
+        if budget_reached() and ranked_ahead(state) is None:
+            state.cut = state.cut or (f"{cut_reason()} before round {rnd}: no further round "
+                                      f"run")
             say(state.cut)
             break
         go_on, joint = _round(rnd, tests, state, joint, settings, say, notes, all_cands)
@@ -192,7 +183,7 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
     """One round on ``state`` (changed in place when a winner is added).  Returns
     whether to go on and the look-ahead path's start (see :func:`run_rounds`)."""
     rk = ranked_ahead(state, pop=True) or rank_round(tests, state, settings)
-    judge = judge_context(rnd, tests, state, rk, say, notes)
+    judge = judge_context(rnd, tests, state, rk, say, notes, settings.criterion)
     if judge is None:  # nothing can earn: the round is not re-identified
         all_cands += [rk.cands[n] for n in rk.order]
         return False, joint
@@ -230,23 +221,24 @@ def _round(rnd: int, tests: SearchTests, state: SearchState, joint: tuple | None
                    else "a candidate fitted on top of it completes a path that earns)"))
         say(note)
         notes.append(note)
-        first.earns = True
+        record_verdict(first, True, "look-ahead path")
     if not earning and first is None:
         return False, joint
-    win = first or prefer_nested(choose_winner(earning), rk.cands, say)
+    win = first or prefer_nested(choose_winner(earning), rk.cands, say,
+                                 settings.criterion.nested_evidence)
     if settings.discover and _term_preferred(rnd, win, tests, state, settings, say):
-        win.earns = False
+        withdraw(win, "")
         return False, joint
-    joint = add_winner(rnd, win, first, joint, tests, state, say)
+    joint = add_winner(rnd, win, first, joint, tests, state, say, settings.criterion)
     stop = None
     if impact_record(win.fit) is not None and state.remaining:
         stop = (f"round {rnd}: {win.effect} was fitted and judged on transient energies and "
                 f"kinematic gaps (a rattling contact): the model's sample-wise residual is "
                 f"not reproducible, so no further effect is searched on it")
-    elif state.remaining and past_deadline() and joint is None and not _ranked_above(rk, state):
-        # the next round would start after the deadline; nothing it could re-identify
+    elif state.remaining and budget_reached() and joint is None and not _ranked_above(rk, state):
+        # the next round would start after the budget; nothing it could re-identify
         # ranked here: it is not work skipped (no cut)
-        stop = (f"round {rnd}: {win.effect} named at the time budget; no other member "
+        stop = (f"round {rnd}: {win.effect} named at the budget ({cut_reason()}); no other member "
                 f"ranked at {100 * MIN_RANK_VALUE:g} % of this round's residual and able "
                 f"to join the model is left unfitted or with held-out evidence (ΔBIC < 0): "
                 f"no further round (not a cut)")
@@ -353,10 +345,10 @@ def rank_round(tests: SearchTests, state: SearchState, settings: DiscrepancySett
 
 
 def judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRanking,
-                   say, notes: list[str]) -> dict | None:
+                  say, notes: list[str], criterion: Criterion) -> dict | None:
     """The current model's measures every candidate of the round is judged against
-    (keyword arguments of :func:`~.evidence.judge_candidate`); None when no refit can
-    earn by the decision rule (said and noted)."""
+    (keyword arguments of :func:`~.judge.judge_candidate`, ``criterion`` among them);
+    None when no refit can earn by the decision rule (said and noted)."""
     fit_pts, held_pts, eval_pts, floor = tests.fit_pts, tests.held_pts, tests.eval_pts, \
         tests.floor
     cur_err = state.error
@@ -374,12 +366,14 @@ def judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRan
                                         > np.nan_to_num(rk.scores[n]['score']) else "")
                                      for n in rk.order)
         + f" (ranked in {rk.seconds:.1f} s, {elapsed_s():.0f} s into the run)")
-    if not (can_earn(cur_err, floor, 0.0, 1.0) or sse_can_earn(ch_sse0, ch_n)):
+    if not (can_earn(cur_err, floor, 0.0, 1.0, criterion)
+            or sse_can_earn(ch_sse0, ch_n, criterion)):
         excess = math.sqrt(max(cur_err ** 2 - floor ** 2, 0.0))
         note = (f"round {rnd}: candidates not re-identified — the {tests.evaluation} force "
                 f"error {cur_err:.3f} % exceeds the noise floor {floor:.3f} % by "
-                f"{excess:.3f} % (≤ {MIN_EXCESS_OVER_FLOOR:g} × floor) and the SSE of "
-                f"every channel is within {1 + MIN_SSE_EXCESS:g} × its noise expectation "
+                f"{excess:.3f} % (≤ {criterion.min_excess_over_floor:g} × floor) and the SSE "
+                f"of every channel is within {1 + criterion.min_sse_excess:g} × its noise "
+                f"expectation "
                 f"(all channels {sse0 / n_obs:.3f}): no refit can earn by the decision rule")
         say(note)
         notes.append(note)
@@ -391,7 +385,8 @@ def judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRan
     return dict(comps=rk.comps, fit_pts=fit_pts, held_pts=held_pts, sse_fit=sse_fit,
                 sse_held=sse_held, n_eff_fit=state.n_eff_fit, n_eff_held=state.n_eff_held,
                 cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say,
-                cur_ev_pred=state.eval_pred(), masks=masks, presliding=tests.presliding)
+                cur_ev_pred=state.eval_pred(), masks=masks, presliding=tests.presliding,
+                criterion=criterion)
 
 
 def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
@@ -400,7 +395,7 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
                 spare: Sequence[str] = ()) -> None:
     """Re-identify the candidates ``names`` on the current model
     (:func:`~.candidate_fit.fit_members`) and judge each
-    (:func:`~.evidence.judge_candidate`); ``with_flexibility``: the flexibility
+    (:func:`~.judge.judge_candidate`); ``with_flexibility``: the flexibility
     member's fit is judged by the same rule too; ``keep``: the new fits are kept in
     ``state.fitted`` for a later round on the same model to reuse.  ``spare``: members
     the round may ask for next, fitted only on workers the fits of ``names`` leave idle
@@ -408,6 +403,9 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
     names = list(names)
     if names:
         args = [_member_args(n, rk, tests, state, settings) for n in names]
+        # the work budget: charged for every member asked for, in rank order, whether
+        # its fit is made now or was made ahead (the answer does not depend on which)
+        args = args[:charge_fits(len(args))]
         # a member fitted ahead on this model (same inputs: by the look-ahead, on an
         # idle worker, or by the delay's rival check): reused
         done = [state.fitted.pop(member_key(x), (None, None)) for x in args]
@@ -420,10 +418,10 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
                  if n not in names and n in rk.comps]
         ahead = [x for x in ahead if member_key(x) not in state.fitted]
         t0 = time.perf_counter()
-        # scheduled as workers free up, in rank order; none started after the deadline
-        # (fits made before it, reused above, are judged all the same)
+        # scheduled as workers free up, in rank order; none started after the safety
+        # cap (fits made before it, reused above, are judged all the same)
         fits, extra = ([], []) if new and past_deadline() else fit_with_spares(
-            new, ahead, settings.jobs, until_deadline=settings.budget_s is not None,
+            new, ahead, settings.jobs, until_deadline=settings.wall_cap_s is not None,
             seconds=state.seconds, estimate=lambda n: _estimate(state, n))
         for x in ahead:
             out = next((o for o in extra if o[0] == x[0]), None)
@@ -440,19 +438,19 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
                          + f"; {elapsed_s():.0f} s into the run)")
         for x, out in zip(new, fits) if keep else ():
             state.fitted[member_key(x)] = (state.rig, out)
-        for out in done + fits:
+        for out in sorted(done + fits, key=lambda o: names.index(o[0])):  # rank order
             judge_fit(rk.cands[out[0]], out, member=CANDIDATES.get(out[0]), **judge)
         started = {o[0] for o in done + fits}
         cut = [n for n in names if n in started and rk.cands[n].cut_at_deadline]
         unstarted = [n for n in names if n not in started]
         if cut or unstarted:
-            state.cut = (f"time budget {settings.budget_s:g} s reached in the round in "
-                         f"progress: "
+            state.cut = (f"{cut_reason()} in the round in progress: "
                          + "; ".join(([f"{', '.join(cut)} cut at the start point (not "
                                        f"fitted)"] if cut else [])
                                      + ([f"{', '.join(unstarted)} not re-identified (not "
-                                         f"started: the fits timed in this run take longer "
-                                         f"than the {max(time_left_s(), 0.0):.0f} s left)"]
+                                         + ("started: the fits timed in this run take "
+                                            f"longer than the {max(time_left_s(), 0.0):.0f} s "
+                                            "left)" if past_deadline() else "started)")]
                                         if unstarted else []))
                          + "; the round is decided on the candidates fitted before the cut")
             judge["say"](state.cut)
@@ -473,15 +471,16 @@ def judge_round(rk: RoundRanking, names: Sequence[str], tests: SearchTests,
 def _term_preferred(rnd: int, win: CandidateResult, tests: SearchTests, state: SearchState,
                     settings: DiscrepancySettings, say) -> bool:
     """Whether a data-driven term (:func:`~.terms.propose_term`) explains the residual
-    far better than the winner (:data:`~.terms.TERM_PREFERENCE`): the catalogue name
+    far better than the winner (``criterion.term_preference``): the catalogue name
     would point at the wrong part, so the winner is not named."""
     floor = tests.floor
     rival = propose_term(tests.fit_pts, state.fit_pred, tests.eval_pts, state.eval_pred(),
                          tests.lead_m_per_rad, settings.seed, floor,
-                         state.n_eff_held if tests.held_pts else state.n_eff_fit)
+                         state.n_eff_held if tests.held_pts else state.n_eff_fit,
+                         settings.criterion)
     ex_win = math.sqrt(max(win.error_after ** 2 - floor ** 2, 0.0))
     ex_term = math.sqrt(max(rival.error_after ** 2 - floor ** 2, 0.0))
-    if rival.earns and rival.group not in FRICTION_LAW_GROUPS and ex_term < TERM_PREFERENCE * ex_win:
+    if rival.earns and rival.group not in FRICTION_LAW_GROUPS and ex_term < settings.criterion.term_preference * ex_win:
         say(f"round {rnd}: {win.effect} earns ({win.error_after:.3f} %) but a data-driven "
             f"term explains the residual far better ({rival.error_after:.3f} %): "
             f"{rival.description}")
@@ -490,8 +489,8 @@ def _term_preferred(rnd: int, win: CandidateResult, tests: SearchTests, state: S
 
 
 def add_winner(rnd: int, win: CandidateResult, first: CandidateResult | None,
-               joint: tuple | None, tests: SearchTests, state: SearchState, say
-               ) -> tuple | None:
+               joint: tuple | None, tests: SearchTests, state: SearchState, say,
+               criterion: Criterion) -> tuple | None:
     """Add the round's winner to ``state`` (in place) and record the step; a winner
     that completes a look-ahead path started at ``joint`` is recorded with its first
     step as one joint step.  Returns the path's start still open (or None)."""
@@ -514,7 +513,8 @@ def add_winner(rnd: int, win: CandidateResult, first: CandidateResult | None,
     if joint is not None and win is not first:  # the path is complete: one step
         prev = steps.pop(-2)
         steps[-1] = {"effect": f"{prev['effect']} + {win.effect}", "error_after": state.error,
-                     "excess_reduction": excess_reduction(joint[1], state.error, tests.floor),
+                     "excess_reduction": excess_reduction(joint[1], state.error, tests.floor,
+                                                         criterion),
                      "parameters": {**prev["parameters"], **win.parameters},
                      "joint": True}
         joint = None

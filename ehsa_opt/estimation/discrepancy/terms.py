@@ -39,7 +39,7 @@ standardised columns, followed by a least-squares refit on the selected columns
 energy names it, in words.  The term's *held-out gain* is measured like a
 catalogue effect's: the held-out force prediction plus the term, against the
 held-out measurement; :func:`propose_term` judges it by the decision rule
-(:func:`~.evidence.earns`), and proposes none when the residual is white.
+(:func:`~.judge.earns`), and proposes none when the residual is white.
 """
 
 from __future__ import annotations
@@ -50,7 +50,9 @@ from typing import Sequence
 
 import numpy as np
 
-from .evidence import WHITE_P, autocorrelation_time, delta_bic, earns, effective_samples, residual_is_white
+from .criterion import DEFAULT_CRITERION, Criterion
+from .evidence import autocorrelation_time, delta_bic, effective_samples, residual_is_white
+from .judge import judge_change
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 from .presliding import travel_since_reversal_m
@@ -58,8 +60,7 @@ from .presliding import travel_since_reversal_m
 __all__ = ["TermProposal", "shifted_force", "names_an_effect", "travel_since_reversal_m",
            "FRICTION_LAW_GROUPS",
            "PRESLIDING_LENGTHS_M", "feature_library", "discover_term", "propose_term", "shift_lag",
-           "shift_sse_curves", "per_test_delays", "DELAY_SPREAD_BIC", "GROUPS", "LAG_GRID_S",
-           "TERM_PREFERENCE"]
+           "shift_sse_curves", "per_test_delays", "GROUPS", "LAG_GRID_S"]
 
 #: Feature groups of the library, in the order they are described.
 GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity", "presliding")
@@ -396,14 +397,6 @@ def shift_lag(pts, preds) -> tuple[float, float] | None:
     return float(LAG_GRID_S[k]), float(sses[k])
 
 
-#: Per-test delays refuse one delay of the record only on very strong evidence: their
-#: ΔBIC against one delay below this (Kass & Raftery 1995: |ΔBIC| > 10).  The baseline
-#: is fitted on the delayed record and absorbs a little of a true delay differently per
-#: test (a 5 ms delay on our own generator: ΔBIC −3.8); friction presliding asks for
-#: shifts that differ by tens of ms (ΔBIC −119 to −1.9e3 on the clean tuning campaigns).
-DELAY_SPREAD_BIC = -10.0
-
-
 def per_test_delays(pts, preds, n_eff: float) -> float:
     """ΔBIC of one delay per test against one delay for all (< 0: the tests' own delays
     fit significantly better).
@@ -443,18 +436,10 @@ def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
                         {"lag_ms": 1e3 * tau}, sse_fit0, lag[1])
 
 
-#: A catalogue effect that earns is still not named when the data-driven term leaves
-#: less than this share of the effect's remaining error above the noise floor (the
-#: catalogue name would point at the wrong part: e.g. backlash for a lagging force
-#: channel).  Not applied to a term of :data:`FRICTION_LAW_GROUPS`: a friction law of
-#: another shape is what the catalogue's friction effects are (the constant column *is*
-#: a direction-dependent Coulomb level, collinear with the offset), and a friction
-#: transition over a distance after each reversal is what a gap looks like in the force
-#: (the gap is told from presliding by the rotor's channel, the voltage, not by this).
-TERM_PREFERENCE = 0.5
 
 
-def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff) -> TermProposal:
+def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff,
+                 criterion: Criterion = DEFAULT_CRITERION) -> TermProposal:
     """The data-driven term of the current residual, judged like a catalogue effect.
 
     * None when the residual of the fit tests is white (Ljung–Box,
@@ -465,24 +450,24 @@ def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_ef
       ``force_lag`` member makes): otherwise the shift stands for a lead that depends
       on the motion (friction presliding), it is refused (``refused`` says why) and the
       term is sought again without the lag features.
-    * The term earns by :func:`~.evidence.earns`: its share of the held-out error above
-      the noise floor, ΔBIC < 0 on the fit tests (``N_eff`` of the fit residual) and on
-      the held-out tests (``n_eff``), one parameter per selected column.
+    * The term earns by :func:`~.judge.earns` with ``criterion``: its share of the
+      held-out error above the noise floor, ΔBIC on the fit tests (``N_eff`` of the fit
+      residual) and on the held-out tests (``n_eff``), one parameter per selected column.
     """
-    white, p = residual_is_white(fit_pts, fit_pred)
+    white, p = residual_is_white(fit_pts, fit_pred, criterion.white_p)
     if white:
         return TermProposal(True, f"the residual is white (Ljung-Box p = {p:.2g} > "
-                                  f"{WHITE_P:g} on every fit test): no term proposed",
+                                  f"{criterion.white_p:g} on every fit test): no term proposed",
                             description="none (white residual)")
     term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead, seed=seed)
     n_eff_fit = effective_samples(fit_pts, fit_pred)
     refused = ""
     if term.group == "lag" and len(fit_pts) > 1:
         spread = per_test_delays(fit_pts, fit_pred, n_eff_fit)
-        if spread < DELAY_SPREAD_BIC:
+        if spread < criterion.delay_spread_bic:
             refused = (f"{term.description}: refused — not a delay of the record, the best "
                        f"delay differs from test to test (per-test delays against one: "
-                       f"ΔBIC {spread:.3g} < {DELAY_SPREAD_BIC:g})")
+                       f"ΔBIC {spread:.3g} < {criterion.delay_spread_bic:g})")
             term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead,
                                  seed=seed, exclude=("lag",))
     term.refused = refused
@@ -490,5 +475,5 @@ def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_ef
         k = len(term.columns)
         d_fit = delta_bic(term.sse_fit_after, term.sse_fit_before, k, n_eff_fit)
         d_held = delta_bic(term.sse_after, term.sse_before, k, n_eff)
-        term.earns = earns(term.error_before, term.error_after, floor, d_fit, d_held)
+        judge_change(term, term.error_before, term.error_after, floor, d_fit, d_held, criterion)
     return term

@@ -11,17 +11,17 @@ check.  The check (:func:`find_voltage_skew`), before the rounds, on the baselin
    voltage SSE of (V − V̂(t − τ))/σ (the same search as the force's,
    :func:`~.terms.shift_lag`, on the voltage);
 2. **one delay of the record** — the per-test delays (one per test) add little to what
-   the one delay explains: ln(SSE_one/SSE_per-test) ≤ :data:`SKEW_SPREAD` ×
+   the one delay explains: ln(SSE_one/SSE_per-test) ≤ ``criterion.skew_spread`` ×
    ln(SSE_0/SSE_one) on the fit tests.  (The force's check,
    :func:`~.terms.per_test_delays`, refuses at ΔBIC < −10; the voltage residual of the
    rigid baseline is never at its noise — SSE/N ≈ 3.4 on a clean campaign — and per-test
    delays pick up some of it on every campaign, ΔBIC −96 to −564 on the tuning cases,
    −176 on the skewed record, where they add 12 % of the one delay's log-gain against
    96–140 % on a gap and a mount spring);
-3. **against no delay**: ΔBIC = N_eff ln(SSE_τ/SSE_0) + ln N_eff < :data:`SKEW_BIC`
+3. **against no delay**: ΔBIC = N_eff ln(SSE_τ/SSE_0) + ln N_eff < ``criterion.skew_bic``
    on the fit tests *and* on the held-out tests (the same τ);
 4. **the delay explains the voltage residual**: on the held-out tests it removes at
-   least :data:`SKEW_EXPLAINS` of the voltage SSE's excess over its noise
+   least ``criterion.skew_explains`` of the voltage SSE's excess over its noise
    expectation, (SSE₀ − SSE_τ)/(SSE₀ − N).  A mount spring's rotor lags the rod by
    F/k — a force-shaped deviation, largest at the friction's reversals — which one
    time shift of the whole record explains only in part.
@@ -31,7 +31,7 @@ check.  The check (:func:`find_voltage_skew`), before the rounds, on the baselin
    K_t V/(R_load r), comes from the rotor's current — while a late voltage record leaves
    the force on time.  The model's force with its generator part moved by the same τ,
    F̂ + c (V̂(t − τ) − V̂(t)) with c = K_t/(R_load r), must not fit the force of the
-   held-out tests significantly better than F̂ (N_eff ln(SSE_moved/SSE_on) < :data:`SKEW_BIC`
+   held-out tests significantly better than F̂ (N_eff ln(SSE_moved/SSE_on) < ``criterion.skew_bic``
    refuses the skew; skipped without ``harvester``).
 
 When all of them hold, every test's voltage is re-aligned, V(t + τ) on the same samples
@@ -48,28 +48,14 @@ from typing import Sequence
 
 import numpy as np
 
+from .criterion import DEFAULT_CRITERION, Criterion
 from .evidence import delta_bic
 from .prepared import PreparedTest
 from .terms import LAG_GRID_S
 
 __all__ = ["VoltageSkew", "find_voltage_skew", "em_force_per_volt", "realign_voltage",
-           "voltage_shift_curves",
-           "SKEW_BIC", "SKEW_EXPLAINS", "SKEW_SPREAD"]
+           "voltage_shift_curves"]
 
-#: One delay of the voltage record against none: ΔBIC below this on the fit and on the
-#: held-out tests (very strong evidence, Kass & Raftery 1995; as
-#: :data:`~.terms.DELAY_SPREAD_BIC`).
-SKEW_BIC = -10.0
-
-#: ... and the delay removes at least this share of the held-out voltage SSE's excess
-#: over its noise expectation (it *explains* the voltage residual, not a part of it; on
-#: the tuning set 79 % on a 1 ms skew, 13 % on a mount spring, 9 % on a gap — the rest of
-#: the skewed case's excess is the rigid baseline's own, SSE/N 3.4 on a clean campaign).
-SKEW_EXPLAINS = 0.5
-
-#: ... and per-test delays add at most this share of the one delay's log-gain (on the
-#: tuning set: 0.12 on a 1 ms skew; 1.4 on a 5e5 N/m mount, 0.96 on a 0.15 mm gap).
-SKEW_SPREAD = 0.25
 
 
 @dataclass
@@ -146,8 +132,8 @@ def em_force_per_volt(pt: PreparedTest, harvester) -> float:
 
 def find_voltage_skew(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.ndarray],
                       held_pts: Sequence[PreparedTest], held_pred: Sequence[np.ndarray],
-                      n_eff_fit: float, n_eff_held: float, harvester=None
-                      ) -> VoltageSkew | None:
+                      n_eff_fit: float, n_eff_held: float, harvester=None,
+                      criterion: Criterion = DEFAULT_CRITERION) -> VoltageSkew | None:
     """The voltage-skew check of the module docstring on the baseline's outputs; None
     when the tests have no voltage channel or no delay is better than none.
     ``harvester`` (:class:`~ehsa_opt.physics.params.HarvesterParams`): for check 5."""
@@ -181,22 +167,22 @@ def find_voltage_skew(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.nda
             dv = np.interp(pt.time_s - tau, pt.time_s, yp[1]) - yp[1]
             f_on += float(np.sum(((pt.y[0] - yp[0]) * w) ** 2))
             f_moved += float(np.sum(((pt.y[0] - yp[0] - c * dv) * w) ** 2))
-    follows = f_on > 0 and delta_bic(f_moved, f_on, 0, n_eff) < SKEW_BIC
+    follows = f_on > 0 and delta_bic(f_moved, f_on, 0, n_eff) < criterion.skew_bic
     edge = abs(abs(tau) - float(np.max(np.abs(LAG_GRID_S)))) < 1e-9
-    found = (not edge and spread <= SKEW_SPREAD and d_fit < SKEW_BIC
-             and d_held < SKEW_BIC and explained >= SKEW_EXPLAINS and not follows)
+    found = (not edge and spread <= criterion.skew_spread and d_fit < criterion.skew_bic
+             and d_held < criterion.skew_bic and explained >= criterion.skew_explains and not follows)
     word = "late" if tau > 0 else "early"
     why = ("one delay of the voltage record explains its residual" if found else
            "at the edge of the searched delays" if edge else
            f"the best delay differs from test to test (per-test delays add "
-           f"{100 * spread:.0f} % of its log-gain, > {100 * SKEW_SPREAD:.0f} %)"
-           if spread > SKEW_SPREAD else
+           f"{100 * spread:.0f} % of its log-gain, > {100 * criterion.skew_spread:.0f} %)"
+           if spread > criterion.skew_spread else
            f"not significant (ΔBIC fit {d_fit:.3g}, held-out {d_held:.3g}; needs < "
-           f"{SKEW_BIC:g})" if not (d_fit < SKEW_BIC and d_held < SKEW_BIC) else
+           f"{criterion.skew_bic:g})" if not (d_fit < criterion.skew_bic and d_held < criterion.skew_bic) else
            f"it explains only {100 * explained:.0f} % of the voltage residual's excess "
-           f"over noise (needs {100 * SKEW_EXPLAINS:.0f} %): the rotor's channel differs "
+           f"over noise (needs {100 * criterion.skew_explains:.0f} %): the rotor's channel differs "
            f"from the model otherwise than by a delay of the record"
-           if explained < SKEW_EXPLAINS else
+           if explained < criterion.skew_explains else
            f"the force follows: its generator part moved by the same delay fits the "
            f"force significantly better (SSE {f_on:.4g} -> {f_moved:.4g}) — the rotor "
            f"lags, not the record")

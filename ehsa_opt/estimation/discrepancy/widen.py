@@ -13,8 +13,9 @@ import time
 from typing import Any, Callable, Sequence
 
 from .candidates import MIN_RANK_VALUE, compatible, rank_value
-from .deadline import elapsed_s
-from .evidence import MIN_EXCESS_REDUCTION, can_earn, choose_winner
+from .budget import cut_reason, elapsed_s
+from .criterion import DEFAULT_POLICY, Criterion
+from .judge import can_earn, choose_winner
 from .impacts import impact_record
 from .lookahead import (confounded, confounded_first, first_step_pool, fit_on_top,
                         lookahead_winner, not_judged, on_top_args, prefetch_on_top,
@@ -27,10 +28,11 @@ __all__ = ["widen_round", "widen_candidates", "should_widen", "WIDEN_BELOW"]
 #: When the best earning candidate of a round removes less than this share of the
 #: held-out force error's excess over the noise floor, the round re-identifies every
 #: remaining applicable candidate before deciding (see :func:`should_widen`).
-WIDEN_BELOW = 0.5
+WIDEN_BELOW = DEFAULT_POLICY.widen_below
 
 
-def should_widen(earning: Sequence[Any], force_excess: bool = True) -> bool:
+def should_widen(earning: Sequence[Any], force_excess: bool = True,
+                 min_excess_reduction: float = 0.0) -> bool:
     """Whether to re-identify the remaining lower-ranked candidates before deciding.
 
     True when some candidate earns but the best earning one removes less than
@@ -50,7 +52,7 @@ def should_widen(earning: Sequence[Any], force_excess: bool = True) -> bool:
         ``sse_reduction`` attribute holds the SSE alternative's share).
     force_excess : bool
         Whether the force error's excess over the noise floor is beyond noise
-        (:func:`~.evidence.can_earn` on the force alone).  Then the force gain decides
+        (:func:`~.judge.can_earn` on the force alone).  Then the force gain decides
         alone: a compliance beside a gap plus a cogging removed 11 % of the force
         excess but more than half of the voltage channel's, and the round was not
         widened.
@@ -63,7 +65,7 @@ def should_widen(earning: Sequence[Any], force_excess: bool = True) -> bool:
         s = getattr(c, "sse_reduction", None)
         use_sse = not force_excess and s is not None and math.isfinite(s)
         gains.append(max(g, s) if use_sse else g)
-    return max(gains) < max(WIDEN_BELOW, MIN_EXCESS_REDUCTION)
+    return max(gains) < max(WIDEN_BELOW, min_excess_reduction)
 
 
 def widen_candidates(rk: Any, state: Any) -> list[str]:
@@ -90,7 +92,9 @@ def widen_round(rnd: int, rk: Any, tests: Any, state: Any, settings: Any, judge:
     cands, order = rk.cands, rk.order
     earning = [c for c in cands.values() if c.earns]
     first = blocked = None
-    if state.cut or not should_widen(earning, can_earn(state.error, tests.floor, 0.0, 1.0)):
+    crit: Criterion = settings.criterion
+    if state.cut or not should_widen(earning, can_earn(state.error, tests.floor, 0.0, 1.0, crit),
+                                     crit.min_excess_reduction):
         return earning, first, blocked
     if any(impact_record(c.fit) is not None for c in earning):
         # a rattling contact earned on its impacts: the sample-wise share of the excess
@@ -138,12 +142,13 @@ def widen_round(rnd: int, rk: Any, tests: Any, state: Any, settings: Any, judge:
             lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd,
                                  state.fitted, cuts, state.seconds),
             state.error, tests.floor,
-            choose_winner(earning).sse_heldout if earning else math.inf, say):
+            choose_winner(earning).sse_heldout if earning else math.inf, say,
+            criterion=settings.criterion):
         first = blocked
     say(f"round {rnd}: look-ahead through {blocked.effect} in "
         f"{time.perf_counter() - t0:.1f} s ({elapsed_s():.0f} s into the run)")
     if cuts:
-        state.cut = (f"time budget {settings.budget_s:g} s reached in the look-ahead of "
+        state.cut = (f"{cut_reason()} in the look-ahead of "
                      f"round {rnd}: {'; '.join(cuts)} not fitted (the path is work left); "
                      f"the round is decided without those paths")
         say(state.cut)

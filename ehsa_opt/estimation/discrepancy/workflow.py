@@ -22,16 +22,16 @@ round after round, then propose a data-driven term for what no catalogue effect 
    screened by forward simulation over the realistic ranges, effect-only stage,
    nut/bearing friction split for transmission effects, full refit, refinement
    on the simulation).
-6. **Decide** (:func:`~.evidence.earns`): a candidate *earns* when its refit removes
-   at least :data:`~.evidence.MIN_EXCESS_REDUCTION` of the held-out relative force
+6. **Decide** (:func:`~.judge.earns`): a candidate *earns* when its refit removes
+   at least the criterion's ``min_excess_reduction`` of the held-out relative force
    error above the noise floor (the error the measurement noise alone gives) and
    ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff < 0 on the fit tests and on the
    held-out tests (N_eff = Σ N/τ, τ the residual autocorrelation time); for an
    effect seen in the voltage channel the same share of that channel's SSE excess,
    the force error not growing by more than the data resolve (e_n/√(2N)).  Among
    the earning candidates the one with the lowest held-out ΔBIC is added
-   (:func:`~.evidence.choose_winner`; between nested effects the simpler unless the
-   richer's ΔBIC is lower by :data:`~.nested.NESTED_EVIDENCE`,
+   (:func:`~.judge.choose_winner`; between nested effects the simpler unless the
+   richer's ΔBIC is lower by the criterion's ``nested_evidence``,
    :func:`~.nested.prefer_nested`).  When the best earning candidate removes less than
    :data:`~.widen.WIDEN_BELOW` of the excess, the remaining lower-ranked
    candidates are re-identified too before deciding (:func:`~.widen.should_widen`;
@@ -70,7 +70,7 @@ from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
 from ..identify_options import MIN_RESOLVED_SAMPLES
 from .candidates import CANDIDATES, try_drive_lag, try_lag
-from .deadline import deadline_set, past_deadline
+from .budget import budget_reached, budget_set, cut_reason
 from .evidence import effective_samples, force_error_percent, force_noise_floor_percent
 from ..fit_result import FitResult
 from .fit import fit_group
@@ -91,6 +91,8 @@ from .split import crop_test, load_split, spread_within
 from .presliding import PreslidingLaw, adopt_presliding
 from .terms import TermProposal, names_an_effect, propose_term
 from .voltage_skew import VoltageSkew, find_voltage_skew, realign_voltage
+from .criterion import DEFAULT_CRITERION, Criterion
+from .judge import withdraw
 
 __all__ = ["run_discrepancy", "load_data", "prepare_search_tests", "fit_baseline", "Baseline",
            "name_force_lag", "name_drive_lag", "assemble_result", "BASELINE_MAX_SAMPLES",
@@ -109,9 +111,10 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
     log : callable, optional
         Progress messages (e.g. ``print``).
     """
-    # process-level parallelism only (see the utility); the time budget is a deadline that
-    # the rounds and the candidate fits inside them check (:mod:`.deadline`)
-    with single_threaded_blas(), deadline_set(settings.budget_s if settings else None):
+    # process-level parallelism only (see the utility); the budget is counted in member
+    # fits, the wall time a safety cap (:mod:`.budget`)
+    settings = settings or DiscrepancySettings()
+    with single_threaded_blas(), budget_set(settings.max_member_fits, settings.wall_cap_s):
         return _run_discrepancy(data, settings, log)
 
 
@@ -130,7 +133,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     raw = ([pt.test for pt in tests.fit_pts], [pt.test for pt in tests.held_pts])
     skew = None
     if tests.rig.has_generator:
-        state, skew = check_voltage_skew(tests, base, state, say, notes)
+        state, skew = check_voltage_skew(tests, base, state, say, notes, settings.criterion)
     if "drive_lag" in settings.candidates and not tests.rig.has_generator:
         state = name_drive_lag(tests, base, state, settings, say, all_cands, notes)
     if "drive_lag" in state.effects and "force_lag" in settings.candidates:
@@ -143,13 +146,14 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         state = name_force_lag(tests, base, state, settings, say, all_cands, notes)
     law = None
     if settings.presliding:
-        law = adopt_base_presliding(tests, base, state, say, notes)
+        law = adopt_base_presliding(tests, base, state, say, notes, settings.criterion)
     state = run_rounds(tests, state, settings, say, notes, all_cands)
     term = None
     if settings.discover:
         term = propose_term(tests.fit_pts, state.fit_pred, tests.eval_pts, state.eval_pred(),
                             tests.lead_m_per_rad, settings.seed, tests.floor,
-                            state.n_eff_held if tests.held_pts else state.n_eff_fit)
+                            state.n_eff_held if tests.held_pts else state.n_eff_fit,
+                            settings.criterion)
         if term.columns:
             say(f"term: {term.description}; {tests.evaluation} error "
                 f"{term.error_before:.3f} -> {term.error_after:.3f} % "
@@ -157,6 +161,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     res = assemble_result(data, tests, base, state, all_cands, term, notes,
                           time.perf_counter() - t_start, raw, skew)
     res.baseline_presliding = law.as_dict() if law is not None else None
+    res.criterion = settings.criterion
     if law is not None and law.adopted:
         res.message += (f"; the base model's friction has a presliding transition "
                         f"({tests.evaluation} error without it {law.error_before:.3f} %)")
@@ -164,7 +169,8 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
 
 
 def adopt_base_presliding(tests: SearchTests, base: Baseline, state: SearchState, say,
-                          notes: list[str]) -> PreslidingLaw:
+                          notes: list[str], criterion: Criterion = DEFAULT_CRITERION
+                          ) -> PreslidingLaw:
     """The presliding transition of the base model's friction law
     (:func:`~.presliding.adopt_presliding`), tried on the model that enters the rounds.
     When adopted, the state's and the baseline's predictions get their presliding term
@@ -172,7 +178,8 @@ def adopt_base_presliding(tests: SearchTests, base: Baseline, state: SearchState
     the localisation are of the corrected model) and ``tests.presliding`` carries the
     law to every model the search judges."""
     law = adopt_presliding(tests.fit_pts, state.fit_pred, tests.held_pts, state.held_pred,
-                           tests.floor, state.n_eff_fit, state.n_eff_held)
+                           tests.floor, state.n_eff_fit, state.n_eff_held,
+                           criterion=criterion)
     say(law.message)
     notes.append(law.message)
     if not law.adopted:
@@ -313,7 +320,8 @@ def baseline_decimation(fit_pts, rig: Rig) -> int:
 
 
 def check_voltage_skew(tests: SearchTests, base: Baseline, state: SearchState, say,
-                       notes: list[str]) -> tuple[SearchState, VoltageSkew | None]:
+                       notes: list[str], criterion: Criterion = DEFAULT_CRITERION
+                       ) -> tuple[SearchState, VoltageSkew | None]:
     """The voltage-skew check (:func:`~.voltage_skew.find_voltage_skew`) on the baseline;
     when one delay of the voltage record explains the voltage residual, every test's
     voltage is re-aligned from here on (``tests`` changed in place; the model's outputs
@@ -321,7 +329,8 @@ def check_voltage_skew(tests: SearchTests, base: Baseline, state: SearchState, s
     Returns the state and the check (None: no voltage channel, or no delay is better
     than none)."""
     skew = find_voltage_skew(tests.fit_pts, state.fit_pred, tests.held_pts, state.held_pred,
-                             state.n_eff_fit, state.n_eff_held, tests.rig.harvester)
+                             state.n_eff_fit, state.n_eff_held, tests.rig.harvester,
+                             criterion)
     if skew is None:
         return state, None
     say(skew.message)
@@ -348,8 +357,8 @@ def name_force_lag(tests: SearchTests, base: Baseline, state: SearchState,
     and the state starts from the refitted baseline.  The delay is not named when a
     member the first round would re-identify, fitted on the record as it is, earns and
     leaves a lower held-out error (:func:`~.lag_rival.lag_rival`)."""
-    if past_deadline():
-        state.cut = (f"time budget {settings.budget_s:g} s reached before the force_lag "
+    if budget_reached():
+        state.cut = (f"{cut_reason()} before the force_lag "
                      f"member was tried: it was not tried")
         say(state.cut)
         return state
@@ -364,7 +373,7 @@ def name_force_lag(tests: SearchTests, base: Baseline, state: SearchState,
     all_cands.append(cand)
     rival = lag_rival(tests, state, settings, cur_err, say, notes if notes is not None else [])
     if rival is not None:
-        cand.earns = False
+        withdraw(cand, "")
         note = (f"force_lag: not named — {rival.effect}, fitted on the record as it is, "
                 f"earns and leaves {rival.error_after:.3f} % against the delay's "
                 f"{cur_err:.3f} %: the member's physics accounts for the lead without "
@@ -396,8 +405,8 @@ def name_drive_lag(tests: SearchTests, base: Baseline, state: SearchState,
     applied force from here on (``tests`` — with its noise floor — and ``base``'s
     outputs changed in place: later effects are judged on what remains) and the state
     starts from the baseline refitted on it."""
-    if past_deadline():
-        state.cut = (f"time budget {settings.budget_s:g} s reached before the drive_lag "
+    if budget_reached():
+        state.cut = (f"{cut_reason()} before the drive_lag "
                      f"member was tried: it was not tried")
         say(state.cut)
         return state

@@ -8,7 +8,8 @@ import pytest
 
 from ehsa_opt.datasets.synthetic import PROTOTYPE_FRICTION, SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.discrepancy import Rig
-from ehsa_opt.estimation.discrepancy.bounds import at_bound, refuse_at_bound, unconstrained_step
+from ehsa_opt.estimation.discrepancy.bounds import at_bound, unconstrained_step
+from ehsa_opt.estimation.discrepancy.judge import refuse_at_bound
 from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
 from ehsa_opt.physics import make_component
 from ehsa_opt.physics.params import HarvesterParams

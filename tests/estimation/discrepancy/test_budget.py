@@ -7,6 +7,8 @@ import json
 import os
 import time
 
+import pytest
+
 from ehsa_opt.cli import main
 from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
 from ehsa_opt.pipeline.discrepancy_report import write_partial_report
@@ -57,7 +59,7 @@ def test_partial_report_from_the_progress_messages(tmp_path):
     assert doc["effects"] == ["backlash"] and doc["effect"] == "backlash"
     assert doc["error_before"] == 12.5 and doc["error_after"] == 2.1
     assert "round 2" in msg and "60 s" in msg
-    assert "Cut at the time budget" in (tmp_path / "o" / "report.md").read_text()
+    assert "Cut at the wall-time safety cap" in (tmp_path / "o" / "report.md").read_text()
 
 
 def test_cli_budget_cuts_with_a_stated_partial_answer(tmp_path, capsys):
@@ -66,12 +68,14 @@ def test_cli_budget_cuts_with_a_stated_partial_answer(tmp_path, capsys):
                                      cycles=1.0, seed=2))
     out = tmp_path / "out"
     t0 = time.monotonic()
-    rc = main(["discrepancy", str(d), "--out", str(out), "--budget-s", "2"])
+    rc = main(["discrepancy", str(d), "--out", str(out), "--wall-cap-s", "2"])
     assert time.monotonic() - t0 < 30
     assert rc == 1
     doc = json.loads((out / "discrepancy.json").read_text())
     assert doc["partial"] and doc["budget_s"] == 2.0
-    assert "time budget of 2 s reached" in capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert "wall-time safety cap of 2 s reached" in said
+    assert "depends on the machine's speed and load" in said
 
 
 def test_workflow_deadline_gives_a_stated_partial_answer(tmp_path):
@@ -82,24 +86,27 @@ def test_workflow_deadline_gives_a_stated_partial_answer(tmp_path):
     d = tmp_path / "data"
     write_synthetic(d, SyntheticSpec(frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(15.0, 109.0),
                                      cycles=1.0, seed=2))
-    res = run_discrepancy(d, DiscrepancySettings(budget_s=1e-3, discover=False))
+    res = run_discrepancy(d, DiscrepancySettings(wall_cap_s=1e-3, discover=False))
     assert not res.success and res.effect == "undecided" and not res.candidates
     assert "reached before round 1" in res.cut and "partial answer" in res.message
     doc = res.as_dict()
     assert doc["partial"] and doc["cut"] == res.cut
     try:
-        DiscrepancySettings(budget_s=0)
+        DiscrepancySettings(wall_cap_s=0)
     except ValueError as exc:
-        assert "budget_s" in str(exc)
+        assert "wall_cap_s" in str(exc)
     else:
-        raise AssertionError("budget_s=0 accepted")
+        raise AssertionError("wall_cap_s=0 accepted")
+    for bad in (0, -1, 2.5, True):
+        with pytest.raises(ValueError, match="max_member_fits"):
+            DiscrepancySettings(max_member_fits=bad)
 
 
 def test_simulation_refinement_stops_at_the_deadline():
     """A candidate fit's Gauss-Newton refinement on the simulation stops at the run's
     deadline and keeps its start (nothing better simulated), saying so."""
     from ehsa_opt.datasets.synthetic import generate_bench_tests
-    from ehsa_opt.estimation.discrepancy.deadline import deadline_set
+    from ehsa_opt.estimation.discrepancy.budget import budget_set
     from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
     from ehsa_opt.estimation.discrepancy.rig import Rig
     from ehsa_opt.estimation.discrepancy.polish import polish
@@ -107,7 +114,7 @@ def test_simulation_refinement_stops_at_the_deadline():
     pts = prepare_tests(generate_bench_tests(spec))
     rig = Rig(spec.harvester)
     start = {**spec.friction.as_dict(), "nut_coulomb_N": 1.2 * spec.friction.nut_coulomb_N}
-    with deadline_set(1e-9):
+    with budget_set(None, 1e-9):
         time.sleep(0.01)
         po = polish(pts, rig, start, ["nut_coulomb_N"], max_iter=3)
     assert po.nfev == 1 and "time budget" in po.message and po.parameters == start

@@ -98,7 +98,9 @@ def test_heldout_verdict_is_widened_by_the_friction_uncertainty():
         assert all(np.all(w[0] >= 0) for w in widen)
         verdicts[name] = v = impact_verdict(pts, cur, pred, h, 3, widen)
         assert v["heldout_objective_after"] <= v["heldout_objective_after_unwidened"] + 1e-12
-    assert verdicts["truth"]["earns"]
+    from ehsa_opt.estimation.discrepancy.judge import impact_earns
+    v = verdicts["truth"]
+    assert impact_earns(v["heldout_objective_before"], v["heldout_objective_after"])
     assert verdicts["truth"]["heldout_objective_after"] < verdicts["soft"]["heldout_objective_after"]
 
 
@@ -106,7 +108,7 @@ def test_impact_fit_search_stops_at_the_runs_deadline():
     """Past the run's deadline the Nelder-Mead stage stops at once with the best grid
     point and says so (a budget that ends in a stated result)."""
     from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
-    from ehsa_opt.estimation.discrepancy.deadline import deadline_set
+    from ehsa_opt.estimation.discrepancy.budget import budget_set
     from ehsa_opt.estimation.discrepancy.impacts import fit_impacts
     from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
     from ehsa_opt.estimation.discrepancy.rig import Rig
@@ -116,7 +118,7 @@ def test_impact_fit_search_stops_at_the_runs_deadline():
     pts = prepare_tests(generate_bench_tests(spec), True)
     rig = Rig(spec.harvester, True, (make_component("backlash"),))
     start = {**make_component("backlash").defaults(), **spec.friction.as_dict()}
-    with deadline_set(1e-6):
+    with budget_set(None, 1e-6):
         res = fit_impacts(pts, rig, start)
     assert "deadline" in res.message and not res.success
     assert res.evaluations == 11  # the grid only (8 stiffnesses, 3 of them at a second damping)

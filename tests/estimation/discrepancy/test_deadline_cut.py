@@ -10,7 +10,7 @@ import numpy as np
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.discrepancy import CANDIDATES, Rig, predict, prepare_tests
 from ehsa_opt.estimation.discrepancy.candidate_fit import CUT_RECORD, not_fitted
-from ehsa_opt.estimation.discrepancy.deadline import (deadline_set, elapsed_s, note_cut,
+from ehsa_opt.estimation.discrepancy.budget import (budget_set, elapsed_s, note_cut,
                                                       recording_cuts, time_left_s)
 from ehsa_opt.estimation.discrepancy.evidence import force_noise_floor_percent
 from ehsa_opt.estimation.discrepancy.lookahead import (confounded, confounded_first,
@@ -48,7 +48,7 @@ def test_cut_records_are_collected_per_fit_and_the_clock_is_the_runs():
     assert [c["stage"] for c in inner] == ["screening of starts"]
     assert [c["simulations"] for c in outer] == [3, 1]
     assert math.isinf(time_left_s())
-    with deadline_set(100.0):
+    with budget_set(None, 100.0):
         assert 0.0 <= elapsed_s() < 5.0 and 95.0 < time_left_s() <= 100.0
 
 
@@ -105,7 +105,7 @@ def test_a_look_ahead_fit_cut_at_its_start_opens_and_completes_no_path():
     judge = dict(comps={"voltage_drop": CANDIDATES["voltage_drop"].component()},
                  fit_pts=fit_pts, held_pts=held_pts, floor=force_noise_floor_percent(held_pts),
                  say=said.append, masks=None)
-    with deadline_set(1e-9):
+    with budget_set(None, 1e-9):
         time.sleep(0.01)
         step = fit_on_top(blocked, second, judge, fit_pts, 50, 1, {}, cuts)
         assert step is not None and step.cut_at_deadline and not step.earns
@@ -125,7 +125,7 @@ def test_a_look_ahead_fit_cut_at_its_start_opens_and_completes_no_path():
 
 def test_no_member_fit_starts_after_the_deadline():
     from ehsa_opt.estimation.discrepancy.candidate_fit import fit_members
-    with deadline_set(1e-9):
+    with budget_set(None, 1e-9):
         time.sleep(0.01)
         # (the argument tuples are never opened: nothing is started)
         assert fit_members([("cogging",), ("backlash",)], 2, until_deadline=True) == []

@@ -108,7 +108,7 @@ def test_backlash_hidden_is_named_and_the_gap_shrinks(backlash_dir, tmp_path):
     out = tmp_path / "out"
     # correctness here, without a wall-time budget (the budget has its own test)
     assert main(["discrepancy", str(backlash_dir), "--out", str(out),
-                 "--budget-s", "0"]) == 0
+                 "--wall-cap-s", "0"]) == 0
     doc = json.loads((out / "discrepancy.json").read_text())
     assert doc["effect"] == "backlash"
     assert doc["evaluation"] == "held-out"
@@ -227,7 +227,7 @@ def test_split_friction_keeps_the_rod_equivalent_friction():
 
 # ------------------------------------------------------------------ the decision rule
 def test_decision_rule_needs_a_gain_beyond_the_noise_floor():
-    from ehsa_opt.estimation.discrepancy.evidence import earns, excess_reduction
+    from ehsa_opt.estimation.discrepancy.judge import earns, excess_reduction
     # 8.35 -> 8.33 % with a 1 % noise floor: 0.2 % of the excess, refused
     assert excess_reduction(8.35, 8.33, 1.0) < 0.01
     assert not earns(8.35, 8.33, 1.0, -10.0, -10.0)
@@ -244,7 +244,8 @@ def test_sse_alternative_tolerates_a_force_change_below_the_data_resolution():
     # a voltage-channel effect: SSE excess reduced 81 %, the force error (at the floor)
     # unchanged up to rounding (1.5910 -> 1.5913 %); 3000 held-out force samples resolve
     # floor/sqrt(2N) = 1.63/77.5 = 0.021 percentage points
-    from ehsa_opt.estimation.discrepancy.evidence import earns, force_resolution
+    from ehsa_opt.estimation.discrepancy.evidence import force_resolution
+    from ehsa_opt.estimation.discrepancy.judge import earns
     assert force_resolution(1.63, 3000) == pytest.approx(1.63 / math.sqrt(6000.0))
     assert force_resolution(1.63, None) == 0.0
     assert earns(1.5910, 1.5913, 1.63, -161.0, -307.0, 0.81, n_force=3000)
@@ -255,7 +256,7 @@ def test_sse_alternative_tolerates_a_force_change_below_the_data_resolution():
 
 def test_a_round_at_the_noise_floor_is_skipped_exactly():
     """can_earn is False only where earns() is False for every possible refit."""
-    from ehsa_opt.estimation.discrepancy.evidence import can_earn, earns
+    from ehsa_opt.estimation.discrepancy.judge import can_earn, earns
     rng = np.random.default_rng(0)
     floor, n = 1.0, 1000.0
     for err0, sse0 in [(1.02, 1.05 * n), (0.95, 1.2 * n), (1.04, 1.0 * n)]:
@@ -278,10 +279,9 @@ def test_sse_alternative_is_judged_per_channel():
     channel at its noise level (force) count as the SSE alternative."""
     from types import SimpleNamespace as NS
 
-    from ehsa_opt.estimation.discrepancy.evidence import (channel_sse,
-                                                         channel_sse_excess_reduction,
-                                                         sse_can_earn)
-    from ehsa_opt.estimation.discrepancy.evidence import earns
+    from ehsa_opt.estimation.discrepancy.evidence import channel_sse
+    from ehsa_opt.estimation.discrepancy.judge import channel_sse_excess_reduction, sse_can_earn
+    from ehsa_opt.estimation.discrepancy.judge import earns
     n = np.array([1000.0, 1000.0])
     # force at its noise level, voltage 1.4 x N: pooled, a force-only drop of 5 % of
     # the force SSE removed 12 % of the pooled excess and earned
@@ -312,8 +312,8 @@ def test_sse_alternative_is_judged_per_channel():
 def test_winner_is_the_lowest_heldout_dbic_and_small_gains_widen_the_round():
     from types import SimpleNamespace as NS
 
-    from ehsa_opt.estimation.discrepancy.evidence import choose_winner
-    from ehsa_opt.estimation.discrepancy.search import WIDEN_BELOW, should_widen
+    from ehsa_opt.estimation.discrepancy.judge import choose_winner
+    from ehsa_opt.estimation.discrepancy.widen import WIDEN_BELOW, should_widen
     from ehsa_opt.estimation.discrepancy.evidence import delta_bic
     n_eff, sse0 = 500.0, 5000.0
     # a gap of ~zero fits as well as the compliance it reduces to (nested, one

@@ -7,13 +7,9 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from ehsa_opt.estimation.discrepancy.evidence import (
-    block_excess_reductions,
-    disturbance_masks,
-    ljung_box,
-    own_evidence,
-)
-from ehsa_opt.estimation.discrepancy.evidence import excess_reduction
+from ehsa_opt.estimation.discrepancy.evidence import block_excess_reductions, disturbance_masks, ljung_box
+from ehsa_opt.estimation.discrepancy.judge import own_evidence
+from ehsa_opt.estimation.discrepancy.judge import excess_reduction
 
 
 def test_ljung_box_tells_white_from_coloured():
@@ -55,14 +51,14 @@ def test_a_dominant_effect_does_not_veto_a_real_second_one():
     floor = 100 * 0.5 * math.sqrt(pt.y.shape[1]) / np.linalg.norm(pt.y[0])
     assert excess_reduction(err(clean), err(clean + small), floor) < 0.10
     # ... but judged per block it removes most of the excess where it is seen
-    red = block_excess_reductions([pt], before, after, blocks=16)
+    red = block_excess_reductions([pt], before, after, None, 16, 0.09)
     ok, med, nb = own_evidence(red, 0.10)
     assert ok and med > 0.5 and nb == 16
     # a spurious effect (noise-sized, unrelated) is not accepted by the same test
     rng = np.random.default_rng(1)
     fake = clean + lfilter([1.0], [1.0, -0.99], rng.normal(0, 0.05, clean.size))
-    ok2, med2, _ = own_evidence(block_excess_reductions([pt], before, [fake[None, :]],
-                                                        blocks=16), 0.10)
+    ok2, med2, _ = own_evidence(block_excess_reductions([pt], before, [fake[None, :]], None,
+                                                        16, 0.09), 0.10)
     assert not ok2 and med2 < 0.10
 
 
@@ -145,7 +141,7 @@ def test_noise_floor_of_a_filtered_force_is_the_raw_noise_through_the_filter():
 
 
 def test_a_transmission_effect_is_refuted_by_a_worse_rotor_channel():
-    from ehsa_opt.estimation.discrepancy.evidence import refuted_by_rotor_channel
+    from ehsa_opt.estimation.discrepancy.judge import refuted_by_rotor_channel
     n_eff = 1500.0
     # the voltage explained better, unchanged, or worse within the member's charge: kept
     assert not refuted_by_rotor_channel(2100.0, 1700.0, 2, n_eff)

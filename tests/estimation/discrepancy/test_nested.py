@@ -46,7 +46,9 @@ def test_the_simpler_nested_member_is_added_when_the_richer_shows_no_evidence_mo
     alternative."""
     from types import SimpleNamespace as NS
 
-    from ehsa_opt.estimation.discrepancy.nested import NESTED_EVIDENCE, prefer_nested
+    from ehsa_opt.estimation.discrepancy.criterion import DEFAULT_CRITERION
+    from ehsa_opt.estimation.discrepancy.nested import prefer_nested
+    NESTED_EVIDENCE = DEFAULT_CRITERION.nested_evidence
 
     def cand(effect, dbic, earns=True):
         return NS(effect=effect, earns=earns, delta_bic_heldout=dbic, at_bound=[],

@@ -15,16 +15,8 @@ from ehsa_opt.estimation.discrepancy.channels import (
     channel_effective_samples,
     refuted_by_channel,
 )
-from ehsa_opt.estimation.discrepancy.evidence import (
-    channel_sse,
-    delta_bic,
-    earns_on_own_channel,
-    effective_samples,
-    force_error_percent,
-    force_noise_floor_percent,
-    judge_candidate,
-    normalised_sse,
-)
+from ehsa_opt.estimation.discrepancy.evidence import channel_sse, delta_bic, effective_samples, force_error_percent, force_noise_floor_percent, normalised_sse
+from ehsa_opt.estimation.discrepancy.judge import earns_on_own_channel, judge_candidate
 from ehsa_opt.estimation.discrepancy.prepared import PreparedTest
 from ehsa_opt.estimation.discrepancy.results import CandidateResult
 from ehsa_opt.physics import make_component

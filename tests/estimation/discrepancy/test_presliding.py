@@ -9,14 +9,8 @@ import numpy as np
 import pytest
 
 from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
-from ehsa_opt.estimation.discrepancy.evidence import (
-    channel_sse,
-    effective_samples,
-    force_error_percent,
-    force_noise_floor_percent,
-    judge_candidate,
-    normalised_sse,
-)
+from ehsa_opt.estimation.discrepancy.evidence import channel_sse, effective_samples, force_error_percent, force_noise_floor_percent, normalised_sse
+from ehsa_opt.estimation.discrepancy.judge import judge_candidate
 from ehsa_opt.estimation.discrepancy.presliding import (
     PRESLIDING_LENGTHS_M,
     adopt_presliding,

@@ -6,7 +6,7 @@ import time
 from ehsa_opt.datasets.bench_format import write_bench
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.discrepancy import DiscrepancySettings
-from ehsa_opt.estimation.discrepancy.deadline import deadline_set
+from ehsa_opt.estimation.discrepancy.budget import budget_set
 from ehsa_opt.estimation.discrepancy.search import (judge_context, judge_round, rank_round,
                                                     ranked_ahead, run_rounds)
 from ehsa_opt.estimation.discrepancy.workflow import (fit_baseline, load_data,
@@ -20,7 +20,7 @@ def _diode_campaign(tmp_path):
     write_bench(tmp_path / "diode", generate_bench_tests(spec), harvester=spec.harvester,
                 rig={"name": "diode", "has_generator": True})
     settings = DiscrepancySettings(candidates=("voltage_drop", "cogging"), max_effects=1,
-                                   jobs=1, budget_s=100.0)
+                                   jobs=1, wall_cap_s=100.0)
     say, notes = (lambda m: None), []
     tests = prepare_search_tests(load_data(tmp_path / "diode", say, notes), settings, say,
                                  notes)
@@ -33,7 +33,7 @@ def test_a_round_fitted_ahead_is_decided_on_those_fits_after_the_deadline(tmp_pa
     state = base.state(settings)
     rk = rank_round(tests, state, settings)
     assert "voltage_drop" in rk.chosen
-    judge = judge_context(1, tests, state, rk, said.append, [])
+    judge = judge_context(1, tests, state, rk, said.append, [], settings.criterion)
     judge_round(rk, ["voltage_drop"], tests, state, settings, judge, keep=True)
     assert rk.cands["voltage_drop"].earns and len(state.fitted) == 1
     state.ranking = (state.rig, list(state.remaining), rk)
@@ -45,7 +45,7 @@ def test_a_round_fitted_ahead_is_decided_on_those_fits_after_the_deadline(tmp_pa
     other.ranking = (other.rig, ["voltage_drop"], rk)
     assert ranked_ahead(other) is None
 
-    with deadline_set(1e-9):
+    with budget_set(None, 1e-9):
         time.sleep(0.01)
         # without fits made ahead, no round runs after the deadline: undecided
         bare = base.state(settings)

@@ -8,7 +8,7 @@ from types import SimpleNamespace as NS
 import pytest
 
 from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
-from ehsa_opt.estimation.discrepancy.evidence import at_bound
+from ehsa_opt.estimation.discrepancy.bounds import at_bound
 from ehsa_opt.physics import make_component
 
 
@@ -57,7 +57,7 @@ def test_zero_bounds_and_declared_limits_are_physical():
 
 
 def test_a_member_at_its_bound_does_not_earn():
-    from ehsa_opt.estimation.discrepancy.evidence import refuse_at_bound
+    from ehsa_opt.estimation.discrepancy.judge import refuse_at_bound
     from ehsa_opt.estimation.discrepancy.results import CandidateResult
     said = []
     c = CandidateResult("compliance", True, 0.4, 10.0)
@@ -138,7 +138,7 @@ def test_family_probes_are_combined_with_non_negative_weights():
 
 
 def test_the_winner_is_chosen_on_its_own_channel_among_physical_members():
-    from ehsa_opt.estimation.discrepancy.evidence import choose_winner
+    from ehsa_opt.estimation.discrepancy.judge import choose_winner
     # the diode campaign: the drop removes the voltage excess; a compliance trading the
     # force's presliding misfit for the voltage has the lower all-channel ΔBIC
     drop = NS(effect="voltage_drop", delta_bic_heldout=-900.0, sse_heldout=50.0, at_bound=[],

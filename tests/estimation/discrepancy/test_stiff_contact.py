@@ -119,7 +119,7 @@ def test_discrepancy_names_a_stiff_backlash(stiffness, tmp_path):
     # no wall-clock budget: the outcome must not depend on how loaded the test machine is
     # (the default 170 s budget cut both cases before the backlash fit on a machine loaded
     # 3x over its cores; the per-case time is measured by the benchmarks, not here)
-    main(["discrepancy", str(data), "--out", str(out), "--budget-s", "0"])
+    main(["discrepancy", str(data), "--out", str(out), "--wall-cap-s", "0"])
     doc = json.loads((out / "discrepancy.json").read_text())
     assert doc["effect"] == "backlash"
     win = next(c for c in doc["candidates"] if c["effect"] == "backlash")

@@ -27,7 +27,8 @@ from ..rig import Rig, predict
 from ..localise import best_rotor_period, stroke_window
 from ..impact_features import impact_energy_ratio
 from ..impacts import IMPACT_ENERGY_RATIO
-from ..evidence import at_bound
+from ..bounds import at_bound
+from ..criterion import DEFAULT_POLICY
 
 __all__ = ["Candidate", "CANDIDATES", "candidate_names", "signature_scores", "components_for",
            "absorbed_columns", "compatible", "rank_value", "nnls_weights", "channel_parts",
@@ -79,7 +80,7 @@ class Candidate:
         changes the force only through the current, which the baseline's friction and
         damping largely absorb, while the voltage shows it directly.  Such a member
         earns on these channels whatever the force's excess
-        (:func:`~ehsa_opt.estimation.discrepancy.evidence.earns_on_own_channel`), the
+        (:func:`~ehsa_opt.estimation.discrepancy.judge.earns_on_own_channel`), the
         force kept.  None: the force decides where its excess dominates.
     amplitudes : tuple of str
         Effect parameters that are all zero when the effect is absent (its size):
@@ -112,7 +113,7 @@ class Candidate:
         with no gap is a compliance: the same series spring and damper).  When this
         member earns, those are re-identified in the same round too, whatever their
         rank, so that the choice between them
-        (:func:`~ehsa_opt.estimation.discrepancy.evidence.choose_winner`) is made on
+        (:func:`~ehsa_opt.estimation.discrepancy.judge.choose_winner`) is made on
         fits, not on a linearised signature.
     """
 
@@ -379,19 +380,19 @@ def channel_parts(r: np.ndarray, fitted: np.ndarray, S: np.ndarray, chan: np.nda
 #: A channel other than the force ranks a candidate by the share of its residual the
 #: candidate explains when its residual exceeds the noise expectation by this share
 #: (SSE/N − 1; the decision rule's all-channel alternative uses the same threshold).
-CHANNEL_EXCESS_MIN = 0.25
+CHANNEL_EXCESS_MIN = DEFAULT_POLICY.channel_excess_min
 
 
 #: A member whose :func:`rank_value` is below this is not re-identified: its signature
 #: explains under 2 % of the residual energy of the channel it is ranked on, i.e. it
 #: would remove about 1 % of the error's excess — a tenth of what it must remove to
 #: earn (the decision rule's 10 %).
-MIN_RANK_VALUE = 0.02
+MIN_RANK_VALUE = DEFAULT_POLICY.min_rank_value
 
 
 #: A transmission member whose fitted signature makes the voltage residual's energy grow
 #: by more than this share is ranked behind every other member (:func:`rank_value`).
-ROTOR_WORSE_SHARE = 0.05
+ROTOR_WORSE_SHARE = DEFAULT_POLICY.rotor_worse_share
 
 
 def rank_value(sc: dict) -> float:

@@ -39,14 +39,8 @@ from scipy.optimize import minimize, minimize_scalar
 from scipy.signal import bilinear, lfilter, lfilter_zi
 
 from ...covariance import hac_covariance
-from ..evidence import (
-    delta_bic,
-    earns,
-    excess_reduction,
-    force_error_percent,
-    force_noise_floor_percent,
-    normalised_sse,
-)
+from ..evidence import delta_bic, force_error_percent, force_noise_floor_percent, normalised_sse
+from ..judge import excess_reduction, judge_change
 from ..fit import fit_group
 from ..prepared import PreparedTest, prepare_tests
 from ..rig import Rig, predict
@@ -368,18 +362,17 @@ def try_drive_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_ef
     cv = blocked_cross_validation(held_pts, held_pred, rig, base.parameters, DELAY_S) \
         if held_pts else []
     resolved = iv[0] > 0
-    ok = earns(e_before, e_after, floor, d_fit, d_held) and resolved
     # the candidate's fit record: the rigid refit on the applied force, with the
     # covariance facts of the lag's own (variable-projection) interval
     rec = _replace(b2, covariance_info=out["covariance_info"])
     c = dict(effect="drive_lag", applicable=True, score=math.nan, chi2=math.nan, round=1,
              fitted=True, fit=rec, error_before=e_before, error_after=e_after,
-             excess_reduction=excess_reduction(e_before, e_after, floor), delta_bic_fit=d_fit,
-             delta_bic_heldout=d_held, sse_heldout=normalised_sse(ev, pe), resolved=resolved,
-             earns=ok, earns_by="total excess" if ok else "",
-             parameters=dict(p),
+             excess_reduction=excess_reduction(e_before, e_after, floor, settings.criterion),
+             delta_bic_fit=d_fit, delta_bic_heldout=d_held, sse_heldout=normalised_sse(ev, pe),
+             resolved=resolved, parameters=dict(p),
              intervals={k: v for k, v in out["intervals"].items()},
              predictions=pf + ph, rig=rig)
+    ok = judge_change(c, e_before, e_after, floor, d_fit, d_held, settings.criterion, resolved)
     it = out["intervals"]["drive_lag_time_constant_s"]
     say(f"drive_lag: time constant {1e3 * tau:.3f} ms [{1e3 * it[0]:.3f}, {1e3 * it[1]:.3f}] "
         f"(bandwidth {p['drive_bandwidth_hz']:.0f} Hz)"

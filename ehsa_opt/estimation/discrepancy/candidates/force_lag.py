@@ -4,7 +4,7 @@ A delay of the force channel relative to the displacement is not a component of
 the bench model (it acts on the record, not on the physics): the delay τ is found
 by a time-shift search on the baseline residual (:func:`~ehsa_opt.estimation.discrepancy.terms.shift_lag`), the
 measured force is re-aligned by it (F(t + τ), the ends cropped) and the baseline is
-refitted; the delay is named when it earns by the decision rule (:func:`~ehsa_opt.estimation.discrepancy.evidence.earns`),
+refitted; the delay is named when it earns by the decision rule (:func:`~ehsa_opt.estimation.discrepancy.judge.earns`),
 compared on the re-aligned held-out tests against the baseline on the same samples.
 
 Two checks before the refits (each refit is a collocation fit of the baseline, tens of
@@ -15,7 +15,7 @@ inside the searched delays (not at the edge of
 shift the search does not locate — an impact-ridden residual, not a record's delay), and
 the baseline's own force moved by it, *without* a refit, must already remove
 :data:`SCREEN_SHARE` of the share of the evaluation error's excess that earning asks for
-(:data:`~ehsa_opt.estimation.discrepancy.evidence.MIN_EXCESS_REDUCTION`).  A delay of the
+(the criterion's ``min_excess_reduction``).  A delay of the
 record is what the shift itself undoes; the refit only re-balances the friction on the
 re-aligned samples.
 """
@@ -28,35 +28,31 @@ from typing import Sequence
 
 import numpy as np
 
-from ..evidence import (
-    MIN_EXCESS_REDUCTION,
-    delta_bic,
-    earns,
-    excess_reduction,
-    force_error_percent,
-    normalised_sse,
-)
+from ..criterion import DEFAULT_CRITERION, DEFAULT_POLICY, Criterion
+from ..evidence import delta_bic, force_error_percent, normalised_sse
+from ..judge import excess_reduction, judge_change
 from ..fit import fit_group
 from ..prepared import PreparedTest, decimated, prepare_tests
 from ..rig import predict
-from ..terms import DELAY_SPREAD_BIC, LAG_GRID_S, per_test_delays, shifted_force, shift_lag
+from ..terms import LAG_GRID_S, per_test_delays, shifted_force, shift_lag
 
 __all__ = ["try_lag", "per_test_delays", "screen_lag", "SCREEN_SHARE"]
 
-#: The shift alone (no refit) must remove this share of
-#: :data:`~ehsa_opt.estimation.discrepancy.evidence.MIN_EXCESS_REDUCTION` of the evaluation
+#: The shift alone (no refit) must remove this share of the criterion's
+#: ``min_excess_reduction`` of the evaluation
 #: error's excess over the noise floor before the baseline is refitted on the re-aligned
 #: record (a margin of two for what the refit adds).
-SCREEN_SHARE = 0.5
+SCREEN_SHARE = DEFAULT_POLICY.lag_screen_share
 
 
-def screen_lag(tau: float, eval_pts, eval_pred, floor: float) -> tuple[float, float, float]:
+def screen_lag(tau: float, eval_pts, eval_pred, floor: float,
+               criterion: Criterion = DEFAULT_CRITERION) -> tuple[float, float, float]:
     """The evaluation force error (%) of the baseline as it is and with its force moved
     by ``tau`` (no refit), and the share of the excess over ``floor`` the move removes."""
     e0 = force_error_percent(eval_pts, eval_pred)
     moved = [np.atleast_2d(shifted_force(pt, yp, tau)) for pt, yp in zip(eval_pts, eval_pred)]
     e1 = force_error_percent(eval_pts, moved)
-    return e0, e1, excess_reduction(e0, e1, floor)
+    return e0, e1, excess_reduction(e0, e1, floor, criterion)
 
 
 def _lag_tests(pts: Sequence[PreparedTest], tau: float, has_generator: bool
@@ -86,11 +82,12 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
     lag = shift_lag(fit_pts, fit_pred)
     if lag is None:
         return None
+    crit = settings.criterion
     spread_bic = per_test_delays(fit_pts, fit_pred, n_eff_fit)
-    if spread_bic < DELAY_SPREAD_BIC:
+    if spread_bic < crit.delay_spread_bic:
         say(f"force_lag: not a channel delay — the best delay differs from test to test "
             f"(per-test delays against one delay: ΔBIC {spread_bic:.3g} < "
-            f"{DELAY_SPREAD_BIC:g}): the force's "
+            f"{crit.delay_spread_bic:g}): the force's "
             f"lead depends on the motion, which a delay of the record does not")
         return None
     tau = lag[0]
@@ -100,12 +97,12 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
             f"the residual is not a delay of the record the search locates")
         return None
     ev_pts, ev_pred = (held_pts, held_pred) if held_pts else (fit_pts, fit_pred)
-    e0, e1, share = screen_lag(tau, ev_pts, ev_pred, floor)
-    if share < SCREEN_SHARE * MIN_EXCESS_REDUCTION:
+    e0, e1, share = screen_lag(tau, ev_pts, ev_pred, floor, crit)
+    if share < SCREEN_SHARE * crit.min_excess_reduction:
         say(f"force_lag: not tried — the baseline's force moved by {1e3 * tau:.2f} ms "
             f"(no refit) removes {100 * share:.1f} % of the error's excess ({e0:.3f} -> "
-            f"{e1:.3f} %), less than {100 * SCREEN_SHARE * MIN_EXCESS_REDUCTION:g} % "
-            f"({SCREEN_SHARE:g} × the {100 * MIN_EXCESS_REDUCTION:g} % earning asks for)")
+            f"{e1:.3f} %), less than {100 * SCREEN_SHARE * crit.min_excess_reduction:g} % "
+            f"({SCREEN_SHARE:g} × the {100 * crit.min_excess_reduction:g} % earning asks for)")
         return None
     for it in range(2):  # re-estimate once on the re-aligned baseline
         f2 = _lag_tests(fit_pts, tau, rig.has_generator)
@@ -134,10 +131,10 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
     d_held = delta_bic(normalised_sse(ev, pe), normalised_sse(ev0, pe0), 1, n_eff_held if h2 else n_eff_fit)
     c = dict(effect="force_lag", applicable=True, score=math.nan, chi2=math.nan, round=1,
              fitted=True, fit=b2, error_before=e_before, error_after=e_after,
-             excess_reduction=excess_reduction(e_before, e_after, floor), delta_bic_fit=d_fit,
-             delta_bic_heldout=d_held, sse_heldout=normalised_sse(ev, pe),
-             earns=earns(e_before, e_after, floor, d_fit, d_held),
+             excess_reduction=excess_reduction(e_before, e_after, floor, crit),
+             delta_bic_fit=d_fit, delta_bic_heldout=d_held, sse_heldout=normalised_sse(ev, pe),
              parameters={"force_lag_s": tau}, predictions=pf + ph, rig=rig)
+    judge_change(c, e_before, e_after, floor, d_fit, d_held, crit)
     say(f"force_lag: {1e3 * tau:.2f} ms, error {e_before:.3f} -> {e_after:.3f} % "
         f"({'earns' if c['earns'] else 'does not earn'})")
     if not c["earns"]:

@@ -1,0 +1,401 @@
+"""The verdicts of the discrepancy search, by one :class:`~.criterion.Criterion`: the only
+module that decides whether a model change *earns* (and writes it).
+
+* the rule: :func:`excess_reduction` (the share of the error above the noise floor a
+  change removes), :func:`earns` (that share reaches ``criterion.min_excess_reduction``
+  and ΔBIC < ``criterion.dbic_max`` on the fit and the evaluation tests; for an effect
+  seen in another channel, the same share of that channel's SSE excess), its routes
+  :func:`earns_on_own_channel` (a generator member on the voltage) and
+  :func:`own_evidence` (the median per-block excess reduction), and :func:`can_earn`
+  (whether any refit could earn from a state);
+* the verdict of one re-identified member, :func:`judge_candidate`, of an impact-fitted
+  contact (:func:`judge_on_impacts`), of a channel member or term
+  (:func:`judge_change`), and the withdrawals (:func:`withdraw`: at a bound, refuted by
+  the rotor's channel, not fitted, a rival);
+* the choice among earning members, :func:`choose_winner`.
+
+Every verdict is written by :func:`record_verdict`; no other module sets ``earns``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..identify_result import force_relative_error_percent
+from .bounds import at_bound_names, unconstrained_step
+from .channels import channel_delta_bic, channel_effective_samples, channel_sse, refuted_by_channel
+from .criterion import DEFAULT_CRITERION, Criterion
+from .evidence import (acts_on_generator, block_excess_reductions, delta_bic,
+                       force_error_percent, force_resolution, normalised_sse, significant)
+from .impact_verdict import impact_record, impact_verdict_record
+
+__all__ = ["excess_reduction", "earns", "earns_on_own_channel", "can_earn",
+           "channel_sse_excess_reduction", "sse_can_earn", "own_channel_dbic", "choose_winner",
+           "own_evidence", "refuted_by_rotor_channel", "judge_candidate", "judge_on_impacts",
+           "judge_change", "record_verdict", "withdraw", "impact_earns", "refuse_at_bound"]
+
+
+def record_verdict(obj: Any, earns: bool, by: str = "") -> bool:
+    """Write the verdict on ``obj`` (a :class:`~.results.CandidateResult`, a term, a
+    friction-law proposal, or the field dict a channel member builds its result from):
+    ``earns`` and, where it has one, ``earns_by`` (the route it earned by, "" when it
+    does not).  Returns the verdict."""
+    ok = bool(earns)
+    if isinstance(obj, dict):
+        obj["earns"], obj["earns_by"] = ok, (by if ok else "")
+        return ok
+    obj.earns = ok
+    if hasattr(obj, "earns_by"):
+        obj.earns_by = by if ok else ""
+    return ok
+
+
+def withdraw(c: Any, why: str, say: Any = None) -> None:
+    """Withdraw the verdict of ``c`` (it does not earn) and say why."""
+    record_verdict(c, False)
+    if say is not None and why:
+        say(why)
+
+
+def judge_change(obj: Any, err_before: float, err_after: float, floor: float,
+                 dbic_fit: float, dbic_heldout: float, criterion: Criterion = DEFAULT_CRITERION,
+                 resolved: bool = True, by: str = "total excess") -> bool:
+    """The verdict of a model change that is not a catalogue member's refit (a channel
+    member such as a delay of the force record or the drive's lag, the data-driven
+    term, a friction-law transition) by :func:`earns` on the force, written on ``obj``;
+    ``resolved``: its size is resolved (:func:`~.evidence.significant`)."""
+    ok = earns(err_before, err_after, floor, dbic_fit, dbic_heldout, criterion=criterion)
+    return record_verdict(obj, ok and resolved, by)
+
+
+def excess_reduction(err_before: float, err_after: float, floor: float,
+                     criterion: Criterion = DEFAULT_CRITERION) -> float:
+    """Share of the error above the noise floor removed:
+    1 − √(e₁² − e_n²)/√(e₀² − e_n²) (negative when the error grows)."""
+    ex0 = math.sqrt(max(err_before ** 2 - floor ** 2, 0.0))
+    ex1 = math.sqrt(max(err_after ** 2 - floor ** 2, 0.0))
+    if ex0 <= criterion.min_excess_over_floor * floor:  # nothing beyond noise left to explain
+        return 0.0 if err_after <= err_before else -math.inf
+    if err_after > err_before:
+        return -(err_after - err_before) / ex0
+    return 1.0 - ex1 / ex0
+
+
+def earns(err_before: float, err_after: float, floor: float, dbic_fit: float,
+          dbic_heldout: float, sse_excess_reduction: float | None = None,
+          n_force: int | None = None, criterion: Criterion = DEFAULT_CRITERION) -> bool:
+    """The decision rule: the held-out force error does not grow and falls by at least
+    ``criterion.min_excess_reduction`` of its excess over the noise floor — or, for an
+    effect seen mainly in another channel (voltage), the held-out SSE of all
+    noise-normalised channels falls by that share of its excess over noise
+    (``sse_excess_reduction`` = 1 − (SSE₁ − N)/(SSE₀ − N)) while the force error does
+    not grow by more than the data resolve (:func:`force_resolution` of the ``n_force``
+    held-out force samples: a voltage drop can leave the force error unchanged up to
+    rounding) — and ΔBIC < 0 on the fit tests and on the held-out tests (beyond what
+    noise explains)."""
+    gain = excess_reduction(err_before, err_after, floor, criterion)
+    if (sse_excess_reduction is not None
+            and err_after <= err_before + force_resolution(floor, n_force)):
+        gain = max(gain, sse_excess_reduction)
+    return gain >= criterion.min_excess_reduction and dbic_fit < criterion.dbic_max and dbic_heldout < criterion.dbic_max
+
+
+def earns_on_own_channel(own_reduction: float | None, dbic_fit: float, dbic_heldout: float,
+                         force_kept: bool, criterion: Criterion = DEFAULT_CRITERION) -> bool:
+    """The decision rule for a member whose own channel is not the force (a generator
+    effect, seen in the voltage: :attr:`~.candidates.Candidate.own_channels`), whatever
+    the force's excess over its noise floor.
+
+    Earns when the held-out SSE of its own channel(s) falls by at least
+    ``criterion.min_excess_reduction`` of its excess over noise (``own_reduction``,
+    :func:`channel_sse_excess_reduction` on those channels; None when no own channel
+    has an excess, and then it does not earn here), ΔBIC < 0 on the fit tests and on
+    the held-out tests (the held-out one with a variance per channel,
+    :func:`channel_delta_bic`), and the force is kept (``force_kept``: its held-out
+    error grows by no more than :func:`force_resolution`, or its SSE by no more than
+    the member's parameters are charged, :func:`refuted_by_channel`).
+
+    The force's excess does not close this route: where the force carries a misfit no
+    member describes (presliding friction, 13 % against a 0.6 % floor), a flux
+    saturation that removed 78 % of the voltage's excess was otherwise judged by the
+    force alone and not named.  Ranking and the winner already use the member's own
+    channel (:func:`choose_winner`)."""
+    return (own_reduction is not None and own_reduction >= criterion.min_excess_reduction
+            and dbic_fit < criterion.dbic_max and dbic_heldout < criterion.dbic_max and bool(force_kept))
+
+
+def can_earn(err_before: float, floor: float, sse_before: float, n_obs: float,
+             criterion: Criterion = DEFAULT_CRITERION) -> bool:
+    """Whether *any* refit could earn by :func:`earns` from this state — False when
+    the force error's excess over the noise floor is within
+    ``criterion.min_excess_over_floor`` of the floor (no force gain is possible) and the
+    all-channel SSE is within ``criterion.min_sse_excess`` of its noise expectation N (the
+    SSE alternative is not offered).  Exact: a round started from such a state
+    cannot name anything, so it is not run."""
+    ex0 = math.sqrt(max(err_before ** 2 - floor ** 2, 0.0))
+    return ex0 > criterion.min_excess_over_floor * floor or sse_before > (1 + criterion.min_sse_excess) * n_obs
+
+
+def channel_sse_excess_reduction(sse_before: np.ndarray, sse_after: np.ndarray,
+                                 n: np.ndarray, criterion: Criterion = DEFAULT_CRITERION) -> float | None:
+    """The SSE alternative of the decision rule, per channel.
+
+    For each channel whose SSE before exceeds its noise expectation by more than
+    ``criterion.min_sse_excess`` (a share of N), the share of that excess removed,
+    1 − (SSE₁ − N)/(SSE₀ − N); the largest of these, or None when no channel has such
+    an excess.  Judged per channel because the alternative is for effects seen mainly
+    in another channel than the force: pooled with the force, a channel's small
+    leftover excess (e.g. of a fitted heating's voltage) let a second effect earn by
+    removing force noise (a cogging named at a force error 0.57 → 0.56 % with the
+    noise floor at 0.57 %).
+
+    Parameters
+    ----------
+    sse_before, sse_after : ndarray, shape (ny,)
+        Per-channel noise-normalised SSE (dimensionless) of the current model and of
+        the candidate on the same tests (:func:`channel_sse`).
+    n : ndarray, shape (ny,)
+        Samples per channel.
+    """
+    best = None
+    for s0, s1, nc in zip(sse_before, sse_after, n):
+        if nc > 0 and s0 > (1 + criterion.min_sse_excess) * nc:
+            red = 1.0 - (s1 - nc) / (s0 - nc)
+            best = red if best is None else max(best, red)
+    return best
+
+
+def sse_can_earn(sse_before: np.ndarray, n: np.ndarray, criterion: Criterion = DEFAULT_CRITERION) -> bool:
+    """Whether the SSE alternative is offered at all (some channel's excess over its
+    noise expectation exceeds ``criterion.min_sse_excess``)."""
+    return bool(np.any((n > 0) & (sse_before > (1 + criterion.min_sse_excess) * n)))
+
+
+def own_channel_dbic(c: Any) -> float:
+    """The candidate's held-out ΔBIC on its own channel (``c.channel_dbic`` at
+    ``c.own_channel``), NaN when either is unknown."""
+    ch, d = getattr(c, "own_channel", None), getattr(c, "channel_dbic", None)
+    if ch is None or not d or ch >= len(d):
+        return math.nan
+    return float(d[ch])
+
+
+def choose_winner(earning: Sequence[Any]) -> Any:
+    """The earning candidate to add: the lowest held-out ΔBIC.
+
+    ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff with the same N_eff and SSE_old for
+    every candidate of the round, so this is the largest held-out SSE drop net of a
+    ln N_eff penalty per effect parameter.  Between nested effects that fit equally
+    well — a backlash whose gap tends to zero *is* a compliance (3 vs 2 parameters) —
+    the simpler one is chosen; a compliance of 3e6 N/m had been answered ``backlash``
+    by the raw SSE (held-out error 0.925 % for both).  Ties (equal ΔBIC) fall back
+    to the lower held-out SSE.
+
+    Parameters
+    ----------
+    earning : sequence of CandidateResult
+        Candidates of the round that earn (``delta_bic_heldout`` and ``sse_heldout``
+        set).
+    """
+    if not earning:
+        raise ValueError("choose_winner: no earning candidate")
+    physical = [c for c in earning if not getattr(c, "at_bound", ())] or list(earning)
+    own = [own_channel_dbic(c) for c in physical]
+    if len(physical) > 1 and all(map(math.isfinite, own)):
+        # each on the channel that sees it best: the all-channel ΔBIC let a mount
+        # compliance that trades the force's presliding misfit for the voltage win over
+        # the diode drop that removed 96 % of the voltage excess
+        return min(zip(own, physical), key=lambda t: (t[0], t[1].delta_bic_heldout,
+                                                      t[1].sse_heldout))[1]
+    return min(physical, key=lambda c: (c.delta_bic_heldout, c.sse_heldout))
+
+
+def own_evidence(reductions: np.ndarray, min_reduction: float) -> tuple[bool, float, int]:
+    """The practical size on the effect's own evidence: the median over blocks with an
+    excess of :func:`block_excess_reductions` reaches ``min_reduction``.  Returns
+    (passes, median, blocks judged)."""
+    r = np.asarray(reductions, float)
+    r = r[np.isfinite(r)]
+    if r.size < 3:
+        return False, math.nan, int(r.size)
+    med = float(np.median(r))
+    return bool(med >= min_reduction), med, int(r.size)
+
+
+def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff: float
+                             ) -> bool:
+    """Whether a transmission effect is refuted by the channel that measures the rotor.
+
+    A transmission effect (a gap, a mount spring) lets the rotor move otherwise than
+    the rod; the generator's voltage measures the rotor's speed.  Such an effect present
+    in the rig explains the voltage too; a refit that trades the voltage for the force
+    is another force law in disguise (friction presliding fitted as a mount spring: the
+    force misfit at reversals falls, the model's rotor then lags a rotor that does not).
+    Refuted when the held-out voltage SSE grows by more than the evidence the member's
+    ``k`` parameters are charged: N_eff ln(SSE_after/SSE_before) > k ln N_eff
+    (:func:`refuted_by_channel`)."""
+    return refuted_by_channel(sse_before, sse_after, k, n_eff)
+
+
+def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse_fit,
+                    sse_held,
+                    n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say,
+                    cur_ev_pred=None, masks=None, presliding=None,
+                    criterion: Criterion = DEFAULT_CRITERION) -> None:
+    """Fill the :class:`~.results.CandidateResult` ``c`` from one re-identification
+    ``out`` (``(name, FitResult, fit outputs, held-out outputs, rig)``,
+    :func:`~.candidate_fit.fit_member`) and judge it by :func:`earns` (force error,
+    ΔBIC on the fit and held-out tests, SSE alternative per channel,
+    :func:`channel_sse_excess_reduction`) or by its own evidence per block.
+    ``member`` is the catalogue entry (:class:`~.candidates.Candidate`: the channels
+    a rigid-rig effect can change, its amplitudes).  ``presliding``: the base model's
+    presliding law (:class:`~.presliding.PreslidingLaw`); when adopted, the candidate's
+    predictions get their own presliding term before anything here measures them
+    (the current model's measures were taken on its corrected predictions).  Every
+    threshold is ``criterion``'s."""
+    name, res, pf, ph, crig = out
+    c.fitted, c.fit, c.rig = True, res, crig
+    if not pf:
+        say(f"{name}: re-identification failed ({res.message})")
+        return
+    if presliding is not None:
+        pf, ph = presliding.correct(fit_pts, pf, held_pts, ph)
+    comp_params = [q.name for q in comps[name].parameters]
+    k = len(comp_params)
+    c.parameters = {n: res.parameters[n] for n in comp_params}
+    c.intervals = {n: res.interval(n) for n in c.parameters}
+    c.delta_bic_fit = delta_bic(normalised_sse(fit_pts, pf), sse_fit, k, n_eff_fit)
+    ev_pts, ev_pred = (held_pts, ph) if held_pts else (fit_pts, pf)
+    c.sse_heldout = normalised_sse(ev_pts, ev_pred)
+    c.delta_bic_heldout = (delta_bic(c.sse_heldout, sse_held, k, n_eff_held) if held_pts
+                           else c.delta_bic_fit)
+    c.error_after = force_error_percent(ev_pts, ev_pred)
+    c.excess_reduction = excess_reduction(cur_err, c.error_after, floor, criterion)
+    ch = member.rigid_channels if member is not None else None
+    if ch is None or any(q.transmission for q in crig.components):
+        ch = tuple(range(len(ch_n)))
+    ch = [k for k in ch if k < len(ch_n)]
+    ch_sse1 = channel_sse(ev_pts, ev_pred)[0]
+    c.sse_reduction = channel_sse_excess_reduction(ch_sse0[ch], ch_sse1[ch], ch_n[ch], criterion)
+    c.resolved = significant(c.intervals, member.amplitudes)
+    c.channel_dbic = [delta_bic(s1, s0, k, n_eff_held if held_pts else n_eff_fit)
+                      for s0, s1 in zip(ch_sse0, ch_sse1)]
+    # the SSE (other-channel) route is for effects seen mainly in another channel: it is
+    # offered where the force error has no excess beyond noise left, or where another
+    # channel's excess over its noise expectation (SSE/N − 1) exceeds the force's;
+    # where the force's excess dominates (a gap at 11 %), the force decides
+    exc = [s0 / n0 - 1.0 if n0 > 0 else -math.inf for s0, n0 in zip(ch_sse0, ch_n)]
+    c.sse_route = (not can_earn(cur_err, floor, 0.0, 1.0, criterion)
+                   or (len(exc) > 1 and max(exc[1:]) > exc[0]))
+    n_force = sum(pt.y.shape[1] for pt in ev_pts)
+    by_total = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
+                          c.sse_reduction if c.sse_route else None, n_force=n_force,
+                          criterion=criterion))
+    # a generator effect earns on its own channel (the voltage) whatever the force's
+    # excess: the held-out ΔBIC with a variance per channel, the force kept
+    by_channel, own_txt = False, ""
+    own_ch = [q for q in (getattr(member, "own_channels", None) or ()) if q < len(ch_n)]
+    if own_ch and len(ch_n) > 1 and not by_total and not any(
+            acts_on_generator(q) for q in list(getattr(crig, "components", ()))[:-1]):
+        neff = channel_effective_samples(
+            ev_pts, cur_ev_pred if cur_ev_pred is not None else ev_pred)
+        own_red = channel_sse_excess_reduction(ch_sse0[own_ch], ch_sse1[own_ch], ch_n[own_ch],
+                                               criterion)
+        dbic_ch = channel_delta_bic(ch_sse0, ch_sse1, neff, k)
+        force_kept = (c.error_after <= cur_err + force_resolution(floor, n_force)
+                      or not refuted_by_channel(ch_sse0[0], ch_sse1[0], k, neff[0]))
+        by_channel = earns_on_own_channel(own_red, c.delta_bic_fit, dbic_ch, force_kept,
+                                          criterion)
+        own_txt = (f", own channel{'s' if len(own_ch) > 1 else ''} "
+                   f"{','.join(map(str, own_ch))}: SSE excess reduced "
+                   + (f"{100 * own_red:.0f} %" if own_red is not None else "n/a")
+                   + f", held-out dBIC per channel {dbic_ch:.1f}, force "
+                   + ("kept" if force_kept else "refuted"))
+    # the effect's own evidence: the same likelihood evidence, and its practical size
+    # judged per block of the held-out records (documented disturbances masked), so
+    # that an effect another one dominates in a few blocks is not vetoed
+    by_own = False
+    if cur_ev_pred is not None:
+        red = block_excess_reductions(ev_pts, cur_ev_pred, ev_pred,
+                                      masks if held_pts else None, criterion.blocks_per_test,
+                                      criterion.min_excess_over_floor ** 2)
+        by_own, c.block_reduction, c.blocks_judged = own_evidence(
+            red, criterion.min_excess_reduction)
+        by_own = (by_own and c.delta_bic_fit < criterion.dbic_max
+                  and c.delta_bic_heldout < criterion.dbic_max and c.error_after <= cur_err)
+    record_verdict(c, (by_total or by_channel or by_own) and c.resolved,
+                   "total excess" if by_total else "own channel" if by_channel
+                   else "own evidence")
+    if (c.earns and impact_record(res) is None and comps[name].transmission
+            and len(ch_n) > 1 and refuted_by_rotor_channel(
+                ch_sse0[1], ch_sse1[1], k, n_eff_held if held_pts else n_eff_fit)):
+        withdraw(c, f"{name}: refuted by the voltage (the rotor's speed): its held-out voltage "
+                    f"SSE grows {ch_sse0[1] / ch_n[1]:.3g} -> {ch_sse1[1] / ch_n[1]:.3g} per "
+                    f"sample", say)
+    if impact_record(res) is not None and cur_ev_pred is not None:
+        judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say, criterion)
+        c.channel_dbic = []  # judged on impacts: its sample-wise channels are not evidence
+    # a bound counts where it is active: the unconstrained step from the fit crosses it
+    step = (None if impact_record(res) is not None or not hasattr(crig, "model") else
+            (lambda: unconstrained_step(fit_pts, crig, res.parameters, comp_params)))
+    refuse_at_bound(c, comps[name].parameters, member, say, step, criterion)
+    c.predictions = pf + ph
+    c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
+                        for y, pt in zip(c.predictions, fit_pts + held_pts)]
+    pars = ", ".join(f"{n} {v:.3g}" + (f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv else "")
+                     for (n, v), iv in zip(c.parameters.items(), c.intervals.values()))
+    sse_txt = f", SSE excess reduced {100 * c.sse_reduction:.0f} %" \
+        if c.sse_reduction is not None else ""
+    blk = (f", median block excess reduced {100 * c.block_reduction:.0f} % over "
+           f"{c.blocks_judged} blocks" if math.isfinite(c.block_reduction) else "")
+    say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
+        f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
+        f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}{blk}{own_txt}; "
+        f"{res.seconds:.1f} s)"
+        f"{' EARNS (' + c.earns_by + ')' if c.earns else ''}"
+        f"{' AT BOUND' if c.at_bound else ''}; {pars}")
+
+
+def judge_on_impacts(c: Any, res: Any, ev_pts, cur_pred, cand_pred, crig: Any, say,
+                     criterion: Criterion = DEFAULT_CRITERION) -> None:
+    """The verdict of the impact-fitted contact ``c`` (its fit ``res`` from the
+    impact-aware search): judged on the evaluation tests' transient energies and
+    kinematic gaps (:func:`~.impact_verdict.impact_verdict_record`): earns when its
+    held-out feature objective is at most ``criterion.impact_earn_objective`` and at most
+    ``criterion.impact_earn_share`` of the current model's, and its size is resolved."""
+    rec = impact_verdict_record(c, res, ev_pts, cur_pred, cand_pred, crig, say)
+    before, after = rec["heldout_objective_before"], rec["heldout_objective_after"]
+    ok = impact_earns(before, after, criterion)
+    rec["earns"] = ok
+    record_verdict(c, ok and c.resolved, "transient energies and kinematic gaps")
+    if c.earns:
+        say(f"{c.effect}: EARNS on transient energies and kinematic gaps (held-out feature "
+            f"objective {after:.3g} ≤ {criterion.impact_earn_objective:g} and ≤ "
+            f"{criterion.impact_earn_share:g} × {before:.3g})")
+
+
+def impact_earns(before: float, after: float, criterion: Criterion = DEFAULT_CRITERION) -> bool:
+    """Whether an impact-fitted contact earns on its held-out feature objectives
+    (``before``: the current model's, ``after``: the candidate's;
+    :func:`~.impact_verdict.impact_verdict`): ``after`` at most
+    ``criterion.impact_earn_objective`` and at most ``criterion.impact_earn_share`` of
+    ``before``."""
+    return bool(math.isfinite(after) and math.isfinite(before)
+                and after <= criterion.impact_earn_objective
+                and after <= criterion.impact_earn_share * before)
+
+
+def refuse_at_bound(c: Any, specs: Sequence[Any], member: Any, say: Any = None, step: Any = None,
+                    criterion: Criterion = DEFAULT_CRITERION) -> bool:
+    """Set ``c.at_bound`` (:func:`~.bounds.at_bound_names`, within
+    ``criterion.at_bound_rel`` of a bound that the unconstrained ``step`` says is active)
+    and withdraw its verdict when it is not empty: an unphysical fit does not earn.
+    Returns whether it was at a bound."""
+    names = at_bound_names(c, specs, member, say, step, criterion.at_bound_rel)
+    if names and c.earns:
+        withdraw(c, f"{c.effect}: at bound ({', '.join(names)} on the edge of its physical "
+                    f"range): an unphysical fit, not earned", say)
+    return bool(names)
