@@ -237,3 +237,40 @@ def test_no_pickle_loads_or_eval() -> None:
             if pattern.search(code):
                 offenders.append(f"{p.relative_to(PKG)}:{n}: {line.strip()}")
     assert not offenders, "code-executing loads:\n" + "\n".join(offenders)
+
+
+def _verdict_writes(tree: ast.AST) -> list[int]:
+    """Lines of ``tree`` that write a verdict: an assignment to an ``earns`` attribute or
+    item, or ``earns=`` passed as a keyword."""
+    lines = []
+    for node in ast.walk(tree):
+        targets = []
+        if isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+        for t in targets:
+            for sub in ast.walk(t):
+                if (isinstance(sub, ast.Attribute) and sub.attr == "earns") or (
+                        isinstance(sub, ast.Subscript) and isinstance(sub.slice, ast.Constant)
+                        and sub.slice.value == "earns"):
+                    lines.append(node.lineno)
+        if isinstance(node, ast.Call) and any(k.arg == "earns" for k in node.keywords):
+            lines.append(node.lineno)
+    return lines
+
+
+def test_verdicts_are_written_by_the_judge_alone() -> None:
+    """Whether a model change earns is decided and written in one module,
+    ``estimation/discrepancy/judge.py`` (by one ``Criterion``); the declaration of the
+    ``earns`` fields (a default in a dataclass body) is not a write."""
+    offenders = []
+    for p in sorted((PKG / "estimation" / "discrepancy").rglob("*.py")):
+        if p.name == "judge.py":
+            continue
+        offenders += [f"{p.relative_to(PKG)}:{n}"
+                      for n in _verdict_writes(ast.parse(p.read_text(encoding="utf-8")))]
+    assert not offenders, "verdicts written outside judge.py:\n" + "\n".join(offenders)
+
+
+def test_the_verdict_check_finds_a_write() -> None:
+    src = "c.earns = True\nd['earns'] = False\nf(earns=1)\nclass A:\n    earns: bool = False\n"
+    assert _verdict_writes(ast.parse(src)) == [1, 2, 3]

@@ -273,6 +273,8 @@ class DiscrepancyResult:
     baseline_presliding: dict | None = None
     #: the criterion the verdicts were decided by
     criterion: Criterion = DEFAULT_CRITERION
+    #: member fits charged to the work budget (:mod:`.budget`)
+    member_fits: int = 0
 
     @property
     def winner(self) -> CandidateResult | None:
@@ -335,6 +337,7 @@ class DiscrepancyResult:
                 "validation": self.validation,
                 "notes": self.notes,
                 "partial": bool(self.cut), "cut": self.cut or None,
+                "member_fits": self.member_fits,
                 "not_fitted_at_budget": [{"effect": c.effect, "round": c.round,
                                           "why": c.cut_at_deadline}
                                          for c in self.candidates if c.cut_at_deadline],

@@ -70,7 +70,7 @@ from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
 from ..identify_options import MIN_RESOLVED_SAMPLES
 from .candidates import CANDIDATES, try_drive_lag, try_lag
-from .budget import budget_reached, budget_set, cut_reason
+from .budget import budget_reached, budget_set, cut_reason, fits_charged
 from .evidence import effective_samples, force_error_percent, force_noise_floor_percent
 from ..fit_result import FitResult
 from .fit import fit_group
@@ -162,6 +162,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                           time.perf_counter() - t_start, raw, skew)
     res.baseline_presliding = law.as_dict() if law is not None else None
     res.criterion = settings.criterion
+    res.member_fits = fits_charged()
     if law is not None and law.adopted:
         res.message += (f"; the base model's friction has a presliding transition "
                         f"({tests.evaluation} error without it {law.error_before:.3f} %)")

@@ -88,7 +88,7 @@ def test_workflow_deadline_gives_a_stated_partial_answer(tmp_path):
                                      cycles=1.0, seed=2))
     res = run_discrepancy(d, DiscrepancySettings(wall_cap_s=1e-3, discover=False))
     assert not res.success and res.effect == "undecided" and not res.candidates
-    assert "reached before round 1" in res.cut and "partial answer" in res.message
+    assert "safety cap" in res.cut and "before round 1" in res.cut and "partial answer" in res.message
     doc = res.as_dict()
     assert doc["partial"] and doc["cut"] == res.cut
     try:
