@@ -183,6 +183,7 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
     load_truth(args.data_dir)  # a truth.toml that cannot be used is refused before the work
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
                                    max_tests=args.max_tests, presliding=args.presliding,
+                                   scheduler=args.scheduler,
                                    **({} if args.max_fits is None
                                       else {"max_member_fits": args.max_fits or None}))
     return run_with_budget(args.data_dir, args.out, settings, args.wall_cap_s,
@@ -342,6 +343,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wall-time safety cap, s (default 1800; 0: none): not a budget — when "
                         "it binds, a partial answer that says it depends on the machine's "
                         "speed and load, exit 1")
+    d.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="make the member fits on the Dask cluster at ADDRESS (e.g. "
+                        "tcp://127.0.0.1:8786) instead of --jobs local processes; the same "
+                        "answer")
     d.add_argument("--presliding", action="store_true",
                    help="offer the base friction law a presliding transition (adopted only "
                         "when it earns on the baseline; off by default)")

@@ -327,6 +327,9 @@ def run_with_budget(data_dir: str | Path, out_dir: str | Path, settings: Discrep
             send(f"true parameters (truth.toml) on the same tests: {floor:.3f} %")
         send(f"wrote {js} and {md} ({res.seconds:.0f} s)")
 
+    if isinstance(settings.scheduler, str):  # refused before any work, not in the worker
+        from ..utils.cluster import check_scheduler
+        check_scheduler(settings.scheduler)
     if not budget_s:
         job(say)
         return 0

@@ -30,6 +30,7 @@ import numpy as np
 
 from .candidates import CANDIDATES, absorbed_columns, signature_scores
 from .criterion import DEFAULT_POLICY
+from .executor import fit_on_cluster, remote
 from .budget import note_cut, past_deadline, recording_cuts, time_left_s
 from .evidence import normalised_sse
 from .judge import judge_candidate, withdraw
@@ -510,6 +511,15 @@ def fit_members(args: list[tuple], jobs: int, *, until_deadline: bool = False,
     time left — it would be cut before it moved — so the results then hold only the fits
     started (a prefix of ``args``).  ``seconds`` (optional) receives each member's wall
     time, s, by name."""
+    if remote() is not None and args:  # on the run's Dask cluster, in the order asked
+        if until_deadline and past_deadline():
+            return []
+        t_start = time.perf_counter()
+        res = fit_on_cluster(fit_member, args)
+        if seconds is not None:
+            for a in args:
+                seconds[a[0]] = time.perf_counter() - t_start
+        return res
     t0: dict[int, float] = {}
     out: dict[int, tuple] = {}
     pending: list[int] = list(range(len(args)))

@@ -27,6 +27,7 @@ from typing import Callable, Sequence
 
 from .candidate_fit import fit_member, fit_members
 from .budget import past_deadline, time_left_s
+from .executor import remote
 
 __all__ = ["fit_with_spares", "POLL_S"]
 
@@ -58,7 +59,7 @@ def fit_with_spares(args: list[tuple], spare: Sequence[tuple], jobs: int, *,
     spare results that finished, in ``spare`` order).  ``seconds`` receives the wall
     time of every fit that finished, s, by name."""
     spare = list(spare)
-    if jobs <= 1 or not spare or not args:
+    if jobs <= 1 or not spare or not args or remote() is not None:
         return fit_members(args, jobs, until_deadline=until_deadline, seconds=seconds,
                            estimate=estimate), []
     ctx = mp.get_context("fork")

@@ -7,6 +7,7 @@ returns; ``.plot()`` returns the figures and ``.write()`` writes them, both dele
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -82,6 +83,10 @@ class DiscrepancySettings:
         map only — with the candidates' parameters fitted without the term, a member
         fitted to the voltage (a winding heating) can end with a friction compromise
         that the term then counts against it (see :mod:`.presliding`).
+    scheduler : str or distributed.Client, optional
+        Make the member fits on a Dask cluster (its scheduler's address, or a client)
+        instead of ``jobs`` local processes: the same fits in the same order, so the
+        same answer as the local run (:mod:`.executor`).
     criterion : Criterion
         The thresholds every verdict is decided by (:class:`~.criterion.Criterion`,
         validated at its construction; the default is the documented one).
@@ -101,8 +106,15 @@ class DiscrepancySettings:
     wall_cap_s: float | None = None
     presliding: bool = False
     criterion: Criterion = DEFAULT_CRITERION
+    scheduler: Any = None
 
     def __post_init__(self) -> None:
+        if self.scheduler is not None and not (
+                isinstance(self.scheduler, str) and self.scheduler.strip()
+                or callable(getattr(self.scheduler, "submit", None))):
+            raise ValueError(f"DiscrepancySettings: scheduler must be None, a Dask scheduler "
+                             f"address (e.g. tcp://127.0.0.1:8786) or a distributed.Client, "
+                             f"got {self.scheduler!r}")
         if not isinstance(self.criterion, Criterion):
             raise ValueError(f"DiscrepancySettings: criterion must be a Criterion, got "
                              f"{type(self.criterion).__name__}")

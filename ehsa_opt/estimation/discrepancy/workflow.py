@@ -71,6 +71,7 @@ from ...utils.process import single_threaded_blas
 from ..identify_options import MIN_RESOLVED_SAMPLES
 from .candidates import CANDIDATES, try_drive_lag, try_lag
 from .budget import budget_reached, budget_set, cut_reason, fits_charged
+from .executor import cluster_set
 from .evidence import effective_samples, force_error_percent, force_noise_floor_percent
 from ..fit_result import FitResult
 from .fit import fit_group
@@ -114,7 +115,8 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
     # process-level parallelism only (see the utility); the budget is counted in member
     # fits, the wall time a safety cap (:mod:`.budget`)
     settings = settings or DiscrepancySettings()
-    with single_threaded_blas(), budget_set(settings.max_member_fits, settings.wall_cap_s):
+    with single_threaded_blas(), budget_set(settings.max_member_fits, settings.wall_cap_s), \
+            cluster_set(settings.scheduler):
         return _run_discrepancy(data, settings, log)
 
 
