@@ -68,23 +68,36 @@ def test_a_work_budget_gives_the_same_partial_answer_for_any_jobs(compliance_dir
     assert sum(bool(c["round"] == 1 and c["parameters"]) for c in a["candidates"]) == 1
 
 
+#: Four campaigns (each effect's truth, then a clean one) for the load test.
+LOAD_CASES = {
+    "compliance": ({"compliance": {"compliance_stiffness_N_per_m": 2e5,
+                                   "compliance_damping_Ns_per_m": 300.0}}, "compliance"),
+    "voltage_drop": ({"voltage_drop": {"voltage_drop_V": 0.5}}, "voltage_drop"),
+    "cogging": ({"cogging": {"cogging_sin_Nm": 0.02}}, "cogging"),
+    "clean": ({}, "none"),
+}
+
+
 @pytest.mark.slow
-def test_the_same_answer_with_two_jobs_and_beside_a_cpu_hog(compliance_dir):
+@pytest.mark.parametrize("case", sorted(LOAD_CASES))
+def test_the_same_answer_with_two_jobs_and_beside_a_cpu_hog(case, tmp_path):
     """One case run with ``jobs`` 1, then with ``jobs`` 2 while a CPU-bound process runs
-    on the other core: identical verdicts and numbers."""
-    settings = DiscrepancySettings(jobs=1, discover=False, max_effects=1, top=2)
-    quiet = run_discrepancy(compliance_dir, settings)
+    on the other core: identical verdicts and numbers, on four campaigns."""
+    effects, expected = LOAD_CASES[case]
+    d = tmp_path / case
+    write_synthetic(d, SyntheticSpec(effects=effects, frequencies_hz=(1.0, 2.0, 3.0),
+                                     loads_ohm=(15.0, 109.0), cycles=1.0, seed=4))
+    quiet = run_discrepancy(d, DiscrepancySettings(jobs=1, max_effects=1, top=2))
     stop = mp.get_context("fork").Event()
     hog = mp.get_context("fork").Process(target=_hog, args=(stop,), daemon=True)
     hog.start()
     try:
-        loaded = run_discrepancy(compliance_dir, DiscrepancySettings(
-            jobs=2, discover=False, max_effects=1, top=2))
+        loaded = run_discrepancy(d, DiscrepancySettings(jobs=2, max_effects=1, top=2))
     finally:
         stop.set()
         hog.join(10)
     assert _answer(quiet) == _answer(loaded)
-    assert quiet.success and quiet.effect == "compliance", quiet.message
+    assert quiet.success and quiet.effect == expected, quiet.message
 
 
 def test_the_theory_page_shows_the_criterion_the_code_uses():
