@@ -57,9 +57,12 @@ class FitResult:
         Solver iterations of the kept start.
     starts : list[dict]
         One record per start: at least ``status``, ``success``, ``objective``; the
-        identification adds ``initial``, ``final``, ``iterations``, ``seconds``; a fit
-        that is not an IPOPT multistart keeps its own record here (e.g. a
-        ``simulation_fit`` or ``impact_fit`` entry).
+        identification adds ``initial``, ``final``, ``iterations``, ``seconds``.
+    records : dict
+        What a fit that is not a plain multistart noted, by kind: ``impact_fit`` (the
+        impact-aware contact fit), ``simulation_refit`` and ``refinement`` (stages on
+        the simulation), ``flexibility`` (the variable-projection grid), ``cut`` (the
+        stages the run's safety cap cut).
     seconds : float
         Wall time of the fit (s).
     delta_F, delta_V : float or None
@@ -102,6 +105,7 @@ class FitResult:
     objective: float = math.nan
     nit: int = 0
     starts: list[dict] = field(default_factory=list)
+    records: dict[str, Any] = field(default_factory=dict)
     seconds: float = 0.0
     # the identification's (fit_tests) measures of the fit
     delta_F: float | None = None

@@ -137,7 +137,7 @@ def screen_starts(fit_pts: Sequence[PreparedTest], rig: Rig, crig: Rig, starts: 
     return best
 
 
-#: Where a fit's :attr:`FitResult.starts` records the stages the run's deadline cut
+#: Where a fit's :attr:`FitResult.records` hold the stages the run's safety cap cut
 #: (:func:`fit_candidate`, :func:`not_fitted`).
 CUT_RECORD = "cut_at_deadline"
 
@@ -149,7 +149,7 @@ def not_fitted(res: FitResult | None) -> str:
     when it is fitted (or was not cut).  Such a member is judged at its start point,
     which says nothing about the effect: it cannot earn, cannot open or complete a
     look-ahead path and is reported as work left at the budget."""
-    for rec in (res.starts if res is not None else ()):
+    for rec in ([res.records] if res is not None else ()):
         cut = rec.get(CUT_RECORD) if isinstance(rec, dict) else None
         if cut and not cut.get("moved", True):
             stages = "; ".join(f"{c['stage']} after {c['simulations']} simulation"
@@ -201,7 +201,7 @@ def fit_candidate(name: str, component, starts: Sequence[dict], fit_pts: Sequenc
     start = seen.get("start")
     moved = bool(res.parameters) and (start is None or any(
         res.parameters.get(q.name) != start.get(q.name) for q in component.parameters))
-    res = replace(res, starts=[*res.starts, {CUT_RECORD: {"stages": cuts, "moved": moved}}],
+    res = replace(res, records={**res.records, CUT_RECORD: {"stages": cuts, "moved": moved}},
                   message=res.message + ("; cut by the time budget" if moved else
                                          "; cut by the time budget at its start point"))
     return name, res, pf, ph
@@ -333,9 +333,9 @@ def _effect_fit_on_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, start:
     return FitResult(success=po.success, message=f"effect fitted on simulation: {po.message}",
                      status=po.message, parameters=dict(po.parameters), free=list(eff),
                      objective=po.sse_after / n_obs,
-                     starts=[{"simulation_fit": {"sse_before": po.sse_before,
+                     records={"simulation_fit": {"sse_before": po.sse_before,
                                                  "sse_after": po.sse_after,
-                                                 "simulations": po.nfev}}],
+                                                 "simulations": po.nfev}},
                      seconds=time.perf_counter() - t0, path="simulation", sse=po.sse_after,
                      n_obs=n_obs, covariance=po.covariance)
 
@@ -377,10 +377,10 @@ def _refit_on_simulation(name: str, fit_pts: Sequence[PreparedTest],
     res = replace(first, parameters=po.parameters, sse=sse, objective=sse / n_obs, **joint,
                   message=f"{first.message} (effect only), refined on simulation: "
                           f"{po.message}{note}",
-                  starts=[*first.starts, {"simulation_refit": {
+                  records={**first.records, "simulation_refit": {
                       "sse_before": po.sse_before, "sse_after": po.sse_after,
                       "simulations": po.nfev, "free": list(free),
-                      **({"tolerance_change_rms_sigma": chaos} if chaos is not None else {})}}],
+                      **({"tolerance_change_rms_sigma": chaos} if chaos is not None else {})}},
                   seconds=first.seconds + time.perf_counter() - t0)
     return name, res, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
 
@@ -415,7 +415,7 @@ def _match_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, res: FitResult
     if past_deadline():
         notes.append("not refined: the run's time budget was reached")
         note_cut("refinement of the collocation fit", 0, True)
-        return replace(res, starts=[*res.starts, {"refinement": notes}]), pf
+        return replace(res, records={**res.records, "refinement": notes}), pf
     fine = fit_group(fit_pts, crig, [res.parameters], free=list(free), fixed=res.parameters,
                      max_iter=max_iter, substeps=REFINE_SUBSTEPS)
     if fine.parameters:
@@ -433,7 +433,7 @@ def _match_simulation(fit_pts: Sequence[PreparedTest], crig: Rig, res: FitResult
             res = replace(res, parameters=po.parameters)
             pf = sim(fit_pts, crig, res.parameters)
     return replace(res, message=f"{res.message}, refined on simulation",
-                   starts=[*res.starts, {"refinement": notes}],
+                   records={**res.records, "refinement": notes},
                    seconds=time.perf_counter() - t0 + seconds0), pf
 
 

@@ -79,10 +79,7 @@ def friction_spread_of_features(prepared: Sequence[PreparedTest], rig: Rig,
 def impact_record(fit: Any) -> dict | None:
     """The impact-aware record of a candidate fit (:func:`fit_candidate_on_impacts`), or
     None for a sample-wise fit."""
-    for s in getattr(fit, "starts", None) or ():
-        if isinstance(s, dict) and "impact_fit" in s:
-            return s["impact_fit"]
-    return None
+    return (getattr(fit, "records", None) or {}).get("impact_fit")
 
 
 def impact_verdict(ev_pts: Sequence[PreparedTest], cur_pred: Sequence[np.ndarray],

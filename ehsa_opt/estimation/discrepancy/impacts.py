@@ -531,7 +531,7 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
                "sample by sample)" if chaos > 1.0 else ""))
     out = FitResult(success=True, message=note, parameters=dict(res.parameters),
                     free=[GAP, STIFFNESS, DAMPING], objective=sse / n_obs,
-                    starts=[{"impact_fit": {"energy_ratio": ratio,
+                    records={"impact_fit": {"energy_ratio": ratio,
                                             "objective": res.objective,
                                             "objective_grid": res.objective_start,
                                             "simulations": res.evaluations,
@@ -539,7 +539,7 @@ def fit_candidate_on_impacts(name: str, fit_pts: Sequence[PreparedTest],
                                             "contact_exponent": res.contact_exponent,
                                             "stiffness": res.stiffness,
                                             "peak_force_ratios": peaks.tolist(),
-                                            "tolerance_change_rms_sigma": chaos}}],
+                                            "tolerance_change_rms_sigma": chaos}},
                     seconds=time.perf_counter() - t0, path="impacts", sse=sse, n_obs=n_obs)
     return name, out, pf, (predict(held_pts, crig, res.parameters) if held_pts else [])
 

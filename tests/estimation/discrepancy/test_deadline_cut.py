@@ -26,10 +26,10 @@ H = HarvesterParams()
 
 def _cut_fit(moved: bool) -> FitResult:
     return FitResult(success=True, message="m", parameters={"voltage_drop_V": 0.05},
-                     starts=[{CUT_RECORD: {"stages": [{"stage": "Gauss-Newton on the "
+                     records={CUT_RECORD: {"stages": [{"stage": "Gauss-Newton on the "
                                                        "simulation", "simulations": 1,
                                                        "moved": moved}],
-                                           "moved": moved}}])
+                                           "moved": moved}})
 
 
 def test_not_fitted_reads_the_cut_record():

@@ -9,14 +9,14 @@ from ehsa_opt.estimation.discrepancy.results import CandidateResult
 
 
 class _Fit:
-    def __init__(self, starts=()):
-        self.starts = list(starts)
+    def __init__(self, records=None):
+        self.records = dict(records or {})
 
 
 def _cands(backlash_earns=True, compliance_fitted=False, impacts=False):
     b = CandidateResult("backlash", True, 0.03, 1.0, 1)
     b.earns, b.fitted = backlash_earns, True
-    b.fit = _Fit([{"impact_fit": {"contact_exponent": 1.5}}] if impacts else [])
+    b.fit = _Fit({"impact_fit": {"contact_exponent": 1.5}} if impacts else None)
     c = CandidateResult("compliance", True, 0.0, 0.0, 1)
     c.fitted = compliance_fitted
     cog = CandidateResult("cogging", True, 0.02, 1.0, 1)

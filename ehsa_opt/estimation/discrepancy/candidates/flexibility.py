@@ -253,8 +253,8 @@ def fit_flexibility_member(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_pa
                if out.get("negative_mass") else ""))
     res = FitResult(success=True, message=note, parameters=params,
                     free=["flex_load_mass_kg"], objective=r1 / n_obs,
-                    starts=[{"flexibility": {k: v for k, v in out.items()
-                                             if k not in ("fit_pred", "eval_pred")}}],
+                    records={"flexibility": {k: v for k, v in out.items()
+                                             if k not in ("fit_pred", "eval_pred")}},
                     seconds=time.perf_counter() - t0, path="variable_projection", sse=r1,
                     n_obs=n_obs, covariance=np.array([[sd * sd]]),
                     covariance_info=out.get("covariance_info"))
@@ -265,7 +265,7 @@ def fit_flexibility_member(fit_pts, cur_fit, held_pts, cur_held, cur_rig, cur_pa
 def flexibility_refusal(cand, fit, rnd: int) -> str:
     """Why the two-mass flexibility (``cand``, its variable-projection ``fit``) is not
     named, in words."""
-    info = ((fit.starts or [{}])[0] or {}).get("flexibility", {}) if fit is not None else {}
+    info = fit.records.get("flexibility", {}) if fit is not None else {}
     neg = info.get("best_negative") or {}
     p = cand.parameters
     msg = (f"round {rnd}: the two-mass flexibility is not named — its physical best "
