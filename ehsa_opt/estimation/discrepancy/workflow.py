@@ -371,8 +371,9 @@ def name_force_lag(tests: SearchTests, base: Baseline, state: SearchState,
                      decimation=baseline_decimation(tests.fit_pts, tests.rig))
     if lagged is None:
         return state
-    fit_pts, held_pts, base_l, cur_fit, cur_held, cur_err, fields = lagged
-    cand = CandidateResult(**fields)
+    fit_pts, held_pts, base_l = lagged.fit_pts, lagged.held_pts, lagged.baseline
+    cur_fit, cur_held, cur_err = lagged.fit_pred, lagged.held_pred, lagged.error
+    cand = CandidateResult(**lagged.fields)
     all_cands.append(cand)
     rival = lag_rival(tests, state, settings, cur_err, say, notes if notes is not None else [])
     if rival is not None:
@@ -418,9 +419,12 @@ def name_drive_lag(tests: SearchTests, base: Baseline, state: SearchState,
                            base.error, settings, say)
     if driven is None:
         return state
-    fit_pts, held_pts, base_d, cur_fit, cur_held, cur_err, fields, floor, dnotes = driven
+    fit_pts, held_pts, base_d, floor = (driven.fit_pts, driven.held_pts, driven.baseline,
+                                        driven.floor)
+    cur_fit, cur_held, cur_err, fields = (driven.fit_pred, driven.held_pred, driven.error,
+                                          driven.fields)
     all_cands.append(CandidateResult(**fields))
-    notes += dnotes
+    notes += driven.notes
     tests.fit_pts, tests.held_pts, tests.floor = fit_pts, held_pts, floor
     state.params = dict(base_d.parameters)
     state.fit_pred, state.held_pred, state.error = cur_fit, cur_held, cur_err

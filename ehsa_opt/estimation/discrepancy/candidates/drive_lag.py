@@ -45,6 +45,7 @@ from ..fit import fit_group
 from ..prepared import PreparedTest, prepare_tests
 from ..rig import Rig, predict
 from .catalogue import absorbed_columns
+from .record_change import RecordChange
 
 __all__ = ["applied_force", "recorded_from_applied", "fit_drive_lag", "try_drive_lag",
            "blocked_cross_validation", "frequency_evidence", "MAX_TIME_CONSTANT_S",
@@ -397,4 +398,5 @@ def try_drive_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_ef
              + ". " + "; ".join(filter(None, (_frequency_sentence(pt.test) for pt in held_pts)))
              + ". From here on the force is the applied force (the recorded force through "
                "the drive): later effects and the per-test errors are judged on it"]
-    return f2, h2, b2, pf, ph, e_applied, c, force_noise_floor_percent(h2 or f2), notes
+    return RecordChange(f2, h2, b2, pf, ph, e_applied, c, force_noise_floor_percent(h2 or f2),
+                        notes)

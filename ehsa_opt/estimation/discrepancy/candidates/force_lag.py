@@ -34,6 +34,7 @@ from ..judge import excess_reduction, judge_change
 from ..fit import fit_group
 from ..prepared import PreparedTest, decimated, prepare_tests
 from ..rig import predict
+from .record_change import RecordChange
 from ..terms import LAG_GRID_S, per_test_delays, shifted_force, shift_lag
 
 __all__ = ["try_lag", "per_test_delays", "screen_lag", "SCREEN_SHARE"]
@@ -139,7 +140,7 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
         f"({'earns' if c['earns'] else 'does not earn'})")
     if not c["earns"]:
         return None
-    return f2, h2, b2, pf, ph, e_after, c
+    return RecordChange(f2, h2, b2, pf, ph, e_after, c)
 
 
 def _crop_like(pt: PreparedTest, like: PreparedTest) -> PreparedTest:
