@@ -28,7 +28,7 @@ from typing import Iterable, Iterator
 from .lock import LOCK_NAME
 
 __all__ = ["MANIFEST_NAME", "TEMP_SUFFIX", "ForeignFolderError", "claim", "claimed", "release", "admit",
-           "read_manifest", "temp_prefix", "stale_temp_files"]
+           "read_manifest", "temp_prefix", "stale_temp_files", "write_listing", "unlisted_content"]
 
 #: The manifest ehsa-opt keeps in every folder it writes.
 MANIFEST_NAME = ".ehsa_opt_manifest.txt"
@@ -211,3 +211,46 @@ def stale_temp_files(root: str | Path, folders: Iterable[str | Path]) -> list[Pa
             if m and prefix + m["name"] in listed and not f.is_symlink() and f.is_file():
                 found.append(f)
     return found
+
+
+# ------------------------------------------------------------------ whole folders
+def write_listing(d: Path, marker: str, fmt: str) -> None:
+    """Write ``d/marker`` listing every name in ``d``: a folder written whole (in a temporary
+    folder, then renamed), such as bench data, so that ``--overwrite`` replaces it only
+    while nobody has added to it (:func:`unlisted_content`)."""
+    import json
+    names = sorted(f.name for f in d.iterdir())
+    (d / marker).write_text(json.dumps({"format": fmt, "files": names}), encoding="utf-8")
+
+
+def unlisted_content(d: Path, marker: str, fmt: str, depth: int = 0) -> str | None:
+    """Why folder ``d`` may not be replaced (None: ehsa-opt wrote all of it): ``d`` must
+    hold ``marker`` (:func:`write_listing`, format ``fmt``) and nothing else than the names
+    listed there (a listed sub-folder must itself be such a folder).  Symlinks are never
+    followed."""
+    import json
+
+    from .limits import parse_json
+    path = d / marker
+    if path.is_symlink() or not path.is_file():
+        return (f"was not written by ehsa-opt (no {marker}); it may hold your own "
+                f"files, so it is never replaced or deleted")
+    try:
+        doc = parse_json(path.read_bytes()[:1 << 20], str(path))
+        listed = set(doc["files"]) if doc.get("format") == fmt else None
+    except (ValueError, KeyError, TypeError, AttributeError, OSError, json.JSONDecodeError):
+        listed = None
+    if listed is None:
+        return f"has an unreadable {marker}, so it is never replaced or deleted"
+    added = []
+    for f in sorted(d.iterdir(), key=lambda f: f.name):
+        if f.name == marker:
+            continue
+        if f.name not in listed or f.is_symlink():
+            added.append(f.name)
+        elif f.is_dir() and (depth > 4 or unlisted_content(f, marker, fmt, depth + 1)):
+            added.append(f.name + "/")
+    if added:
+        return (f"holds files ehsa-opt did not write ({', '.join(added[:5])}"
+                + (", ..." if len(added) > 5 else "") + "), so it is never replaced or deleted")
+    return None
