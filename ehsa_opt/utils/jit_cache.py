@@ -26,6 +26,7 @@ import platform
 import shutil
 import stat
 import tempfile
+import threading
 from pathlib import Path
 
 import casadi as ca
@@ -100,7 +101,7 @@ def compiled(f: ca.Function, flags: tuple[str, ...] = ("-O2",)) -> ca.Function |
     d = cache_dir()
     lib = d / f"{f.name()}_{_key(code, cc, tuple(flags))}.so"
     if not (lib.is_file() and not lib.is_symlink()):
-        stem = f".{lib.stem}.{os.getpid()}"
+        stem = f".{lib.stem}.{os.getpid()}.{threading.get_ident()}"  # this thread's files
         src = d / f"{stem}.c"
         try:
             src.write_text(code, encoding="utf-8")
