@@ -31,6 +31,17 @@ __all__ = ["main", "build_parser"]
 _MAX_POP, _MAX_GENS, _MAX_STARTS = 10_000, 100_000, 1_000
 
 
+_OVERWRITE_HELP = ("write into a non-empty folder ehsa-opt did not write (it still never "
+                   "replaces a file its manifest does not list)")
+
+
+def _writes_folder(p: argparse.ArgumentParser, *produces: str) -> None:
+    """The command writes the folder ``--out``: ``--overwrite`` and the paths it always
+    writes (checked against the folder's manifest before any work)."""
+    p.add_argument("--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    p.set_defaults(produces=produces)
+
+
 # ------------------------------------------------------------------ bench
 def _cmd_bench_generate(args: argparse.Namespace) -> int:
     from .datasets.synthetic import spec_from_options, write_synthetic
@@ -281,6 +292,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="combine several friction sets: worst case (default) or mean")
     o.add_argument("--out", required=True, metavar="OUT_DIR")
     o.set_defaults(func=_cmd_optimize)
+    _writes_folder(o, "result.json")
 
     w = sub.add_parser("sweep", help="design-space study: [sweep] grid, tidy CSV + figure")
     w.add_argument("problem", metavar="PROBLEM.toml")
@@ -292,6 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="take the sweep's min/best/max friction sets from this "
                         "identification.json (overrides [sweep] friction_from)")
     w.set_defaults(func=_cmd_sweep)
+    _writes_folder(w, "sweep.csv")
 
     s = sub.add_parser("simulate", help="simulate a quarter car with the harvester on a road")
     s.add_argument("problem", metavar="PROBLEM.toml")
@@ -313,6 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--lenient", action="store_true",
                    help="use data whose signals contradict bench.toml (warnings, not errors)")
     i.set_defaults(func=_cmd_identify)
+    _writes_folder(i, "identification.json")
     pt = sub.add_parser("plan-tests", help="propose bench tests where the road puts the strokes")
     for a, kw in (("identification", {"metavar": "ID.json"}), ("--vehicle", {"required": True}),
                   ("--rig", {"required": True}), ("--n", {"type": _POSITIVE, "default": 3}),
@@ -322,6 +336,7 @@ def build_parser() -> argparse.ArgumentParser:
                                         "dissipated there (default) or the time"})):
         pt.add_argument(a, **kw)
     pt.set_defaults(func=_cmd_plan_tests)
+    _writes_folder(pt, "bench.toml", "plan.json")
     d = sub.add_parser("discrepancy", help="find, name and add the missing effect in a model "
                                            "(localise residuals, rank candidates, re-identify)")
     d.add_argument("data_dir", metavar="DATA_DIR")
@@ -351,6 +366,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="offer the base friction law a presliding transition (adopted only "
                         "when it earns on the baseline; off by default)")
     d.set_defaults(func=_cmd_discrepancy)
+    _writes_folder(d, "report.md", "discrepancy.json")
 
     r = sub.add_parser("reproduce", help="reproduce the paper end to end on the embedded data "
                                          "or on your own bench data (--data)")
@@ -368,6 +384,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--out", default="results/latest", help="output folder (default results/latest)")
     r.add_argument("--jobs", type=_POSITIVE, default=2, help="parallel processes (default 2)")
     r.set_defaults(func=_cmd_reproduce)
+    _writes_folder(r, "REPORT.md")
     return parser
 
 
@@ -398,9 +415,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         import contextlib
 
         from .utils.lock import LOCK_NAME, output_lock
+        from .utils.output_folder import claimed
         created = {f: not Path(f).exists() for f in folders}
         try:
             with contextlib.ExitStack() as stack:
+                if getattr(args, "produces", None) is not None:  # never a folder of the user's
+                    stack.enter_context(claimed(args.out, overwrite=args.overwrite,
+                                                produces=args.produces))
                 for f in folders:  # one run per output and checkpoint folder
                     stack.enter_context(output_lock(f))
                 return func(args)

@@ -48,6 +48,7 @@ from ..physics.params import (
     nearest_name,
     unknown_name_message,
 )
+from ..utils.output_folder import unlisted_content, write_listing
 from .checks import check_test_signals
 
 __all__ = ["BenchDataError", "BenchDataWarning", "BenchTest", "BenchData", "load_bench",
@@ -459,45 +460,14 @@ _MARKER_FORMAT = "ehsa_opt bench directory"
 
 
 def write_marker(d: Path) -> None:
-    import json
-    names = sorted(f.name for f in d.iterdir())
-    (d / MARKER_NAME).write_text(json.dumps({"format": _MARKER_FORMAT, "files": names}),
-                                 encoding="utf-8")
+    """List every name in ``d`` in its marker (:func:`~ehsa_opt.utils.output_folder.write_listing`)."""
+    write_listing(d, MARKER_NAME, _MARKER_FORMAT)
 
 
-def foreign_content(d: Path, depth: int = 0) -> str | None:
-    """Why ``--overwrite`` may not replace directory ``d`` (None: ehsa-opt wrote all of it).
-
-    ``d`` must hold the marker :func:`write_bench` writes, and nothing else than the names
-    listed there (a sub-directory listed must itself be such a directory). Symlinks are
-    never followed.
-    """
-    import json
-
-    from ..utils.limits import parse_json
-    marker = d / MARKER_NAME
-    if marker.is_symlink() or not marker.is_file():
-        return (f"was not written by ehsa-opt (no {MARKER_NAME}); it may hold your own "
-                f"files, so it is never replaced or deleted")
-    try:
-        doc = parse_json(marker.read_bytes()[:1 << 20], str(marker))
-        listed = set(doc["files"]) if doc.get("format") == _MARKER_FORMAT else None
-    except (ValueError, KeyError, TypeError, AttributeError, OSError, json.JSONDecodeError):
-        listed = None
-    if listed is None:
-        return f"has an unreadable {MARKER_NAME}, so it is never replaced or deleted"
-    added = []
-    for f in sorted(d.iterdir(), key=lambda f: f.name):
-        if f.name == MARKER_NAME:
-            continue
-        if f.name not in listed or f.is_symlink():
-            added.append(f.name)
-        elif f.is_dir() and (depth > 4 or foreign_content(f, depth + 1)):
-            added.append(f.name + "/")
-    if added:
-        return (f"holds files ehsa-opt did not write ({', '.join(added[:5])}"
-                + (", ..." if len(added) > 5 else "") + "), so it is never replaced or deleted")
-    return None
+def foreign_content(d: Path) -> str | None:
+    """Why ``--overwrite`` may not replace directory ``d`` (None: ehsa-opt wrote all of it):
+    :func:`~ehsa_opt.utils.output_folder.unlisted_content` of its marker."""
+    return unlisted_content(d, MARKER_NAME, _MARKER_FORMAT)
 
 
 def _harvester_table(h: HarvesterParams) -> dict[str, float]:

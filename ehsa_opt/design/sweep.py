@@ -46,6 +46,7 @@ from ..physics.params import (
     from_mapping,
     nearest_name,
 )
+from ..utils.cluster import check_cluster_imports, connect_client
 
 __all__ = ["SweepSpec", "SweepTask", "run_sweep", "parse_sweep", "executor", "harvesters_from",
            "road_holding_warning", "sweep_warnings", "write_sweep",
@@ -244,27 +245,6 @@ def _call(task: Callable[[], Any]) -> Any:
     return task()
 
 
-def _check_cluster_imports(client: Any, where: Any) -> None:
-    """Refuse a cluster whose scheduler or workers cannot import ehsa_opt (the
-    tasks are pickled by reference; Dask's scheduler unpickles the graph)."""
-    import importlib.util
-
-    def found(spec: Any) -> bool:
-        return spec is not None
-    try:
-        on_sched = found(client.run_on_scheduler(importlib.util.find_spec, "ehsa_opt"))
-        on_workers = {w: found(s) for w, s in client.run(importlib.util.find_spec,
-                                                         "ehsa_opt").items()}
-    except Exception as exc:  # pragma: no cover - cluster-specific failures
-        raise ParameterError(f"--scheduler {where}: cannot query the cluster ({exc})") from None
-    missing = ([] if on_sched else ["scheduler"]) + [w for w, ok in on_workers.items() if not ok]
-    if missing:
-        raise ParameterError(
-            f"--scheduler {where}: ehsa_opt is not importable on {', '.join(missing)}; install "
-            f"it there (pip install .) or start the scheduler and workers with "
-            f"PYTHONPATH=<repository root>")
-
-
 @contextlib.contextmanager
 def executor(jobs: int = 1, scheduler: Any = None
              ) -> Iterator[Callable[[Callable[..., Any], Sequence[Any]], list]]:
@@ -275,8 +255,9 @@ def executor(jobs: int = 1, scheduler: Any = None
     jobs : int
         Local worker processes (1 = in this process).
     scheduler : str or distributed.Client, optional
-        Dask scheduler address (``tcp://host:8786``) or an existing client; then
-        the work goes to that cluster.
+        Dask scheduler address (``tcp://host:8786``; checked with bounded waits by
+        :func:`~ehsa_opt.utils.cluster.connect_client`) or an existing client; then the
+        work goes to that cluster.
     """
     if scheduler is not None:
         try:
@@ -285,16 +266,9 @@ def executor(jobs: int = 1, scheduler: Any = None
             raise ParameterError("--scheduler needs the 'distributed' package "
                                  "(pip install 'dask[distributed]')") from None
         own = not isinstance(scheduler, Client)
-        if own:
-            try:
-                client = Client(scheduler, timeout=10)
-            except (OSError, TimeoutError, ValueError) as exc:
-                raise ParameterError(f"--scheduler {scheduler}: cannot connect ({exc}); check "
-                                     f"the address, e.g. tcp://127.0.0.1:8786") from None
-        else:
-            client = scheduler
+        client = connect_client(scheduler) if own else scheduler  # no hang: bounded waits
         try:
-            _check_cluster_imports(client, scheduler)
+            check_cluster_imports(client, scheduler)
         except BaseException:
             if own:
                 client.close()

@@ -256,7 +256,7 @@ def summarise_identifiability(data: BenchData, fits: Sequence[FitResult]) -> dic
         for d in f.identifiability["directions"]:
             if not d["identifiable"]:
                 seen.add(" / ".join(sorted(d["main"])))
-        for s in seen:
+        for s in sorted(seen):  # a set's order changes with the hash seed
             weak_counts[s] = weak_counts.get(s, 0) + 1
     r = data.harvester.lead_m_per_rad
     spread = {}

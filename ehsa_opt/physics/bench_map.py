@@ -30,13 +30,12 @@ at rtol 1e-7, the discrepancy fits' default, is itself 0.5 off).
 from __future__ import annotations
 
 import math
-import os
-import shutil
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from ..utils.jit_cache import compiled
 from .bench_model import BenchModel
 from .motion import FilteredMotion, SampledMotion, SineMotion
 
@@ -70,16 +69,14 @@ MAX_SUBSTEPS = 64
 FOLD_SUBSTEPS = True
 
 
-def _compile_options(level: str = "-O2") -> dict:
-    """Compile the sub-step to C when a compiler is on the PATH (about 2 s once per
-    model; ten to fifty times faster than the SX interpreter); else interpret.
-    ``level``: the C compiler's optimisation flag (the sensitivity sub-step of the
-    compliance rig: about 1.4 s to compile at -O0, 4 s at -O2, but one sensitivity run
-    of 8 tests, 10 198 samples, 1.05 s against 0.39 s: -O2 for both)."""
-    if os.environ.get("EHSA_OPT_NO_JIT") or not (shutil.which("gcc") or shutil.which("cc")):
-        return {}
-    return {"jit": True, "compiler": "shell",
-            "jit_options": {"flags": [level], "verbose": False}}
+def _compiled(F: ca.Function, level: str = "-O2") -> ca.Function:
+    """``F`` compiled to C when a compiler is on the PATH (about 2 s once per model, then
+    loaded from the per-user cache, :mod:`ehsa_opt.utils.jit_cache`; ten to fifty times
+    faster than the SX interpreter); else ``F`` itself, interpreted.  ``level``: the C
+    compiler's optimisation flag (the sensitivity sub-step of the compliance rig: about
+    1.4 s to compile at -O0, 4 s at -O2, but one sensitivity run of 8 tests, 10 198
+    samples, 1.05 s against 0.39 s: -O2 for both)."""
+    return compiled(F, (level,)) or F
 
 
 def _substep_function(model: BenchModel) -> ca.Function:
@@ -108,11 +105,7 @@ def _substep_function(model: BenchModel) -> ca.Function:
     xn = x + h * (ca.reshape(Kv, nx, 3) @ ca.DM(RADAU_A[2, :]))  # stiffly accurate
     cache["substep_expr"] = (x, U, p, h, K, residual(ca.vec(K)), Kv, xn)
     xn = ca.cse(xn)  # common subexpressions evaluated once
-    opts = _compile_options()
-    try:
-        F = ca.Function("radau_substep", [x, U, p, h], [xn], opts)
-    except RuntimeError:  # the compiler failed: interpret
-        F = ca.Function("radau_substep", [x, U, p, h], [xn])
+    F = _compiled(ca.Function("radau_substep", [x, U, p, h], [xn]))
     cache["substep"] = F
     return F
 
@@ -141,10 +134,7 @@ def _sensitivity_substep_function(model: BenchModel) -> ca.Function:
     Sn = S + h * sum(RADAU_A[2, j] * dK[j * nx:(j + 1) * nx, :] for j in range(3))
     zn = ca.cse(ca.vertcat(xn, ca.vec(Sn)))
     z = ca.vertcat(x, ca.vec(S))
-    try:
-        F = ca.Function("radau_substep_sens", [z, U, p, h], [zn], _compile_options())
-    except RuntimeError:  # the compiler failed: interpret
-        F = ca.Function("radau_substep_sens", [z, U, p, h], [zn])
+    F = _compiled(ca.Function("radau_substep_sens", [z, U, p, h], [zn]))
     cache["sens_substep"] = F
     return F
 

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from ..utils.io import atomic_write_text
+from ..utils.output_folder import stale_temp_files
 from ..utils.limits import parse_json
 
 __all__ = ["CACHE_FORMAT", "encode", "decode", "StepCache", "remove_stale_temp_files",
@@ -109,23 +110,17 @@ def _sha256_file(path: Path) -> str:
 
 
 def remove_stale_temp_files(out_dir: Path) -> list[Path]:
-    """Delete the ``.NAME.XXXX.tmp`` files of atomic writes a killed run left behind.
+    """Delete the temporary files of atomic writes a killed run left behind in ``out_dir``,
+    ``cache``, ``figures`` and ``tables`` (only ``.NAME.ehsa_opt-XXXXXXXX.tmp`` of a
+    ``NAME`` the folder's manifest lists: :func:`~ehsa_opt.utils.output_folder.stale_temp_files`).
 
     Call it only while holding the folder's lock (no other writer is alive then).
     """
     out = Path(out_dir)
-    stale = [f for d in (out, out / "cache", out / "figures", out / "tables")
-             if d.is_dir() and (d == out or not d.is_symlink())  # never follow a symlink
-             for f in sorted(d.iterdir())
-             if _ATOMIC_TEMP.match(f.name) and not f.is_symlink() and f.is_file()]
+    stale = stale_temp_files(out, [out, out / "cache", out / "figures", out / "tables"])
     for f in stale:
         f.unlink(missing_ok=True)
     return stale
-
-
-#: ``.NAME.XXXXXXXX.tmp`` of :func:`~ehsa_opt.utils.io.atomic_write_text` (``mkstemp``: 8
-#: random characters) for the kinds of files a run writes; nothing else is touched.
-_ATOMIC_TEMP = re.compile(r"^\..+\.(md|json|png|csv|npz)\.[a-z0-9_]{8}\.tmp$")
 
 
 class StepCache:

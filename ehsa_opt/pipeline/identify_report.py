@@ -80,7 +80,7 @@ def _identifiability_lines(ctx, rep, ok: list, opts) -> list[str]:
               "was eigen-decomposed. Directions the data do not determine (relative eigenvalue "
               f"< {opts.identifiable_rtol:g}), counted over the tests:\n",
               "| direction (main components) | tests |", "|---|---|"]
-    for k, v in sorted(weak.items(), key=lambda kv: -kv[1]):
+    for k, v in sorted(weak.items(), key=lambda kv: (-kv[1], kv[0])):  # ties by name
         lines.append(f"| {k} | {v} |")
     lines += ["", "Spread across tests (std / mean) of the raw parameters against the spread "
               "of the identifiable combination, the total friction at the rod "

@@ -159,14 +159,16 @@ def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs:
     Steps whose inputs did not change since a previous run in the same ``out_dir``
     are taken from ``OUT/cache`` (logged as cached) after verifying each entry
     (:class:`~.cache.StepCache`: digest, step, inputs, figures); one run per folder
-    (:func:`~ehsa_opt.utils.lock.output_lock`).  ``data_dir``: a user's bench
+    (:func:`~ehsa_opt.utils.lock.output_lock`); a non-empty folder ehsa-opt did not write
+    is refused (:mod:`~ehsa_opt.utils.output_folder`).  ``data_dir``: a user's bench
     data directory instead of the embedded data (validated first); ``vehicle``: a
     problem file whose ``preset`` / ``[vehicle]`` replaces the passenger car;
     ``friction_bounds``: "data" (data-supported min/max friction sets, default) or
     "paper" (the paper's per-parameter min/max) for the §4 studies and the design.
     """
     from ..utils.lock import output_lock
-    with output_lock(out_dir):
+    from ..utils.output_folder import claimed
+    with claimed(out_dir, produces=("REPORT.md",)), output_lock(out_dir):
         return _reproduce(out_dir, quick, jobs, steps, log, data_dir, vehicle, friction_bounds)
 
 

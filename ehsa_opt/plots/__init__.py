@@ -9,8 +9,6 @@ only :func:`save` writes a file (atomically, as PNG).  Topic modules live beside
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -19,7 +17,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from ..utils.io import current_umask  # noqa: E402
+from ..utils.io import atomic_write_with  # noqa: E402
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -41,18 +39,11 @@ def axes_or_new(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, 
 
 def save(fig: Figure, path: str | Path, dpi: int = 110) -> Path:
     """Save ``fig`` as PNG via a temporary file + rename, then close it."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
     try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png")
-        os.chmod(tmp, 0o666 & ~current_umask())  # mkstemp made it 0600
-        os.replace(tmp, path)
+        return atomic_write_with(
+            path, lambda tmp: fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png"))
     finally:
-        Path(tmp).unlink(missing_ok=True)
         plt.close(fig)
-    return path
 
 
 def bench_fit(test: BenchTest, sim: Prediction, title: str = "") -> Figure:

@@ -33,12 +33,16 @@ WORKER_WAIT_S = 5.0
 #: Address schemes of Dask's comm backends that ehsa-opt supports (an address without a
 #: scheme is TCP, as in Dask; ``inproc`` is a cluster inside this process).
 SCHEMES = ("tcp", "tls", "ws", "wss", "inproc")
+#: Share of the time limit given to Dask's own connection attempts (it retries a refused
+#: connection until then): a refused connection is reported as such before the hard limit,
+#: which then only catches a server that accepts and never answers.
+_CONNECT_SHARE = 0.8
 _FIX = "give the address of a running Dask scheduler, e.g. tcp://127.0.0.1:8786"
 
 
 async def _identity(address: str, timeout: float) -> dict:
     from distributed.comm import connect
-    comm = await connect(address, timeout=timeout)
+    comm = await connect(address, timeout=_CONNECT_SHARE * timeout)
     try:
         await comm.write({"op": "identity", "reply": True})
         return await comm.read()

@@ -1,6 +1,10 @@
 """Atomic file writes (temporary file in the same folder, then rename): a reader never
 sees a half-written result, and an interrupted write leaves the old file intact.
 
+Inside an output folder a command claimed (:mod:`ehsa_opt.utils.output_folder`) the target
+is first listed in the folder's manifest, or refused when it is a file ehsa-opt did not
+write.  The temporary file is ``.NAME.ehsa_opt-XXXXXXXX.tmp``, a name only ehsa-opt makes.
+
 Files get the user's umask (``tempfile.mkstemp`` creates them 0600; they are chmod-ed to
 ``0o666 & ~umask`` like any file ``open()`` creates).  :func:`atomic_write_json` writes
 standard JSON: non-finite floats become ``null`` (never a bare ``NaN``).
@@ -13,10 +17,12 @@ import math
 import os
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
-__all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "json_safe",
-           "current_umask"]
+from .output_folder import TEMP_SUFFIX, admit, temp_prefix
+
+__all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "atomic_write_with",
+           "json_safe", "current_umask"]
 
 
 def current_umask() -> int:
@@ -33,20 +39,31 @@ def current_umask() -> int:
     return old
 
 
-def _write(path: str | Path, data: bytes) -> None:
+def atomic_write_with(path: str | Path, write: Callable[[str], None]) -> Path:
+    """Write ``path`` atomically by ``write(temporary_path)`` (e.g. a figure's ``savefig``),
+    then fsync and rename; the temporary file is removed on any failure."""
     path = Path(path)
+    admit(path)  # inside an output folder: listed in its manifest before anything is made
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=temp_prefix(path), suffix=TEMP_SUFFIX, dir=path.parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
+        write(tmp)
+        with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.chmod(tmp, 0o666 & ~current_umask())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    return path
+
+
+def _write(path: str | Path, data: bytes) -> None:
+    def put(tmp: str) -> None:
+        with open(tmp, "wb") as fh:
+            fh.write(data)
+    atomic_write_with(path, put)
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:

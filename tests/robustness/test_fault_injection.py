@@ -108,7 +108,7 @@ def test_altered_checkpoint_refused(tmp_path, capsys):
     for f in files:  # alter one number in the data (text: a digit; binary: a byte)
         data = bytearray(f.read_bytes())
         for i in range(len(data) // 2, len(data)):
-            if chr(data[i]).isdigit():
+            if 0x30 <= data[i] <= 0x39:  # an ASCII digit (not '²', which isdigit() takes)
                 data[i] = ord(str((int(chr(data[i])) + 1) % 10))
                 changed = True
                 break

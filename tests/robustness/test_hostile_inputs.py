@@ -125,7 +125,8 @@ def test_reproduce_bad_data_deletes_nothing_in_out(tmp_path, capsys):
     draft.write_text("my draft")
     look_alike = out / ".REPORT.md.abcd1234.tmp"
     look_alike.write_text("kept until the data are valid")
-    rc, _, err = run(capsys, "reproduce", "--quick", "--data", tmp_path / "nodata", "--out", out)
+    rc, _, err = run(capsys, "reproduce", "--quick", "--data", tmp_path / "nodata", "--out", out,
+                     "--overwrite")
     assert rc == 2 and "nodata" in err, err
     assert draft.read_text() == "my draft" and look_alike.is_file()
 
@@ -140,14 +141,21 @@ def test_stale_temp_cleanup_stays_inside_out(tmp_path):
     out.mkdir()
     (out / "figures").symlink_to(elsewhere)
     (out / "cache").symlink_to(elsewhere)
-    (out / ".REPORT.md.abcd1234.tmp").symlink_to(victim)
-    ours = out / ".REPORT.md.x1y2z3w4.tmp"
+    (out / ".REPORT.md.ehsa_opt-abcd1234.tmp").symlink_to(victim)
+    ours = out / ".REPORT.md.ehsa_opt-x1y2z3w4.tmp"
     ours.write_text("partial")
     user = out / ".draft.tmp"
     user.write_text("mine")
+    look_alike = out / ".REPORT.md.x1y2z3w4.tmp"  # not a name ehsa-opt makes
+    look_alike.write_text("mine too")
+    from ehsa_opt.utils.output_folder import MANIFEST_NAME, claimed
+    from ehsa_opt.utils.io import atomic_write_text
+    with claimed(out, overwrite=True):
+        atomic_write_text(out / "REPORT.md", "report")  # listed in the manifest
+    assert "REPORT.md" in (out / MANIFEST_NAME).read_text()
     removed = remove_stale_temp_files(out)
     assert removed == [ours] and not ours.exists()
-    assert victim.read_text() == "not ours" and user.is_file()
+    assert victim.read_text() == "not ours" and user.is_file() and look_alike.is_file()
 
 
 # =============================================================== 2. unbounded resources
