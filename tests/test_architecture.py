@@ -17,7 +17,7 @@ PKG = PACKAGE
 
 #: Rooms from the bottom up; a module may import its own room and rooms below it.
 ROOMS = ["utils", "physics", "datasets", "estimation", "vehicle", "design", "plots",
-         "pipeline", "cli"]
+         "api", "pipeline", "cli"]
 
 
 def module_name(path: Path) -> str:
