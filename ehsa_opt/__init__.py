@@ -15,7 +15,8 @@ sweep(problem, design=None, speed_km_per_h=None, ...)
 simulate(problem, friction=None)
     A quarter car with the harvester on a road: a :class:`SimulationResult`.
 identify(data_dir, starts=4, jobs=1, seed=0)
-    The friction of every bench test: an :class:`IdentificationResult`.
+    The friction of every bench test: an :class:`IdentificationResult` (the data read
+    and checked by ``load_bench(data_dir)`` first, or given as its :class:`BenchData`).
 
 Messages go to the ``ehsa_opt`` logger (``logging.getLogger("ehsa_opt")``); the
 physics (:class:`BenchModel`, :class:`HarvesterParams`, friction laws …) is below.
@@ -31,7 +32,7 @@ from .api import (
                   simulate,
                   sweep,
 )
-from .datasets.bench_format import BenchDataError
+from .datasets.bench_format import BenchData, BenchDataError, load_bench
 from .design.outcome import DesignResult
 from .design.problem import DesignProblem
 from .physics import BenchModel
@@ -58,7 +59,8 @@ from .utils.version import __version__
 ENTRY_POINTS = ("load_problem", "optimize", "sweep", "simulate", "identify")
 
 __all__ = [*ENTRY_POINTS, "DesignProblem", "DesignResult", "SweepResult",
-           "SimulationResult", "IdentificationResult", "BenchDataError", "ParameterError",
+           "SimulationResult", "IdentificationResult", "load_bench", "BenchData",
+           "BenchDataError", "ParameterError",
            "BenchModel", "BenchSimulation", "simulate_bench", "SineMotion", "SampledMotion",
            "HarvesterParams", "FrictionParams", "VehicleParams", "RoadParams",
            "FRICTION_NAMES", "FRICTION_RANGES", "simscape_friction", "nut_friction_N",

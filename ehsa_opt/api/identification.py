@@ -52,9 +52,11 @@ class IdentificationResult:
 
     @property
     def friction_sets(self) -> dict[str, dict[str, float]]:
-        """The data-supported friction sets ``min`` / ``best`` / ``max`` (their
-        :class:`~ehsa_opt.physics.params.FrictionParams` fields)."""
-        return {k: dict(v) for k, v in (self.record.get("friction_sets") or {}).items()}
+        """The data-supported friction sets ``min`` / ``best`` / ``max`` (and the paper's
+        per-parameter ``paper_min`` / ``paper_max``), as their
+        :class:`~ehsa_opt.physics.params.FrictionParams` fields."""
+        sets = self.record.get("friction_sets") or {}
+        return {k: dict(v) for k, v in sets.items() if isinstance(v, Mapping)}
 
     def table(self) -> Any:
         """One row per test: file, frequency (Hz), load (ohm), success, the identified

@@ -122,8 +122,6 @@ def simulate(problem: str | Path, *, friction: str | None = None,
         The simulation failed or its energy balance does not close (its metrics would
         not be trustworthy); the message names the file and the fix.
     """
-    from ..datasets.problem_file import resolve_problem_path
-    path = problem if Path(problem).is_file() else resolve_problem_path(problem)
-    run = simulate_problem(path, friction, on_warning=lambda line: logger.warning("%s", line),
+    run = simulate_problem(problem, friction, on_warning=lambda line: logger.warning("%s", line),
                            keep_series=keep_series)
     return SimulationResult(json.loads(run.to_json()), run)

@@ -141,6 +141,12 @@ def sweep(problem: str | Path | SweepSpec, *, design: Mapping[str, Sequence[floa
     -------
     SweepResult
     """
+    if friction_from is not None:
+        from ..datasets.friction_source import parse_friction_spec
+        if str(parse_friction_spec(friction_from)[0]) != str(friction_from):
+            raise ParameterError(
+                f"sweep --friction {friction_from}: give the file only; the cases come from "
+                f"[sweep] friction = [\"none\", \"min\", \"best\", \"max\"]")
     if isinstance(problem, SweepSpec):
         if any(v is not None for v in (design, speed_km_per_h, iso_class, vehicle, friction,
                                        friction_from)):

@@ -176,6 +176,7 @@ def _optimize_catalogue(cfg: DesignConfig, method: str | None, problem: DesignPr
     if kw["checkpoint"] is not None or kw["resume"] is not None:
         raise ParameterError("--checkpoint/--resume: not available with a motor catalogue "
                              "(one run per motor); run one motor's problem instead")
+    from ..utils.tables import table_to_csv
     results = []
     files: dict[str, str] = {}
     for k, motor in enumerate(cfg.catalogue_motors()):
@@ -184,6 +185,8 @@ def _optimize_catalogue(cfg: DesignConfig, method: str | None, problem: DesignPr
         results.append((motor, res))
         files.update({f"motor_{k}/{name}": text for name, text in res.files.items()})
         files[f"motor_{k}/result.json"] = res.to_json()
+        if res.front is not None:
+            files[f"motor_{k}/front.csv"] = table_to_csv(res.front)
     table = [{"motor": m.name, "source": m.source, "success": bool(r.record["success"]),
               "feasible": bool(r.record.get("feasible", False)),
               "gamma": r.record.get("gamma"), "design": r.design, "objectives": r.objectives,

@@ -206,13 +206,16 @@ class DesignResult:
         """The lines ``ehsa-opt optimize`` prints (warnings: :meth:`warnings`)."""
         from ..vehicle.coverage import out_of_range_lines
         r, m = self.record, self.metrics
-        lines = [("" if self.success else "FAILED: ") + f"{self.method}: {self.message}",
+        failed = not self.success and not self.message.startswith("stopped after")
+        lines = [("FAILED: " if failed else "") + f"{self.method}: {self.message}",
                  "design: " + ", ".join(f"{k} = {v:.4g}" for k, v in self.design.items()),
-                 "objectives: " + ", ".join(f"{k} = {v:.4g}"
-                                            for k, v in self.objectives.items())]
+                 "objectives (minimised): " + ", ".join(f"{k} = {v:.4g}"
+                                                        for k, v in self.objectives.items())]
         if "power_W" in m:
             lines.append(f"power {m['power_W']:.1f} W, efficiency {100 * m['efficiency']:.1f} %, "
-                         f"W_k rms {m.get('comfort_weighted_rms_m_s2', float('nan')):.3f} m/s^2")
+                         f"W_k rms {m.get('comfort_weighted_rms_m_s2', float('nan')):.3f} m/s^2 "
+                         f"(inverse_power = 1 / dimensionless power, inverse_efficiency = "
+                         f"1 / efficiency)")
         if "gamma" in r:
             lines.append(f"attainment factor gamma = {r['gamma']:+.4f}")
         if self.method == "nsga2":
