@@ -62,7 +62,8 @@ class SweepResult:
                           {"iso_class": "", "vehicle": "", "friction": ""})
 
     def summary(self) -> str:
-        """Number of cases, what varies and each metric's range."""
+        """Number of cases, what varies and each metric's range (the warnings are in
+        :attr:`warnings` and were logged)."""
         varied = [k for k in CASE_COLUMNS + self.design_keys
                   if len({r.get(k) for r in self.rows}) > 1]
         lines = [f"{len(self.rows)} cases in {self.seconds:.2f} s; varied: "
@@ -71,18 +72,30 @@ class SweepResult:
             vals = [float(r[c]) for r in self.rows if c in r and r[c] == r[c]]
             if vals:
                 lines.append(f"  {c:<40s} {min(vals):.4g} .. {max(vals):.4g}")
-        return "\n".join(lines + list(self.warnings))
+        return "\n".join(lines)
 
-    def plot(self, ax: Any = None) -> Any:
-        """The metrics against speed (when it varies) or the first design parameter, one
-        line per combination of what else varies; returns the figure (``ax`` is not
-        used: four panels)."""
+    def plot(self, ax: Any = None, x: str | None = None,
+             y: Sequence[str] | None = None) -> Any:
+        """The metrics ``y`` (default power, efficiency, W_k-weighted acceleration, road
+        holding) against ``x`` (default the speed when it varies, else the first design
+        parameter), one line per combination of what else varies; returns the figure
+        (``ax`` is not used: one panel per metric)."""
+        from ..plots.design import sweep_lines
         axes = sweep_axes(self.rows, self.design_keys)
-        if axes is None:
+        if axes is None and x is None:
             raise ValueError("nothing to plot: neither the speed nor a design parameter "
                              "varies in this sweep")
-        from ..plots.design import sweep_lines
-        return sweep_lines(self.rows, *axes)
+        if x is not None:
+            if not self.rows or x not in self.rows[0]:
+                raise ValueError(f"plot: no column '{x}' (columns: "
+                                 f"{', '.join(self.rows[0]) if self.rows else 'none'})")
+            hue = [k for k in CASE_COLUMNS + self.design_keys if k != x
+                   and len({r.get(k) for r in self.rows}) > 1] or ["vehicle"]
+            axes = (x, axes[1] if axes else [], hue)
+        assert axes is not None
+        ys = list(y) if y is not None else axes[1] or [
+            "power_W", "efficiency", "comfort_weighted_rms_m_s2", "road_holding"]
+        return sweep_lines(self.rows, axes[0], ys, axes[2])
 
     def save(self, out_dir: str | Path) -> list[Path]:
         """Write ``sweep.csv`` and, when something varies, ``sweep.png``."""

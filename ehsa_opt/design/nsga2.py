@@ -16,6 +16,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..physics.params import ParameterError
+from ..utils.log import logger
 from .checkpoint import capture, load_state, restore, save_state, verify_designs
 from .pareto import hypervolume, non_dominated, pick_preferred, update_archive
 from .problem import DesignProblem
@@ -360,6 +361,9 @@ def _evolve(problem: DesignProblem, algorithm: Any, history: list[dict], archive
                         "hv": hv_front[1], "n_front": int(F.shape[0]),
                         "hv_archive": hv_archive, "n_archive": int(archive.shape[0])})
         save(archive)
+        logger.info("generation %d%s: %d evaluations, hypervolume %.4g, %d non-dominated",
+                    len(history), "" if n_gen is None else f"/{n_gen}",
+                    history[-1]["n_eval"], history[-1]["hv"], history[-1]["n_front"])
         if progress is not None:
             progress(len(history), n_gen)
         if stop_after is not None and len(history) >= stop_after and (

@@ -261,7 +261,7 @@ class QuarterCarObjectives:
                "inverse_efficiency": 1.0 / m["efficiency"]}
         for key in ("comfort_weighted_rms_m_s2", "power_W", "efficiency", "power_dimensionless",
                     "dissipated_power_W", "dissipation_bound_W", "current_rms_A",
-                    "voltage_rms_V", "stroke_rms_m"):
+                    "voltage_rms_V", "stroke_rms_m", "stroke_velocity_rms_m_s"):
             if key in m:
                 out[key] = m[key]
         out.update(self.constraints(mapping, m))
