@@ -11,6 +11,11 @@ Cross-references
     helpers) stay code, without a link.  ``tools/check_site.py`` verifies that the built site
     has no raw role left.
 
+Version and licence
+    :func:`on_config` puts the package's version (from ``ehsa_opt/utils/version.py``) and
+    its licence in the site's footer, and the repository link when ``pyproject.toml`` names
+    one (``[project.urls] Repository``).
+
 Command help
     A line ``{{ ehsa-opt-help bench generate }}`` in a page becomes a console block with
     ``ehsa-opt bench generate --help`` as the code prints it (100 columns), so the
@@ -40,6 +45,21 @@ _ANCHOR = re.compile(r'id="(ehsa_opt(?:\.[A-Za-z_][A-Za-z0-9_]*)*)"')
 _HELP = re.compile(r"^\{\{ ehsa-opt-help ([a-z -]*?) ?\}\}$", re.MULTILINE)
 
 _anchors: dict[str, str] = {}  # documented dotted name -> page url
+
+
+def on_config(config: Any) -> Any:
+    """Version, licence and (when known) repository of the site."""
+    import tomllib
+    text = (ROOT / "ehsa_opt" / "utils" / "version.py").read_text(encoding="utf-8")
+    version = re.search(r'__version__ = "([^"]+)"', text).group(1)
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    licence = project.get("license", {}).get("text", "")
+    config["copyright"] = (f"ehsa_opt {version}" + (f" · {licence} licence" if licence else "")
+                           + " · cite with CITATION.cff")
+    repo = project.get("urls", {}).get("Repository")
+    if repo and not config.get("repo_url"):
+        config["repo_url"] = repo
+    return config
 
 
 def _mark(match: re.Match) -> str:
