@@ -1,5 +1,7 @@
-"""``ehsa-opt optimize``: a design problem file → goal attainment or NSGA-II →
-``OUT/result.json`` (+ ``OUT/pareto.csv`` for NSGA-II), written atomically.
+"""The design study of ``ehsa-opt optimize`` and :func:`ehsa_opt.optimize`: a design
+problem → goal attainment or NSGA-II (or any pymoo algorithm) → a
+:class:`~.outcome.DesignResult` in memory, whose ``save(folder)`` writes
+``result.json`` (+ ``pareto.csv``, ``front.csv`` for a front) atomically.
 
 ``result.json`` holds ``design`` (total_inertia_gcm2, lead_mm_per_rev,
 speed_constant_rpm_per_V, load_ohm) and ``objectives`` (comfort, road_holding,
@@ -163,58 +165,12 @@ def optimize(cfg: DesignConfig, method: str | None = None, *,
     if cfg.motor_model != "catalogue":
         outcome = _optimize_one(cfg, method, problem=problem, **kw)
     else:
-        outcome = _optimize_catalogue(cfg, method, problem, kw)
+        from .catalogue_study import catalogue_study
+        outcome = catalogue_study(cfg, method, kw, _optimize_one, lambda motor: _motor_problem(
+            cfg, problem, motor, frictions, friction_mode))
     if out_dir is not None:
         outcome.save(out_dir)
     return outcome
-
-
-def _optimize_catalogue(cfg: DesignConfig, method: str | None, problem: DesignProblem | None,
-                        kw: dict[str, Any]) -> OptimizeOutcome:
-    """One study per motor of the catalogue; the best motor's record with the table of
-    all, and (NSGA-II) the front non-dominated across motors."""
-    if kw["checkpoint"] is not None or kw["resume"] is not None:
-        raise ParameterError("--checkpoint/--resume: not available with a motor catalogue "
-                             "(one run per motor); run one motor's problem instead")
-    from ..utils.tables import table_to_csv
-    results = []
-    files: dict[str, str] = {}
-    for k, motor in enumerate(cfg.catalogue_motors()):
-        one = _motor_problem(cfg, problem, motor, kw["frictions"], kw["friction_mode"])
-        res = _optimize_one(cfg, method, motor=motor, problem=one, **kw)
-        results.append((motor, res))
-        files.update({f"motor_{k}/{name}": text for name, text in res.files.items()})
-        files[f"motor_{k}/result.json"] = res.to_json()
-        if res.front is not None:
-            files[f"motor_{k}/front.csv"] = table_to_csv(res.front)
-    table = [{"motor": m.name, "source": m.source, "success": bool(r.record["success"]),
-              "feasible": bool(r.record.get("feasible", False)),
-              "gamma": r.record.get("gamma"), "design": r.design, "objectives": r.objectives,
-              "metrics": r.metrics,
-              "active_constraints": r.record.get("active_constraints", []),
-              "constraints": r.record.get("constraints", {})} for m, r in results]
-    feasible = [i for i, row in enumerate(table) if row["feasible"]]
-    method = check_method(method or cfg.method)
-    if method == "goal-attainment":
-        pool = feasible or list(range(len(table)))
-        best = min(pool, key=lambda i: (table[i]["gamma"] if table[i]["gamma"] is not None
-                                        else math.inf))
-    else:
-        best = max(feasible or list(range(len(table))),
-                   key=lambda i: results[i][1].record.get("n_feasible_front", 0))
-    chosen = results[best][1]
-    rec = dict(chosen.record)
-    rec.update({"motor": {"model": "catalogue", "catalogue": cfg.catalogue,
-                          "chosen": table[best]["motor"],
-                          "source": table[best]["source"]},
-                "catalogue": table,
-                "catalogue_note": ("no motor of the catalogue has a feasible design"
-                                   if not feasible else
-                                   f"{len(feasible)} of {len(table)} motors feasible")})
-    front = None
-    if method == "nsga2":
-        files["pareto.csv"], front = _catalogue_front(rec, results)
-    return OptimizeOutcome(rec, chosen.result, chosen.goal_attainment_result, files, front)
 
 
 def _motor_problem(cfg: DesignConfig, problem: DesignProblem | None, motor: Any,
@@ -226,40 +182,6 @@ def _motor_problem(cfg: DesignConfig, problem: DesignProblem | None, motor: Any,
         if frictions is None and hasattr(ev, "frictions"):
             frictions, friction_mode = ev.frictions, ev.mode
     return extended_like(build_problem(cfg, None, frictions, friction_mode, motor), problem)
-
-
-def _catalogue_front(rec: dict[str, Any], results: Sequence[tuple[Any, OptimizeOutcome]]
-                     ) -> tuple[str, dict[str, Any] | None]:
-    """The catalogue's front (feasible points of every motor, non-dominated across motors)
-    as ``pareto.csv`` text and as columns (with ``motor``); sets ``n_front`` and
-    ``front_note`` in ``rec``."""
-    from .pareto import non_dominated
-    pts = []
-    rows: list[dict[str, Any]] = []
-    names_obj: Sequence[str] = OBJECTIVE_NAMES
-    for m, r in results:
-        pr = r.result
-        names_obj = pr.objective_names
-        ok = np.ones(pr.F.shape[0], bool)
-        if r.record.get("feasible_front") is not None:
-            ok = np.asarray(r.record["feasible_front"], bool)
-        for i in np.flatnonzero(ok):
-            pts.append((m.name, {k: float(v[i]) for k, v in pr.designs.items()}, pr.F[i]))
-            rows.append({"motor": m.name, **{k: v[i] for k, v in (r.front or {}).items()}})
-    keep = (np.flatnonzero(non_dominated(np.array([p[2] for p in pts]))) if pts
-            else np.zeros(0, int))
-    names = list(pts[0][1]) if pts else []
-    lines = [",".join(["motor"] + names + list(names_obj))]
-    lines += [",".join([f'"{pts[i][0]}"'] + [repr(pts[i][1][n]) for n in names]
-                       + [repr(float(v)) for v in pts[i][2]]) for i in keep]
-    rec["n_front"] = len(lines) - 1
-    rec["front_note"] = ("feasible points of every motor, non-dominated across motors"
-                         if pts else "no motor has a feasible design")
-    kept = [rows[i] for i in keep]
-    cols = ({k: np.array([r.get(k, np.nan) for r in kept],
-                         dtype=object if k == "motor" else float) for k in kept[0]}
-            if kept else None)
-    return "\n".join(lines) + "\n", cols
 
 
 def _optimize_one(cfg: DesignConfig, method: str | None = None, *,
@@ -418,14 +340,6 @@ def _front_study(cfg: DesignConfig, problem: DesignProblem, proto: Mapping[str, 
             "n_dominating_by_1pct": int(better.sum()),
             "best_ratio_per_point_min": float(np.min(np.max(pr.F / f_ga, axis=1)))}
     return pr
-
-
-def check_out_dir(out_dir: str | Path) -> Path:
-    """Refuse an output path that is an existing file."""
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise ParameterError(f"--out {out}: exists and is not a directory")
-    return out
 
 
 def _out_of_range(cfg: DesignConfig, ev: Any, design: Mapping[str, float],
