@@ -247,7 +247,7 @@ class DesignResult:
             for key, which in (("ga_design", "design"), ("ga_mass", "mass"),
                                ("ga_objectives", "objectives")):
                 figs[key] = pd.goal_attainment_history(ga, which)
-        res = self.result
+        res = self.result if self.result is not None else self._front_result()
         if isinstance(res, ParetoResult) and len(res.F):
             ga_rec = self.record.get("goal_attainment")
             ga_pt = ga_rec["objectives"] if ga_rec else None
@@ -259,15 +259,38 @@ class DesignResult:
                                                          res.hv_reference)
         return figs
 
+    def _front_result(self) -> ParetoResult | None:
+        """The front of a loaded result (:attr:`front`, NSGA-II or another algorithm) as
+        a :class:`~.nsga2.ParetoResult`, to draw it; None for goal attainment."""
+        import numpy as np
+        if self.front is None or self.method != "nsga2":
+            return None
+        F = self.F
+        names = list(self.record["box"])
+        rows = self._rows()
+        designs = {k: np.asarray(rows[k], float) for k in names}
+        chosen = np.array([self.design[k] for k in names])
+        pref = int(np.argmin(np.sum((np.column_stack(list(designs.values())) - chosen) ** 2
+                                    / np.maximum(chosen ** 2, 1e-300), axis=1)))
+        hv = self.record.get("hypervolume", {})
+        ref = np.asarray(hv.get("reference_point", [2.0] * F.shape[1]), float)
+        return ParetoResult(True, self.message, self.X, designs, F, self.objective_names, pref,
+                            str(self.record.get("pick", "knee")), list(hv.get("history", [])),
+                            np.ones(F.shape[1]), ref, dict(self.record.get("stats", {})),
+                            self.G, str(self.record.get("algorithm", "NSGA2")))
+
     def plot(self, ax: Any = None) -> Any:
         """The main figure: the front's projections (NSGA-II) or the objectives per
         iteration (goal attainment); returns the figure, writes nothing.  ``ax`` is not
         used (both are multi-panel figures); it is accepted for the common protocol."""
-        key = "pareto" if isinstance(self.result, ParetoResult) else "ga_objectives"
+        key = ("pareto" if isinstance(self.result, ParetoResult)
+               or (self.result is None and self._front_result() is not None)
+               else "ga_objectives")
         figs = self.figures()
         if key not in figs:
-            raise ValueError("nothing to plot: an outcome read from result.json has no "
-                             "solver results; plot the outcome optimize() returned")
+            raise ValueError("nothing to plot: a goal-attainment result read from "
+                             "result.json has no solver results (iterations); plot the "
+                             "result optimize() returned")
         import matplotlib.pyplot as plt
         for k, f in figs.items():
             if k != key:

@@ -80,6 +80,8 @@ def test_optimize_api_equals_cli_and_writes_nothing(tmp_path, monkeypatch) -> No
     np.testing.assert_array_equal(back.F, result.F)
     np.testing.assert_array_equal(back.G, result.G)
     assert back.files["pareto.csv"] == result.files["pareto.csv"]
+    fig = back.plot()  # the loaded front is drawn from front.csv
+    assert len(fig.axes) >= 6
 
 
 def test_public_nsga2_path_finds_a_feasible_front() -> None:
