@@ -34,7 +34,7 @@ from .api import (
 )
 from .datasets.bench_format import BenchData, BenchDataError, load_bench
 from .design.outcome import DesignResult
-from .design.problem import DesignProblem
+from .design.problem import DesignProblem, DesignSpace
 from .physics import BenchModel
 from .physics.bench_sim import BenchSimulation, simulate_bench
 from .physics.friction import (
@@ -58,7 +58,7 @@ from .utils.version import __version__
 #: The scripting entry points, first in ``help(ehsa_opt)`` and in the API reference.
 ENTRY_POINTS = ("load_problem", "optimize", "sweep", "simulate", "identify")
 
-__all__ = [*ENTRY_POINTS, "DesignProblem", "DesignResult", "SweepResult",
+__all__ = [*ENTRY_POINTS, "DesignProblem", "DesignSpace", "DesignResult", "SweepResult",
            "SimulationResult", "IdentificationResult", "load_bench", "BenchData",
            "BenchDataError", "ParameterError",
            "BenchModel", "BenchSimulation", "simulate_bench", "SineMotion", "SampledMotion",

@@ -21,7 +21,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-from ..design.optimize import build_problem
+from ..design.nsga2 import run_nsga2
+from ..design.optimize import build_problem, constraint_record, design_record, objectives_at
 from ..design.optimize import optimize as _study
 from ..design.outcome import DesignResult
 from ..design.problem import DesignProblem
@@ -80,7 +81,13 @@ def optimize(problem: DesignProblem | str | Path, algorithm: Any = None,
     Parameters
     ----------
     problem : DesignProblem or path
-        From :func:`load_problem` (possibly extended), or a problem file's path.
+        From :func:`load_problem` (possibly extended), or a problem file's path; or a
+        :class:`~ehsa_opt.design.problem.DesignProblem` built in Python from a
+        :class:`~ehsa_opt.design.problem.DesignSpace` and an evaluator (a callable
+        mapping a dict of design arrays to a dict of output arrays, with an attribute
+        ``objective_names`` and optionally ``constraint_names`` returned as
+        ``constraint_<name>``): then only its front is computed (no prototype, goals
+        or time-domain check; NSGA-II with 40 × 25 by default).
     algorithm : pymoo algorithm, optional
         Any pymoo multi-objective algorithm instance (NSGA-III, SMS-EMOA, AGE-MOEA …);
         default NSGA-II with the file's ``[nsga2]`` population.  When it keeps pymoo's
@@ -123,11 +130,11 @@ def optimize(problem: DesignProblem | str | Path, algorithm: Any = None,
     if not isinstance(problem, DesignProblem):
         raise TypeError(f"optimize: problem must be a DesignProblem (ehsa_opt.load_problem)"
                         f" or a problem file's path, got {type(problem).__name__}")
-    if problem.config is None:
-        raise ParameterError("optimize: this problem has no problem file behind it (no "
-                             "prototype, goals or road); build it with "
-                             "ehsa_opt.load_problem(path) and extend it with "
-                             "with_objective / with_constraint")
+    if problem.config is None:  # built in Python: a space and an evaluator
+        if method not in (None, "nsga2"):
+            raise ParameterError(f"optimize: method {method!r} needs a problem file (its "
+                                 f"prototype and goals); this problem has none: use nsga2")
+        return _front_only(problem, algorithm, termination, seed, pop_size, progress)
     method = method or "nsga2"
     gens = None
     if isinstance(termination, tuple) and len(termination) == 2 and termination[0] == "n_gen" \
@@ -147,4 +154,51 @@ def optimize(problem: DesignProblem | str | Path, algorithm: Any = None,
         logger.warning("warning: %s: %s", result.method, result.message)
     for line in result.warnings():
         logger.warning("%s", line)
+    return result
+
+
+#: Population and generations of the default NSGA-II on a problem without a file.
+DEFAULT_POP, DEFAULT_GENS, DEFAULT_SEED = 40, 25, 1
+
+
+def _front_only(problem: DesignProblem, algorithm: Any, termination: Any, seed: int | None,
+                pop_size: int | None, progress: Any) -> DesignResult:
+    """The front of a problem built in Python (a :class:`DesignProblem` of a space and an
+    evaluator, no problem file): no prototype, goals or time-domain check; hypervolume
+    of the raw objectives against the default reference."""
+    import numpy as np
+    n_gen = DEFAULT_GENS
+    if isinstance(termination, tuple) and len(termination) == 2 and termination[0] == "n_gen" \
+            and algorithm is None:
+        n_gen, termination = int(termination[1]), None
+    pr = run_nsga2(problem, pop_size=pop_size or DEFAULT_POP, n_gen=n_gen,
+                   seed=DEFAULT_SEED if seed is None else seed, progress=progress,
+                   algorithm=algorithm, termination=termination)
+    names = problem.objective_names
+    rec: dict[str, Any] = {"problem_file": None, "method": "nsga2",
+                           "box": problem.space.as_dict()}
+    outputs = objectives_at(problem, pr.preferred_design)
+    rec.update(design_record(pr.preferred_design, outputs, names))
+    rec.update(constraint_record(problem, outputs))
+    rec.update({"success": pr.success, "message": pr.message, "pick": pr.pick,
+                "n_front": int(pr.F.shape[0]),
+                "hypervolume": {"normalisation": "none", "reference_point":
+                                pr.hv_reference.tolist(), "history": pr.history},
+                "stats": pr.stats})
+    if pr.algorithm != "NSGA2":
+        rec["algorithm"] = pr.algorithm
+    if problem.constraint_names:
+        rec["constraint_names"] = list(problem.constraint_names)
+    if problem.units:
+        rec["units"] = dict(problem.units)
+    out = problem.evaluate_design(pr.designs)
+    front: dict[str, Any] = {k: np.asarray(v, float) for k, v in pr.designs.items()}
+    front.update({k: pr.F[:, j] for j, k in enumerate(names)})
+    front.update({k: np.broadcast_to(v, (pr.F.shape[0],)) for k, v in out.items()
+                  if k not in front})
+    front["feasible"] = (np.all(pr.G <= 0.0, axis=1) if pr.G is not None
+                         else np.ones(pr.F.shape[0], bool))
+    result = DesignResult(rec, pr, None, {"pareto.csv": pr.to_csv_text()}, front)
+    if not result.success:
+        logger.warning("warning: %s: %s", result.method, result.message)
     return result

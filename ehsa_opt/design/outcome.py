@@ -251,8 +251,8 @@ class DesignResult:
         if isinstance(res, ParetoResult) and len(res.F):
             ga_rec = self.record.get("goal_attainment")
             ga_pt = ga_rec["objectives"] if ga_rec else None
-            figs["pareto"] = pd.pareto_projections(res, ga_pt,
-                                                   self.record["prototype"]["objectives"])
+            figs["pareto"] = pd.pareto_projections(
+                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"))
             figs["parallel"] = pd.parallel_coordinates(
                 res, None if ga_rec is None else {**ga_rec["design"], **ga_pt})
             figs["hypervolume"] = pd.hypervolume_history({front_label: res.history},

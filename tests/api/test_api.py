@@ -229,3 +229,33 @@ def test_identify_api_equals_cli(tmp_path) -> None:
     assert api["bounds"] == cli["bounds"] and api["friction_sets"] == cli["friction_sets"]
     back = ehsa_opt.IdentificationResult.load(tmp_path / "api")
     assert back.friction_sets == res.friction_sets and back.report is not None
+
+
+class _Parabolas:
+    """f1 = a² + b, f2 = (a − 2)² + b: Pareto set b = 0, front f2 = (√f1 − 2)²."""
+
+    objective_names = ("f1", "f2")
+
+    def __call__(self, d):
+        a, b = np.asarray(d["a"], float), np.asarray(d["b"], float)
+        return {"f1": a ** 2 + b, "f2": (a - 2.0) ** 2 + b}
+
+
+def test_a_problem_built_in_python(tmp_path) -> None:
+    """A DesignProblem of one's own space and evaluator (no problem file) is solved by the
+    same entry point; its front is the analytic one."""
+    space = ehsa_opt.DesignSpace.from_bounds({"a": [0.0, 2.0], "b": [0.0, 1.0]}, log=[])
+    problem = ehsa_opt.DesignProblem(space, _Parabolas())
+    res = ehsa_opt.optimize(problem, termination=("n_gen", 30), pop_size=20, seed=4)
+    assert res.success and res.G is None
+    t = res.table()
+    f1, f2 = np.asarray(t["f1"]), np.asarray(t["f2"])
+    gap = f2 - (np.sqrt(f1) - 2.0) ** 2  # distance above the true front, > 0
+    assert np.all(gap > -1e-12) and np.median(gap) < 1e-3
+    assert np.mean(np.asarray(t["b"]) < 0.01) >= 0.8
+    assert np.ptp(np.asarray(t["a"])) > 1.5  # the front spans the Pareto set
+    res.save(tmp_path)
+    back = ehsa_opt.DesignResult.load(tmp_path)
+    np.testing.assert_array_equal(back.F, res.F)
+    with pytest.raises(ehsa_opt.ParameterError, match="needs a problem file"):
+        ehsa_opt.optimize(problem, method="goal-attainment")
