@@ -12,8 +12,7 @@ import sys
 from pathlib import Path
 from typing import Callable, Sequence
 
-from .datasets.bench_format import BenchDataError
-from .physics.params import ParameterError
+from . import BenchDataError, ParameterError
 from .utils.cli_args import (  # argument types and up-front checks
     NON_NEGATIVE as _NON_NEGATIVE,
     POSITIVE as _POSITIVE,
@@ -89,94 +88,56 @@ def _cmd_bench_convert_emps(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ design
 def _cmd_optimize(args: argparse.Namespace) -> int:
-    from .design.config import check_method, load_design_config
-    from .design.optimize import check_out_dir, optimize
-    from .design.sweep import executor
-    from .utils.progress import progress_bar
-    cfg = load_design_config(args.problem)
-    method = check_method(args.method or cfg.method)
-    frictions = None
-    if args.friction:
-        from .datasets.friction_source import load_friction
-        frictions = [load_friction(spec) for spec in args.friction]
-    out = check_out_dir(args.out)
-    gens = args.gens or cfg.nsga2.gens
     import contextlib
-    bar_cm = (progress_bar(total=gens, desc="generations", unit="gen") if method == "nsga2"
-              else contextlib.nullcontext())
-    with executor(1, args.scheduler) as mapper, bar_cm as bar:
-        def tick(done: int, total: int) -> None:
+
+    from . import load_problem, optimize
+    from .utils.progress import progress_bar
+    problem = load_problem(args.problem, friction=args.friction,
+                           friction_mode=args.friction_mode)
+    nsga2 = (args.method or problem.config.method) == "nsga2"
+    bar_cm = (progress_bar(total=args.gens or problem.config.nsga2.gens, desc="generations",
+                           unit="gen") if nsga2 else contextlib.nullcontext())
+    with bar_cm as bar:
+        def tick(done: int, total: int | None) -> None:
             if bar is not None:
                 bar.n = done
                 bar.refresh()
-        outcome = optimize(cfg, method, out_dir=out, pop=args.pop, gens=args.gens,
-                           seed=args.seed, checkpoint=args.checkpoint, resume=args.resume,
-                           stop_after=args.stop_after,
-                           mapper=mapper if args.scheduler else None, progress=tick,
-                           frictions=frictions, friction_mode=args.friction_mode,
-                           friction_labels=tuple(args.friction or ()))
-    outcome.write_figures(out / "figures")
-    print(outcome.summary())
-    for line in outcome.warnings():
-        print(line, file=sys.stderr)
-    print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if method == "nsga2"
-                                            else ""))
-    return 0 if outcome.success or args.stop_after else 1
+        result = optimize(problem, termination=("n_gen", args.gens) if args.gens else None,
+                          seed=args.seed, method=args.method or problem.config.method,
+                          pop_size=args.pop, checkpoint=args.checkpoint, resume=args.resume,
+                          stop_after=args.stop_after, scheduler=args.scheduler, progress=tick)
+    out = Path(args.out)
+    result.save(out)
+    result.write_figures(out / "figures")
+    print(result.summary())
+    print(f"wrote {out / 'result.json'}" + (f", {out / 'pareto.csv'}" if nsga2 else ""))
+    return 0 if result.success or args.stop_after else 1
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    import time
-
-    from .design.sweep import parse_sweep, run_sweep, sweep_warnings, write_sweep
-    from .physics.params import load_toml
-
-    spec = parse_sweep(load_toml(args.problem), args.problem,
-                       friction_from=_friction_file(args.friction))
-    t0 = time.perf_counter()
-    rows = run_sweep(spec, jobs=args.jobs, scheduler=args.scheduler)
-    dt = time.perf_counter() - t0
+    from . import sweep
+    result = sweep(args.problem, friction_from=args.friction, jobs=args.jobs,
+                   scheduler=args.scheduler)
     out = Path(args.out)
-    write_sweep(out, rows, spec)
-    for line in sweep_warnings(rows, spec):
-        print(line, file=sys.stderr)
+    result.save(out)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.jobs} local job(s)"
-    print(f"{len(rows)} cases in {dt:.2f} s on {where}; wrote {out / 'sweep.csv'}")
+    print(f"{len(result.rows)} cases in {result.seconds:.2f} s on {where}; wrote "
+          f"{out / 'sweep.csv'}")
     return 0
-
-
-def _friction_file(spec: str | None) -> str | None:
-    """``--friction FILE`` of sweep (a case suffix makes no sense: the sweep names cases)."""
-    if spec is None:
-        return None
-    from .datasets.friction_source import parse_friction_spec
-    path, case = parse_friction_spec(spec)
-    if str(path) != spec:
-        raise _UsageError(f"sweep --friction {spec}: give the file only; the cases come from "
-                          f"[sweep] friction = [\"none\", \"min\", \"best\", \"max\"]")
-    return spec
 
 
 # ------------------------------------------------------------------ identify
 def _cmd_identify(args: argparse.Namespace) -> int:
-    from .datasets.bench_format import load_bench
-    from .estimation.bounds import envelope_lines, identification_dict
-    from .estimation.identify import identify
-    from .utils.io import atomic_write_json
+    from . import identify, load_bench
     from .utils.progress import progress_bar
-
     data = load_bench(args.data_dir, lenient=args.lenient)  # refuses bad data before solving
-    out = Path(args.out)
     with progress_bar(total=len(data.tests), desc="identify", unit="test") as bar:
-        rep = identify(data, starts=args.starts, jobs=args.jobs, seed=args.seed,
-                       progress=lambda k: bar.update(1))
-    out.mkdir(parents=True, exist_ok=True)
-    rep.write(out)
-    doc = identification_dict(rep)
-    atomic_write_json(out / "identification.json", doc)
-    print(rep.summary(out / "identification.json"))
-    for line in envelope_lines(doc, out / "identification.json"):
-        print(line)
-    return 0 if rep.success else 1
+        result = identify(data, starts=args.starts, jobs=args.jobs, seed=args.seed,
+                          progress=lambda k: bar.update(1))
+    out = Path(args.out)
+    result.save(out)
+    print(result.summary(out / "identification.json"))
+    return 0 if result.success else 1
 
 
 def _cmd_plan_tests(args: argparse.Namespace) -> int:
@@ -212,10 +173,9 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from .vehicle.problem_simulation import simulate_problem
-    run = simulate_problem(args.problem, args.friction,
-                           on_warning=lambda line: print(line, file=sys.stderr))
-    print(run.to_json() if args.json else run.summary())
+    from . import simulate
+    result = simulate(args.problem, friction=args.friction, keep_series=False)
+    print(result.to_json() if args.json else result.summary())
     return 0
 
 
@@ -225,7 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="ehsa-opt",
         description="Identify, simulate and optimally design ball-screw energy-harvesting "
                     "shock absorbers.")
-    from .utils.version import __version__
+    from . import __version__
     parser.add_argument("--version", action="version", version=f"ehsa-opt {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -398,6 +358,13 @@ def _shorten(message: str) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ehsa-opt`` console script."""
+    from .utils.log import stderr_handler
+    with stderr_handler():  # the library's warnings (``ehsa_opt`` logger), lines on stderr
+        return _main(argv)
+
+
+def _main(argv: Sequence[str] | None = None) -> int:
+    """Parse, run the command, turn input errors into exit status 2."""
     parser = build_parser()
     args = parser.parse_args(argv)
     func: Callable[[argparse.Namespace], int] = args.func

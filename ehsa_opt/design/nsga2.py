@@ -16,6 +16,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..physics.params import ParameterError
+from ..utils.log import logger
 from .checkpoint import capture, load_state, restore, save_state, verify_designs
 from .pareto import hypervolume, non_dominated, pick_preferred, update_archive
 from .problem import DesignProblem
@@ -49,6 +50,10 @@ class ParetoResult:
         Normalisation (F / hv_scale) and reference point of the hypervolume.
     stats : dict
         ``n_eval``, ``seconds`` (this process), ``resumed_from`` generation.
+    G : ndarray (n, n_constr) or None
+        Their constraint values (≤ 0 feasible), None without constraints.
+    algorithm : str
+        The pymoo algorithm's class name.
     """
 
     success: bool
@@ -63,6 +68,13 @@ class ParetoResult:
     hv_scale: np.ndarray
     hv_reference: np.ndarray
     stats: dict
+    G: np.ndarray | None = None
+    algorithm: str = "NSGA2"
+
+    @property
+    def preferred_design(self) -> dict[str, float]:
+        """The preferred (knee / preference pick) design, physical units."""
+        return {k: float(v[self.preferred]) for k, v in self.designs.items()}
 
     def rows(self) -> list[dict[str, float]]:
         """One dict per front point: design variables then objectives."""
@@ -78,13 +90,17 @@ class ParetoResult:
         i = self.preferred
         hv = self.history[-1] if self.history else {}
         return "\n".join([
-            f"NSGA-II: {'converged' if self.success else 'FAILED'} ({self.message})",
+            f"{self._label}: {'converged' if self.success else 'FAILED'} ({self.message})",
             f"front: {self.F.shape[0]} designs" + (f", hypervolume {hv['hv']:.4g} after "
                                                    f"{hv['n_eval']} evaluations" if hv else ""),
             f"preferred ({self.pick}): " + ", ".join(
                 f"{k} = {float(v[i]):.4g}" for k, v in self.designs.items()),
             "objectives: " + ", ".join(f"{k} = {float(self.F[i, j]):.4g}"
                                        for j, k in enumerate(self.objective_names))])
+
+    @property
+    def _label(self) -> str:
+        return "NSGA-II" if self.algorithm == "NSGA2" else self.algorithm
 
     def to_csv_text(self) -> str:
         """``pareto.csv`` text: one row per non-dominated design, full precision."""
@@ -101,13 +117,14 @@ class ParetoResult:
         return pareto_projections(self, **kw)
 
 
-def _front(algorithm: Any) -> tuple[np.ndarray, np.ndarray]:
+def _front(algorithm: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     opt = algorithm.opt
     X, F = opt.get("X"), opt.get("F")
+    G = opt.get("G") if algorithm.problem.n_ieq_constr else None
     keep = non_dominated(F)
     X, F = X[keep], F[keep]
     order = np.lexsort(F.T[::-1])
-    return X[order], F[order]
+    return X[order], F[order], (None if G is None else G[keep][order])
 
 
 def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, seed: int = 1,
@@ -116,7 +133,8 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
               hv_reference: Sequence[float] | None = None, pick: str = "knee",
               pick_weights: Sequence[float] | None = None,
               progress: Callable[[int, int], None] | None = None,
-              initial: Any = None) -> ParetoResult:
+              initial: Any = None, algorithm: Any = None,
+              termination: Any = None) -> ParetoResult:
     """Seeded NSGA-II on ``problem`` with per-generation hypervolume and checkpoints.
 
     Parameters
@@ -139,10 +157,18 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
     pick : str
         'knee', 'compromise' or 'preference' (see :func:`pick_preferred`), made
         among the front points inside the hypervolume box (all if none is).
-    initial : array (k, n_var), optional
-        Unit-cube points put in the first population (e.g. the prototype, feasible by
-        construction when the limits are its own demands); the rest is drawn uniformly
-        with ``seed``.
+    initial : array (k, n_var) or False, optional
+        Unit-cube points put in the first population (default the problem's feasible
+        seed :attr:`~.problem.DesignProblem.initial`, e.g. the prototype, feasible by
+        construction when the limits are its own demands; ``False``: none); the rest is
+        drawn uniformly with ``seed``.
+    algorithm : pymoo algorithm, optional
+        Run this algorithm instead of NSGA-II (NSGA-III, SMS-EMOA, AGE-MOEA …;
+        ``pop_size`` is then its own); when it keeps pymoo's default random sampling,
+        its first population is ``initial`` first and the rest uniform (as NSGA-II's).
+        No checkpoints.
+    termination : pymoo termination or tuple, optional
+        Instead of ``n_gen`` generations, e.g. ``("n_eval", 2000)``.
 
     Notes
     -----
@@ -164,11 +190,17 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
         raise ParameterError(f"nsga2: hv_scale (> 0) and hv_reference need {m} values")
     fp = problem.fingerprint()
     t0 = time.perf_counter()
+    if algorithm is not None or termination is not None:
+        return _run_other(problem, algorithm, termination, pop_size, n_gen, seed,
+                          _initial(problem, initial),
+                          scale, ref, pick, pick_weights, progress, (checkpoint, resume,
+                                                                     stop_after))
     if resume is not None:
         algorithm, history, archive = _resumed(problem, Path(resume), fp, pop_size, seed, n_gen)
         ck = Path(checkpoint) if checkpoint is not None else Path(resume)
     else:
-        algorithm, history, archive = _started(problem, pop_size, seed, n_gen, initial)
+        algorithm, history, archive = _started(problem, pop_size, seed, n_gen,
+                                               _initial(problem, initial))
         ck = Path(checkpoint) if checkpoint is not None else None
     resumed_from = len(history)
     algorithm.termination = get_termination("n_gen", n_gen)
@@ -176,7 +208,15 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
                           lambda arc: None if ck is None else save_state(
                               ck, capture(algorithm, history, arc, fp, pop_size, seed)),
                           progress, stop_after)
-    X, F = _front(algorithm)
+    return _result(problem, algorithm, history, interrupted, n_gen, scale, ref, pick,
+                   pick_weights, t0, resumed_from)
+
+
+def _result(problem: DesignProblem, algorithm: Any, history: list[dict], interrupted: bool,
+            n_gen: int | None, scale: np.ndarray, ref: np.ndarray, pick: str,
+            pick_weights: Sequence[float] | None, t0: float, resumed_from: int) -> ParetoResult:
+    """The :class:`ParetoResult` of a finished (or stopped) run."""
+    X, F, G = _front(algorithm)
     # pick among the points inside the hypervolume box (F/scale < reference): the
     # front's far tails (e.g. 1/ρ_g in the thousands) would otherwise set the
     # normalisation; all points when none is inside
@@ -185,6 +225,9 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
     idx = int(cand[pick_preferred(F[cand] / scale, pick, pick_weights)])
     msg = (f"stopped after {len(history)} of {n_gen} generations (resume with --resume)"
            if interrupted else f"{len(history)} generations, {F.shape[0]} non-dominated designs")
+    if n_gen is None and not interrupted:
+        msg = (f"{type(algorithm.termination).__name__} ended the run after {len(history)} "
+               f"generations, {F.shape[0]} non-dominated designs")
     feasible = True
     if problem.n_ieq_constr:
         feasible = bool(np.all(algorithm.opt.get("feas")))
@@ -195,9 +238,56 @@ def run_nsga2(problem: DesignProblem, *, pop_size: int = 40, n_gen: int = 25, se
         success=not interrupted and feasible, message=msg, X=X,
         designs=problem.space.from_unit(X), F=F,
         objective_names=problem.objective_names, preferred=idx, pick=pick, history=history,
-        hv_scale=scale, hv_reference=ref,
+        hv_scale=scale, hv_reference=ref, G=G, algorithm=type(algorithm).__name__,
         stats={"n_eval": int(algorithm.evaluator.n_eval), "seconds": time.perf_counter() - t0,
                "resumed_from": resumed_from, "generations": len(history)})
+
+
+def _run_other(problem: DesignProblem, algorithm: Any, termination: Any, pop_size: int,
+               n_gen: int, seed: int, initial: Any, scale: np.ndarray, ref: np.ndarray,
+               pick: str, pick_weights: Sequence[float] | None,
+               progress: Callable[[int, int], None] | None,
+               state_args: tuple[Any, Any, Any]) -> ParetoResult:
+    """:func:`run_nsga2` with a given pymoo ``algorithm`` and/or ``termination``: the same
+    seeding, history and archive; no checkpoints."""
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.operators.sampling.rnd import FloatRandomSampling
+
+    checkpoint, resume, stop_after = state_args
+    if checkpoint is not None or resume is not None:
+        raise ParameterError("checkpoints and --resume are available with the built-in "
+                             "NSGA-II only (no algorithm=, no termination=)")
+    t0 = time.perf_counter()
+    if algorithm is None:
+        algorithm = NSGA2(pop_size=pop_size, eliminate_duplicates=True)
+    size = int(getattr(algorithm, "pop_size", None) or pop_size)
+    init = getattr(algorithm, "initialization", None)
+    if init is not None and initial is not None and type(init.sampling) is FloatRandomSampling:
+        init.sampling = problem.seed_population(size, seed, initial)
+    algorithm.setup(problem, termination=termination if termination is not None
+                    else ("n_gen", n_gen), seed=seed, verbose=False)
+    total = _generations(algorithm.termination)
+    history: list[dict] = []
+    interrupted = _evolve(problem, algorithm, history, np.zeros((0, problem.n_obj)), total,
+                          scale, ref, lambda arc: None, progress, stop_after)
+    return _result(problem, algorithm, history, interrupted, total, scale, ref, pick,
+                   pick_weights, t0, 0)
+
+
+def _initial(problem: DesignProblem, initial: Any) -> Any:
+    """The seed designs: ``initial`` when given (``False``: none), else the problem's own
+    feasible seed (:attr:`DesignProblem.initial`, e.g. the prototype)."""
+    if initial is False:
+        return None
+    return problem.initial if initial is None else initial
+
+
+def _generations(termination: Any) -> int | None:
+    """The number of generations of an ``n_gen`` termination, else None."""
+    from pymoo.termination.max_gen import MaximumGenerationTermination
+    if isinstance(termination, MaximumGenerationTermination):
+        return int(termination.n_max_gen)
+    return None
 
 
 def _resumed(problem: DesignProblem, rdir: Path, fp: str, pop_size: int, seed: int,
@@ -235,9 +325,7 @@ def _started(problem: DesignProblem, pop_size: int, seed: int, n_gen: int,
 
     kw: dict[str, Any] = {}
     if initial is not None:
-        first = np.atleast_2d(np.asarray(initial, dtype=float))[:pop_size]
-        rest = np.random.default_rng(seed).random((pop_size - first.shape[0], problem.n_var))
-        kw["sampling"] = np.clip(np.vstack([first, rest]), 0.0, 1.0)
+        kw["sampling"] = problem.seed_population(pop_size, seed, initial)
     algorithm = NSGA2(pop_size=pop_size, seed=seed, eliminate_duplicates=True, **kw)
     algorithm.setup(problem, termination=("n_gen", n_gen), verbose=False)
     return algorithm, [], np.zeros((0, problem.n_obj))
@@ -251,7 +339,7 @@ def _evolve(problem: DesignProblem, algorithm: Any, history: list[dict], archive
     ``history`` and is saved by ``save(archive)``.  Returns whether the run stopped early."""
     hv_front: tuple[np.ndarray, float] | None = None  # last front and its hypervolume
     hv_archive = None if not history else float(history[-1]["hv_archive"])
-    while len(history) < n_gen:
+    while algorithm.has_next() if n_gen is None else len(history) < n_gen:
         # Algorithm.next() spelled out, to see the evaluated infills (archive)
         infills = algorithm.infill()
         changed = False
@@ -264,7 +352,7 @@ def _evolve(problem: DesignProblem, algorithm: Any, history: list[dict], archive
             archive, changed = update_archive(archive, F_new)
         else:
             algorithm.advance()
-        _, F = _front(algorithm)
+        _, F, _ = _front(algorithm)
         if hv_front is None or not np.array_equal(hv_front[0], F):
             hv_front = (F, hypervolume(F / scale, ref))
         if changed or hv_archive is None:
@@ -273,8 +361,12 @@ def _evolve(problem: DesignProblem, algorithm: Any, history: list[dict], archive
                         "hv": hv_front[1], "n_front": int(F.shape[0]),
                         "hv_archive": hv_archive, "n_archive": int(archive.shape[0])})
         save(archive)
+        logger.info("generation %d%s: %d evaluations, hypervolume %.4g, %d non-dominated",
+                    len(history), "" if n_gen is None else f"/{n_gen}",
+                    history[-1]["n_eval"], history[-1]["hv"], history[-1]["n_front"])
         if progress is not None:
             progress(len(history), n_gen)
-        if stop_after is not None and len(history) >= stop_after and len(history) < n_gen:
+        if stop_after is not None and len(history) >= stop_after and (
+                n_gen is None or len(history) < n_gen):
             return True
     return False

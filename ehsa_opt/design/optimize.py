@@ -1,5 +1,7 @@
-"""``ehsa-opt optimize``: a design problem file → goal attainment or NSGA-II →
-``OUT/result.json`` (+ ``OUT/pareto.csv`` for NSGA-II), written atomically.
+"""The design study of ``ehsa-opt optimize`` and :func:`ehsa_opt.optimize`: a design
+problem → goal attainment or NSGA-II (or any pymoo algorithm) → a
+:class:`~.outcome.DesignResult` in memory, whose ``save(folder)`` writes
+``result.json`` (+ ``pareto.csv``, ``front.csv`` for a front) atomically.
 
 ``result.json`` holds ``design`` (total_inertia_gcm2, lead_mm_per_rev,
 speed_constant_rpm_per_V, load_ohm) and ``objectives`` (comfort, road_holding,
@@ -31,7 +33,7 @@ from .nsga2 import run_nsga2
 from .outcome import OptimizeOutcome, motor_summary, time_domain_summary
 from .problem import OBJECTIVE_NAMES, DesignProblem, QuarterCarObjectives
 
-__all__ = ["build_problem", "config_frictions", "front_check", "goals_and_weights", "optimize",
+__all__ = ["build_problem", "extended_like", "config_frictions", "front_check", "goals_and_weights", "optimize",
            "OptimizeOutcome", "objectives_at", "design_record", "constraint_record",
            "harvesters_of", "motor_summary", "time_domain_summary"]
 
@@ -66,8 +68,19 @@ def build_problem(cfg: DesignConfig, mapper: Any = None,
                                   (("n_freq", cfg.n_freq),), motor if motor is not None
                                   else cfg.motor(), cfg.stroke_limit_m)
     problem = DesignProblem(cfg.space, ev)
-    problem.mapper = mapper
+    problem.mapper, problem.config = mapper, cfg
+    if problem.constraint_names and motor is None:
+        # the prototype meets the limits made of its own demands: a feasible seed
+        problem.initial = cfg.space.to_unit(cfg.prototype_design)[None, :]
     return problem
+
+
+def extended_like(problem: DesignProblem, model: DesignProblem | None) -> DesignProblem:
+    """``problem`` with the user objectives and constraints of ``model`` (if any)."""
+    ev = getattr(model, "evaluator", None)
+    if ev is None or not hasattr(ev, "user_constraints"):
+        return problem
+    return problem.extended(ev.objectives, ev.user_constraints)
 
 
 def objectives_at(problem: DesignProblem, design: Mapping[str, float]) -> dict[str, float]:
@@ -89,11 +102,13 @@ def goals_and_weights(cfg: DesignConfig, problem: DesignProblem
     return goals, weights, proto
 
 
-def design_record(design: Mapping[str, float], outputs: Mapping[str, float]) -> dict[str, Any]:
-    """The ``design`` / ``objectives`` / ``metrics`` blocks of result.json."""
+def design_record(design: Mapping[str, float], outputs: Mapping[str, float],
+                  names: Sequence[str] = OBJECTIVE_NAMES) -> dict[str, Any]:
+    """The ``design`` / ``objectives`` / ``metrics`` blocks of result.json (objectives
+    ``names``, default the paper's four)."""
     return {"design": {k: float(design[k]) for k in design},
-            "objectives": {k: float(outputs[k]) for k in OBJECTIVE_NAMES},
-            "metrics": {k: float(v) for k, v in outputs.items() if k not in OBJECTIVE_NAMES}}
+            "objectives": {k: float(outputs[k]) for k in names},
+            "metrics": {k: float(v) for k, v in outputs.items() if k not in names}}
 
 
 def _changes(proto: Mapping[str, float], opt: Mapping[str, float]) -> dict[str, float]:
@@ -106,7 +121,8 @@ def _changes(proto: Mapping[str, float], opt: Mapping[str, float]) -> dict[str, 
                                100 / opt["inverse_efficiency"]]}
 
 
-def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Path,
+def optimize(cfg: DesignConfig, method: str | None = None, *,
+             out_dir: str | Path | None = None,
              pop: int | None = None, gens: int | None = None, seed: int | None = None,
              checkpoint: str | Path | None = None, resume: str | Path | None = None,
              stop_after: int | None = None, mapper: Any = None,
@@ -116,9 +132,11 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
              friction_mode: str | None = None, friction_labels: Sequence[str] = (),
              check_time_domain: bool = True,
              identified_range_m_per_s: float | None = None,
-             identified_range_source: str = "") -> OptimizeOutcome:
-    """Run the design study of ``cfg`` and write ``out_dir/result.json`` (and
-    ``pareto.csv``, ``history.json``).
+             identified_range_source: str = "", problem: DesignProblem | None = None,
+             algorithm: Any = None, termination: Any = None) -> OptimizeOutcome:
+    """Run the design study of ``cfg``; with ``out_dir`` write its files there
+    (``result.json``, ``pareto.csv``, ``ga_history.json``, ``front_check.csv``; see
+    :meth:`OptimizeOutcome.save`), else write nothing.
 
     For NSGA-II the goal-attainment point is computed too (``with_goal_attainment``)
     so the front can be drawn against it and checked for dominance.  ``frictions`` /
@@ -131,75 +149,42 @@ def optimize(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Pat
     ``friction_labels`` files, of the problem file's ``[friction] from``, else the
     embedded campaign's); ``result.json`` states the fractions of time and friction
     energy the chosen design spends above it (``out_of_range``, fast path).
+    ``problem``: the design problem to solve (default :func:`build_problem` of ``cfg``;
+    one with user objectives or constraints, see
+    :meth:`~.problem.DesignProblem.with_objective`); ``algorithm`` / ``termination``: a
+    pymoo algorithm and termination instead of the built-in NSGA-II (see
+    :func:`~.nsga2.run_nsga2`).
     """
     kw = dict(pop=pop, gens=gens, seed=seed, checkpoint=checkpoint, resume=resume,
               stop_after=stop_after, mapper=mapper, with_goal_attainment=with_goal_attainment,
               progress=progress, frictions=frictions, friction_mode=friction_mode,
               friction_labels=friction_labels, check_time_domain=check_time_domain,
               identified_range_m_per_s=identified_range_m_per_s,
-              identified_range_source=identified_range_source)
+              identified_range_source=identified_range_source, algorithm=algorithm,
+              termination=termination)
     if cfg.motor_model != "catalogue":
-        return _optimize_one(cfg, method, out_dir=out_dir, **kw)
-    from ..utils.io import atomic_write_text
-    if checkpoint is not None or resume is not None:
-        raise ParameterError("--checkpoint/--resume: not available with a motor catalogue "
-                             "(one run per motor); run one motor's problem instead")
-    out = Path(out_dir)
-    results = []
-    for k, motor in enumerate(cfg.catalogue_motors()):
-        res = _optimize_one(cfg, method, out_dir=out / f"motor_{k}", motor=motor, **kw)
-        results.append((motor, res))
-    table = [{"motor": m.name, "source": m.source, "success": bool(r.record["success"]),
-              "feasible": bool(r.record.get("feasible", False)),
-              "gamma": r.record.get("gamma"), "design": r.design, "objectives": r.objectives,
-              "metrics": r.metrics,
-              "active_constraints": r.record.get("active_constraints", []),
-              "constraints": r.record.get("constraints", {})} for m, r in results]
-    feasible = [i for i, row in enumerate(table) if row["feasible"]]
-    method = check_method(method or cfg.method)
-    if method == "goal-attainment":
-        pool = feasible or list(range(len(table)))
-        best = min(pool, key=lambda i: (table[i]["gamma"] if table[i]["gamma"] is not None
-                                        else math.inf))
+        outcome = _optimize_one(cfg, method, problem=problem, **kw)
     else:
-        best = max(feasible or list(range(len(table))),
-                   key=lambda i: results[i][1].record.get("n_feasible_front", 0))
-    chosen = results[best][1]
-    rec = dict(chosen.record)
-    rec.update({"motor": {"model": "catalogue", "catalogue": cfg.catalogue,
-                              "chosen": table[best]["motor"],
-                              "source": table[best]["source"]},
-                    "catalogue": table,
-                    "catalogue_note": ("no motor of the catalogue has a feasible design"
-                                       if not feasible else
-                                       f"{len(feasible)} of {len(table)} motors feasible")})
-    if method == "nsga2":
-        # the catalogue's front: feasible points of every motor, non-dominated across motors
-        from .pareto import non_dominated
-        pts = []
-        for m, r in results:
-            pr = r.result
-            ok = np.ones(pr.F.shape[0], bool)
-            if r.record.get("feasible_front") is not None:
-                ok = np.asarray(r.record["feasible_front"], bool)
-            for i in np.flatnonzero(ok):
-                pts.append((m.name, {k: float(v[i]) for k, v in pr.designs.items()}, pr.F[i]))
-        keep = (np.flatnonzero(non_dominated(np.array([p[2] for p in pts]))) if pts
-                else np.zeros(0, int))
-        names = list(pts[0][1]) if pts else []
-        lines = [",".join(["motor"] + names + list(OBJECTIVE_NAMES))]
-        lines += [",".join([f'"{pts[i][0]}"'] + [repr(pts[i][1][n]) for n in names]
-                           + [repr(float(v)) for v in pts[i][2]]) for i in keep]
-        rec["n_front"] = len(lines) - 1
-        rec["front_note"] = ("feasible points of every motor, non-dominated across motors"
-                                 if pts else "no motor has a feasible design")
-        atomic_write_text(out / "pareto.csv", "\n".join(lines) + "\n")
-    outcome = OptimizeOutcome(rec, chosen.result, chosen.goal_attainment_result)
-    atomic_write_text(out / "result.json", outcome.to_json())
+        from .catalogue_study import catalogue_study
+        outcome = catalogue_study(cfg, method, kw, _optimize_one, lambda motor: _motor_problem(
+            cfg, problem, motor, frictions, friction_mode))
+    if out_dir is not None:
+        outcome.save(out_dir)
     return outcome
 
 
-def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str | Path,
+def _motor_problem(cfg: DesignConfig, problem: DesignProblem | None, motor: Any,
+                   frictions: Any, friction_mode: str | None) -> DesignProblem:
+    """The design problem with one catalogue motor, with ``problem``'s friction and user
+    objectives and constraints."""
+    if problem is not None:
+        ev = problem.evaluator
+        if frictions is None and hasattr(ev, "frictions"):
+            frictions, friction_mode = ev.frictions, ev.mode
+    return extended_like(build_problem(cfg, None, frictions, friction_mode, motor), problem)
+
+
+def _optimize_one(cfg: DesignConfig, method: str | None = None, *,
                   pop: int | None = None, gens: int | None = None, seed: int | None = None,
                   checkpoint: str | Path | None = None, resume: str | Path | None = None,
                   stop_after: int | None = None, mapper: Any = None,
@@ -209,37 +194,51 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
                   friction_mode: str | None = None, friction_labels: Sequence[str] = (),
                   check_time_domain: bool = True, motor: Any = None,
                   identified_range_m_per_s: float | None = None,
-                  identified_range_source: str = "") -> OptimizeOutcome:
-    """One design study (one motor model) of :func:`optimize`."""
-    from ..utils.io import atomic_write_json, atomic_write_text
+                  identified_range_source: str = "", problem: DesignProblem | None = None,
+                  algorithm: Any = None, termination: Any = None) -> OptimizeOutcome:
+    """One design study (one motor model) of :func:`optimize`; writes nothing."""
+    import json
 
+    from ..utils.io import json_safe
     method = check_method(method or cfg.method)
     if method != "nsga2":
         given = [n for n, v in (("--checkpoint", checkpoint), ("--resume", resume),
-                                ("--stop-after", stop_after), ("--pop", pop), ("--gens", gens))
+                                ("--stop-after", stop_after), ("--pop", pop), ("--gens", gens),
+                                ("algorithm", algorithm), ("termination", termination))
                  if v is not None]
         if given:
             raise ParameterError(f"{', '.join(given)} only apply to --method nsga2 (goal "
                                  f"attainment takes a second or less and has no generations)")
-    out = Path(out_dir)
     if resume is not None:
         load_state(resume)  # a bad checkpoint is refused before any work
-    problem = build_problem(cfg, mapper, frictions, friction_mode, motor)
+    if problem is None:
+        problem = build_problem(cfg, mapper, frictions, friction_mode, motor)
+    elif mapper is not None:
+        problem.mapper = mapper
+    own = tuple(problem.objective_names) == OBJECTIVE_NAMES
+    if method == "goal-attainment" and not own:
+        raise ParameterError(f"goal attainment needs the objectives {OBJECTIVE_NAMES}; this "
+                             f"problem has {problem.objective_names}: use method 'nsga2' "
+                             f"(or any pymoo algorithm)")
     ev = problem.evaluator
     # goals: the prototype's own objectives (its own motor), whatever motor is designed
     goals, weights, proto = goals_and_weights(
-        cfg, problem if motor is None else build_problem(cfg, None, frictions, friction_mode))
-    ga_settings = cfg.goal_attainment
+        cfg, problem if motor is None else extended_like(
+            build_problem(cfg, None, frictions, friction_mode), problem))
     rec: dict[str, Any] = {}
+    files: dict[str, str] = {}
+    front: dict[str, Any] = {}
     rec.update({"problem_file": cfg.path, "method": method,
-                    "vehicle": cfg.vehicle_name, "road": {"iso_class": cfg.road.iso_class,
-                                                          "speed_km_per_h": cfg.road.speed_km_per_h},
-                    "box": cfg.space.as_dict(),
-                    "friction": _friction_block(ev, friction_labels),
-                    "motor": _motor_block(ev, cfg),
-                    "prototype": design_record(cfg.prototype_design, proto)})
+                "vehicle": cfg.vehicle_name, "road": {"iso_class": cfg.road.iso_class,
+                                                      "speed_km_per_h": cfg.road.speed_km_per_h},
+                "box": cfg.space.as_dict(),
+                "friction": _friction_block(ev, friction_labels),
+                "motor": _motor_block(ev, cfg),
+                "prototype": design_record(cfg.prototype_design, proto,
+                                           problem.objective_names)})
     ga = None
-    if method == "goal-attainment" or with_goal_attainment:
+    if method == "goal-attainment" or (with_goal_attainment and own):
+        ga_settings = cfg.goal_attainment
         ga = solve_goal_attainment(problem, goals, weights, cfg.prototype_design,
                                    n_starts=ga_settings.n_starts, seed=ga_settings.seed,
                                    max_iter=ga_settings.max_iter, where=f"{cfg.path} [goals]")
@@ -249,7 +248,8 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
                     "success": ga.success, "message": ga.message, "stats": ga.stats,
                     "starts": ga.starts, "changes": _changes(proto, ga.objectives)}
         rec["goal_attainment"] = ga_block
-        atomic_write_json(out / "ga_history.json", ga.history)
+        files["ga_history.json"] = json.dumps(json_safe(ga.history), indent=1,
+                                              allow_nan=False)
     if method == "goal-attainment":
         assert ga is not None
         rec.update(design_record(ga.design, ga.objectives))
@@ -257,54 +257,14 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
         rec.update(constraint_record(problem, ga.objectives))
         result: Any = ga
     else:
-        ns = cfg.nsga2
-        F_proto = np.array([proto[k] for k in OBJECTIVE_NAMES])
-        ref = np.full(len(OBJECTIVE_NAMES), ns.hv_reference)
-        pr = run_nsga2(problem, pop_size=pop or ns.pop, n_gen=gens or ns.gens,
-                       seed=ns.seed if seed is None else seed, checkpoint=checkpoint,
-                       resume=resume, stop_after=stop_after, hv_scale=F_proto,
-                       hv_reference=ref, pick=ns.pick, pick_weights=ns.pick_weights,
-                       progress=progress,
-                       initial=(problem.space.to_unit(cfg.prototype_design)[None, :]
-                                if problem.constraint_names and motor is None else None))
-        i = pr.preferred
-        d = {k: float(v[i]) for k, v in pr.designs.items()}
-        outputs = objectives_at(problem, d)
-        rec.update(design_record(d, outputs))
-        rec.update(constraint_record(problem, outputs))
-        front_out = problem.evaluate_design(pr.designs)
-        if problem.constraint_names:
-            G = np.column_stack([np.asarray(front_out[f"constraint_{c}"], float)
-                                 for c in problem.constraint_names])
-            rec["n_feasible_front"] = int(np.sum(np.all(G <= 1e-9, axis=1)))
-            rec["feasible_front"] = np.all(G <= 1e-9, axis=1).tolist()
-        from ..vehicle.validity import FAST_PATH_REGION, check_validity
-        region, design = None, dict(pr.designs)
-        if hasattr(ev, "frictions"):  # the fast path: its validated region
-            region = FAST_PATH_REGION
-            design["electrical_damping_Ns_per_m"] = np.array(
-                [h.equivalent_damping_Ns_per_m(0.0) for h in harvesters_of(ev, pr.designs)])
-        validity = check_validity(front_out, stroke_limit_m=cfg.vehicle.stroke_limit_m,
-                                  design=design, fast_path_region=region)
-        rec["front_validity"] = validity.as_list()  # per pareto.csv row
-        rec["n_front_valid"] = int(np.sum(validity.valid))
-        rec.update({"success": pr.success, "message": pr.message, "pick": pr.pick,
-                        "n_front": int(pr.F.shape[0]),
-                        "hypervolume": {"normalisation": "F / F(prototype)",
-                                        "reference_point": ref.tolist(),
-                                        "history": pr.history},
-                        "stats": pr.stats})
-        if ga is not None:
-            f_ga = np.array([ga.objectives[k] for k in OBJECTIVE_NAMES])
-            better = np.all(pr.F < f_ga * (1 - 0.01), axis=1)
-            rec["front_vs_goal_attainment"] = {
-                "n_dominating_by_1pct": int(better.sum()),
-                "best_ratio_per_point_min": float(np.min(np.max(pr.F / f_ga, axis=1)))}
-        atomic_write_text(out / "pareto.csv", pr.to_csv_text())
-        result = pr
+        result = _front_study(cfg, problem, proto, rec, ga, motor is None,
+                              dict(pop=pop, gens=gens, seed=seed, checkpoint=checkpoint,
+                                   resume=resume, stop_after=stop_after, progress=progress,
+                                   algorithm=algorithm, termination=termination), front)
+        files["pareto.csv"] = result.to_csv_text()
     rec["out_of_range"] = _out_of_range(cfg, ev, rec["design"],
-                                            identified_range_m_per_s, identified_range_source,
-                                            friction_labels)
+                                        identified_range_m_per_s, identified_range_source,
+                                        friction_labels)
     if check_time_domain and (hasattr(ev, "frictions") or problem.constraint_names):
         if method == "nsga2":
             designs = {k: np.asarray(v, float) for k, v in result.designs.items()}
@@ -312,18 +272,74 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *, out_dir: str 
             designs = {k: np.array([float(v)]) for k, v in rec["design"].items()}
         check, csv_text = front_check(cfg, ev, designs)
         rec["time_domain_check"] = check
-        atomic_write_text(out / "front_check.csv", csv_text)
-    outcome = OptimizeOutcome(rec, result, ga)
-    atomic_write_text(out / "result.json", outcome.to_json())
-    return outcome
+        files["front_check.csv"] = csv_text
+    if problem.units:
+        rec["units"] = dict(problem.units)
+    if problem.constraint_names:
+        rec["constraint_names"] = list(problem.constraint_names)
+    return OptimizeOutcome(rec, result, ga, files, front or None)
 
 
-def check_out_dir(out_dir: str | Path) -> Path:
-    """Refuse an output path that is an existing file."""
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise ParameterError(f"--out {out}: exists and is not a directory")
-    return out
+def _front_study(cfg: DesignConfig, problem: DesignProblem, proto: Mapping[str, float],
+                 rec: dict[str, Any], ga: Any, own_motor: bool,
+                 run: dict[str, Any], front: dict[str, Any]) -> Any:
+    """The NSGA-II (or given pymoo algorithm's) front of ``problem``, its record entries
+    (preferred design, feasibility, validity, hypervolume) added to ``rec`` and its
+    columns (designs, objectives, every evaluator output, ``feasible``) to ``front``."""
+    ns = cfg.nsga2
+    names = problem.objective_names
+    F_proto = np.array([proto[k] for k in names])
+    ref = np.full(len(names), ns.hv_reference)
+    pr = run_nsga2(problem, pop_size=run["pop"] or ns.pop, n_gen=run["gens"] or ns.gens,
+                   seed=ns.seed if run["seed"] is None else run["seed"],
+                   checkpoint=run["checkpoint"], resume=run["resume"],
+                   stop_after=run["stop_after"], hv_scale=F_proto, hv_reference=ref,
+                   pick=ns.pick, pick_weights=ns.pick_weights, progress=run["progress"],
+                   initial=None if own_motor else False,
+                   algorithm=run["algorithm"], termination=run["termination"])
+    d = pr.preferred_design
+    outputs = objectives_at(problem, d)
+    rec.update(design_record(d, outputs, names))
+    rec.update(constraint_record(problem, outputs))
+    front_out = problem.evaluate_design(pr.designs)
+    feasible = np.ones(pr.F.shape[0], bool)
+    if problem.constraint_names:
+        G = np.column_stack([np.asarray(front_out[f"constraint_{c}"], float)
+                             for c in problem.constraint_names])
+        feasible = np.all(G <= 1e-9, axis=1)
+        rec["n_feasible_front"] = int(np.sum(feasible))
+        rec["feasible_front"] = feasible.tolist()
+    front.update({k: np.asarray(v, float) for k, v in pr.designs.items()})
+    front.update({k: pr.F[:, j] for j, k in enumerate(names)})
+    front.update({k: np.broadcast_to(np.asarray(v, float), feasible.shape)
+                  for k, v in front_out.items() if k not in front})
+    front["feasible"] = feasible
+    from ..vehicle.validity import FAST_PATH_REGION, check_validity
+    ev = problem.evaluator
+    region, design = None, dict(pr.designs)
+    if hasattr(ev, "frictions"):  # the fast path: its validated region
+        region = FAST_PATH_REGION
+        design["electrical_damping_Ns_per_m"] = np.array(
+            [h.equivalent_damping_Ns_per_m(0.0) for h in harvesters_of(ev, pr.designs)])
+    validity = check_validity(front_out, stroke_limit_m=cfg.vehicle.stroke_limit_m,
+                              design=design, fast_path_region=region)
+    rec["front_validity"] = validity.as_list()  # per pareto.csv row
+    rec["n_front_valid"] = int(np.sum(validity.valid))
+    rec.update({"success": pr.success, "message": pr.message, "pick": pr.pick,
+                "n_front": int(pr.F.shape[0]),
+                "hypervolume": {"normalisation": "F / F(prototype)",
+                                "reference_point": ref.tolist(),
+                                "history": pr.history},
+                "stats": pr.stats})
+    if pr.algorithm != "NSGA2":
+        rec["algorithm"] = pr.algorithm
+    if ga is not None:
+        f_ga = np.array([ga.objectives[k] for k in OBJECTIVE_NAMES])
+        better = np.all(pr.F < f_ga * (1 - 0.01), axis=1)
+        rec["front_vs_goal_attainment"] = {
+            "n_dominating_by_1pct": int(better.sum()),
+            "best_ratio_per_point_min": float(np.min(np.max(pr.F / f_ga, axis=1)))}
+    return pr
 
 
 def _out_of_range(cfg: DesignConfig, ev: Any, design: Mapping[str, float],

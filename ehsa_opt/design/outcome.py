@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -24,7 +24,8 @@ from .nsga2 import ParetoResult
 if TYPE_CHECKING:  # plotting is imported only when a figure is drawn
     from matplotlib.figure import Figure
 
-__all__ = ["DESIGN_FIGURES", "OptimizeOutcome", "motor_summary", "time_domain_summary"]
+__all__ = ["DESIGN_FIGURES", "DesignResult", "OptimizeOutcome", "motor_summary",
+           "time_domain_summary"]
 
 #: The figures of an optimisation and their file names under ``write(out_dir)``.
 DESIGN_FIGURES: dict[str, str] = {
@@ -34,12 +35,39 @@ DESIGN_FIGURES: dict[str, str] = {
 
 
 @dataclass(frozen=True)
-class OptimizeOutcome:
-    """``result.json`` (``record``) with the solver results (not serialised)."""
+class DesignResult:
+    """The result of a design study: ``result.json`` (``record``), the solver results
+    (not serialised), the other files' text and the front as named columns.
+
+    Follows pymoo's ``Result``: :attr:`X` (unit-cube designs), :attr:`F` (objectives,
+    all minimised: see :attr:`objective_names`), :attr:`G` (constraints, ≤ 0 feasible),
+    one row per front design (NSGA-II or another pymoo algorithm) or the one optimum
+    (goal attainment); :meth:`table` is the same with names and units, :attr:`design`
+    the preferred design.  Nothing is written until :meth:`save`; :meth:`load` reads a
+    saved folder back (JSON and CSV).
+
+    Attributes
+    ----------
+    record : mapping
+        ``result.json``'s content (see :mod:`ehsa_opt.design.optimize`).
+    result : GoalAttainmentResult or ParetoResult or None
+        The chosen method's solver result (None when loaded).
+    goal_attainment_result : GoalAttainmentResult or None
+        Goal attainment's result whenever it ran (None when loaded).
+    files : mapping of str to str
+        Text of the other files :meth:`save` writes, by path relative to the folder
+        (``pareto.csv``, ``ga_history.json``, ``front_check.csv``, ``motor_<k>/…``).
+    front : mapping of str to ndarray or None
+        The front (or the optimum) as columns: design variables, objectives, the
+        reported quantities (``power_W``, ``efficiency`` …), ``constraint_<name>`` and
+        ``feasible``; written as ``front.csv``.
+    """
 
     record: Mapping[str, Any]
     result: GoalAttainmentResult | ParetoResult | None = None
     goal_attainment_result: GoalAttainmentResult | None = None
+    files: Mapping[str, str] = field(default_factory=dict)
+    front: Mapping[str, Any] | None = None
 
     # ---------------------------------------------------------------- the record's head
     @property
@@ -66,13 +94,102 @@ class OptimizeOutcome:
     def metrics(self) -> dict[str, float]:
         return dict(self.record["metrics"])
 
+    @property
+    def objective_names(self) -> tuple[str, ...]:
+        """The objectives, in the columns of :attr:`F` (all minimised)."""
+        return tuple(self.record["objectives"])
+
+    @property
+    def constraint_names(self) -> tuple[str, ...]:
+        """The constraints, in the columns of :attr:`G`."""
+        return tuple(self.record.get("constraint_names")
+                     or (self.record.get("motor") or {}).get("constraints", ()))
+
+    def _rows(self) -> Mapping[str, Any]:
+        if self.front is not None:
+            return self.front
+        cols: dict[str, Any] = {k: [v] for k, v in self.design.items()}
+        cols.update({k: [v] for k, v in self.objectives.items()})
+        cols.update({k: [v] for k, v in self.metrics.items()})
+        return cols
+
+    @property
+    def X(self) -> Any:
+        """Designs in the unit cube of the box, shape (n, n_var)."""
+        import numpy as np
+
+        from .problem import DesignSpace
+        box = self.record["box"]
+        space = DesignSpace(tuple(box), tuple(b["lower"] for b in box.values()),
+                            tuple(b["upper"] for b in box.values()),
+                            tuple(b["log"] for b in box.values()))
+        rows = self._rows()
+        return np.atleast_2d(space.to_unit({k: np.asarray(rows[k], float) for k in box}))
+
+    @property
+    def F(self) -> Any:
+        """Objectives (minimised forms), shape (n, n_obj)."""
+        import numpy as np
+        rows = self._rows()
+        return np.column_stack([np.asarray(rows[k], float) for k in self.objective_names])
+
+    @property
+    def G(self) -> Any:
+        """Constraints (value / limit − 1, ≤ 0 feasible), shape (n, n_constr); None
+        without constraints."""
+        import numpy as np
+        rows = self._rows()
+        names = [c for c in self.constraint_names if f"constraint_{c}" in rows]
+        if not names:
+            return None
+        return np.column_stack([np.asarray(rows[f"constraint_{c}"], float) for c in names])
+
+    def table(self) -> Any:
+        """The front (or the optimum) as a tidy table: one row per design, named columns
+        with units (``attrs["units"]``); a DataFrame when pandas is installed."""
+        from ..utils.tables import tidy_table
+        return tidy_table(self._rows(), self.record.get("units"))
+
     # ---------------------------------------------------------------- saving
+    def save(self, out_dir: str | Path) -> list[Path]:
+        """Write the study's files into ``out_dir`` (atomically each): ``result.json``,
+        ``front.csv`` (:meth:`table`), and :attr:`files`.  Returns the paths written."""
+        from ..utils.tables import table_to_csv
+        out = Path(out_dir)
+        paths = []
+        texts = dict(self.files)
+        if self.front is not None:
+            texts["front.csv"] = table_to_csv(self.front)
+        for name, text in texts.items():
+            atomic_write_text(out / name, text)
+            paths.append(out / name)
+        atomic_write_text(out / "result.json", self.to_json())
+        return [out / "result.json", *paths]
+
+    @classmethod
+    def load(cls, out_dir: str | Path) -> DesignResult:
+        """A result read back from a folder :meth:`save` wrote (no solver results)."""
+        from ..utils.tables import csv_to_columns
+        out = Path(out_dir)
+        base = cls.from_json(out / "result.json")
+        front = None
+        if (out / "front.csv").is_file():
+            front = csv_to_columns((out / "front.csv").read_text(encoding="utf-8"),
+                                   str(out / "front.csv"))
+        files = {}
+        for p in sorted(out.rglob("*")):
+            rel = p.relative_to(out).as_posix()
+            if p.is_file() and p.suffix in (".csv", ".json") and rel not in (
+                    "result.json", "front.csv"):
+                files[rel] = p.read_text(encoding="utf-8")
+        return cls(base.record, files=files, front=front)
+
     def to_json(self) -> str:
         """``result.json`` text: standard JSON (NaN and infinities as ``null``)."""
         return json.dumps(json_safe(dict(self.record)), indent=2, allow_nan=False)
 
     @classmethod
-    def from_json(cls, source: str | Path) -> OptimizeOutcome:
+    def from_json(cls, source: str | Path) -> DesignResult:
         """An outcome from a ``result.json`` file (a path) or its text; no solver results."""
         where = "result.json"
         if isinstance(source, Path) or not source.lstrip().startswith("{"):
@@ -89,13 +206,16 @@ class OptimizeOutcome:
         """The lines ``ehsa-opt optimize`` prints (warnings: :meth:`warnings`)."""
         from ..vehicle.coverage import out_of_range_lines
         r, m = self.record, self.metrics
-        lines = [f"{self.method}: {self.message}",
+        failed = not self.success and not self.message.startswith("stopped after")
+        lines = [("FAILED: " if failed else "") + f"{self.method}: {self.message}",
                  "design: " + ", ".join(f"{k} = {v:.4g}" for k, v in self.design.items()),
-                 "objectives: " + ", ".join(f"{k} = {v:.4g}"
-                                            for k, v in self.objectives.items())]
+                 "objectives (minimised): " + ", ".join(f"{k} = {v:.4g}"
+                                                        for k, v in self.objectives.items())]
         if "power_W" in m:
             lines.append(f"power {m['power_W']:.1f} W, efficiency {100 * m['efficiency']:.1f} %, "
-                         f"W_k rms {m.get('comfort_weighted_rms_m_s2', float('nan')):.3f} m/s^2")
+                         f"W_k rms {m.get('comfort_weighted_rms_m_s2', float('nan')):.3f} m/s^2 "
+                         f"(inverse_power = 1 / dimensionless power, inverse_efficiency = "
+                         f"1 / efficiency)")
         if "gamma" in r:
             lines.append(f"attainment factor gamma = {r['gamma']:+.4f}")
         if self.method == "nsga2":
@@ -127,27 +247,50 @@ class OptimizeOutcome:
             for key, which in (("ga_design", "design"), ("ga_mass", "mass"),
                                ("ga_objectives", "objectives")):
                 figs[key] = pd.goal_attainment_history(ga, which)
-        res = self.result
+        res = self.result if self.result is not None else self._front_result()
         if isinstance(res, ParetoResult) and len(res.F):
             ga_rec = self.record.get("goal_attainment")
             ga_pt = ga_rec["objectives"] if ga_rec else None
-            figs["pareto"] = pd.pareto_projections(res, ga_pt,
-                                                   self.record["prototype"]["objectives"])
+            figs["pareto"] = pd.pareto_projections(
+                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"))
             figs["parallel"] = pd.parallel_coordinates(
                 res, None if ga_rec is None else {**ga_rec["design"], **ga_pt})
             figs["hypervolume"] = pd.hypervolume_history({front_label: res.history},
                                                          res.hv_reference)
         return figs
 
+    def _front_result(self) -> ParetoResult | None:
+        """The front of a loaded result (:attr:`front`, NSGA-II or another algorithm) as
+        a :class:`~.nsga2.ParetoResult`, to draw it; None for goal attainment."""
+        import numpy as np
+        if self.front is None or self.method != "nsga2":
+            return None
+        F = self.F
+        names = list(self.record["box"])
+        rows = self._rows()
+        designs = {k: np.asarray(rows[k], float) for k in names}
+        chosen = np.array([self.design[k] for k in names])
+        pref = int(np.argmin(np.sum((np.column_stack(list(designs.values())) - chosen) ** 2
+                                    / np.maximum(chosen ** 2, 1e-300), axis=1)))
+        hv = self.record.get("hypervolume", {})
+        ref = np.asarray(hv.get("reference_point", [2.0] * F.shape[1]), float)
+        return ParetoResult(True, self.message, self.X, designs, F, self.objective_names, pref,
+                            str(self.record.get("pick", "knee")), list(hv.get("history", [])),
+                            np.ones(F.shape[1]), ref, dict(self.record.get("stats", {})),
+                            self.G, str(self.record.get("algorithm", "NSGA2")))
+
     def plot(self, ax: Any = None) -> Any:
         """The main figure: the front's projections (NSGA-II) or the objectives per
         iteration (goal attainment); returns the figure, writes nothing.  ``ax`` is not
         used (both are multi-panel figures); it is accepted for the common protocol."""
-        key = "pareto" if isinstance(self.result, ParetoResult) else "ga_objectives"
+        key = ("pareto" if isinstance(self.result, ParetoResult)
+               or (self.result is None and self._front_result() is not None)
+               else "ga_objectives")
         figs = self.figures()
         if key not in figs:
-            raise ValueError("nothing to plot: an outcome read from result.json has no "
-                             "solver results; plot the outcome optimize() returned")
+            raise ValueError("nothing to plot: a goal-attainment result read from "
+                             "result.json has no solver results (iterations); plot the "
+                             "result optimize() returned")
         import matplotlib.pyplot as plt
         for k, f in figs.items():
             if k != key:
@@ -210,3 +353,7 @@ def time_domain_summary(outcome: Mapping[str, Any]) -> str:
                + ", ".join(f"{k} {v:+.4f}" for k, v in
                            lim["time_domain_worst_constraint"].items()))
             + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")
+
+
+#: The former name of :class:`DesignResult`.
+OptimizeOutcome = DesignResult

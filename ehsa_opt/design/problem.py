@@ -42,8 +42,8 @@ from pymoo.core.problem import Problem
 
 from ..physics.params import HarvesterParams, ParameterError, RoadParams, VehicleParams
 
-__all__ = ["DESIGN_VARIABLES", "OBJECTIVE_NAMES", "PAPER_BOX", "DesignSpace",
-           "QuarterCarObjectives", "DesignProblem"]
+__all__ = ["DESIGN_VARIABLES", "OBJECTIVE_NAMES", "OBJECTIVE_MEANINGS", "PAPER_BOX",
+           "DesignSpace", "QuarterCarObjectives", "DesignProblem"]
 
 #: The paper's design variables (Table 3), in this order.
 DESIGN_VARIABLES: tuple[str, ...] = ("total_inertia_gcm2", "lead_mm_per_rev",
@@ -51,6 +51,16 @@ DESIGN_VARIABLES: tuple[str, ...] = ("total_inertia_gcm2", "lead_mm_per_rev",
 #: The paper's objectives (Eq 10), all minimised.
 OBJECTIVE_NAMES: tuple[str, ...] = ("comfort", "road_holding", "inverse_power",
                                     "inverse_efficiency")
+#: What each objective is and the quantity it is the minimised form of.
+OBJECTIVE_MEANINGS: dict[str, str] = {
+    "comfort": "comfort alpha (-): ISO 2631 W_k-weighted rms body acceleration / its "
+               "passive reference; minimised as it is",
+    "road_holding": "road holding eta_rh (-): rms dynamic tyre load / static load; "
+                    "minimised as it is",
+    "inverse_power": "1 / harvested power (dimensionless rho_g); minimised, i.e. power_W "
+                     "(W) maximised",
+    "inverse_efficiency": "1 / harvesting efficiency eta_g; minimised, i.e. efficiency (-) "
+                          "maximised"}
 
 
 # --------------------------------------------------------------------------- design space
@@ -251,7 +261,7 @@ class QuarterCarObjectives:
                "inverse_efficiency": 1.0 / m["efficiency"]}
         for key in ("comfort_weighted_rms_m_s2", "power_W", "efficiency", "power_dimensionless",
                     "dissipated_power_W", "dissipation_bound_W", "current_rms_A",
-                    "voltage_rms_V", "stroke_rms_m"):
+                    "voltage_rms_V", "stroke_rms_m", "stroke_velocity_rms_m_s"):
             if key in m:
                 out[key] = m[key]
         out.update(self.constraints(mapping, m))
@@ -347,8 +357,86 @@ class DesignProblem(Problem):
         #: optional ``mapper(fn, list_of_chunks) -> list`` (local pool or Dask, see
         #: :mod:`ehsa_opt.design.sweep`) to spread a population over workers; not pickled
         self.mapper: Any = None
+        #: feasible designs to seed a population with (unit cube, shape (k, n_var)), e.g.
+        #: the prototype when the limits are its own demands; see :meth:`seed_population`
+        self.initial: np.ndarray | None = None
+        #: the :class:`ehsa_opt.design.config.DesignConfig` of a problem read from a file
+        self.config: Any = None
+        #: where the friction sets came from (``FILE:CASE``), for the record
+        self.friction_labels: tuple[str, ...] = ()
         super().__init__(n_var=space.n, n_obj=len(self.objective_names),
                          n_ieq_constr=len(self.constraint_names), xl=0.0, xu=1.0, vtype=float)
+
+    def with_objective(self, name: str, func: Callable[[Mapping[str, np.ndarray]], Any],
+                       unit: str = "-") -> "DesignProblem":
+        """A copy of this problem with one more objective (minimised).
+
+        Parameters
+        ----------
+        name : str
+            Its column name, with its unit (e.g. ``"peak_current_A"``).
+        func : callable
+            ``func(outputs) -> array``: ``outputs`` maps every evaluator output (the
+            objectives, ``power_W``, ``efficiency``, ``current_rms_A``, ``voltage_rms_V``,
+            ``stroke_rms_m`` …) and design variable to an array over the designs.
+        unit : str
+            Its unit, shown in tables.
+
+        Returns
+        -------
+        DesignProblem
+            The extended problem; this one is unchanged.  Goal attainment needs the four
+            built-in objectives; NSGA-II and any other pymoo algorithm take the new one.
+        """
+        from .extension import UserQuantity
+        return self.extended(objectives=(UserQuantity(name, func, unit),))
+
+    def with_constraint(self, name: str, func: Callable[[Mapping[str, np.ndarray]], Any],
+                        upper: float, unit: str = "-") -> "DesignProblem":
+        """A copy of this problem with one more inequality constraint ``func ≤ upper``.
+
+        ``func`` is as in :meth:`with_objective`; pymoo sees
+        ``(func − upper) / |upper| ≤ 0`` (normalised by its limit, as the built-in rated
+        limits), named
+        ``constraint_<name>`` in the outputs and ``<name>`` in :attr:`constraint_names`.
+        """
+        from .extension import UserQuantity
+        return self.extended(constraints=(UserQuantity(name, func, unit, float(upper)),))
+
+    def extended(self, objectives: tuple = (), constraints: tuple = ()) -> "DesignProblem":
+        from .extension import ExtendedObjectives
+        ev = self.evaluator
+        if isinstance(ev, ExtendedObjectives):
+            objectives, constraints = ev.objectives + objectives, ev.user_constraints + constraints
+            ev = ev.inner
+        new = DesignProblem(self.space, ExtendedObjectives(ev, objectives, constraints))
+        new.mapper, new.initial, new.config = self.mapper, self.initial, self.config
+        new.friction_labels = self.friction_labels
+        return new
+
+    @property
+    def units(self) -> dict[str, str]:
+        """Unit of each user objective and constraint (built-in names carry theirs)."""
+        ev = self.evaluator
+        return {q.name: q.unit for q in getattr(ev, "objectives", ()) + getattr(
+            ev, "user_constraints", ()) if hasattr(q, "unit")}
+
+    def seed_population(self, pop_size: int, seed: int, initial: Any = None
+                        ) -> np.ndarray | None:
+        """The first population the problem asks for (unit cube): its feasible
+        :attr:`initial` designs (or ``initial``) first, the rest drawn uniformly with
+        ``seed``; None when there is no seed design (any sampling will do).
+
+        The built-in NSGA-II uses it, and so does :func:`ehsa_opt.optimize` for any
+        pymoo algorithm that keeps pymoo's default random sampling: with rated-limit
+        constraints most of the box is infeasible, and a population without one
+        feasible design can end the run with none."""
+        initial = self.initial if initial is None else initial
+        if initial is None:
+            return None
+        first = np.atleast_2d(np.asarray(initial, dtype=float))[:pop_size]
+        rest = np.random.default_rng(seed).random((pop_size - first.shape[0], self.n_var))
+        return np.clip(np.vstack([first, rest]), 0.0, 1.0)
 
     def evaluate_design(self, design: Mapping[str, Any]) -> dict[str, np.ndarray]:
         """All evaluator outputs (objectives and extras) of physical designs."""

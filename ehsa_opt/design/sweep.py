@@ -50,7 +50,7 @@ from ..utils.cluster import check_cluster_imports, connect_client
 
 __all__ = ["SweepSpec", "SweepTask", "run_sweep", "parse_sweep", "executor", "harvesters_from",
            "road_holding_warning", "sweep_warnings", "write_sweep",
-           "default_friction_sets", "rows_to_csv", "METRIC_COLUMNS", "DESIGN_KEYS",
+           "default_friction_sets", "rows_to_csv", "sweep_axes", "METRIC_COLUMNS", "DESIGN_KEYS",
            "out_of_range_warning"]
 
 #: Output columns of every case.
@@ -363,16 +363,26 @@ def write_sweep(out_dir: str | Path, rows: Sequence[Mapping[str, Any]],
     out = Path(out_dir)
     atomic_write_text(out / "sweep.csv", rows_to_csv(rows))
     paths = [out / "sweep.csv"]
-    hue = [k for k in ("vehicle", "iso_class", "friction") if
-           len({r[k] for r in rows}) > 1] + [k for k, _ in spec.design]
-    ys = ["power_W", "efficiency", "comfort_weighted_rms_m_s2", "road_holding"]
-    if len(spec.speeds_km_per_h) > 1:
-        paths.append(plots.save(sweep_lines(rows, "speed_km_per_h", ys, hue), out / "sweep.png"))
-    elif spec.design:
-        x = spec.design[0][0]
-        paths.append(plots.save(sweep_lines(rows, x, ys, [h for h in hue if h != x]
-                                            or ["vehicle"]), out / "sweep.png"))
+    axes = sweep_axes(rows, [k for k, _ in spec.design])
+    if axes is not None:
+        paths.append(plots.save(sweep_lines(rows, *axes), out / "sweep.png"))
     return paths
+
+
+def sweep_axes(rows: Sequence[Mapping[str, Any]], design_keys: Sequence[str]
+               ) -> tuple[str, list[str], list[str]] | None:
+    """What a sweep's figure shows: the metrics (y) against speed when it varies, else
+    against the first swept design parameter, one line per combination of what else
+    varies (hue); None when nothing varies."""
+    hue = [k for k in ("vehicle", "iso_class", "friction") if
+           len({r[k] for r in rows}) > 1] + list(design_keys)
+    ys = ["power_W", "efficiency", "comfort_weighted_rms_m_s2", "road_holding"]
+    if len({r["speed_km_per_h"] for r in rows}) > 1:
+        return "speed_km_per_h", ys, hue
+    if design_keys:
+        x = design_keys[0]
+        return x, ys, [h for h in hue if h != x] or ["vehicle"]
+    return None
 
 
 def rows_to_csv(rows: Sequence[Mapping[str, Any]]) -> str:

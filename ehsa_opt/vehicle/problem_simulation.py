@@ -102,13 +102,15 @@ class ProblemSimulation:
 
 
 def simulate_problem(problem_path: str | Path, friction: str | None = None,
-                     on_warning: Callable[[str], None] | None = None) -> ProblemSimulation:
+                     on_warning: Callable[[str], None] | None = None,
+                     keep_series: bool = False) -> ProblemSimulation:
     """Simulate the quarter-car problem file ``problem_path`` (``friction``: a
     ``FILE[:CASE]`` identification result replacing the file's ``[friction]``).
 
     Every warning line is kept in ``.warnings`` and, as it arises, passed to
     ``on_warning`` (so a caller sees the simulation's warnings even when the run is then
-    refused).
+    refused).  ``keep_series``: keep the time series (for plots; the metrics do not
+    depend on it).
 
     Raises ``ValueError`` (naming the file and the fix) when the simulation fails or its
     energy balance does not close within :data:`ENERGY_TOLERANCE`."""
@@ -123,7 +125,7 @@ def simulate_problem(problem_path: str | Path, friction: str | None = None,
             sim = simulate_quarter_car(
                 prob.vehicle, prob.harvester, prob.friction, prob.road,
                 settle_s=prob.simulation.settle_s, sample_rate_hz=prob.simulation.sample_rate_hz,
-                base_dir=prob.base_dir, keep_series=False, identified_range_m_per_s=v_range)
+                base_dir=prob.base_dir, keep_series=keep_series, identified_range_m_per_s=v_range)
         except ParameterError as exc:  # name the file the bad value came from
             if path in str(exc):
                 raise
