@@ -17,6 +17,10 @@ simulate(problem, friction=None)
 identify(data_dir, starts=4, jobs=1, seed=0)
     The friction of every bench test: an :class:`IdentificationResult` (the data read
     and checked by ``load_bench(data_dir)`` first, or given as its :class:`BenchData`).
+discrepancy(data_dir, settings=None, **options)
+    The effects the model misses, named, identified and judged on held-out data by one
+    criterion (``DiscrepancySettings``: jobs, a Dask scheduler, the work budget …): a
+    ``DiscrepancyResult`` (``effect``, ``effects``, ``summary()``, ``table()``).
 
 Messages go to the ``ehsa_opt`` logger (``logging.getLogger("ehsa_opt")``); the
 physics (:class:`BenchModel`, :class:`HarvesterParams`, friction laws …) is below.
@@ -26,6 +30,7 @@ from .api import (
                   IdentificationResult,
                   SimulationResult,
                   SweepResult,
+                  discrepancy,
                   identify,
                   load_problem,
                   optimize,
@@ -34,6 +39,7 @@ from .api import (
 )
 from .datasets.bench_format import BenchData, BenchDataError, load_bench
 from .design.outcome import DesignResult
+from .estimation.discrepancy import Criterion, DiscrepancyResult, DiscrepancySettings
 from .design.problem import DesignProblem, DesignSpace
 from .physics import BenchModel
 from .physics.bench_sim import BenchSimulation, simulate_bench
@@ -56,10 +62,11 @@ from .physics.params import (
 from .utils.version import __version__
 
 #: The scripting entry points, first in ``help(ehsa_opt)`` and in the API reference.
-ENTRY_POINTS = ("load_problem", "optimize", "sweep", "simulate", "identify")
+ENTRY_POINTS = ("load_problem", "optimize", "sweep", "simulate", "identify", "discrepancy")
 
 __all__ = [*ENTRY_POINTS, "DesignProblem", "DesignSpace", "DesignResult", "SweepResult",
-           "SimulationResult", "IdentificationResult", "load_bench", "BenchData",
+           "SimulationResult", "IdentificationResult", "DiscrepancySettings",
+           "DiscrepancyResult", "Criterion", "load_bench", "BenchData",
            "BenchDataError", "ParameterError",
            "BenchModel", "BenchSimulation", "simulate_bench", "SineMotion", "SampledMotion",
            "HarvesterParams", "FrictionParams", "VehicleParams", "RoadParams",

@@ -148,7 +148,7 @@ def _cmd_plan_tests(args: argparse.Namespace) -> int:
     return 0 if plan.success else 1
 # ------------------------------------------------------------------ discrepancy
 def _cmd_discrepancy(args: argparse.Namespace) -> int:
-    from .estimation.discrepancy import DiscrepancySettings
+    from . import DiscrepancySettings
     from .pipeline.discrepancy_report import run_with_budget
 
     from .datasets.embedded import load_truth

@@ -284,16 +284,17 @@ CLI_EXCEPTIONS: dict[str, str] = {
     "ehsa_opt.utils.progress": "the command line's tqdm bars (the library logs instead)",
     "ehsa_opt.utils.process": "pool workers die with the command",
     "ehsa_opt.utils.lock": "one run at a time per output folder",
+    "ehsa_opt.utils.output_folder": "a folder of the user's is refused before any work",
     "ehsa_opt.utils.log": "the command line's stderr handler of the ehsa_opt logger",
     "ehsa_opt.datasets.synthetic": "bench generate: no scripting entry point yet",
     "ehsa_opt.datasets.bench_format": "bench check: no scripting entry point yet",
     "ehsa_opt.datasets.emps": "bench convert-emps: no scripting entry point yet",
     "ehsa_opt.physics.components": "bench generate: the --effect choices",
     "ehsa_opt.design.test_plan": "plan-tests: no scripting entry point yet",
-    "ehsa_opt.estimation.discrepancy": "discrepancy: its engine is being redesigned; its "
-                                       "entry point comes with the new engine",
-    "ehsa_opt.pipeline.discrepancy_report": "discrepancy (as above)",
-    "ehsa_opt.datasets.embedded": "discrepancy (as above): truth.toml checked first",
+    "ehsa_opt.pipeline.discrepancy_report": "discrepancy: the run in a worker process "
+                                            "stopped at the wall-time safety cap, and its "
+                                            "report with the truth's error",
+    "ehsa_opt.datasets.embedded": "discrepancy: truth.toml checked before the work",
     "ehsa_opt.pipeline.reproduce": "reproduce: the whole report job, no scripting entry point",
 }
 

@@ -48,7 +48,7 @@ def test_help_lists_the_entry_points_first() -> None:
     for name in ehsa_opt.ENTRY_POINTS:
         assert f"{name}(" in text
         assert callable(getattr(ehsa_opt, name))
-    assert list(ehsa_opt.__all__[:5]) == list(ehsa_opt.ENTRY_POINTS)
+    assert list(ehsa_opt.__all__[:len(ehsa_opt.ENTRY_POINTS)]) == list(ehsa_opt.ENTRY_POINTS)
 
 
 def test_optimize_api_equals_cli_and_writes_nothing(tmp_path, monkeypatch) -> None:
@@ -259,3 +259,34 @@ def test_a_problem_built_in_python(tmp_path) -> None:
     np.testing.assert_array_equal(back.F, res.F)
     with pytest.raises(ehsa_opt.ParameterError, match="needs a problem file"):
         ehsa_opt.optimize(problem, method="goal-attainment")
+
+
+def test_discrepancy_api_equals_cli_and_writes_nothing(tmp_path, monkeypatch) -> None:
+    """``ehsa_opt.discrepancy`` returns the engine's result in memory (nothing written in
+    the working folder); ``save`` writes what the command writes, with the same answer."""
+    import json
+
+    from ehsa_opt.cli import main
+    from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
+    data = tmp_path / "data"
+    write_synthetic(data, SyntheticSpec(effects={"voltage_drop": {"voltage_drop_V": 0.5}},
+                                        frequencies_hz=(1.5, 3.0), loads_ohm=(15.0, 109.0),
+                                        cycles=1.0, seed=5))
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    res = ehsa_opt.discrepancy(data, top=1)
+    assert list(work.iterdir()) == []
+    assert res.effect == "voltage_drop" and "voltage_drop" in res.summary()
+    assert main(["discrepancy", str(data), "--out", str(tmp_path / "cli"), "--top", "1",
+                 "--wall-cap-s", "0"]) == 0
+    cli = json.loads((tmp_path / "cli" / "discrepancy.json").read_text())
+    res.save(tmp_path / "api")
+    api = json.loads((tmp_path / "api" / "discrepancy.json").read_text())
+    for key in ("effect", "effects", "error_before", "error_after", "steps", "criterion",
+                "member_fits"):
+        assert api[key] == cli[key], key
+    assert [c["parameters"] for c in api["candidates"]] == \
+        [c["parameters"] for c in cli["candidates"]]
+    with pytest.raises(ValueError, match="bench data directory"):
+        ehsa_opt.discrepancy(tmp_path / "nowhere")

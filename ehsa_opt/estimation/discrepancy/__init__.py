@@ -13,7 +13,11 @@ Modules, one concept each:
 * :mod:`.candidates`: the catalogue — every member (components, ``force_lag``,
   ``flexibility``), signature scores;
 * :mod:`.candidate_fit`: re-identifying one candidate on the current model;
-* :mod:`.evidence`: the statistics and the decision rule;
+* :mod:`.evidence`: the statistics a model change is measured by;
+* :mod:`.criterion`: every threshold a verdict depends on (:class:`Criterion`) and
+  the search's policy; :mod:`.judge`: the verdicts, by that criterion;
+* :mod:`.budget`: the work budget (member fits) and the wall-time safety cap;
+  :mod:`.executor`: local processes or a Dask cluster for the member fits;
 * :mod:`.search`: the forward-selection rounds; :mod:`.widen`: widening a round;
   :mod:`.lookahead`: the look-ahead
   through a confounded candidate;
@@ -23,6 +27,7 @@ Modules, one concept each:
 """
 
 from .candidates import CANDIDATES, Candidate, signature_scores
+from .criterion import Criterion, SearchPolicy
 from ..fit_result import FitResult
 from .fit import fit_group
 from .prepared import prepare_tests
@@ -41,4 +46,4 @@ from .workflow import run_discrepancy
 __all__ = ["CANDIDATES", "Candidate", "signature_scores", "FitResult", "Rig", "fit_group",
            "predict", "prepare_tests", "Localisation", "localise", "CandidateResult",
            "DiscrepancyResult", "DiscrepancySettings", "run_discrepancy", "split_tests",
-           "NONE_OF_CATALOGUE", "TermProposal", "discover_term"]
+           "NONE_OF_CATALOGUE", "TermProposal", "discover_term", "Criterion", "SearchPolicy"]

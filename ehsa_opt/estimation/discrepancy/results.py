@@ -374,5 +374,51 @@ class DiscrepancyResult:
         from ...plots import discrepancy as pd
         return pd.all_figures(self, Path(out_dir))
 
+    def summary(self) -> str:
+        """The answer in words and one line per judged candidate (round, effect, verdict,
+        held-out error after its refit, %)."""
+        lines = [self.message]
+        for c in self.candidates:
+            if c.fitted:
+                lines.append(f"  round {c.round}: {c.effect:<22s} "
+                             f"{'EARNS (' + c.earns_by + ')' if c.earns else 'does not earn':<28s}"
+                             f" error after {c.error_after:.3f} %")
+        return "\n".join(lines)
+
+    def table(self) -> Any:
+        """The judged candidates as a tidy table (one row per candidate and round)."""
+        from ...utils.tables import tidy_table
+        rows = [c for c in self.candidates if c.fitted]
+        return tidy_table({
+            "round": [c.round for c in rows], "effect": [c.effect for c in rows],
+            "earns": [bool(c.earns) for c in rows], "earns_by": [c.earns_by for c in rows],
+            "error_before_pct": [c.error_before for c in rows],
+            "error_after_pct": [c.error_after for c in rows],
+            "delta_bic_heldout": [c.delta_bic_heldout for c in rows]},
+            {"round": "-", "earns": "", "effect": "", "earns_by": "",
+             "delta_bic_heldout": "-"})
+
+    def save(self, out_dir: str | Path) -> list[Path]:
+        """Write ``discrepancy.json`` (standard JSON) and the figures (``figures/``) into
+        ``out_dir``; returns the paths written."""
+        import json
+
+        from ...utils.io import atomic_write_json
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        figs = self.write(out / "figures")
+        js = out / "discrepancy.json"
+        atomic_write_json(js, json.loads(json.dumps(self.as_dict(), default=_plain)), indent=2)
+        return [js, *figs]
+
 
 # ------------------------------------------------------------------ the workflow
+
+
+def _plain(o: Any) -> Any:
+    """numpy scalars and arrays as JSON values (the rest as text)."""
+    if isinstance(o, (np.floating, np.integer, np.bool_)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    return str(o)
