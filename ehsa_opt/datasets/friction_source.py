@@ -27,7 +27,6 @@ from ..physics.params import (
     check_keys,
     from_mapping,
 )
-from ..utils.limits import parse_json
 
 __all__ = ["FRICTION_CASES", "FrictionSets", "parse_friction_spec", "load_friction_sets", "load_friction",
            "friction_from_table", "load_velocity_range", "identified_range_for",
@@ -127,22 +126,17 @@ def load_friction_sets(path: str | Path) -> dict[str, FrictionParams]:
         File missing or unreadable, not JSON, or without ``friction_sets`` (with the
         command that makes one).
     """
+    from .identification_file import read_identification
     path = Path(path)
-    if not path.is_file():
-        raise ParameterError(f"{path}: identification result not found; make one with "
-                             f"`ehsa-opt identify DATA_DIR --out DIR` (DIR/identification.json)")
-    try:
-        doc = parse_json(path.read_bytes(), str(path), ParameterError)
-    except OSError as exc:
-        raise ParameterError(f"{path}: cannot be read ({exc.strerror}); check the path and "
-                             f"its permissions") from None
-    except ParameterError as exc:
-        raise ParameterError(f"{exc}; pass the identification.json written by "
-                             f"`ehsa-opt identify`") from None
-    sets = doc.get("friction_sets") if isinstance(doc, Mapping) else None
+    doc = read_identification(path)
+    sets = doc.get("friction_sets")
     if not isinstance(sets, Mapping):
-        raise ParameterError(f"{path}: no 'friction_sets' table (written by an older ehsa_opt "
-                             f"or not an identification result); re-run `ehsa-opt identify`")
+        note = doc.get("friction_sets_note")
+        raise ParameterError(f"{path}: no 'friction_sets' table "
+                             + (f"({note}) " if isinstance(note, str) else
+                                "(written by an older ehsa_opt or not an identification "
+                                "result)")
+                             + "; re-run `ehsa-opt identify`")
     fs = FrictionSets.from_dict(sets, f"{path} friction_sets")
     return {case: getattr(fs, case) for case in FRICTION_CASES}
 
@@ -202,19 +196,16 @@ def load_velocity_range(path: str | Path) -> float | None:
     """Upper end (m/s) of the stroke velocities an ``identification.json``'s data cover
     (``velocity_range.campaign_m_per_s``; for files written before it, the envelope's
     largest velocity), or None when the file has neither."""
+    from .identification_file import campaign_range_m_per_s, read_identification
     path = Path(path)
-    try:
-        doc = parse_json(path.read_text(encoding="utf-8"), str(path))
-    except (OSError, UnicodeDecodeError, ValueError):
-        return None
-    if not isinstance(doc, Mapping):
-        return None
+    doc = read_identification(path)  # every table validated: the range is finite, ordered
     rng = doc.get("velocity_range")
-    if isinstance(rng, Mapping) and isinstance(rng.get("campaign_m_per_s"), list):
-        return float(rng["campaign_m_per_s"][1])
+    if isinstance(rng, Mapping) and rng.get("campaign_m_per_s") is not None:
+        return campaign_range_m_per_s(rng["campaign_m_per_s"],
+                                      f"{path} velocity_range.campaign_m_per_s")[1]
     env = doc.get("friction_envelope")
     if isinstance(env, Mapping) and env.get("velocity_m_per_s"):
-        return float(max(x for x in env["velocity_m_per_s"] if x is not None))
+        return float(env["velocity_m_per_s"][-1])  # validated: increasing
     return None
 
 
