@@ -10,11 +10,12 @@ or gigabytes of memory.
 from __future__ import annotations
 
 import json
+import math
 from typing import Any, Callable
 
 __all__ = ["MAX_NESTING", "MAX_CSV_FIELD_CHARS", "MAX_TEXT_FILE_BYTES", "nesting_depth",
            "parse_json", "check_nesting", "nesting_error", "usable_cores", "read_input_bytes",
-           "decode_text", "read_input_text"]
+           "decode_text", "read_input_text", "MAX_CSV_BYTES", "max_csv_bytes", "scan_csv"]
 
 #: Deepest nesting of tables/arrays accepted in a TOML or JSON input (ours use < 10).
 MAX_NESTING = 64
@@ -24,6 +25,11 @@ MAX_CSV_FIELD_CHARS = 1024
 #: a problem file or bench.toml holds a few kB, an identification.json about 35 kB per
 #: test (a thousand tests: 35 MB); a parsed JSON document takes ~10x its size in memory.
 MAX_TEXT_FILE_BYTES = 64 * 2 ** 20
+#: Largest numeric CSV read (a bench test, an EMPS source), bytes, unless the environment
+#: variable ``EHSA_OPT_MAX_CSV_MB`` says otherwise: 256 MiB hold ~6 million rows of four
+#: columns (1.7 h at 1 kHz), parsed into ~200 MB of floats; the identification's
+#: collocation handles far fewer samples.
+MAX_CSV_BYTES = 256 * 2 ** 20
 
 
 def nesting_depth(obj: Any) -> int:
@@ -133,6 +139,63 @@ def read_input_text(path: Any, what: str, error: Callable[[str], Exception] = Va
                     limit: int = MAX_TEXT_FILE_BYTES) -> str:
     """:func:`read_input_bytes` decoded by :func:`decode_text`."""
     return decode_text(read_input_bytes(path, what, error, limit), str(path), error)
+
+
+def max_csv_bytes() -> int:
+    """:data:`MAX_CSV_BYTES`, or ``EHSA_OPT_MAX_CSV_MB`` (MiB) when set."""
+    import os
+    env = os.environ.get("EHSA_OPT_MAX_CSV_MB")
+    if not env:
+        return MAX_CSV_BYTES
+    try:
+        mb = float(env)
+    except ValueError:
+        mb = math.nan
+    if not (math.isfinite(mb) and mb > 0):
+        raise ValueError(f"EHSA_OPT_MAX_CSV_MB = {env!r} is not a positive number; set it to "
+                         f"the largest CSV to read in MiB, e.g. 512")
+    return int(mb * 2 ** 20)
+
+
+def scan_csv(path: Any, columns: int, name: str,
+             error: Callable[[str], Exception] = ValueError, chunk: int = 1 << 20) -> None:
+    """Refuse a CSV before it is parsed: larger than :func:`max_csv_bytes` (checked before
+    reading), or holding a NUL byte (binary data, a sparse or unfinished file) or a row
+    longer than ``columns`` fields of :data:`MAX_CSV_FIELD_CHARS` — streamed in ``chunk``
+    bytes, so the memory stays that of one chunk whatever the file."""
+    import os
+
+    import numpy as np
+    size, limit = os.stat(path).st_size, max_csv_bytes()
+    if size > limit:
+        raise error(f"{name}: {size / 2 ** 20:.0f} MiB, more than the {limit / 2 ** 20:g} MiB "
+                    f"a CSV may have (EHSA_OPT_MAX_CSV_MB); split the recording into several "
+                    f"tests, or raise the limit if the memory allows (~1 GB per 1 GiB of CSV)")
+    longest = columns * (MAX_CSV_FIELD_CHARS + 1) + 1
+    row, run = 1, 0  # 1-based row of the line being read, its length so far
+    with open(path, "rb") as fh:
+        while block := fh.read(chunk):
+            nul = block.find(b"\0")
+            if nul >= 0:
+                at = row + block.count(b"\n", 0, nul)
+                raise error(f"{name}: row {at} holds a NUL byte "
+                            f"(binary data: a sparse, unfinished or corrupt file); re-export "
+                            f"the test as a comma-separated text file")
+            nl = np.flatnonzero(np.frombuffer(block, np.uint8) == 10)
+            ends = np.concatenate([[-1], nl])
+            lengths = np.diff(ends) - 1
+            if lengths.size:
+                lengths[0] += run
+                run = len(block) - int(nl[-1]) - 1
+            else:
+                run += len(block)
+            over = np.flatnonzero(lengths > longest)
+            if over.size or run > longest:
+                k = int(over[0]) if over.size else int(nl.size)
+                raise error(f"{name}: row {row + k} is longer than {longest} characters "
+                            f"({columns} fields of at most {MAX_CSV_FIELD_CHARS}); it is not "
+                            f"a row of numbers — repair the file or re-export it")
+            row += int(nl.size)
 
 
 def usable_cores() -> int:
