@@ -128,8 +128,8 @@ def decode_text(raw: bytes, where: str, error: Callable[[str], Exception] = Valu
         name = "UTF-8" if enc.startswith("utf-8") else enc.upper()
         guess = (" (it looks like Latin-1 / Windows-1252)"
                  if name == "UTF-8" and raw[exc.start] >= 0x80 else "")
-        raise error(f"{where}: byte {exc.start} (0x{byte}) is not {name}{guess}; save the "
-                    f"file as UTF-8 (e.g. iconv -f latin1 -t utf-8 FILE > NEW)") from None
+        raise error(f"{where}: byte {exc.start} (0x{byte}) is not {name}{guess}; re-save it "
+                    f"as UTF-8 (e.g. iconv -f latin1 -t utf-8 FILE > NEW)") from None
     if text.startswith("\ufeff"):
         text = text[1:]  # the byte-order mark of UTF-16 / UTF-32
     return text
