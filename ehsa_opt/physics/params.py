@@ -469,3 +469,8 @@ def load_toml(path: str | Path, what: str = "file") -> dict[str, Any]:
         raise nesting_error(str(path), ParameterError) from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML ({exc}); fix the syntax there") from None
+    except ParameterError:
+        raise
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
+        raise ParameterError(f"{path}: not valid TOML ({str(exc)[:120]}); fix the value "
+                             f"there") from None

@@ -108,7 +108,7 @@ def test_altered_checkpoint_refused(tmp_path, capsys):
     for f in files:  # alter one number in the data (text: a digit; binary: a byte)
         data = bytearray(f.read_bytes())
         for i in range(len(data) // 2, len(data)):
-            if chr(data[i]).isdigit():
+            if chr(data[i]) in "0123456789":  # ASCII digits (not "²")
                 data[i] = ord(str((int(chr(data[i])) + 1) % 10))
                 changed = True
                 break
