@@ -388,15 +388,19 @@ def check_law(d: Any, where: str) -> Mapping[str, Any]:
     nt = d.get("n_tests", 1)
     if isinstance(nt, bool) or not isinstance(nt, int) or nt < 1:
         raise _fail(f"{where}.n_tests", f"{_shown(nt)} must be a whole number >= 1")
-    vr = d.get("velocity_range_m_per_s")
-    if vr is not None and any(x is not None for x in _list(vr, f"{where}."
-                                                           "velocity_range_m_per_s", 2)):
-        campaign_range_m_per_s(vr, f"{where}.velocity_range_m_per_s")
-    _number(d.get("residual_rms_N"), f"{where}.residual_rms_N", lo=0.0, none=True)
-    for key in ("test_residual_rms_N", "test_peak_acceleration_m_per_s2", "test_n_samples",
-                "test_n_effective"):
+    if d.get("velocity_range_m_per_s") is not None:
+        campaign_range_m_per_s(d["velocity_range_m_per_s"], f"{where}.velocity_range_m_per_s")
+    # a least-squares law on measured samples leaves a residual: zero is no fit of data
+    _number(d.get("residual_rms_N"), f"{where}.residual_rms_N", lo=0.0, lo_open=True,
+            none=True)
+    for key in ("test_residual_rms_N", "test_peak_acceleration_m_per_s2"):
         for k, x in enumerate(_list(d.get(key, []), f"{where}.{key}")):
             _number(x, f"{where}.{key}[{k}]", lo=0.0, none=True)
+    n_k = _list(d.get("test_n_samples", []), f"{where}.test_n_samples")
+    neff_k = _list(d.get("test_n_effective", []), f"{where}.test_n_effective", len(n_k))
+    for k, (x, e) in enumerate(zip(n_k, neff_k)):  # each test: 1 <= effective <= samples
+        hi = _number(x, f"{where}.test_n_samples[{k}]", lo=1.0)
+        _number(e, f"{where}.test_n_effective[{k}]", lo=1.0, hi=hi)
     for k, x in enumerate(_list(d.get("bandwidths", []), f"{where}.bandwidths")):
         if isinstance(x, bool) or not isinstance(x, int) or x < 0:
             raise _fail(f"{where}.bandwidths[{k}]", f"{_shown(x)} must be a whole number >= 0")
@@ -416,7 +420,7 @@ def _covariance(c: Any, where: str, n: int) -> None:
     a = np.array(rows, dtype=float)
     scale = float(np.max(np.abs(a)))
     if scale == 0.0:
-        return
+        raise _fail(where, "is zero: a law fitted on noisy samples has an uncertainty")
     a = a / scale
     if not np.allclose(a, a.T, rtol=1e-9, atol=1e-12):
         raise _fail(where, "is not symmetric")
