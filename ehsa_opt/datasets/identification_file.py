@@ -378,7 +378,7 @@ def check_law(d: Any, where: str) -> Mapping[str, Any]:
     for key in ("covariance", "covariance_iid", "covariance_cluster"):
         if key == "covariance_cluster" and d.get(key) is None:
             continue
-        _covariance(d.get(key), f"{where}.{key}", len(free))
+        _covariance(d.get(key), f"{where}.{key}", free)
     _number(d["lead_m_per_rad"], f"{where}.lead_m_per_rad", lo=0.0, lo_open=True,
             hi=_MAX_LEAD_M_PER_RAD)
     ns = d["n_samples"]
@@ -411,13 +411,22 @@ def check_law(d: Any, where: str) -> Mapping[str, Any]:
     return d
 
 
-def _covariance(c: Any, where: str, n: int) -> None:
-    """An n × n finite symmetric positive semi-definite matrix."""
+def _covariance(c: Any, where: str, free: list[str]) -> None:
+    """A finite symmetric positive semi-definite matrix over ``free`` whose standard
+    deviations stay within each parameter's physical range (a larger one says nothing
+    and overflows the planning's products)."""
+    n = len(free)
     rows = _list(c, where, n)
     for i, row in enumerate(rows):
         for j, x in enumerate(_list(row, f"{where}[{i}]", n)):
             _number(x, f"{where}[{i}][{j}]")
     a = np.array(rows, dtype=float)
+    for i, name in enumerate(free):
+        top = PARAMETERS[name].bounds[1]
+        if not a[i, i] <= top * top:
+            raise _fail(f"{where}[{i}][{i}]", f"the standard deviation of {name} "
+                        f"({math.sqrt(max(a[i, i], 0.0)):.3g}) exceeds its physical range "
+                        f"(<= {top:g})")
     scale = float(np.max(np.abs(a)))
     if scale == 0.0:
         raise _fail(where, "is zero: a law fitted on noisy samples has an uncertainty")

@@ -123,6 +123,11 @@ def plan(capsys, ident_path, rig, out) -> tuple[int, str]:
      r"law\.covariance: is not positive semi-definite"),
     (lambda d: the_law(d).__setitem__("n_effective", 0), r"law\.n_effective: 0 must be >= 1"),
     (lambda d: the_law(d).__setitem__("lead_m_per_rad", 0), r"law\.lead_m_per_rad: 0 must be > 0"),
+    (lambda d: the_law(d).__setitem__("covariance", np.zeros((len(the_law(d)["free"]),) * 2
+                                                             ).tolist()), r"covariance: is zero"),
+    (lambda d: the_law(d).__setitem__("residual_rms_N", 0.0), r"residual_rms_N: 0.0 must be > 0"),
+    (lambda d: the_law(d).__setitem__("test_n_effective", [0.0] * len(the_law(d)[
+        "test_n_samples"])), r"test_n_effective\[0\]: 0.0 must be >= 1"),
 ])
 def test_plan_tests_refuses_a_damaged_law(ident, rig, tmp_path, capsys, edit, pattern):
     import re
@@ -322,3 +327,16 @@ def test_csv_field_over_the_row_limit(tmp_path, capsys):
         fh.write("1" * 5_000_000 + ",0,0,0\n")
     with pytest.raises(BenchDataError, match=r"t.csv: row 3 is longer than \d+ characters"):
         _read_csv(p, True)
+
+
+def test_unclear_messages_name_the_file(tmp_path):
+    import errno
+
+    from ehsa_opt.physics.params import load_toml
+    from ehsa_opt.utils.cli_args import os_error_message
+    p = tmp_path / "p.toml"
+    p.write_text("x = " + "9" * 5000 + "\n")  # beyond Python's integer-string limit
+    with pytest.raises(ParameterError, match=f"{p}: not valid TOML"):
+        load_toml(p)
+    msg = os_error_message(OSError(errno.EFBIG, "File too large"))
+    assert "ulimit -f" in msg and "--out" in msg
