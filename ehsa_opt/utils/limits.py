@@ -174,14 +174,17 @@ def scan_csv(path: Any, columns: int, name: str,
     longest = columns * (MAX_CSV_FIELD_CHARS + 1) + 1
     row, run = 1, 0  # 1-based row of the line being read, its length so far
     with open(path, "rb") as fh:
+        sep = 10  # the line end: \n, or \r in a file that has no \n (classic Mac)
         while block := fh.read(chunk):
+            if row == 1 and run == 0 and b"\n" not in block and b"\r" in block:
+                sep = 13
             nul = block.find(b"\0")
             if nul >= 0:
-                at = row + block.count(b"\n", 0, nul)
+                at = row + block.count(bytes([sep]), 0, nul)
                 raise error(f"{name}: row {at} holds a NUL byte "
                             f"(binary data: a sparse, unfinished or corrupt file); re-export "
                             f"the test as a comma-separated text file")
-            nl = np.flatnonzero(np.frombuffer(block, np.uint8) == 10)
+            nl = np.flatnonzero(np.frombuffer(block, np.uint8) == sep)
             ends = np.concatenate([[-1], nl])
             lengths = np.diff(ends) - 1
             if lengths.size:

@@ -340,3 +340,14 @@ def test_unclear_messages_name_the_file(tmp_path):
         load_toml(p)
     msg = os_error_message(OSError(errno.EFBIG, "File too large"))
     assert "ulimit -f" in msg and "--out" in msg
+
+
+def test_scan_counts_rows_of_any_line_end(tmp_path):
+    from ehsa_opt.utils.limits import scan_csv
+    p = tmp_path / "cr.csv"
+    p.write_bytes(b"time_s,x\r" + b"".join(b"%d,1\r" % k for k in range(20000)))
+    scan_csv(p, 2, "cr.csv", chunk=4096)  # classic-Mac line ends: rows, not one long line
+    p.write_bytes(b"time_s,x\r\n" + b"".join(b"%d,1\r\n" % k for k in range(20000))
+                  + b"1" * 5000 + b"\r\n")
+    with pytest.raises(ValueError, match="row 20002 is longer"):
+        scan_csv(p, 2, "crlf.csv", chunk=4096)
