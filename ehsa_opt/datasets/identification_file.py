@@ -177,15 +177,23 @@ def _shown(v: Any) -> str:
     return text if len(text) <= 40 else text[:40] + "..."
 
 
+def _kind(v: Any) -> str:
+    """The JSON name of a value's type."""
+    return ("null" if v is None else "true/false" if isinstance(v, bool) else
+            "a number" if isinstance(v, (int, float)) else "text" if isinstance(v, str) else
+            "a list" if isinstance(v, list) else "a table" if isinstance(v, Mapping) else
+            type(v).__name__)
+
+
 def _table(v: Any, where: str) -> Mapping[str, Any]:
     if not isinstance(v, Mapping):
-        raise _fail(where, f"must be a table (JSON object), got {type(v).__name__}")
+        raise _fail(where, f"must be a table (JSON object), got {_kind(v)}")
     return v
 
 
 def _list(v: Any, where: str, n: int | None = None) -> list:
     if not isinstance(v, list):
-        raise _fail(where, f"must be a list, got {type(v).__name__}")
+        raise _fail(where, f"must be a list, got {_kind(v)}")
     if n is not None and len(v) != n:
         raise _fail(where, f"has {len(v)} values, expected {n}")
     return v
