@@ -8,6 +8,13 @@ sine test, 4 columns); the extra peak RSS over a process that only imported the
 package is printed with the ratio to the file size.
 
     PYTHONPATH=. python benchmarks/csv_memory.py --rows 1500000
+
+``--hostile`` measures instead the files a careless or hostile user hands over: a sparse
+1 GiB CSV (a valid head, then a hole of zero bytes) and a CSV with a 300 MB field, each
+read by the current loader with the default size limit (refused before reading) and with
+``EHSA_OPT_MAX_CSV_MB`` raised above the file (streamed scan: refused at the first NUL
+byte or over-long row, memory of one chunk).  The previous loader (before the scan) peaked
+at 5.3 GB on the sparse file and 1.9 GB on the long field.
 """
 
 from __future__ import annotations
@@ -23,7 +30,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 
 _CHILD = r"""
-import resource, sys, time
+import sys, time
 from pathlib import Path
 import numpy as np
 from ehsa_opt.datasets import bench_format as bf
@@ -45,7 +52,9 @@ def previous(path, need_voltage=True):  # the loader before issue 15, verbatim i
     return {h: arr[:, j] for j, h in enumerate(header)}
 
 which, path = sys.argv[1], Path(sys.argv[2])
-r0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+def status(key):  # this process's own figures (ru_maxrss carries the parent's over exec)
+    return next(int(ln.split()[1]) for ln in open("/proc/self/status") if ln.startswith(key))
+r0 = status("VmHWM")
 t0 = time.perf_counter()
 if which == "previous":
     cols = previous(path)
@@ -54,23 +63,70 @@ elif which == "current":
 else:
     cols = {}
 dt = time.perf_counter() - t0
-r1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+r1 = status("VmHWM")
 print(r0 * 1024, r1 * 1024, dt, sum(c.size for c in cols.values()))
 """
 
 
-def measure(which: str, path: Path) -> tuple[float, float, float]:
+def measure(which: str, path: Path, env: dict | None = None) -> tuple[float, float, float]:
     r = subprocess.run([sys.executable, "-c", _CHILD, which, str(path)], capture_output=True,
-                       text=True, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
-                       check=True)
+                       text=True, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin",
+                                       **(env or {})}, check=True)
     r0, r1, dt, _ = (float(v) for v in r.stdout.split())
     return r0, r1, dt
+
+
+_HOSTILE = r"""
+import sys, time
+from pathlib import Path
+from ehsa_opt.datasets import bench_format as bf
+t0 = time.perf_counter()
+try:
+    bf._read_csv(Path(sys.argv[1]), need_voltage=True)
+    verdict = "read"
+except bf.BenchDataError as exc:
+    verdict = "refused: " + str(exc)[:90]
+dt = time.perf_counter() - t0
+# VmHWM: this process's own peak (ru_maxrss would carry the parent's across fork/exec)
+hwm = next(int(ln.split()[1]) for ln in open("/proc/self/status") if ln.startswith("VmHWM"))
+print(hwm * 1024, dt, verdict)
+"""
+
+
+def hostile() -> int:
+    """Peak RSS of the loader on a sparse 1 GiB CSV and on a 300 MB field."""
+    with tempfile.TemporaryDirectory() as tmp:
+        head = b"time_s,displacement_m,force_N,voltage_V\n" + b"".join(
+            f"{k / 1000:.3f},0.001,1.0,0.5\n".encode() for k in range(1000))
+        sparse, field = Path(tmp) / "sparse.csv", Path(tmp) / "field.csv"
+        sparse.write_bytes(head)
+        with sparse.open("r+b") as fh:
+            fh.truncate(2 ** 30)
+        with field.open("wb") as fh:
+            fh.write(head)
+            for _ in range(300):  # 300 MB in 1 MB writes: this process stays small
+                fh.write(b"1" * 1_000_000)
+            fh.write(b",1,1,1\n")
+        for path, what in ((sparse, "sparse 1 GiB CSV"), (field, "300 MB field")):
+            for env in ({}, {"EHSA_OPT_MAX_CSV_MB": "4096"}):
+                r = subprocess.run([sys.executable, "-c", _HOSTILE, str(path)],
+                                   capture_output=True, text=True, check=True,
+                                   env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin",
+                                        **env})
+                rss, dt, verdict = r.stdout.split(maxsplit=2)
+                limit = "limit raised" if env else "default limit"
+                print(f"  {what:17s} ({limit:13s}): peak RSS {float(rss) / 2 ** 20:6.1f} MiB, "
+                      f"{float(dt):5.2f} s — {verdict.strip()}")
+    return 0
 
 
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--rows", type=int, default=1_500_000)
+    ap.add_argument("--hostile", action="store_true", help="sparse file and long field")
     args = ap.parse_args()
+    if args.hostile:
+        return hostile()
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "big.csv"
         t = np.arange(args.rows) / 1000.0

@@ -49,6 +49,7 @@ from ..physics.params import (
     unknown_name_message,
 )
 from ..utils.output_folder import unlisted_content, write_listing
+from ..utils.limits import scan_csv
 from .checks import check_test_signals
 
 __all__ = ["BenchDataError", "BenchDataWarning", "BenchTest", "BenchData", "load_bench",
@@ -251,6 +252,7 @@ def read_number_table(path: Path, min_columns: int = 1,
                                  f"control character; rename the column")
         if check_header is not None:
             check_header(header)
+        scan_csv(path, len(header), name, BenchDataError)  # size, NUL, row length: bounded
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # "input contained no data"

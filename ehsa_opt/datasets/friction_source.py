@@ -10,100 +10,29 @@ An ``identification.json`` written by ``ehsa-opt identify`` carries a table
 
 A problem file refers to it with ``[friction] from = "out/identification.json"`` and
 ``case = "min" | "best" | "max"`` (path relative to the problem file); the CLI with
-``--friction FILE[:CASE]`` (case ``best`` by default).
+``--friction FILE[:CASE]`` (case ``best`` by default).  The file is read and validated by
+:mod:`ehsa_opt.datasets.identification_file` (where :class:`FrictionSets` and
+:func:`friction_set` live; re-exported here).
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..physics.params import (
-    FRICTION_NAMES,
-    FrictionParams,
-    ParameterError,
-    check_keys,
-    from_mapping,
+from ..physics.params import FrictionParams, ParameterError, from_mapping
+from .identification_file import (
+    FRICTION_CASES,
+    FrictionSets,
+    campaign_range_m_per_s,
+    friction_set,
+    read_identification,
 )
-from ..utils.limits import parse_json
 
 __all__ = ["FRICTION_CASES", "FrictionSets", "parse_friction_spec", "load_friction_sets", "load_friction",
            "friction_from_table", "load_velocity_range", "identified_range_for",
            "embedded_range_m_per_s", "RANGE_SOURCE_EMBEDDED", "identified_range_kw",
            "friction_set", "resolve_reference"]
-
-#: The friction cases an identification result provides.
-FRICTION_CASES: tuple[str, ...] = ("min", "best", "max")
-
-
-@dataclass(frozen=True)
-class FrictionSets:
-    """The identified friction cases, with the one meaning they have everywhere.
-
-    ``min`` ≤ ``best`` ≤ ``max`` in rod friction at every velocity when ``method`` is the
-    data-supported one of :mod:`ehsa_opt.estimation.bounds` (the envelope of the tests
-    and, beyond them, the best law's band); ``best`` is the law the data support best.
-    The paper's per-parameter minimum and maximum over the tests, which over-state the
-    spread, are kept apart as ``paper_min`` / ``paper_max``.
-
-    Attributes
-    ----------
-    min, best, max : FrictionParams
-        The three cases (N, m/s, N s/m at the nut; N m, rad/s, N m s/rad at the bearings).
-    method : str
-        How they were built (identification.json ``friction_sets.method``).
-    paper_min, paper_max : FrictionParams or None
-        The paper's per-parameter sets, when the identification made them.
-    """
-
-    min: FrictionParams
-    best: FrictionParams
-    max: FrictionParams
-    method: str = ""
-    paper_min: FrictionParams | None = None
-    paper_max: FrictionParams | None = None
-
-    def bounds(self, method: str = "data") -> tuple[FrictionParams, FrictionParams]:
-        """(min, max) of ``method``: ``"data"`` the data-supported sets, ``"paper"`` the
-        paper's per-parameter ones (ValueError when they were not made)."""
-        if method == "data":
-            return self.min, self.max
-        if method != "paper":
-            raise ValueError(f"FrictionSets.bounds: method must be 'data' or 'paper', got "
-                             f"{method!r}")
-        if self.paper_min is None or self.paper_max is None:
-            raise ValueError("FrictionSets.bounds: no paper's per-parameter sets (the "
-                             "identification had fewer than two converged tests)")
-        return self.paper_min, self.paper_max
-
-    def to_dict(self) -> dict:
-        """The ``friction_sets`` table of identification.json (``min``, ``best``, ``max``,
-        ``method``), plus ``paper_min`` / ``paper_max`` when present."""
-        out: dict[str, Any] = {c: getattr(self, c).as_dict() for c in FRICTION_CASES}
-        out["method"] = self.method
-        for c in ("paper_min", "paper_max"):
-            if getattr(self, c) is not None:
-                out[c] = getattr(self, c).as_dict()
-        return out
-
-    @classmethod
-    def from_dict(cls, table: Mapping[str, Any], where: str = "friction_sets"
-                  ) -> "FrictionSets":
-        """Inverse of :meth:`to_dict`; every set validated as received data
-        (:func:`friction_set`), a missing case refused with the fix."""
-        if not isinstance(table, Mapping):
-            raise ParameterError(f"{where}: must be a table of the cases "
-                                 f"{', '.join(FRICTION_CASES)}; re-run `ehsa-opt identify`")
-        sets = {}
-        for case in FRICTION_CASES:
-            if not isinstance(table.get(case), Mapping):
-                raise ParameterError(f"{where}: no '{case}' case; re-run `ehsa-opt identify`")
-            sets[case] = friction_set(table[case], f"{where}.{case}")
-        paper = {c: friction_set(table[c], f"{where}.{c}")
-                 for c in ("paper_min", "paper_max") if isinstance(table.get(c), Mapping)}
-        return cls(**sets, method=str(table.get("method", "")), **paper)
 
 
 def parse_friction_spec(spec: str | Path) -> tuple[Path, str]:
@@ -128,41 +57,17 @@ def load_friction_sets(path: str | Path) -> dict[str, FrictionParams]:
         command that makes one).
     """
     path = Path(path)
-    if not path.is_file():
-        raise ParameterError(f"{path}: identification result not found; make one with "
-                             f"`ehsa-opt identify DATA_DIR --out DIR` (DIR/identification.json)")
-    try:
-        doc = parse_json(path.read_bytes(), str(path), ParameterError)
-    except OSError as exc:
-        raise ParameterError(f"{path}: cannot be read ({exc.strerror}); check the path and "
-                             f"its permissions") from None
-    except ParameterError as exc:
-        raise ParameterError(f"{exc}; pass the identification.json written by "
-                             f"`ehsa-opt identify`") from None
-    sets = doc.get("friction_sets") if isinstance(doc, Mapping) else None
+    doc = read_identification(path)
+    sets = doc.get("friction_sets")
     if not isinstance(sets, Mapping):
-        raise ParameterError(f"{path}: no 'friction_sets' table (written by an older ehsa_opt "
-                             f"or not an identification result); re-run `ehsa-opt identify`")
+        note = doc.get("friction_sets_note")
+        raise ParameterError(f"{path}: no 'friction_sets' table "
+                             + (f"({note}) " if isinstance(note, str) else
+                                "(written by an older ehsa_opt or not an identification "
+                                "result)")
+                             + "; re-run `ehsa-opt identify`")
     fs = FrictionSets.from_dict(sets, f"{path} friction_sets")
     return {case: getattr(fs, case) for case in FRICTION_CASES}
-
-
-def friction_set(values: Mapping[str, Any], where: str) -> FrictionParams:
-    """A received friction set, validated as data: every parameter by name (no default
-    fills a missing one, a misspelled name is refused with the nearest valid one), finite
-    numbers, physical (breakaway >= Coulomb >= 0, velocities > 0, viscous >= 0)."""
-    check_keys(values, FRICTION_NAMES, where)
-    missing = [n for n in FRICTION_NAMES if n not in values]
-    if missing:
-        raise ParameterError(f"{where}: missing {', '.join(missing)}; a friction set needs all "
-                             f"{len(FRICTION_NAMES)} parameters ({', '.join(FRICTION_NAMES)}) — "
-                             f"re-run `ehsa-opt identify` or complete the set")
-    for n in FRICTION_NAMES:
-        v = values[n]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ParameterError(f"{where}: {n} = {v!r} is not a finite number; re-run "
-                                 f"`ehsa-opt identify` or give a number")
-    return from_mapping(FrictionParams, values, where)
 
 
 def load_friction(spec: str | Path, case: str | None = None) -> FrictionParams:
@@ -203,18 +108,14 @@ def load_velocity_range(path: str | Path) -> float | None:
     (``velocity_range.campaign_m_per_s``; for files written before it, the envelope's
     largest velocity), or None when the file has neither."""
     path = Path(path)
-    try:
-        doc = parse_json(path.read_text(encoding="utf-8"), str(path))
-    except (OSError, UnicodeDecodeError, ValueError):
-        return None
-    if not isinstance(doc, Mapping):
-        return None
+    doc = read_identification(path)  # every table validated: the range is finite, ordered
     rng = doc.get("velocity_range")
-    if isinstance(rng, Mapping) and isinstance(rng.get("campaign_m_per_s"), list):
-        return float(rng["campaign_m_per_s"][1])
+    if isinstance(rng, Mapping) and rng.get("campaign_m_per_s") is not None:
+        return campaign_range_m_per_s(rng["campaign_m_per_s"],
+                                      f"{path} velocity_range.campaign_m_per_s")[1]
     env = doc.get("friction_envelope")
     if isinstance(env, Mapping) and env.get("velocity_m_per_s"):
-        return float(max(x for x in env["velocity_m_per_s"] if x is not None))
+        return float(env["velocity_m_per_s"][-1])  # validated: increasing
     return None
 
 

@@ -318,10 +318,20 @@ def _parse_motor(mt: Mapping[str, Any], path: str, space: DesignSpace
                          ratings.get("rated_power_W")) if ratings else None
     catalogue = None
     if model == "catalogue":
-        name = str(mt.get("catalogue", "dc_generators"))
+        name = mt.get("catalogue", "dc_generators")
+        if not isinstance(name, str):
+            raise ParameterError(f"{where} catalogue: give the path of a catalogue file "
+                                 f"(relative to the problem file) or 'dc_generators' as text")
         base = Path(path).parent if path else Path(".")
-        cand = base / name if name.endswith(".toml") and not Path(name).is_absolute() else name
-        catalogue = str(catalogue_path(cand))
+        if name.endswith(".toml") or len(Path(name).parts) > 1:  # a file: confined, must exist
+            from ..datasets.friction_source import resolve_reference
+            resolve_reference(name, base, f"{where} catalogue")
+        try:
+            catalogue = str(catalogue_path(name, base))
+        except ParameterError as exc:
+            raise ParameterError(f"{where} {exc}") from None
+        from ..physics.motor import load_catalogue
+        load_catalogue(catalogue)  # refused now, before any work, naming the file and key
         if "speed_constant_rpm_per_V" in space.names:
             raise ParameterError(f"{path} [design.bounds]: a catalogue motor fixes k_n; remove "
                                  "speed_constant_rpm_per_V from the box with [motor] model = "

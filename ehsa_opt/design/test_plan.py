@@ -43,7 +43,8 @@ import numpy as np
 
 from ..estimation.rod_law import Z95, RodLawFit, rod_gradient
 from ..physics.harvester import equivalent_damping_Ns_per_m, equivalent_mass_kg
-from ..physics.params import HarvesterParams, ParameterError, load_toml, nearest_name
+from ..physics.params import HarvesterParams, ParameterError
+from .rig import SLOWEST_TRIANGLE_M_PER_S, RigLimits, load_rig
 
 __all__ = ["RigLimits", "load_rig", "Candidate", "candidate_tests", "TestPlan", "plan_tests",
            "road_velocity_sigma", "plan_from_files", "triangle_resolved_velocity",
@@ -52,88 +53,6 @@ __all__ = ["RigLimits", "load_rig", "Candidate", "candidate_tests", "TestPlan", 
 _KINDS = ("sine", "triangle")
 #: Fewest resolved samples a triangle candidate must keep (as a recorded test to be fitted).
 _MIN_RESOLVED = 20
-
-
-@dataclass(frozen=True)
-class RigLimits:
-    """What the bench can do (the ``[rig]`` table of a rig file).
-
-    Attributes
-    ----------
-    stroke_m : float
-        Usable stroke, peak to peak (a sine's amplitude ≤ stroke/2).
-    peak_velocity_m_per_s : float
-        Largest actuator velocity.
-    force_N : float
-        Largest actuator force (the damper's peak force must stay below).
-    actuator_power_W : float
-        Largest peak mechanical power F·v.
-    loads_ohm : tuple of float
-        Load resistors available.
-    sample_rate_hz, cycles : float
-        Recording of a planned test.
-    reversal_s : float
-        Time a triangle stroke takes to reverse (its acceleration is v / reversal_s).
-    min_frequency_hz, max_frequency_hz : float
-        Sine frequencies the controller runs.
-    """
-
-    stroke_m: float = 0.1
-    peak_velocity_m_per_s: float = 1.0
-    force_N: float = 10_000.0
-    actuator_power_W: float = 5_000.0
-    loads_ohm: tuple[float, ...] = (15.0, 47.0, 109.0)
-    sample_rate_hz: float = 1000.0
-    cycles: float = 2.0
-    reversal_s: float = 0.05
-    min_frequency_hz: float = 0.1
-    max_frequency_hz: float = 20.0
-
-    def __post_init__(self) -> None:
-        for name in ("stroke_m", "peak_velocity_m_per_s", "force_N", "actuator_power_W",
-                     "sample_rate_hz", "cycles", "reversal_s", "min_frequency_hz",
-                     "max_frequency_hz"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (
-                    math.isfinite(v) and v > 0):
-                raise ParameterError(f"[rig] {name} = {v!r}: give a positive number (e.g. "
-                                     f"{getattr(RigLimits, name)!r})")
-        if self.stroke_m > 2.0:
-            raise ParameterError(f"[rig] stroke_m = {self.stroke_m:g} m: strokes are metres "
-                                 f"(e.g. 0.1 for ±50 mm); did you give millimetres?")
-        if self.max_frequency_hz <= self.min_frequency_hz:
-            raise ParameterError("[rig] max_frequency_hz must be above min_frequency_hz")
-        loads = tuple(self.loads_ohm)
-        if not loads or any(isinstance(r, bool) or not isinstance(r, (int, float))
-                            or not (math.isfinite(r) and r > 0) for r in loads):
-            raise ParameterError(f"[rig] loads_ohm = {self.loads_ohm!r}: give a list of "
-                                 f"positive resistances in ohm, e.g. [15.0, 47.0, 109.0]")
-
-
-def load_rig(path: str | Path) -> RigLimits:
-    """A rig file's ``[rig]`` table (unknown keys and bad values refused with the fix)."""
-    doc = load_toml(path)
-    tab = doc.get("rig")
-    if not isinstance(tab, Mapping):
-        raise ParameterError(f"{path}: no [rig] table; add one, e.g.\n[rig]\nstroke_m = 0.1\n"
-                             f"peak_velocity_m_per_s = 1.0\nforce_N = 10000.0\n"
-                             f"actuator_power_W = 5000.0\nloads_ohm = [15.0, 47.0, 109.0]")
-    valid = [f for f in RigLimits.__dataclass_fields__]
-    for k in tab:
-        if k not in valid:
-            near = nearest_name(k, valid)
-            raise ParameterError(f"{path}: [rig] unknown key '{k}'"
-                                 + (f"; did you mean '{near}'?" if near else "")
-                                 + f" (valid: {', '.join(valid)})")
-    vals = dict(tab)
-    if "loads_ohm" in vals:
-        if not isinstance(vals["loads_ohm"], list):
-            raise ParameterError(f"{path}: [rig] loads_ohm must be a list, e.g. [15.0, 47.0]")
-        vals["loads_ohm"] = tuple(vals["loads_ohm"])
-    try:
-        return RigLimits(**vals)
-    except ParameterError as exc:
-        raise ParameterError(f"{path}: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -239,7 +158,8 @@ def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
         if "triangle" in kinds:
             ceq = float(equivalent_damping_Ns_per_m(h, 0.0))
             a = 0.5 * rig.stroke_m
-            for v in np.geomspace(0.02, rig.peak_velocity_m_per_s, n_freq):
+            for v in np.geomspace(SLOWEST_TRIANGLE_M_PER_S, rig.peak_velocity_m_per_s,
+                                 n_freq):
                 if 2 * a / v <= 2 * rig.reversal_s:
                     continue
                 F = meq * v / rig.reversal_s + ceq * v + float(law.rod_N(v))
@@ -576,24 +496,23 @@ def plan_from_files(ident_path: str | Path, vehicle_path: str | Path, rig_path: 
                     ) -> tuple[TestPlan, dict]:
     """:func:`plan_tests` from an ``identification.json``, a quarter-car problem file and a
     rig file.  Returns the plan and the bench's ``[harvester]`` table (for the skeleton)."""
-    from ..datasets.friction_source import load_friction_sets
+    from ..datasets.friction_source import FrictionSets
+    from ..datasets.identification_file import bench_harvester, read_identification
     from ..datasets.problem_file import load_problem
     ident_path = Path(ident_path)
     rig = load_rig(rig_path)
     prob = load_problem(vehicle_path)
-    sets = load_friction_sets(ident_path)
-    doc = json.loads(ident_path.read_text(encoding="utf-8"))
+    doc = read_identification(ident_path)  # every table validated (law, sets, ranges)
+    if not isinstance(doc.get("friction_sets"), Mapping):
+        raise ParameterError(f"{ident_path}: no 'friction_sets' table (not an identification "
+                             f"result, or its fits failed); re-run `ehsa-opt identify`")
+    sets = FrictionSets.from_dict(doc["friction_sets"], f"{ident_path} friction_sets")
     law_doc = ((doc.get("friction_envelope") or {}).get("extrapolation_band") or {}).get("law")
-    if not isinstance(law_doc, Mapping) or "covariance" not in law_doc:
+    if not isinstance(law_doc, Mapping):
         raise ParameterError(f"{ident_path}: no friction_envelope.extrapolation_band.law "
                              f"(written by an older ehsa_opt); re-run `ehsa-opt identify`")
-    law = RodLawFit.from_dict(law_doc)
-    harv_tab: dict = {}
-    bench = Path(str(doc.get("data_dir", ""))) / "bench.toml"
-    if bench.is_file():
-        harv_tab = dict(load_toml(bench).get("harvester") or {})
-    harvester = HarvesterParams(**harv_tab) if harv_tab else HarvesterParams()
-    sigma = road_velocity_sigma(prob, sets["best"])
+    law = RodLawFit.from_dict(law_doc, f"{ident_path} friction_envelope.extrapolation_band.law")
+    harvester, harv_tab = bench_harvester(doc, ident_path)
+    sigma = road_velocity_sigma(prob, sets.best)
     return plan_tests(law, rig, harvester, sigma, n_tests=n_tests, criterion=criterion,
                       kinds=kinds, weight=weight), harv_tab
-

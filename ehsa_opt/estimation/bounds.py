@@ -59,7 +59,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from scipy import stats
 
-from ..physics.params import FRICTION_NAMES, FrictionParams
+from ..physics.params import FRICTION_NAMES, FrictionParams, ParameterError
 from ..utils.io import json_safe
 from .ordered_sets import ENVELOPE_PARAMETERS, fit_envelope, friction_set, ordered_set, rod_curve_N
 from .test_velocity import test_peak_velocity_m_per_s, test_velocity_range_m_per_s
@@ -229,14 +229,35 @@ class FrictionBounds:
         return json.dumps(json_safe(self.to_dict()), indent=1, allow_nan=False)
 
     @classmethod
-    def from_dict(cls, doc: Mapping[str, Any]) -> "FrictionBounds":
+    def from_dict(cls, doc: Mapping[str, Any], where: str = "friction bounds"
+                  ) -> "FrictionBounds":
         """Reload the bounds from :meth:`to_dict`, or from an identification.json as
         ``ehsa-opt identify`` writes it (its ``friction_sets`` / ``friction_envelope`` /
-        ``velocity_range`` tables), to inspect or plot them."""
+        ``velocity_range`` tables), to inspect or plot them.  Validated as received data
+        first (:func:`~ehsa_opt.datasets.identification_file.check_identification`: sets
+        physical and ordered, curves finite and as long as the grid, ranges ordered,
+        covariances positive semi-definite); a bad document raises
+        :class:`~ehsa_opt.physics.params.ParameterError` naming ``where`` and the key."""
+        from ..datasets.identification_file import RERUN, check_identification
+        doc = check_identification(doc, where)
         if "friction_envelope" not in doc or "friction_sets" not in doc:
             note = doc.get("friction_sets_note")
-            raise ValueError("friction bounds: no friction_sets / friction_envelope tables"
-                             + (f" ({note})" if note else "; identify the data first"))
+            raise ParameterError(f"{where}: no friction_sets / friction_envelope tables"
+                                 + (f" ({str(note)[:200]})" if note else
+                                    "; identify the data first"))
+        env = doc["friction_envelope"]
+        for key in ("velocity_m_per_s", "lower_N", "upper_N", "mean_N", "mean_ci95_low_N",
+                    "mean_ci95_high_N", "sets_rod_N", "lead_m_per_rad"):
+            if not isinstance(env, Mapping) or env.get(key) is None:
+                raise ParameterError(f"{where}: friction_envelope has no '{key}'; {RERUN}")
+        try:
+            return cls._build(doc)
+        except (KeyError, TypeError, AttributeError, IndexError, ValueError) as exc:
+            raise ParameterError(f"{where}: a table does not hold what the bounds need "
+                                 f"({type(exc).__name__}: {str(exc)[:200]}); {RERUN}") from None
+
+    @classmethod
+    def _build(cls, doc: Mapping[str, Any]) -> "FrictionBounds":
         env, sets = doc["friction_envelope"], doc["friction_sets"]
         band = env.get("extrapolation_band") or {}
         paper = env.get("paper_method") or {}
@@ -265,15 +286,17 @@ class FrictionBounds:
                    sets.get("method", DATA_METHOD),
                    pair(band.get("law_low_N"), band.get("law_high_N")),
                    pair(band.get("margin_low_N"), band.get("margin_high_N")),
-                   tuple(float(x) for x in env.get("identified_range_m_per_s",
-                                                   (math.nan, math.nan))),
+                   tuple(math.nan if x is None else float(x)
+                         for x in env.get("identified_range_m_per_s") or (None, None)),
                    {k: float(x) for k, x in peaks.items()}, dict(band.get("law") or {}),
                    float(band.get("level", 0.95)))
 
     @classmethod
-    def from_json(cls, text: str) -> "FrictionBounds":
-        """Reload bounds written by :meth:`to_json` (or an identification.json's text)."""
-        return cls.from_dict(json.loads(text))
+    def from_json(cls, text: str | bytes, where: str = "friction bounds") -> "FrictionBounds":
+        """Reload bounds written by :meth:`to_json` (or an identification.json's text),
+        through the shared JSON limits (nesting, standard constants)."""
+        from ..utils.limits import parse_json
+        return cls.from_dict(parse_json(text, where, ParameterError), where)
 
     def plot(self, ax: Any = None, **kw: Any) -> Any:
         """Envelope, sets and paper bounds against velocity (two panels, ``ax`` not used;

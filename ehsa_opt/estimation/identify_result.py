@@ -15,7 +15,7 @@ import numpy as np
 
 from ..datasets.bench_format import BenchData, BenchDataError, BenchTest, load_bench
 from ..physics.friction import rod_friction_N
-from ..physics.params import FRICTION_NAMES
+from ..physics.params import FRICTION_NAMES, ParameterError
 from ..utils.io import json_safe
 from .fit_result import FitResult
 from .test_simulation import Prediction, simulate_tests
@@ -110,7 +110,10 @@ class IdentificationReport:
                      "train": j.per_test, "holdout": self.holdout_errors,
                      "holdout_files": list(self.holdout_files),
                      **{k: getattr(j, k) for k in _JOINT_RELOAD}}
-        return json_safe({"data_dir": str(self.data.path), "rig": self.data.rig_name,
+        # absolute: the file is read from other folders (plan-tests resolves a relative
+        # data_dir against the file's own folder)
+        data_dir = str(Path(self.data.path).resolve()) if self.data.path else ""
+        return json_safe({"data_dir": data_dir, "rig": self.data.rig_name,
                           "has_generator": gen, "tests": tests, "bounds": self.bounds,
                           "identifiable": self.identifiable, "joint_fit": joint,
                           "seconds": self.seconds, "starts_per_test": self.starts})
@@ -120,39 +123,58 @@ class IdentificationReport:
         return json.dumps(self.to_dict(), indent=1, allow_nan=False)
 
     @classmethod
-    def from_dict(cls, doc: Mapping[str, Any], data: BenchData | None = None
-                  ) -> "IdentificationReport":
+    def from_dict(cls, doc: Mapping[str, Any], data: BenchData | None = None,
+                  where: str = "identification result") -> "IdentificationReport":
         """Reload a report from :meth:`to_dict` (or an identification.json) to inspect or
         plot it.  ``data``: the bench data it was identified on (default: loaded from
-        the file's ``data_dir``); its tests must be the file's ``tests[].file``."""
+        the file's ``data_dir``); its tests must be the file's ``tests[].file``.
+
+        The document is validated as received data first
+        (:func:`~ehsa_opt.datasets.identification_file.check_identification`); a bad one
+        raises :class:`~ehsa_opt.physics.params.ParameterError` (or
+        :class:`~ehsa_opt.datasets.bench_format.BenchDataError` for the bench data)
+        naming ``where``, the key and the fix."""
+        from ..datasets.identification_file import RERUN, check_identification
+        doc = check_identification(doc, where)
         for key in ("data_dir", "tests", "bounds", "identifiable"):
             if key not in doc:
-                raise BenchDataError(f"identification result: no key '{key}'; it was not "
+                raise BenchDataError(f"{where}: no key '{key}'; it was not "
                                      f"written by IdentificationReport.to_json / ehsa-opt "
                                      f"identify")
         if data is None:
             data = load_bench(doc["data_dir"])
         files = [t["file"] for t in doc["tests"]]
         if [t.file for t in data.tests] != files:
-            raise BenchDataError(f"identification result: its tests {files} are not the tests "
+            raise BenchDataError(f"{where}: its tests {files} are not the tests "
                                  f"of {data.path} ({[t.file for t in data.tests]}); pass the "
                                  f"bench data it was identified on as data=")
+        try:
+            return cls._build(doc, data)
+        except (KeyError, TypeError, AttributeError, IndexError, ValueError) as exc:
+            raise ParameterError(f"{where}: a table does not hold what the report needs "
+                                 f"({type(exc).__name__}: {str(exc)[:200]}); {RERUN}") from None
+
+    @classmethod
+    def _build(cls, doc: Mapping[str, Any], data: BenchData) -> "IdentificationReport":
         fits = [_fit_of(t) for t in doc["tests"]]
         j = doc.get("joint_fit")
         joint = None if j is None else FitResult(
-            success=bool(j["success"]), parameters=_floats(j["parameters"]),
+            success=bool(j["success"]), parameters=_floats(j.get("parameters")),
             per_test=list(j.get("train", [])),
             **{"message": "", **{k: j[k] for k in _JOINT_RELOAD if j.get(k) is not None}})
         held = list(j.get("holdout", [])) if j is not None else []
         return cls(data, fits, {k: [float(x) for x in v] for k, v in doc["bounds"].items()},
-                   joint, list(j.get("holdout_files", [r["file"] for r in held]))
+                   joint, list(j.get("holdout_files", [r.get("file") for r in held]))
                    if j is not None else [], held, dict(doc["identifiable"]),
-                   float(doc.get("seconds") or 0.0), int(doc.get("starts_per_test", 0)))
+                   float(doc.get("seconds") or 0.0), int(doc.get("starts_per_test") or 0))
 
     @classmethod
-    def from_json(cls, text: str, data: BenchData | None = None) -> "IdentificationReport":
-        """Reload a report written by :meth:`to_json` (see :meth:`from_dict`)."""
-        return cls.from_dict(json.loads(text), data)
+    def from_json(cls, text: str | bytes, data: BenchData | None = None,
+                  where: str = "identification result") -> "IdentificationReport":
+        """Reload a report written by :meth:`to_json` (see :meth:`from_dict`): through the
+        shared JSON limits (nesting, standard constants; bytes in UTF-8 or UTF-16)."""
+        from ..utils.limits import parse_json
+        return cls.from_dict(parse_json(text, where, ParameterError), data, where)
 
     def summary(self, json_path: str | Path = "identification.json") -> str:
         """The lines ``ehsa-opt identify`` prints: tests converged, per-test Eq 5 δ and

@@ -38,7 +38,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..physics.friction import rod_friction_N
-from ..physics.params import FRICTION_NAMES
+from ..physics.params import FRICTION_NAMES, ParameterError
 
 __all__ = ["FrictionSamples", "RodLawFit", "friction_samples", "rod_law_fit",
            "hac_covariance", "cluster_covariance", "andrews_bandwidth", "rod_gradient",
@@ -412,37 +412,46 @@ class RodLawFit:
                                        np.asarray(self.covariance_cluster).tolist())}
 
     def to_json(self) -> str:
-        """:meth:`to_dict` as JSON text."""
-        return json.dumps(self.to_dict(), indent=1)
+        """:meth:`to_dict` as standard JSON text (NaN written as null)."""
+        from ..utils.io import json_safe
+        return json.dumps(json_safe(self.to_dict()), indent=1, allow_nan=False)
 
     @classmethod
-    def from_json(cls, text: str) -> "RodLawFit":
-        """Reload a law written by :meth:`to_json`."""
-        return cls.from_dict(json.loads(text))
+    def from_json(cls, text: str, where: str = "rod-friction law") -> "RodLawFit":
+        """Reload a law written by :meth:`to_json` (validated as :meth:`from_dict`)."""
+        from ..utils.limits import parse_json
+        return cls.from_dict(parse_json(text, where, ParameterError), where)
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> "RodLawFit":
+    def from_dict(cls, d: Mapping[str, Any], where: str = "rod-friction law") -> "RodLawFit":
         """Inverse of :meth:`to_dict` (identification.json ``extrapolation_band.law``;
         the list of free names is read from ``free``, or ``varied`` in files written by
-        earlier versions)."""
+        earlier versions).  Validated as received data
+        (:func:`~ehsa_opt.datasets.identification_file.check_law`: physical parameters,
+        known names, positive semi-definite covariances, effective samples >= 1);
+        :class:`~ehsa_opt.physics.params.ParameterError` names ``where`` and the key."""
+        from ..datasets.identification_file import check_law
+        check_law(d, where)
         cl = d.get("covariance_cluster")
         free = d["free"] if "free" in d else d["varied"]
+
+        def num(x: Any) -> float:  # null is how standard JSON writes NaN
+            return math.nan if x is None else float(x)
         return cls({k: float(v) for k, v in d["parameters"].items()}, list(free),
                    np.asarray(d["covariance"], dtype=float),
                    np.asarray(d["covariance_iid"], dtype=float), float(d["lead_m_per_rad"]),
                    int(d["n_samples"]), float(d["n_effective"]), list(d.get("bandwidths", [])),
-                   float(d.get("residual_rms_N", math.nan)),
-                   tuple(d.get("velocity_range_m_per_s", (math.nan, math.nan))),
+                   num(d.get("residual_rms_N")),
+                   tuple(num(x) for x in d.get("velocity_range_m_per_s") or (None, None)),
                    None if cl is None else np.asarray(cl, dtype=float),
                    int(d.get("n_tests", 1)),
-                   [float(x) for x in d.get("test_residual_rms_N", [])],
-                   [math.nan if x is None else float(x)
-                    for x in d.get("test_peak_acceleration_m_per_s2", [])],
+                   [num(x) for x in d.get("test_residual_rms_N", [])],
+                   [num(x) for x in d.get("test_peak_acceleration_m_per_s2", [])],
                    [{k: float(v) for k, v in a.items()} for a in d.get("alternatives", [])],
                    None if not d.get("weighted") else
                    {k: float(v) for k, v in d["weighted"].items()},
-                   [float(x) for x in d.get("test_n_samples", [])],
-                   [float(x) for x in d.get("test_n_effective", [])])
+                   [num(x) for x in d.get("test_n_samples", [])],
+                   [num(x) for x in d.get("test_n_effective", [])])
 
 
 def _free_names(params: Mapping[str, float], has_generator: bool) -> list[str]:

@@ -28,14 +28,13 @@ the vehicle's.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .params import HarvesterParams, ParameterError, check_keys
+from .params import HarvesterParams, ParameterError, check_keys, load_toml, nearest_name
 
 __all__ = ["RatedLimits", "ScalingMotor", "FixedWindingMotor", "CatalogueMotor",
            "MOTOR_MODELS", "load_catalogue", "catalogue_path"]
@@ -191,39 +190,65 @@ _MOTOR_KEYS = ("name", "speed_constant_rpm_per_V", "voltage_constant_Vs_per_rad"
                "notes")
 
 
-def catalogue_path(name: str | Path = "dc_generators") -> Path:
-    """A catalogue file: a path, or the name of one shipped in ``ehsa_opt/data/motors``."""
-    p = Path(name)
-    if p.suffix == ".toml" and p.is_file():
-        return p
-    shipped = Path(__file__).resolve().parents[1] / "data" / "motors" / f"{p.stem}.toml"
-    if shipped.is_file():
-        return shipped
-    raise ParameterError(f"motor catalogue '{name}': no such file (give a .toml path or "
-                         "'dc_generators', the shipped catalogue)")
+def catalogue_path(name: str | Path = "dc_generators", base_dir: str | Path | None = None
+                   ) -> Path:
+    """A catalogue file: the name of one shipped in ``ehsa_opt/data/motors`` (a bare name
+    such as ``"dc_generators"``), or a path (a ``.toml`` name or one with a folder),
+    resolved against ``base_dir`` (the folder of the file naming it) when relative.  A path
+    must lead to an existing file: it never falls back on a shipped catalogue."""
+    text = str(name)
+    if not text or not text.isprintable():
+        raise ParameterError(f"motor catalogue {text!r}: not a file name (empty or a control "
+                             f"character); give a .toml path or 'dc_generators'")
+    p = Path(text)
+    shipped_dir = Path(__file__).resolve().parents[1] / "data" / "motors"
+    if p.suffix != ".toml" and len(p.parts) == 1:
+        shipped = shipped_dir / f"{text}.toml"
+        if shipped.is_file():
+            return shipped
+        names = sorted(f.stem for f in shipped_dir.glob("*.toml"))
+        near = nearest_name(text, names)
+        raise ParameterError(f"motor catalogue '{text}': no shipped catalogue of that name"
+                             + (f"; did you mean '{near}'?" if near else "")
+                             + f" (shipped: {', '.join(names)}; or give the path of a .toml "
+                               f"file)")
+    if not p.is_absolute() and base_dir is not None:
+        p = Path(base_dir) / p
+    if not p.is_file():
+        where = f" (resolved against {Path(base_dir).resolve()})" if base_dir is not None \
+            and not Path(text).is_absolute() else ""
+        raise ParameterError(f"motor catalogue '{text}': no such file{where}; give the path "
+                             f"of the catalogue relative to the problem file, or "
+                             f"'dc_generators' for the shipped one")
+    return p
 
 
-def load_catalogue(path: str | Path = "dc_generators") -> list[CatalogueMotor]:
-    """Read a motor catalogue (TOML, one ``[[motor]]`` table per generator).
+def load_catalogue(path: str | Path = "dc_generators", base_dir: str | Path | None = None
+                   ) -> list[CatalogueMotor]:
+    """Read a motor catalogue (TOML, one ``[[motor]]`` table per generator; the format:
+    docs/formats.md).
 
     Each motor: ``name``, ``speed_constant_rpm_per_V`` or ``voltage_constant_Vs_per_rad``,
     ``internal_resistance_ohm``, ``inductance_H``, ``motor_inertia_gcm2``, the ratings
     ``rated_voltage_V``, ``rated_current_A`` (continuous), ``rated_power_W`` (each
     optional), ``mass_kg`` (optional) and ``source`` (required: where the values come
-    from).  Bad entries are refused naming the file, the motor and the key.
+    from).  The file is read through the shared limits (size, UTF-8, nesting:
+    :func:`~ehsa_opt.physics.params.load_toml`); bad entries are refused naming the file,
+    the motor and the key.
     """
-    p = catalogue_path(path)
-    try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{p}: not valid TOML ({exc})") from None
+    p = catalogue_path(path, base_dir)
+    doc = load_toml(p, "motor catalogue")
     check_keys(doc, ("motor", "title", "description"), str(p))
     motors = doc.get("motor")
     if not isinstance(motors, list) or not motors:
         raise ParameterError(f"{p}: no [[motor]] tables; add at least one motor")
     out = []
     for k, m in enumerate(motors):
-        where = f"{p} [[motor]] #{k + 1} ({m.get('name', 'unnamed')})"
+        if not isinstance(m, dict):
+            raise ParameterError(f"{p}: motor #{k + 1} is {m!r:.40}, not a table; write each "
+                                 f"generator as a [[motor]] table of key = value pairs")
+        label = m.get("name") if isinstance(m.get("name"), str) else "unnamed"
+        where = f"{p} [[motor]] #{k + 1} ({label[:60]})"
         check_keys(m, _MOTOR_KEYS, where)
         for key in ("name", "source"):
             if not isinstance(m.get(key), str) or not m[key].strip():
@@ -253,6 +278,10 @@ def load_catalogue(path: str | Path = "dc_generators") -> list[CatalogueMotor]:
             rating=RatedLimits(num("rated_voltage_V", False), num("rated_current_A", False),
                                num("rated_power_W", False)),
             mass_kg=num("mass_kg", False), source=m["source"].strip()))
+        try:  # the ranges every harvester obeys (units: a slip of 1000 is refused here)
+            out[-1].harvester(HarvesterParams())
+        except ParameterError as exc:
+            raise ParameterError(f"{where}: {str(exc).split(': ', 1)[-1]}") from None
     names = [m.name for m in out]
     if len(set(names)) != len(names):
         raise ParameterError(f"{p}: duplicate motor names")

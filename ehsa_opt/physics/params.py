@@ -451,26 +451,26 @@ def from_mapping(cls: type, mapping: Mapping[str, Any], where: str) -> Any:
             from None
 
 
-def load_toml(path: str | Path) -> dict[str, Any]:
-    """Read a TOML file with an error that names the file and the line."""
+def load_toml(path: str | Path, what: str = "file") -> dict[str, Any]:
+    """Read a TOML file with an error that names the file and the line.
+
+    Through the shared limits of every received file (:mod:`ehsa_opt.utils.limits`): its
+    size before reading, its encoding (UTF-8; UTF-16 with its byte-order mark decoded;
+    another encoding refused naming the byte), and the nesting depth."""
     path = Path(path)
     if not path.is_file():
-        raise ParameterError(f"{path}: file not found")
-    from ..utils.limits import check_nesting, nesting_error
+        raise ParameterError(f"{path}: {what} not found")
+    from ..utils.limits import check_nesting, decode_text, nesting_error, read_input_bytes
     try:
-        with path.open("rb") as fh:
-            raw = fh.read()
-        if raw.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte-order mark (some editors add one)
-            raw = raw[3:]
-        return check_nesting(tomllib.loads(raw.decode("utf-8")), str(path), ParameterError)
+        text = decode_text(read_input_bytes(path, what, ParameterError), str(path),
+                           ParameterError)
+        return check_nesting(tomllib.loads(text), str(path), ParameterError)
     except RecursionError:
         raise nesting_error(str(path), ParameterError) from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML ({exc}); fix the syntax there") from None
-    except UnicodeDecodeError as exc:
-        raise ParameterError(f"{path}: byte {exc.start} is not UTF-8 ({exc.reason}); TOML files "
-                             f"must be UTF-8: re-save it as UTF-8 (e.g. iconv -f latin1 -t "
-                             f"utf-8)") from None
-    except OSError as exc:
-        raise ParameterError(f"{path}: cannot be read ({exc.strerror}); check the path and its "
-                             f"permissions") from None
+    except ParameterError:
+        raise
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
+        raise ParameterError(f"{path}: not valid TOML ({str(exc)[:120]}); fix the value "
+                             f"there") from None

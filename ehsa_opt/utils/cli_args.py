@@ -105,6 +105,10 @@ def os_error_message(exc: OSError) -> str:
     elif code in (errno.EACCES, errno.EPERM, errno.EROFS):
         fix = (f"{exc.strerror or 'permission denied'}; choose a folder you can write to "
                f"(--out) or fix its permissions")
+    elif code == errno.EFBIG:
+        fix = ("file too large: the size limit of a file was reached (`ulimit -f`, or the file "
+               "system's); raise the limit or choose --out on another file system, then run "
+               "the same command again")
     elif code == errno.ENOENT:
         fix = "not found; check the path"
     elif code in (errno.EISDIR, errno.ENOTDIR):

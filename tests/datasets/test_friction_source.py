@@ -15,8 +15,9 @@ SETS = {
     "min": {"nut_breakaway_N": 40.0, "nut_coulomb_N": 30.0, "nut_viscous_Ns_per_m": 100.0},
     "best": {"nut_breakaway_N": 60.0, "nut_coulomb_N": 45.0, "nut_viscous_Ns_per_m": 150.0,
              "bearing_coulomb_Nm": 0.01, "bearing_breakaway_Nm": 0.012},
-    "max": {"nut_breakaway_N": 80.0, "nut_coulomb_N": 60.0, "nut_viscous_Ns_per_m": 200.0},
-}
+    "max": {"nut_breakaway_N": 80.0, "nut_coulomb_N": 60.0, "nut_viscous_Ns_per_m": 200.0,
+            "bearing_coulomb_Nm": 0.012, "bearing_breakaway_Nm": 0.015},
+}  # ordered: min <= best <= max in rod friction at every velocity
 
 
 @pytest.fixture()

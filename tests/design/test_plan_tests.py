@@ -94,7 +94,9 @@ def test_planned_tests_reach_the_road_and_shrink_the_band(law) -> None:
 def test_cli_plan_tests_writes_the_skeleton(law, tmp_path, capsys) -> None:
     ident = tmp_path / "identification.json"
     sets = {c: TRUTH.as_dict() for c in ("min", "best", "max")}
-    ident.write_text(json.dumps({"data_dir": str(tmp_path / "none"), "friction_sets": sets,
+    (tmp_path / "bench").mkdir()
+    (tmp_path / "bench" / "bench.toml").write_text("[rig]\nname = 'r'\n")  # Table 1 lead
+    ident.write_text(json.dumps({"data_dir": "bench", "friction_sets": sets,
                                  "friction_envelope": {"extrapolation_band": {
                                      "law": law.to_dict()}}}))
     rig = tmp_path / "rig.toml"
