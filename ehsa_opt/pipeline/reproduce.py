@@ -166,7 +166,8 @@ def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs:
     "paper" (the paper's per-parameter min/max) for the §4 studies and the design.
     """
     from ..utils.lock import output_lock
-    with output_lock(out_dir):
+    from ..utils.process import single_threaded_blas
+    with output_lock(out_dir), single_threaded_blas():  # parallel by processes (jobs)
         return _reproduce(out_dir, quick, jobs, steps, log, data_dir, vehicle, friction_bounds)
 
 
