@@ -179,26 +179,27 @@ def compare_case(case: Case, base: Side, head: Side, pairs: int = 3, warmup: boo
                  log: Callable[[str], None] = print) -> CaseResult:
     """Interleaved pairs of ``case`` (base, head; then head, base; …)."""
     res = CaseResult(case.name, case.unit)
+    sides = {"base": base, "head": head}  # keyed by role: a checkout against itself works
     with tempfile.TemporaryDirectory(prefix=f"compare-{case.name}-") as tmp:
-        work = {s.label: Path(tmp) / s.label for s in (base, head)}
+        work = {role: Path(tmp) / role for role in sides}
         for w in work.values():
             w.mkdir()
         if warmup:  # byte-compile both checkouts, fill the file cache
-            for s in (base, head):
-                measure(case, s, work[s.label])
+            for role, s in sides.items():
+                measure(case, s, work[role])
         for k in range(pairs):
-            order = (base, head) if k % 2 == 0 else (head, base)
+            order = ("base", "head") if k % 2 == 0 else ("head", "base")
             got = {}
-            for s in order:
-                shutil.rmtree(work[s.label])
-                work[s.label].mkdir()
-                got[s.label] = measure(case, s, work[s.label])
-            res.base_cpu.append(got[base.label][0])
-            res.base_wall.append(got[base.label][1])
-            res.head_cpu.append(got[head.label][0])
-            res.head_wall.append(got[head.label][1])
-            log(f"  {case.name} pair {k + 1}: CPU {got[base.label][0]:.4g} / "
-                f"{got[head.label][0]:.4g} {case.unit} (base / head), ratio "
+            for role in order:
+                shutil.rmtree(work[role])
+                work[role].mkdir()
+                got[role] = measure(case, sides[role], work[role])
+            res.base_cpu.append(got["base"][0])
+            res.base_wall.append(got["base"][1])
+            res.head_cpu.append(got["head"][0])
+            res.head_wall.append(got["head"][1])
+            log(f"  {case.name} pair {k + 1}: CPU {got['base'][0]:.4g} / "
+                f"{got['head'][0]:.4g} {case.unit} (base / head), ratio "
                 f"{res.cpu_ratios[-1]:.3f}; wall ratio {res.wall_ratios[-1]:.3f}")
     return res
 
