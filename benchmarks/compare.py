@@ -1,7 +1,7 @@
 """Speed of this checkout against an earlier commit, A/B interleaved, ratios from one run.
 
     python benchmarks/compare.py --base ad745e2 [--cases identify,nsga2_per_eval,reproduce_quick]
-        [--pairs 3] [--cpu-factor 1.15] [--wall-factor 1.5] [--history FILE.jsonl]
+        [--pairs 3] [--cpu-factor 1.15] [--wall-factor 2.0] [--history FILE.jsonl]
 
 The base commit is checked out in a temporary ``git worktree`` (removed at the end; or
 ``--base-dir DIR``, an existing checkout).  Every case is a whole ``python -m ehsa_opt``
@@ -13,14 +13,15 @@ process; its CPU time (user + sys, including the processes it waited for:
 median ratio over the pairs is the case's figure.
 
 A case **fails** when its median CPU ratio exceeds ``--cpu-factor`` (default 1.15) or its
-median wall ratio exceeds ``--wall-factor`` (default 1.5); the exit status is then 1.
-Why those factors: on the shared 2-core machine the figures were measured on, a checkout
-against itself (``--base-dir .``) gave median CPU ratios within 0.93–1.07 (single pairs
-0.85–1.15) and wall ratios within 0.8–1.3 — the wall time moves with the other jobs'
-load, the CPU time much less — so 1.15 on CPU is above the noise of a median of three
-pairs and below the regressions this gate exists for (the 2× of an identification, the 3×
-of ``reproduce --quick``); the wall factor only catches what CPU cannot see (a process
-waiting: a sleep, a lock, a subprocess started serially).
+median wall ratio exceeds ``--wall-factor`` (default 2.0); the exit status is then 1.
+Why those factors: on the shared 2-core machine the figures were measured on (load 13–16,
+other jobs' test suites beside it), this checkout against itself (``--base-dir .``, 3
+pairs) gave CPU ratios of single pairs 0.985–1.046 (identification, NSGA-II per
+evaluation) but wall ratios 0.96–1.47 — the wall time moves with the other jobs' load, the
+CPU time much less.  So 1.15 on the median CPU ratio is three times the noise of a single
+pair and well below the regressions this gate exists for (the 2x of an identification,
+the 3x of ``reproduce --quick``); the wall factor only catches what the CPU time cannot see
+(a process waiting: a sleep, a lock, a subprocess run serially) and sits above the noise.
 
 ``nsga2_per_eval`` is the CPU per design evaluation of NSGA-II (``run_nsga2`` in one
 process, timed from inside): (CPU of 100 × 100 − CPU of 100 × 20) / 8000 evaluations, per
@@ -53,7 +54,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: Median CPU ratio head / base above which a case fails (see the module docstring).
 CPU_FACTOR = 1.15
 #: Median wall ratio head / base above which a case fails.
-WALL_FACTOR = 1.5
+WALL_FACTOR = 2.0
 
 
 @dataclass(frozen=True)

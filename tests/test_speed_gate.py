@@ -74,7 +74,7 @@ def test_busy_slowdown_fails_on_cpu(compare, tmp_path):
 
 def test_sleep_slowdown_fails_on_wall(compare, tmp_path):
     base = compare.Side(ROOT, "base")
-    res = compare.compare_case(_case(compare), base, _slowed(compare, tmp_path, "sleep", 0.01),
+    res = compare.compare_case(_case(compare), base, _slowed(compare, tmp_path, "sleep", 0.03),
                                pairs=2, warmup=False, log=lambda m: None)
     why = res.verdict(compare.CPU_FACTOR, compare.WALL_FACTOR)
     assert any(w.startswith("wall") for w in why), (res.wall_ratios, why)

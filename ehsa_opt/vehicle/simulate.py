@@ -28,12 +28,9 @@ sampled exactly and the frictionless results match the frequency path.
 
 from __future__ import annotations
 
-import atexit
 import functools
 import math
 import os
-import shutil
-import tempfile
 import threading
 import time
 import warnings
@@ -58,6 +55,7 @@ from ..physics.quarter_car_model import (
     QuarterCarModel,
     param_vector,
 )
+from ..utils.jit import jit_options
 from .frequency_path import G, dimensionless_power
 from .iso2631 import weighted_rms_fft
 from .resources import check_simulation_resources
@@ -76,41 +74,6 @@ class RoadHoldingWarning(UserWarning):
     """Road holding above 1: the tyre would leave the ground (linear tyre invalid)."""
 
 
-_JIT_DIR: str | None = None
-
-
-def _jit_directory() -> str:
-    """A private temporary folder for CasADi's generated C and shared objects, so runs
-    never litter the user's working directory."""
-    global _JIT_DIR
-    if _JIT_DIR is None:
-        _remove_orphaned_jit_directories()
-        _JIT_DIR = tempfile.mkdtemp(prefix=f"ehsa_opt_jit_{os.getpid()}_")
-        atexit.register(_remove_jit_directory, _JIT_DIR, os.getpid())
-    return _JIT_DIR
-
-
-def _remove_orphaned_jit_directories() -> None:
-    """JIT folders of our processes that died without cleaning up (``kill -9``)."""
-    for d in Path(tempfile.gettempdir()).glob("ehsa_opt_jit_*_*"):
-        try:
-            pid = int(d.name.split("_")[3])
-            if d.is_symlink() or not d.is_dir() or d.stat().st_uid != os.getuid():
-                continue
-            os.kill(pid, 0)  # alive: its folder stays
-        except ProcessLookupError:
-            shutil.rmtree(d, ignore_errors=True)
-        except (ValueError, IndexError, OSError):
-            continue
-
-
-def _remove_jit_directory(path: str, owner: int) -> None:
-    """Remove the JIT folder at exit (only in the process that made it: forked workers
-    share it while their parent runs)."""
-    if os.getpid() == owner:
-        shutil.rmtree(path, ignore_errors=True)
-
-
 @functools.lru_cache(maxsize=8)
 def compiled_step(h: float, jit: bool = True) -> tuple[ca.Function, bool]:
     """The quarter-car step for step ``h`` (s), compiled when a C compiler works.
@@ -123,11 +86,7 @@ def compiled_step(h: float, jit: bool = True) -> tuple[ca.Function, bool]:
     model = QuarterCarModel()
     if jit:
         try:
-            # the folder is ours and removed at exit; CasADi leaves its files to us
-            opts = {"jit": True, "compiler": "shell", "jit_cleanup": False,
-                    "jit_options": {"flags": ["-O2"], "verbose": False, "cleanup": False,
-                                    "directory": _jit_directory()}}
-            return model.step_function(h, opts), True
+            return model.step_function(h, jit_options()), True
         except Exception:  # noqa: BLE001 - no compiler: the VM evaluates the same graph
             pass
     return model.step_function(h), False
