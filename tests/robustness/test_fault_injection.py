@@ -108,8 +108,8 @@ def test_altered_checkpoint_refused(tmp_path, capsys):
     for f in files:  # alter one number in the data (text: a digit; binary: a byte)
         data = bytearray(f.read_bytes())
         for i in range(len(data) // 2, len(data)):
-            if chr(data[i]).isdigit():
-                data[i] = ord(str((int(chr(data[i])) + 1) % 10))
+            if 0x30 <= data[i] <= 0x39:  # an ASCII digit (not a byte such as 0xB2, "²")
+                data[i] = 0x30 + (data[i] - 0x30 + 1) % 10
                 changed = True
                 break
         if changed:
