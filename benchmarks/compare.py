@@ -1,7 +1,8 @@
 """Speed of this checkout against an earlier commit, A/B interleaved, ratios from one run.
 
     python benchmarks/compare.py --base ad745e2 [--cases identify,nsga2_per_eval,reproduce_quick]
-        [--pairs 3] [--cpu-factor 1.15] [--wall-factor 2.0] [--history FILE.jsonl]
+        [--pairs 3] [--cpu-factor 1.15] [--wall-factor 2.0]
+        [--history benchmarks/history/compare.jsonl]
 
 The base commit is checked out in a temporary ``git worktree`` (removed at the end; or
 ``--base-dir DIR``, an existing checkout).  Every case is a whole ``python -m ehsa_opt``
