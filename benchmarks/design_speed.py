@@ -164,4 +164,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from ehsa_opt.utils.process import single_threaded_blas
+    with single_threaded_blas():  # both sides as the command line runs them
+        main()

@@ -205,7 +205,9 @@ def main():
     ap.add_argument("--baseline-src", default="/tmp/baseline/src")
     ap.add_argument("--skip-embedded", action="store_true")
     args = ap.parse_args()
-    part_rigid(args)
+    from ehsa_opt.utils.process import single_threaded_blas
+    with single_threaded_blas():  # both sides as the command line runs them
+        part_rigid(args)
     if not args.skip_embedded:
         if Path(args.baseline_src, "ehsa_opt", "identify.py").is_file():
             part_embedded(args)

@@ -368,8 +368,16 @@ def _main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     func: Callable[[argparse.Namespace], int] = args.func
-    from .utils.process import die_with_parent
+    from .utils.process import die_with_parent, single_threaded_blas
     die_with_parent()  # pool workers forked from here on die with this process
+    # our parallelism is by processes (--jobs): a multi-threaded BLAS beside them, or
+    # beside other work on the machine, spins its threads (10x the CPU of a rod-law fit)
+    with single_threaded_blas():
+        return _run(func, args)
+
+
+def _run(func: Callable[[argparse.Namespace], int], args: argparse.Namespace) -> int:
+    """Run the parsed command: output locks, errors as messages and exit codes."""
     try:
         _check_outputs(args)
         _cap_jobs(args)

@@ -229,6 +229,41 @@ def estimate_motion(test: BenchTest, options: IdentifyOptions | None = None,
     Nothing assumes the record is periodic.
     """
     opt = options or IdentifyOptions()
+    key = _motion_key(test, opt, mass_kg)
+    hit = _MOTIONS.get(key)
+    if hit is None:
+        hit = _MOTIONS[key] = _estimate_motion(test, opt, mass_kg)
+        while len(_MOTIONS) > MOTION_CACHE_SIZE:
+            _MOTIONS.pop(next(iter(_MOTIONS)))
+    # the spline is immutable; the mask is the caller's to change
+    return MotionEstimate(hit.motion, hit.cutoff_hz, hit.resolved.copy())
+
+
+#: Motion estimates kept in this process (the identification, its friction samples, the
+#: report and the discrepancy workflow ask for the same test's motion again; a smoothing
+#: spline of a long record costs tens of ms).
+MOTION_CACHE_SIZE = 48
+_MOTIONS: dict[tuple, MotionEstimate] = {}
+
+
+def _motion_key(test: BenchTest, opt: IdentifyOptions, mass_kg: float | None) -> tuple:
+    """What :func:`estimate_motion` depends on: the samples (digest), the excitation,
+    the smoothing settings and the mass."""
+    import hashlib
+    h = hashlib.blake2b(digest_size=16)
+    arrays = [test.time_s, test.displacement_m]
+    if test.excitation != "sine":
+        arrays.append(test.force_N)
+    for a in arrays:
+        a = np.ascontiguousarray(a, dtype=float)
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    return (h.hexdigest(), test.excitation, opt.smoothing, opt.smoothing_cutoff_hz,
+            opt.spline_points, None if mass_kg is None else float(mass_kg))
+
+
+def _estimate_motion(test: BenchTest, opt: IdentifyOptions,
+                     mass_kg: float | None) -> MotionEstimate:
     n = test.n_samples
     t, x = test.time_s, test.displacement_m
     if opt.smoothing is None and opt.smoothing_cutoff_hz is not None:

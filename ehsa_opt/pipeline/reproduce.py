@@ -96,7 +96,8 @@ STEPS: list[Step] = [
     Step("discrepancy", "Model discrepancy: find, name and add the missing effect",
          _step_discrepancy, lambda ctx: data_digest(_data_paths(ctx)[0]), background=True),
     Step("discrepancy_emps", "Model discrepancy on the real EMPS data",
-         _step_discrepancy_emps, lambda ctx: data_digest(_data_paths(ctx)[1])),
+         _step_discrepancy_emps, lambda ctx: data_digest(_data_paths(ctx)[1]),
+         background=True),
     Step("qc_paths", "Quarter car: W_k, frequency vs time domain, dissipation bound",
          lambda ctx: _quarter_car_step("step_quarter_car_paths", ctx),
          lambda ctx: [ctx.quick, ctx.inputs()]),
@@ -168,7 +169,9 @@ def reproduce(out_dir: str | Path = "results/latest", quick: bool = False, jobs:
     """
     from ..utils.lock import output_lock
     from ..utils.output_folder import claimed
-    with claimed(out_dir, produces=("REPORT.md",)), output_lock(out_dir):
+    from ..utils.process import single_threaded_blas
+    with claimed(out_dir, produces=("REPORT.md",)), output_lock(out_dir), \
+            single_threaded_blas():  # parallel by processes (jobs)
         return _reproduce(out_dir, quick, jobs, steps, log, data_dir, vehicle, friction_bounds)
 
 
