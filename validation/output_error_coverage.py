@@ -2,13 +2,15 @@
 
 Synthetic records: the measured EMPS estimation force (its first ``--samples``
 samples) drives the open-loop port (:mod:`ehsa_opt.estimation.discrepancy.openloop`)
-with known parameters; AR(1) noise e_k = ρ e_{k−1} + w_k is added to the simulated
-position.  Each record is refitted by output error (the port's M, F_v, F_C and offset
-free, started at the truth) and its ≈95 % Newey–West intervals (the ones
-:func:`~ehsa_opt.estimation.discrepancy.outputerror.output_error_multistart`
-reports) are checked against the truth, beside the independent-samples
-Gauss–Newton intervals.  The intervals are local: they describe the basin the
-refit converged in, not the choice between basins (that is the cross-validation's).
+with known parameters from the record's moving initial state; AR(1) noise
+e_k = ρ e_{k−1} + w_k is added to the simulated position.  Each record is fitted by
+output error on the whole record from the state its first 20 samples give (the port's
+M, F_v, F_C and offset free, started at the truth) and its ≈95 % Newey–West
+intervals (the ones
+:func:`~ehsa_opt.estimation.discrepancy.outputerror.fit_output_error` reports) are
+checked against the truth, beside the independent-samples Gauss–Newton intervals.
+The intervals are local: they describe the basin the fit converged in, not the
+choice between basins, and they hold the initial state at its estimate.
 
     PYTHONPATH=. python validation/output_error_coverage.py [--sets 60] [--rho 0.98]
         [--samples 6000] [--sigma-mm 0.05]
@@ -28,7 +30,11 @@ from ehsa_opt.datasets.bench_format import load_bench
 from ehsa_opt.datasets.embedded import embedded_data_dir
 from ehsa_opt.estimation.covariance import hac_covariance
 from ehsa_opt.estimation.discrepancy.openloop import open_loop_position
-from ehsa_opt.estimation.discrepancy.outputerror import OE_PARAMETERS, OpenLoopRecord, refit_record
+from ehsa_opt.estimation.discrepancy.outputerror import (
+    OE_PARAMETERS,
+    WindowedRecord,
+    fit_output_error,
+)
 
 TRUTH = {"inertia_kg": 95.0, "nut_viscous_Ns_per_m": 200.0, "nut_coulomb_N": 20.0,
          "offset_N": -3.0}
@@ -45,7 +51,7 @@ def main() -> None:
     t0 = time.perf_counter()
     est = load_bench(embedded_data_dir("emps")).tests[0]
     k = slice(0, a.samples)
-    q = open_loop_position(est.time_s[k], est.force_N[k], float(est.displacement_m[0]), TRUTH)
+    q = open_loop_position(est.time_s[k], est.force_N[k], est.displacement_m[k], TRUTH)
     free = list(TRUTH)
     truth = np.array([TRUTH[n] for n in free])
     idx = [OE_PARAMETERS.index(n) for n in free]
@@ -55,9 +61,10 @@ def main() -> None:
     for _ in range(a.sets):
         e = lfilter([1.0], [1.0, -a.rho], sd_w * rng.standard_normal(q.size))
         test = replace(est, time_s=est.time_s[k], force_N=est.force_N[k], displacement_m=q + e)
-        rec = OpenLoopRecord(test, TRUTH)
-        p, out, _, _ = refit_record(rec, TRUTH, free, None, 60)
-        h = hac_covariance(rec.jacobian(p)[:, idx], out.fun)
+        rec = WindowedRecord(test)
+        out = fit_output_error(rec, TRUTH, free, 60)
+        p = np.array([out["parameters"][n] for n in OE_PARAMETERS])
+        h = hac_covariance(rec.jacobian(p)[:, idx], rec.residual(p))
         err = p[idx] - truth
         hits.append(np.abs(err) <= 1.96 * np.sqrt(np.diag(h.cov)))
         hits_iid.append(np.abs(err) <= 1.96 * np.sqrt(np.diag(h.cov_iid)))

@@ -114,7 +114,8 @@ _SIMULATORS: dict[int, tuple] = {}
 
 def simulator(steps: int) -> tuple:
     """CasADi functions (x0[3], U, R, Δt [1 × steps], p) → q [1 × (steps + 1)] and
-    → ∂q/∂p [(steps + 1) × len(:data:`SIM_PARAMETERS`)], cached by ``steps``."""
+    → ∂q/∂(p, x0) [(steps + 1) × (len(:data:`SIM_PARAMETERS`) + 3)], cached by
+    ``steps``."""
     if steps not in _SIMULATORS:
         import casadi as ca
         if len(_SIMULATORS) >= 8:
@@ -125,7 +126,8 @@ def simulator(steps: int) -> tuple:
         X = sim(x0, U, R, D, ca.repmat(P, 1, steps))
         q = ca.horzcat(x0[0], X[0, :])
         _SIMULATORS[steps] = (ca.Function("q", [x0, U, R, D, P], [q]),
-                              ca.Function("dq", [x0, U, R, D, P], [ca.jacobian(q, P)]))
+                              ca.Function("dq", [x0, U, R, D, P],
+                                          [ca.jacobian(q, ca.vertcat(P, x0))]))
     return _SIMULATORS[steps]
 
 

@@ -128,22 +128,34 @@ class WindowedRecord:
         """Scored samples per window."""
         return [self.window - STATE_WINDOW_SAMPLES] * len(self.starts)
 
-    def _P(self, p: np.ndarray) -> np.ndarray:
-        return np.tile(np.asarray(p, float)[:, None], (1, len(self.starts)))
+    def _args(self, p: np.ndarray, dx: np.ndarray | None) -> tuple:
+        X0 = self.X0.copy()
+        if dx is not None:
+            X0[:2] += np.asarray(dx, float).reshape(len(self.starts), 2).T
+        P = np.tile(np.asarray(p, float)[:, None], (1, len(self.starts)))
+        return X0, self.U, self.R, self.D, P
 
-    def residual(self, p: np.ndarray) -> np.ndarray:
-        """Simulated minus measured position of every window's scored samples, mm."""
-        q = np.asarray(self._q(self.X0, self.U, self.R, self.D, self._P(p)))
+    def residual(self, p: np.ndarray, dx: np.ndarray | None = None) -> np.ndarray:
+        """Simulated minus measured position of every window's scored samples, mm;
+        ``dx`` (2 per window: position m, velocity m/s) moves the windows' initial
+        states off their 20-sample estimates."""
+        q = np.asarray(self._q(*self._args(p, dx)))
         q = q.reshape(len(self.starts), self.steps + 1)
         return 1e3 * (q[:, self.offset:].ravel() - self.target)
 
-    def jacobian(self, p: np.ndarray) -> np.ndarray:
-        """∂(residual, mm)/∂p, rows as :meth:`residual`, columns
-        :data:`~.openloop.SIM_PARAMETERS`."""
-        J = np.asarray(self._dq(self.X0, self.U, self.R, self.D, self._P(p)))
-        W, m = len(self.starts), len(SIM_PARAMETERS)
-        J = J.reshape(self.steps + 1, W, m) if W > 1 else J.reshape(self.steps + 1, 1, m)
-        return 1e3 * J[self.offset:].transpose(1, 0, 2).reshape(-1, m)
+    def jacobian(self, p: np.ndarray, dx: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """(∂residual/∂p [rows of :meth:`residual` × :data:`~.openloop.SIM_PARAMETERS`],
+        ∂residual/∂dx [rows × 2 per window, block-diagonal]), mm per unit."""
+        J = np.asarray(self._dq(*self._args(p, dx)))
+        W, m = len(self.starts), len(SIM_PARAMETERS) + 3
+        J = 1e3 * J.reshape(self.steps + 1, W, m)[self.offset:]
+        rows = J.shape[0]
+        Jp = J[:, :, :len(SIM_PARAMETERS)].transpose(1, 0, 2).reshape(-1, m - 3)
+        Js = np.zeros((rows * W, 2 * W))
+        for w in range(W):
+            Js[w * rows:(w + 1) * rows, 2 * w:2 * w + 2] = J[:, w, m - 3:m - 1]
+        return Jp, Js
 
 
 def _bounds(free: Sequence[str], scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -158,16 +170,19 @@ def _bounds(free: Sequence[str], scale: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 def fit_output_error(rec: WindowedRecord, params: Mapping[str, float], free: Sequence[str],
-                     max_nfev: int = 50) -> dict:
+                     max_nfev: int = 50, free_states: bool = True) -> dict:
     """Least-squares fit of ``free`` on the windowed record, the others held at
-    ``params``.
+    ``params``; with ``free_states`` each window's initial position and velocity are
+    fitted too (nuisance parameters started at their 20-sample estimates: on the
+    estimation record every sample may inform them, and the parameters' intervals
+    then count their uncertainty).
 
     Returns
     -------
     dict with ``parameters`` (all of :data:`~.openloop.SIM_PARAMETERS`), ``cost_rms_mm``
     (RMS of the windowed residual), ``success``, ``message``, ``nfev``,
-    ``intervals`` (≈95 % Newey–West per free parameter), ``covariance`` (free × free)
-    and ``covariance_info``.
+    ``intervals`` (≈95 % Newey–West per free parameter, the states profiled out),
+    ``covariance`` (free × free) and ``covariance_info``.
     """
     from scipy.optimize import least_squares
 
@@ -181,27 +196,39 @@ def fit_output_error(rec: WindowedRecord, params: Mapping[str, float], free: Seq
     scale = np.maximum(np.abs(p0[idx]), [1e-4 if k == "drive_lag_time_constant_s" else 1.0
                                          for k in free])
     lo, hi = _bounds(free, scale)
+    ns = 2 * len(rec.starts) if free_states else 0
+    # the states' scales: 0.1 mm and 1 mm/s, the size of a 20-sample estimate's error
+    sscale = np.tile([1e-4, 1e-3], ns // 2)
+    k = len(free)
 
-    def full(z):
+    def unpack(y):
         p = p0.copy()
-        p[idx] = z * scale
-        return p
+        p[idx] = y[:k] * scale
+        return p, (y[k:] * sscale if ns else None)
 
-    z0 = np.clip(p0[idx] / scale, lo, hi)
+    def jac(y):
+        Jp, Js = rec.jacobian(*unpack(y))
+        Jz = Jp[:, idx] * scale[None, :]
+        return np.hstack([Jz, Js * sscale[None, :]]) if ns else Jz
+
+    y0 = np.concatenate([np.clip(p0[idx] / scale, lo, hi), np.zeros(ns)])
     # tolerances: a relative change of 1e-6 is far below the parameters' intervals
-    out = least_squares(lambda z: rec.residual(full(z)), z0,
-                        jac=lambda z: rec.jacobian(full(z))[:, idx] * scale[None, :],
-                        bounds=(lo, hi), method="trf", x_scale="jac", ftol=1e-6, xtol=1e-6,
-                        max_nfev=max_nfev)
-    p = full(out.x)
-    h = hac_covariance(rec.jacobian(p)[:, idx], out.fun, groups=rec.groups)
+    out = least_squares(lambda y: rec.residual(*unpack(y)), y0, jac=jac,
+                        bounds=(np.concatenate([lo, np.full(ns, -np.inf)]),
+                                np.concatenate([hi, np.full(ns, np.inf)])),
+                        method="trf", x_scale="jac", ftol=1e-6, xtol=1e-6, max_nfev=max_nfev)
+    p, dx = unpack(out.x)
+    Jp, Js = rec.jacobian(p, dx)
+    J = np.hstack([Jp[:, idx], Js]) if ns else Jp[:, idx]
+    h = hac_covariance(J, out.fun, groups=rec.groups, n_nuisance=ns)
     sd = np.sqrt(np.clip(np.diag(h.cov), 0.0, None))
-    return {"parameters": {k: float(v) for k, v in zip(SIM_PARAMETERS, p)},
+    return {"parameters": {name: float(v) for name, v in zip(SIM_PARAMETERS, p)},
             "cost_rms_mm": float(np.sqrt(np.mean(out.fun ** 2))),
             "success": bool(out.status > 0 and np.all(np.isfinite(out.x)) and p[0] > 0),
             "message": str(out.message), "nfev": int(out.nfev), "free": list(free),
-            "intervals": {k: [float(p[i] - 1.96 * s), float(p[i] + 1.96 * s)]
-                          for k, i, s in zip(free, idx, sd)},
+            "free_states": bool(free_states),
+            "intervals": {name: [float(p[i] - 1.96 * s), float(p[i] + 1.96 * s)]
+                          for name, i, s in zip(free, idx, sd)},
             "covariance": {a: {b: float(h.cov[i, j]) for j, b in enumerate(free)}
                            for i, a in enumerate(free)},
             "covariance_info": {"method": h.method, "n_eff": float(h.n_eff), "n": int(h.n),

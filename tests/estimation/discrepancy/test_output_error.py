@@ -79,22 +79,20 @@ def test_a_known_hold_and_lag_are_told_apart():
     tau = 4e-4
     free = ["inertia_kg", "nut_viscous_Ns_per_m", "nut_coulomb_N", "offset_N",
             "drive_lag_time_constant_s"]
-    test = _synthetic(6000, {**TRUTH, "drive_lag_time_constant_s": tau}, True)
+    test = _synthetic(3000, {**TRUTH, "drive_lag_time_constant_s": tau}, True)
     start = {**TRUTH, "inertia_kg": 92.0, "drive_lag_time_constant_s": 2e-4}
-    held = fit_output_error(WindowedRecord(test, 1000, hold=True), start, free)
-    assert held["success"] and held["cost_rms_mm"] < 0.02  # the windows' states are estimates
-    # the position sees the lag only as a shift v τ of a few µm, of the order of the
-    # windows' initial-state errors: τ to within a quarter
+    held = fit_output_error(WindowedRecord(test, 500, hold=True), start, free)
+    assert held["success"] and held["cost_rms_mm"] < 0.005
     tau_held = held["parameters"]["drive_lag_time_constant_s"]
-    assert tau_held == pytest.approx(tau, rel=0.25)
+    assert tau_held == pytest.approx(tau, rel=0.05)
     assert held["parameters"]["inertia_kg"] == pytest.approx(95.0, rel=0.01)
-    ramp = fit_output_error(WindowedRecord(test, 1000, hold=False), start, free)
+    ramp = fit_output_error(WindowedRecord(test, 500, hold=False), start, free)
     # without the hold the lag takes the hold's half sample (0.5 ms) on top
     assert ramp["parameters"]["drive_lag_time_constant_s"] - tau_held == pytest.approx(
-        5e-4, rel=0.2)
-    none = _synthetic(6000, TRUTH, True)
-    h0 = fit_output_error(WindowedRecord(none, 1000, hold=True), start, free)
-    assert h0["parameters"]["drive_lag_time_constant_s"] < 1e-4
+        5e-4, rel=0.05)
+    none = _synthetic(3000, TRUTH, True)
+    h0 = fit_output_error(WindowedRecord(none, 500, hold=True), start, free)
+    assert h0["parameters"]["drive_lag_time_constant_s"] < 2e-5
 
 
 def test_output_error_recovers_the_simulating_parameters_and_chooses_on_the_fit_record():
@@ -118,7 +116,9 @@ def test_output_error_recovers_the_simulating_parameters_and_chooses_on_the_fit_
         assert lo <= TRUTH[name] <= hi, name
         assert best["parameters"][name] == pytest.approx(TRUTH[name], rel=0.05, abs=0.5)
     assert 0 < best["covariance_info"]["n_eff"] < best["covariance_info"]["n"]
-    assert best["eval"]["rms_mm"] == pytest.approx(best["fit_rms_mm"], rel=0.2, abs=0.01)
+    # judged from the 20-sample state (the fit's states use the whole record): the
+    # noise's 0.05 mm and the state estimate's error
+    assert best["fit_rms_mm"] < best["eval"]["rms_mm"] < 0.25
     with pytest.raises(ValueError, match="unknown free parameters"):
         fit_output_error(WindowedRecord(test, 1000), near, ["gremlin_N"])
     with pytest.raises(ValueError, match="leaves nothing to score"):

@@ -407,8 +407,9 @@ def try_drive_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_ef
                        n_eff_held if held_pts else n_eff_fit)
     cv = blocked_cross_validation(held_pts, held_pred, rig, base.parameters, hold) \
         if held_pts else []
-    # resolved: the lead beyond the hold (τ) is distinguishable from none
-    resolved = out["intervals"]["drive_lag_time_constant_s"][0] > 0
+    # the lead δ + τ (the hold's half sample and the lag beyond it) resolved: with the
+    # hold held the member is judged by what hold and lag together do to the error
+    resolved = iv[0] > 0
     ok = earns(e_before, e_after, floor, d_fit, d_held) and resolved
     # the candidate's fit record: the rigid refit on the applied force, with the
     # covariance facts of the lag's own (variable-projection) interval
