@@ -170,18 +170,20 @@ def _bounds(free: Sequence[str], scale: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 def fit_output_error(rec: WindowedRecord, params: Mapping[str, float], free: Sequence[str],
-                     max_nfev: int = 50, free_states: bool = True) -> dict:
+                     max_nfev: int = 50, free_states: bool = False) -> dict:
     """Least-squares fit of ``free`` on the windowed record, the others held at
-    ``params``; with ``free_states`` each window's initial position and velocity are
-    fitted too (nuisance parameters started at their 20-sample estimates: on the
-    estimation record every sample may inform them, and the parameters' intervals
-    then count their uncertainty).
+    ``params``.  Each window starts from its 20-sample state (trained as the benchmark
+    tests: the parameters are chosen for the state the protocol gives); with
+    ``free_states`` each window's initial position and velocity are fitted too
+    (nuisance parameters started at their 20-sample estimates and profiled out of
+    the intervals — the way to recover a record's own parameters exactly).
 
     Returns
     -------
     dict with ``parameters`` (all of :data:`~.openloop.SIM_PARAMETERS`), ``cost_rms_mm``
     (RMS of the windowed residual), ``success``, ``message``, ``nfev``,
     ``intervals`` (≈95 % Newey–West per free parameter, the states profiled out),
+    ``intervals_iid`` (the independent-samples ones, for comparison),
     ``covariance`` (free × free) and ``covariance_info``.
     """
     from scipy.optimize import least_squares
@@ -222,6 +224,7 @@ def fit_output_error(rec: WindowedRecord, params: Mapping[str, float], free: Seq
     J = np.hstack([Jp[:, idx], Js]) if ns else Jp[:, idx]
     h = hac_covariance(J, out.fun, groups=rec.groups, n_nuisance=ns)
     sd = np.sqrt(np.clip(np.diag(h.cov), 0.0, None))
+    sd_iid = np.sqrt(np.clip(np.diag(h.cov_iid), 0.0, None))
     return {"parameters": {name: float(v) for name, v in zip(SIM_PARAMETERS, p)},
             "cost_rms_mm": float(np.sqrt(np.mean(out.fun ** 2))),
             "success": bool(out.status > 0 and np.all(np.isfinite(out.x)) and p[0] > 0),
@@ -229,6 +232,8 @@ def fit_output_error(rec: WindowedRecord, params: Mapping[str, float], free: Seq
             "free_states": bool(free_states),
             "intervals": {name: [float(p[i] - 1.96 * s), float(p[i] + 1.96 * s)]
                           for name, i, s in zip(free, idx, sd)},
+            "intervals_iid": {name: [float(p[i] - 1.96 * s), float(p[i] + 1.96 * s)]
+                              for name, i, s in zip(free, idx, sd_iid)},
             "covariance": {a: {b: float(h.cov[i, j]) for j, b in enumerate(free)}
                            for i, a in enumerate(free)},
             "covariance_info": {"method": h.method, "n_eff": float(h.n_eff), "n": int(h.n),
@@ -256,7 +261,8 @@ def _perturbed_starts(anchors: Sequence[tuple[str, Mapping[str, float]]], free: 
 
 
 def fit_lengthening(test, params: Mapping[str, float], free: Sequence[str], hold: bool = True,
-                    chain: Sequence[float | None] = None, max_nfev: int = 50) -> dict:
+                    chain: Sequence[float | None] = None, max_nfev: int = 50,
+                    free_states: bool = False) -> dict:
     """:func:`fit_output_error` over windows that lengthen (:data:`WINDOW_CHAIN_S`):
     each stage starts where the shorter-horizon one ended, the last is the whole
     record (the benchmark's own simulation).  Returns the last stage's fit with
@@ -266,7 +272,7 @@ def fit_lengthening(test, params: Mapping[str, float], free: Sequence[str], hold
     p, stages, out = dict(params), [], None
     for w in (WINDOW_CHAIN_S if chain is None else chain):
         rec = WindowedRecord(test, None if w is None else int(round(w * fs)), hold)
-        out = fit_output_error(rec, p, free, max_nfev)
+        out = fit_output_error(rec, p, free, max_nfev, free_states)
         p = out["parameters"]
         stages.append({"window_s": w, "cost_rms_mm": out["cost_rms_mm"], "nfev": out["nfev"]})
     return {**out, "stages": stages}
@@ -289,7 +295,8 @@ def _model_start(free: Sequence[str], params: Mapping[str, float]) -> dict[str, 
 
 def output_error_multistart(fit_test, eval_test, anchors: Sequence[tuple[str, Mapping[str, float]]],
                             free: Sequence[str], hold: bool = True,
-                            chain: Sequence[float | None] = None) -> dict:
+                            chain: Sequence[float | None] = None,
+                            free_states: bool = False) -> dict:
     """:func:`fit_lengthening` from each of ``anchors`` ((label, parameters[, whole]);
     ``whole`` true: a start that is already a whole-record fit, refitted on the whole
     record without the shorter windows), the start
@@ -310,7 +317,8 @@ def output_error_multistart(fit_test, eval_test, anchors: Sequence[tuple[str, Ma
         label, params = anchor[0], anchor[1]
         # a start that is already a whole-record fit (a simpler model's) goes straight on
         r = fit_lengthening(fit_test, _model_start(free, params), free, hold,
-                            (None,) if len(anchor) > 2 and anchor[2] else chain)
+                            (None,) if len(anchor) > 2 and anchor[2] else chain,
+                            free_states=free_states)
         ev = open_loop_error(eval_test.time_s, eval_test.force_N, eval_test.displacement_m,
                              r["parameters"], hold)
         rows.append({**r, "label": label, "fit_rms_mm": r["cost_rms_mm"],

@@ -81,17 +81,20 @@ def test_a_known_hold_and_lag_are_told_apart():
             "drive_lag_time_constant_s"]
     test = _synthetic(3000, {**TRUTH, "drive_lag_time_constant_s": tau}, True)
     start = {**TRUTH, "inertia_kg": 92.0, "drive_lag_time_constant_s": 2e-4}
-    held = fit_output_error(WindowedRecord(test, 500, hold=True), start, free)
+    held = fit_output_error(WindowedRecord(test, 500, hold=True), start, free,
+                            free_states=True)
     assert held["success"] and held["cost_rms_mm"] < 0.005
     tau_held = held["parameters"]["drive_lag_time_constant_s"]
     assert tau_held == pytest.approx(tau, rel=0.05)
     assert held["parameters"]["inertia_kg"] == pytest.approx(95.0, rel=0.01)
-    ramp = fit_output_error(WindowedRecord(test, 500, hold=False), start, free)
+    ramp = fit_output_error(WindowedRecord(test, 500, hold=False), start, free,
+                            free_states=True)
     # without the hold the lag takes the hold's half sample (0.5 ms) on top
     assert ramp["parameters"]["drive_lag_time_constant_s"] - tau_held == pytest.approx(
         5e-4, rel=0.05)
     none = _synthetic(3000, TRUTH, True)
-    h0 = fit_output_error(WindowedRecord(none, 500, hold=True), start, free)
+    h0 = fit_output_error(WindowedRecord(none, 500, hold=True), start, free,
+                          free_states=True)
     assert h0["parameters"]["drive_lag_time_constant_s"] < 2e-5
 
 
@@ -105,7 +108,7 @@ def test_output_error_recovers_the_simulating_parameters_and_chooses_on_the_fit_
     near = {**TRUTH, "inertia_kg": 90.0, "nut_viscous_Ns_per_m": 190.0}
     free = list(TRUTH)
     runs = [output_error_multistart(test, other, [("far", far), ("near", near)], free,
-                                    chain=(1.0, None))
+                                    chain=(1.0, None), free_states=True)
             for other in (test, replace(test, displacement_m=test.displacement_m[::-1].copy()))]
     a, b = runs
     assert a["chosen"] == b["chosen"]
