@@ -211,6 +211,8 @@ def _output_error_markdown(v: dict) -> list[str]:
                      f"position error, N_eff {info.get('n_eff', 0):.0f} of {info.get('n', 0)}): "
                      + "; ".join(f"{k} {row['parameters'][k]:.4g} [{lo:.4g}, {hi:.4g}]"
                                  for k, (lo, hi) in iv.items())
+                     + "".join(f"; {k} {row['parameters'][k]:.4g} (at its bound)"
+                               for k in row.get("at_bound") or [])
                      + (f"; F_v+ {dd['viscous_pos']:.1f} [{dd['viscous_pos_ci95'][0]:.1f}, "
                         f"{dd['viscous_pos_ci95'][1]:.1f}], F_v− {dd['viscous_neg']:.1f} "
                         f"[{dd['viscous_neg_ci95'][0]:.1f}, {dd['viscous_neg_ci95'][1]:.1f}] N s/m"

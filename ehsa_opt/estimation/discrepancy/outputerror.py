@@ -2,23 +2,25 @@
 open-loop port (:mod:`.openloop`) chosen so that the position *simulated* from the
 force matches the measured position on the estimation record.
 
-*Why windows.*  Fitted on one simulation of the whole record, the objective is flat:
-the position error is a slow drift that a few effective samples carry, and fits
-within 0.01 mm of each other there extrapolate 1–3 mm apart.  So the record is cut
-into windows of :data:`WINDOW_S` seconds (a truncated simulation error, the idea of
-multiple shooting and of the subspace encoder): each window's state is estimated
-from its own first :data:`~.initial_state.STATE_WINDOW_SAMPLES` measured positions
+*Why windows.*  Fitted on one simulation of the whole record, the objective is flat
+and rough: the position error is a slow drift that a few effective samples carry,
+fits within 0.01 mm of each other there extrapolate 1–3 mm apart, and the optimiser
+stops in different places from different starts.  So the fit lengthens its horizon
+(:func:`fit_lengthening`, :data:`WINDOW_CHAIN_S`): first a truncated simulation
+error over windows of 1 s (the idea of multiple shooting and of the subspace
+encoder), each window's state estimated from its own first
+:data:`~.initial_state.STATE_WINDOW_SAMPLES` measured positions
 (:func:`~.initial_state.initial_state`, the benchmark's protocol in miniature), the
-position is simulated from there through the window, and the error from the
-window's 20th sample on enters the fit.  Every window is a fresh look at M, F_v and
-F_C, started from a state the data gave, not one the previous error left.
+error scored from the window's 20th sample on — every window a fresh look at M, F_v
+and F_C, a problem every start solves alike; then the whole record, the benchmark's
+own horizon, from where the windows ended.
 
 The parameters are scaled by their starting values and fitted by
 ``scipy.optimize.least_squares`` (trust-region reflective, bounds: M, F_v > 0,
 0 ≤ τ ≤ :data:`MAX_LAG_S`) on the position error in mm, with the simulator's exact
-Jacobian.  Several starts (the inverse-model parameters, the published IDIM-LS ones
-and seeded perturbations) are fitted; the one with the smallest windowed cost on the
-estimation record is chosen, and the evaluation record only judges.
+Jacobian.  Several starts are fitted (:func:`output_error_multistart`); the one with
+the smallest whole-record error on the estimation record is chosen, and the
+evaluation record only judges.
 
 *Intervals*: Newey–West (Bartlett, Andrews bandwidth, fixed-b) of the windowed
 residual with each window an independent group (:func:`~..covariance.hac_covariance`),
@@ -183,7 +185,8 @@ def fit_output_error(rec: WindowedRecord, params: Mapping[str, float], free: Seq
     dict with ``parameters`` (all of :data:`~.openloop.SIM_PARAMETERS`), ``cost_rms_mm``
     (RMS of the windowed residual), ``success``, ``message``, ``nfev``,
     ``intervals`` (≈95 % Newey–West per free parameter, the states profiled out),
-    ``intervals_iid`` (the independent-samples ones, for comparison),
+    ``intervals_iid`` (the independent-samples ones, for comparison), ``at_bound``
+    (free parameters that ended on a bound: no interval),
     ``covariance`` (free × free) and ``covariance_info``.
     """
     from scipy.optimize import least_squares
@@ -224,6 +227,9 @@ def fit_output_error(rec: WindowedRecord, params: Mapping[str, float], free: Seq
     J = np.hstack([Jp[:, idx], Js]) if ns else Jp[:, idx]
     h = hac_covariance(J, out.fun, groups=rec.groups, n_nuisance=ns)
     sd = np.sqrt(np.clip(np.diag(h.cov), 0.0, None))
+    # a parameter held at a bound (τ = 0: no lag beyond the hold) has no interval
+    active = [bool(out.active_mask[j]) or bool(abs(out.x[j] - lo[j]) < 1e-6)
+              or bool(abs(out.x[j] - hi[j]) < 1e-6) for j in range(k)]
     sd_iid = np.sqrt(np.clip(np.diag(h.cov_iid), 0.0, None))
     return {"parameters": {name: float(v) for name, v in zip(SIM_PARAMETERS, p)},
             "cost_rms_mm": float(np.sqrt(np.mean(out.fun ** 2))),
@@ -231,33 +237,14 @@ def fit_output_error(rec: WindowedRecord, params: Mapping[str, float], free: Seq
             "message": str(out.message), "nfev": int(out.nfev), "free": list(free),
             "free_states": bool(free_states),
             "intervals": {name: [float(p[i] - 1.96 * s), float(p[i] + 1.96 * s)]
-                          for name, i, s in zip(free, idx, sd)},
+                          for name, i, s, a in zip(free, idx, sd, active) if not a},
             "intervals_iid": {name: [float(p[i] - 1.96 * s), float(p[i] + 1.96 * s)]
-                              for name, i, s in zip(free, idx, sd_iid)},
+                              for name, i, s, a in zip(free, idx, sd_iid, active) if not a},
+            "at_bound": [name for name, a in zip(free, active) if a],
             "covariance": {a: {b: float(h.cov[i, j]) for j, b in enumerate(free)}
                            for i, a in enumerate(free)},
             "covariance_info": {"method": h.method, "n_eff": float(h.n_eff), "n": int(h.n),
                                 "bandwidth_samples": int(h.bandwidth)}}
-
-
-def _perturbed_starts(anchors: Sequence[tuple[str, Mapping[str, float]]], free: Sequence[str],
-                      perturbations: int, spread: float, seed: int
-                      ) -> list[tuple[str, dict[str, float]]]:
-    """The anchors and, per anchor, ``perturbations`` draws with each free parameter
-    multiplied by 1 + ``spread`` · N(0, 1) (inertia and viscous levels kept positive)."""
-    rng = np.random.default_rng(seed)
-    out = [(label, dict(p)) for label, p in anchors]
-    for label, p in anchors:
-        for j in range(perturbations):
-            q = dict(p)
-            for k in free:
-                v = float(p.get(k, 0.0)) * (1.0 + spread * float(rng.standard_normal()))
-                if k in ("inertia_kg", "nut_viscous_Ns_per_m", "nut_coulomb_N",
-                         "drive_lag_time_constant_s"):
-                    v = max(v, 0.2 * abs(float(p.get(k, 1.0))))
-                q[k] = v
-            out.append((f"{label}, perturbed {j + 1}", q))
-    return out
 
 
 def fit_lengthening(test, params: Mapping[str, float], free: Sequence[str], hold: bool = True,
@@ -372,7 +359,8 @@ def output_error_rows(fit_test, eval_test, inverse_model: Mapping[str, float],
                "parameters": best["parameters"], "chosen_start": best["label"],
                "starts": [{k: st[k] for k in ("label", "fit_rms_mm", "eval_rms_mm", "success")}
                           for st in r["starts"]],
-               "intervals": best["intervals"], "covariance_info": best["covariance_info"],
+               "intervals": best["intervals"], "at_bound": best["at_bound"],
+               "covariance_info": best["covariance_info"],
                "stages": best["stages"]}
         if "asym_viscous_Ns_per_m" in free:
             row["direction_dependent"] = _direction_dependent(best["parameters"],

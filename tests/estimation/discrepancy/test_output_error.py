@@ -98,6 +98,7 @@ def test_a_known_hold_and_lag_are_told_apart():
     assert h0["parameters"]["drive_lag_time_constant_s"] < 2e-5
 
 
+@pytest.mark.slow  # two starts × two stages × two evaluation records (~40 s on a loaded machine)
 def test_output_error_recovers_the_simulating_parameters_and_chooses_on_the_fit_record():
     """From a far and a near start, the chosen fit (smallest whole-record error on the
     fit record) recovers the truth within its intervals, and another evaluation record
