@@ -226,6 +226,11 @@ def _output_error_markdown(v: dict) -> list[str]:
                  + f"; a lag fitted to the whole phase {1e3 * h['apparent_tau_s']:.2f} ms, "
                    f"beyond the hold's {1e3 * h['hold_s']:.2f} ms "
                    f"{1e3 * h['tau_beyond_hold_s']:.2f} ms.")
+    mode = v.get("mode_above_drive")
+    if mode:
+        L += ["", f"A mode above the drive's band (apparent mass of the validation record "
+              f"after the hold and the lag): {'found' if mode['found'] else 'not found'} — "
+              f"{mode['reason']}."]
     return L
 
 

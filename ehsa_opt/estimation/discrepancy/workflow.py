@@ -489,6 +489,7 @@ def _open_loop_validation(raw: tuple, base: Baseline, state: SearchState,
     each named effect, and the sentence the message gains."""
     from .openloop import BEST_PUBLISHED_MM, direction_dependent, validation_summary
     from .candidates.drive_lag import hold_and_lag
+    from .candidates.mode_band import fit_mode
     from .outputerror import output_error_rows
     fit_raw, held_raw = raw
     # a named drive lag acts on the force of every model simulated after it
@@ -506,6 +507,9 @@ def _open_loop_validation(raw: tuple, base: Baseline, state: SearchState,
         validation["output_error"] = output_error_rows(fit_raw[0], held_raw[0],
                                                        {**state.params, **drive})
     validation["hold_and_lag"] = [hold_and_lag(t) for t in (*fit_raw, *held_raw)]
+    # a mode above the drive's band, on the held-out record after its hold and lag
+    validation["mode_above_drive"] = fit_mode(
+        held_raw[0], tau_s=validation["hold_and_lag"][-1]["tau_beyond_hold_s"])
     asym = [c for c in all_cands if c.effect == "asymmetric_friction" and c.fitted
             and c.fit is not None and c.fit.parameters]
     if asym:
