@@ -228,8 +228,10 @@ def fit_output_error(rec: WindowedRecord, params: Mapping[str, float], free: Seq
     h = hac_covariance(J, out.fun, groups=rec.groups, n_nuisance=ns)
     sd = np.sqrt(np.clip(np.diag(h.cov), 0.0, None))
     # a parameter held at a bound (τ = 0: no lag beyond the hold) has no interval
-    active = [bool(out.active_mask[j]) or bool(abs(out.x[j] - lo[j]) < 1e-6)
-              or bool(abs(out.x[j] - hi[j]) < 1e-6) for j in range(k)]
+    # (within 1e-4 of the scale of a bound, or without any effect on the residual)
+    active = [bool(out.active_mask[j]) or bool(abs(out.x[j] - lo[j]) < 1e-4)
+              or bool(abs(out.x[j] - hi[j]) < 1e-4) or not np.any(J[:, j])
+              for j in range(k)]
     sd_iid = np.sqrt(np.clip(np.diag(h.cov_iid), 0.0, None))
     return {"parameters": {name: float(v) for name, v in zip(SIM_PARAMETERS, p)},
             "cost_rms_mm": float(np.sqrt(np.mean(out.fun ** 2))),
