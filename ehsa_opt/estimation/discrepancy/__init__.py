@@ -22,7 +22,9 @@ Modules, one concept each:
   :mod:`.lookahead`: the look-ahead
   through a confounded candidate;
 * :mod:`.terms`: a data-driven term for what no catalogue effect explains;
-* :mod:`.openloop`: the open-loop validation of the EMPS benchmark;
+* :mod:`.openloop`: the open-loop validation of the EMPS benchmark (the hold, the
+  lag), :mod:`.initial_state`: its initial state from the first 20 samples,
+  :mod:`.outputerror`: the output-error fits of its model table;
 * :mod:`.results`: settings and result objects.
 """
 

@@ -7,7 +7,10 @@
   on the record, not on the physics: found by a time-shift search, the force
   re-aligned and the baseline refitted);
 * :mod:`.flexibility`: the member ``flexibility`` of a rig without generator, fitted
-  by variable projection.
+  by variable projection;
+* :mod:`.drive_lag`: the member ``drive_lag`` (the DAC's hold and a lag beyond it);
+* :mod:`.mode_band`: a mode above the drive's band, judged on a record's apparent mass
+  after the hold and the lag (reported beside the open-loop validation).
 """
 
 from .catalogue import (

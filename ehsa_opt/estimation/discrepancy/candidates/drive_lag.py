@@ -49,23 +49,32 @@ from .record_change import RecordChange
 
 __all__ = ["applied_force", "recorded_from_applied", "fit_drive_lag", "try_drive_lag",
            "blocked_cross_validation", "frequency_evidence", "MAX_TIME_CONSTANT_S",
-           "CV_BLOCKS", "DELAY_S"]
+           "CV_BLOCKS", "HOLD_SAMPLES", "hold_delay_s", "hold_and_lag"]
 
 #: Largest drive time constant searched, s (a current loop slower than this would
 #: show at the trajectory's own frequencies as a phase lag of the whole force).
 MAX_TIME_CONSTANT_S = 0.01
 #: Largest transport delay searched, s.
 MAX_DELAY_S = 0.005
-#: The delay the catalogue member holds, s: none — the records do not resolve a delay
-#: beside the lag (on the EMPS estimation record δ and τ trade against each other at
-#: a fixed lead δ + τ; within the pulses record the free fit puts δ at 0).
-DELAY_S = 0.0
+#: The delay the catalogue member holds, in samples: the DAC's zero-order hold, half a
+#: sample late on average (:func:`hold_delay_s`).  The lag's τ is fitted on top, so it
+#: is what remains of the lead beyond the hold; the open-loop simulation
+#: (:mod:`..openloop`) holds the force over each step itself and adds only τ, so the
+#: hold is counted once in both.  (A free delay beside the lag is not resolved by the
+#: records: on the EMPS estimation record δ and τ trade at a fixed lead δ + τ.)
+HOLD_SAMPLES = 0.5
 #: Blocks each held-out test is cut into for :func:`blocked_cross_validation`.
 CV_BLOCKS = 8
 
 
 def _dt(time_s: np.ndarray) -> float:
     return float(np.median(np.diff(time_s)))
+
+
+def hold_delay_s(time_s: np.ndarray) -> float:
+    """The zero-order hold's mean delay, :data:`HOLD_SAMPLES` of the record's median
+    sample interval, s."""
+    return HOLD_SAMPLES * _dt(np.asarray(time_s, float))
 
 
 def applied_force(time_s: np.ndarray, force_N: np.ndarray, tau_s: float,
@@ -247,7 +256,8 @@ def blocked_cross_validation(pts: Sequence[PreparedTest], preds: Sequence[np.nda
 
 
 def frequency_evidence(test, nperseg: int = 1024, min_coherence: float = 0.8,
-                       band_hz: tuple[float, float] = (15.0, 200.0)) -> dict:
+                       band_hz: tuple[float, float] = (15.0, 200.0),
+                       hold_s: float = 0.0) -> dict:
     """The recorded force against the measured acceleration in the frequency domain:
     the effective mass M(f) = S_aF / S_aa (Welch cross-spectra; the acceleration from
     central second differences of the displacement), its phase and coherence, and
@@ -282,13 +292,42 @@ def frequency_evidence(test, nperseg: int = 1024, min_coherence: float = 0.8,
     tau = math.nan
     if np.count_nonzero(use) >= 3:
         w = 2 * math.pi * f[use]
-        opt = minimize_scalar(lambda g: float(np.sum(coh[use] * (ph[use] - np.arctan(w * g)) ** 2)),
+        opt = minimize_scalar(lambda g: float(np.sum(coh[use] * (ph[use] - w * hold_s
+                                                                 - np.arctan(w * g)) ** 2)),
                               bounds=(0.0, MAX_TIME_CONSTANT_S), method="bounded")
         tau = float(opt.x)
     low = use & (f < 50.0)
     return {"frequency_hz": f, "mass_kg": np.abs(M), "phase_deg": np.degrees(ph),
             "coherence": coh, "band": f[use], "tau_s": tau,
             "mass_low_kg": float(np.median(np.abs(M[low]))) if low.any() else math.nan}
+
+
+def hold_and_lag(test, picks_hz: Sequence[float] = (20.0, 50.0, 100.0, 150.0)) -> dict:
+    """How much of the recorded force's phase lead over the measured acceleration is
+    the zero-order hold and how much a lag beyond it (:func:`frequency_evidence`).
+
+    Returns
+    -------
+    dict with ``hold_s`` (:func:`hold_delay_s`), ``apparent_tau_s`` (a first-order
+    lag fitted to the whole phase, the hold not counted), ``tau_beyond_hold_s`` (the
+    lag fitted to the phase less the hold's ω T/2) and ``picks`` (per frequency near
+    ``picks_hz`` in the coherent band: ``frequency_hz``, ``mass_kg``, ``phase_deg``,
+    ``hold_deg``, ``excess_deg`` = phase − hold).
+    """
+    hold = hold_delay_s(test.time_s)
+    ev = frequency_evidence(test)
+    beyond = frequency_evidence(test, hold_s=hold)
+    f, rows = ev["frequency_hz"], []
+    for fi in picks_hz:
+        if not (ev["band"].size and ev["band"].min() - 1 <= fi <= ev["band"].max() + 1):
+            continue
+        i = int(np.argmin(np.abs(f - fi)))
+        hd = math.degrees(2 * math.pi * f[i] * hold)
+        rows.append({"frequency_hz": float(f[i]), "mass_kg": float(ev["mass_kg"][i]),
+                     "phase_deg": float(ev["phase_deg"][i]), "hold_deg": hd,
+                     "excess_deg": float(ev["phase_deg"][i]) - hd})
+    return {"record": str(getattr(test, "file", "")), "hold_s": hold,
+            "apparent_tau_s": ev["tau_s"], "tau_beyond_hold_s": beyond["tau_s"], "picks": rows}
 
 
 def _frequency_sentence(test) -> str:
@@ -339,7 +378,8 @@ def try_drive_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_ef
     floor, notes for the report)."""
     if rig.has_generator:
         return None
-    out = fit_drive_lag(fit_pts, fit_pred, rig, base.parameters, delay_s=DELAY_S)
+    hold = hold_delay_s(fit_pts[0].time_s)
+    out = fit_drive_lag(fit_pts, fit_pred, rig, base.parameters, delay_s=hold)
     p = out["parameters"]
     tau, delay = p["drive_lag_time_constant_s"], p["drive_delay_s"]
     iv = out["intervals"]["drive_lead_s"]
@@ -360,8 +400,10 @@ def try_drive_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_ef
                       n_eff_fit)
     d_held = delta_bic(normalised_sse(ev, pe), normalised_sse(ev, pe0), 1,
                        n_eff_held if held_pts else n_eff_fit)
-    cv = blocked_cross_validation(held_pts, held_pred, rig, base.parameters, DELAY_S) \
+    cv = blocked_cross_validation(held_pts, held_pred, rig, base.parameters, hold) \
         if held_pts else []
+    # the lead δ + τ (the hold's half sample and the lag beyond it) resolved: with the
+    # hold held the member is judged by what hold and lag together do to the error
     resolved = iv[0] > 0
     # the candidate's fit record: the rigid refit on the applied force, with the
     # covariance facts of the lag's own (variable-projection) interval
