@@ -28,6 +28,7 @@ from ..design.outcome import DesignResult
 from ..design.problem import DesignProblem
 from ..physics.params import ParameterError
 from ..utils.log import logger
+from ..utils.process import one_blas_thread
 
 __all__ = ["load_problem", "optimize"]
 
@@ -69,6 +70,7 @@ def load_problem(path: str | Path, *, friction: str | Sequence[str] | None = Non
     return problem
 
 
+@one_blas_thread
 def optimize(problem: DesignProblem | str | Path, algorithm: Any = None,
              termination: Any = None, seed: int | None = None, *,
              method: str | None = None, pop_size: int | None = None,

@@ -20,6 +20,7 @@ from ..estimation.identify import identify as _identify
 from ..estimation.identify_result import IdentificationReport
 from ..utils.io import atomic_write_json
 from ..utils.log import logger
+from ..utils.process import one_blas_thread
 
 __all__ = ["IdentificationResult", "identify"]
 
@@ -111,6 +112,7 @@ class IdentificationResult:
         return cls(json.loads(json.dumps(doc)), report)
 
 
+@one_blas_thread
 def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, seed: int = 0,
              lenient: bool = False,
              progress: Callable[[int], None] | None = None) -> IdentificationResult:

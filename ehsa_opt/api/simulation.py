@@ -15,6 +15,7 @@ from typing import Any, Mapping
 
 from ..utils.io import atomic_write_text
 from ..utils.log import logger
+from ..utils.process import one_blas_thread
 from ..vehicle.problem_simulation import ProblemSimulation, simulate_problem
 
 __all__ = ["SimulationResult", "simulate"]
@@ -95,6 +96,7 @@ class SimulationResult:
         return cls(doc)
 
 
+@one_blas_thread
 def simulate(problem: str | Path, *, friction: str | None = None,
              keep_series: bool = True) -> SimulationResult:
     """Simulate a quarter-car problem file; nothing written.

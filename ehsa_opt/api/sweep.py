@@ -23,6 +23,7 @@ from ..design.sweep import (
 )
 from ..physics.params import ParameterError, load_toml
 from ..utils.log import logger
+from ..utils.process import one_blas_thread
 
 __all__ = ["SweepResult", "sweep"]
 
@@ -122,6 +123,7 @@ class SweepResult:
         return cls(rows, tuple(k for k in cols if k not in skip))
 
 
+@one_blas_thread
 def sweep(problem: str | Path | SweepSpec, *, design: Mapping[str, Sequence[float]] | None = None,
           speed_km_per_h: Sequence[float] | None = None, iso_class: Sequence[str] | None = None,
           vehicle: Sequence[str] | None = None, friction: Sequence[str] | None = None,

@@ -20,7 +20,8 @@ import sys
 import threading
 import time
 
-__all__ = ["die_with_parent", "single_threaded_blas", "DeadlineOutcome", "run_with_deadline"]
+__all__ = ["die_with_parent", "single_threaded_blas", "one_blas_thread", "DeadlineOutcome",
+           "run_with_deadline"]
 
 _PR_SET_PDEATHSIG = 1
 _installed = False
@@ -74,6 +75,20 @@ def single_threaded_blas():
     from threadpoolctl import threadpool_limits
     with threadpool_limits(limits=1, user_api="blas"):
         yield
+
+
+def one_blas_thread(fn):
+    """Decorator: ``fn`` runs inside :func:`single_threaded_blas` — the library's entry
+    points give the numbers the command line gives (whose every command runs so), however
+    many BLAS threads the caller's process would use: a multithreaded BLAS sums in another
+    order, and an optimiser's iterates then drift apart."""
+    import functools
+
+    @functools.wraps(fn)
+    def run(*args, **kwargs):
+        with single_threaded_blas():
+            return fn(*args, **kwargs)
+    return run
 
 
 @dataclass
