@@ -48,7 +48,7 @@ from .catalogue import absorbed_columns
 from .record_change import RecordChange
 
 __all__ = ["applied_force", "recorded_from_applied", "fit_drive_lag", "try_drive_lag",
-           "blocked_cross_validation", "frequency_evidence", "MAX_TIME_CONSTANT_S",
+           "blocked_cross_validation", "effective_mass", "frequency_evidence", "MAX_TIME_CONSTANT_S",
            "CV_BLOCKS", "HOLD_SAMPLES", "hold_delay_s", "hold_and_lag"]
 
 #: Largest drive time constant searched, s (a current loop slower than this would
@@ -255,6 +255,25 @@ def blocked_cross_validation(pts: Sequence[PreparedTest], preds: Sequence[np.nda
     return out
 
 
+def effective_mass(test, nperseg: int = 1024) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(f Hz, M(f) = S_aF / S_aa kg complex, coherence γ²) of a recorded test: Welch
+    cross-spectra of the force and the acceleration from central second differences of
+    the displacement (``nperseg`` samples per segment, at most the record)."""
+    from scipy.signal import csd, welch
+    t = np.asarray(test.time_s, float)
+    x = np.asarray(test.displacement_m, float)
+    F = np.asarray(test.force_N, float)
+    fs = 1.0 / _dt(t)
+    a = np.zeros_like(x)
+    a[1:-1] = (x[2:] - 2 * x[1:-1] + x[:-2]) * fs * fs
+    n = min(nperseg, x.size)
+    f, Saf = csd(a, F, fs=fs, nperseg=n)
+    _, Saa = welch(a, fs=fs, nperseg=n)
+    _, Sff = welch(F, fs=fs, nperseg=n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return f, Saf / Saa, np.abs(Saf) ** 2 / (Saa * Sff)
+
+
 def frequency_evidence(test, nperseg: int = 1024, min_coherence: float = 0.8,
                        band_hz: tuple[float, float] = (15.0, 200.0),
                        hold_s: float = 0.0) -> dict:
@@ -273,20 +292,7 @@ def frequency_evidence(test, nperseg: int = 1024, min_coherence: float = 0.8,
     coherent frequencies), ``mass_low_kg`` (median |M| in the coherent band below
     50 Hz).
     """
-    from scipy.signal import csd, welch
-    t = np.asarray(test.time_s, float)
-    x = np.asarray(test.displacement_m, float)
-    F = np.asarray(test.force_N, float)
-    fs = 1.0 / _dt(t)
-    a = np.zeros_like(x)
-    a[1:-1] = (x[2:] - 2 * x[1:-1] + x[:-2]) * fs * fs
-    n = min(nperseg, x.size)
-    f, Saf = csd(a, F, fs=fs, nperseg=n)
-    _, Saa = welch(a, fs=fs, nperseg=n)
-    _, Sff = welch(F, fs=fs, nperseg=n)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        M = Saf / Saa
-        coh = np.abs(Saf) ** 2 / (Saa * Sff)
+    f, M, coh = effective_mass(test, nperseg)
     ph = np.angle(M)
     use = (f >= band_hz[0]) & (f <= band_hz[1]) & (coh >= min_coherence) & np.isfinite(ph)
     tau = math.nan

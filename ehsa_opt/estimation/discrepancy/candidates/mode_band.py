@@ -29,9 +29,8 @@ import math
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.signal import csd, welch
 
-from .drive_lag import hold_delay_s
+from .drive_lag import effective_mass, hold_delay_s
 
 __all__ = ["apparent_mass", "fit_mode", "MODE_BAND_HZ", "MODE_DELTA_BIC", "ZETA_GRID"]
 
@@ -53,20 +52,9 @@ def apparent_mass(test, tau_s: float = 0.0, nperseg: int = 1024, hold: bool = Tr
     response of a mass through the hold and the central second difference,
     e^(iωT/2) / cos(ωT/2), is divided out; without it only the difference's gain."""
     t = np.asarray(test.time_s, float)
-    x = np.asarray(test.displacement_m, float)
-    F = np.asarray(test.force_N, float)
-    fs = 1.0 / float(np.median(np.diff(t)))
-    a = np.zeros_like(x)
-    a[1:-1] = (x[2:] - 2 * x[1:-1] + x[:-2]) * fs * fs
-    n = min(nperseg, x.size)
-    f, Saf = csd(a, F, fs=fs, nperseg=n)
-    _, Saa = welch(a, fs=fs, nperseg=n)
-    _, Sff = welch(F, fs=fs, nperseg=n)
+    f, M, coh = effective_mass(test, nperseg)
     w = 2 * math.pi * f
-    with np.errstate(divide="ignore", invalid="ignore"):
-        M = Saf / Saa
-        coh = np.abs(Saf) ** 2 / (Saa * Sff)
-    dt = 1.0 / fs
+    dt = 1.0 / (1.0 / float(np.median(np.diff(t))))  # as 1/fs of the spectra
     if hold:
         # a mass driven through the hold and seen through the central second
         # difference: u / a = M e^(iωT/2) / cos(ωT/2) exactly; divide both out
