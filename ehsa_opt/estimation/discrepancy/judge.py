@@ -35,7 +35,8 @@ from .impact_verdict import impact_record, impact_verdict_record
 __all__ = ["excess_reduction", "earns", "earns_on_own_channel", "can_earn",
            "channel_sse_excess_reduction", "sse_can_earn", "own_channel_dbic", "choose_winner",
            "own_evidence", "refuted_by_rotor_channel", "judge_candidate", "judge_on_impacts",
-           "judge_change", "record_verdict", "withdraw", "impact_earns", "refuse_at_bound"]
+           "judge_change", "record_verdict", "withdraw", "impact_earns", "refuse_at_bound",
+           "judge_attempt", "skew_found", "choose_rival"]
 
 
 def record_verdict(obj: Any, earns: bool, by: str = "") -> bool:
@@ -69,6 +70,50 @@ def judge_change(obj: Any, err_before: float, err_after: float, floor: float,
     ``resolved``: its size is resolved (:func:`~.evidence.significant`)."""
     ok = earns(err_before, err_after, floor, dbic_fit, dbic_heldout, criterion=criterion)
     return record_verdict(obj, ok and resolved, by)
+
+
+def judge_attempt(att: Any, floor: float, criterion: Criterion = DEFAULT_CRITERION) -> bool:
+    """The verdict on a record or law member's attempt
+    (:class:`~.members.protocol.Attempt`), written on it and on its result fields: by
+    :func:`earns` on the force with its size resolved, or — for the voltage record's
+    skew, a change of the voltage channel that leaves the force alone — by
+    :func:`skew_found` on its own statistics."""
+    if att.decided_by == "voltage skew":
+        ok, by = skew_found(att.evidence, criterion), "one delay of the voltage record"
+    else:
+        ok = earns(att.error_before, att.error_after, floor, att.delta_bic_fit,
+                   att.delta_bic_heldout, criterion=criterion) and bool(att.resolved)
+        by = "total excess"
+    if att.fields is not None:
+        record_verdict(att.fields, ok, by)
+    return record_verdict(att, ok, by)
+
+
+def skew_found(ev: dict, criterion: Criterion = DEFAULT_CRITERION) -> bool:
+    """A skew of the voltage record: one delay (not at the edge of the searched ones,
+    per-test delays adding at most ``skew_spread`` of its log-gain) significant on the
+    fit and held-out tests (ΔBIC < ``skew_bic``), explaining ``skew_explains`` of the
+    voltage residual's excess over noise, while the generator's force does not follow
+    it (a lagging rotor moves both; :mod:`.voltage_skew`)."""
+    return (not ev["edge"] and ev["spread"] <= criterion.skew_spread
+            and ev["delta_bic_fit"] < criterion.skew_bic
+            and ev["delta_bic_heldout"] < criterion.skew_bic
+            and ev["explained"] >= criterion.skew_explains and not ev["follows"])
+
+
+def choose_rival(earning: Sequence[Any], criterion: Criterion = DEFAULT_CRITERION) -> Any:
+    """Of earning rivals for one channel (a delay of the force record and the force
+    sensor's dynamics, whose limit the delay is), the one with the fewest parameters
+    unless a richer one's held-out ΔBIC is lower by the criterion's
+    ``nested_evidence``; among those, the lowest held-out ΔBIC."""
+    if not earning:
+        raise ValueError("choose_rival: no earning attempt")
+    by_size = sorted(earning, key=lambda a: (a.n_parameters, a.delta_bic_heldout))
+    best = by_size[0]
+    for a in by_size[1:]:
+        if a.delta_bic_heldout < best.delta_bic_heldout - criterion.nested_evidence:
+            best = a
+    return best
 
 
 def excess_reduction(err_before: float, err_after: float, floor: float,
@@ -243,7 +288,7 @@ def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff:
 def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse_fit,
                     sse_held,
                     n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say,
-                    cur_ev_pred=None, masks=None, presliding=None,
+                    cur_ev_pred=None, masks=None, laws=None,
                     criterion: Criterion = DEFAULT_CRITERION) -> None:
     """Fill the :class:`~.results.CandidateResult` ``c`` from one re-identification
     ``out`` (``(name, FitResult, fit outputs, held-out outputs, rig)``,
@@ -251,9 +296,10 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     ΔBIC on the fit and held-out tests, SSE alternative per channel,
     :func:`channel_sse_excess_reduction`) or by its own evidence per block.
     ``member`` is the catalogue entry (:class:`~.candidates.Candidate`: the channels
-    a rigid-rig effect can change, its amplitudes).  ``presliding``: the base model's
-    presliding law (:class:`~.presliding.PreslidingLaw`); when adopted, the candidate's
-    predictions get their own presliding term before anything here measures them
+    a rigid-rig effect can change, its amplitudes).  ``laws``: the friction-law terms
+    every model carries (:meth:`~.search.SearchTests.correct`: a presliding transition,
+    the campaign's drift); the candidate's predictions get their own terms before
+    anything here measures them
     (the current model's measures were taken on its corrected predictions).  Every
     threshold is ``criterion``'s."""
     name, res, pf, ph, crig = out
@@ -261,8 +307,8 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
     if not pf:
         say(f"{name}: re-identification failed ({res.message})")
         return
-    if presliding is not None:
-        pf, ph = presliding.correct(fit_pts, pf, held_pts, ph)
+    if laws is not None:
+        pf, ph = laws.correct(fit_pts, pf, held_pts, ph)
     comp_params = [q.name for q in comps[name].parameters]
     k = len(comp_params)
     c.parameters = {n: res.parameters[n] for n in comp_params}

@@ -25,12 +25,26 @@ from .criterion import DEFAULT_CRITERION, Criterion
 from .terms import TermProposal
 
 __all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "NONE_OF_CATALOGUE",
-           "UNDECIDED"]
+           "UNDECIDED", "CHANNEL_MEMBERS", "DEFAULT_MEMBERS"]
 
 #: The answer when the residual is structured but no catalogue effect earns.
 NONE_OF_CATALOGUE = "none of the catalogue"
 #: The answer of a run cut at its time budget before any effect was named.
 UNDECIDED = "undecided"
+
+#: The members beside the catalogue's components that
+#: :attr:`DiscrepancySettings.candidates` may list (:mod:`.members`: the drive's lag, a
+#: delay of the force record, the force sensor's dynamics, the friction's drift).
+CHANNEL_MEMBERS: tuple[str, ...] = ("drive_lag", "force_lag", "force_sensor", "friction_drift")
+
+#: The members searched by default: every catalogue component, the drive's lag, the
+#: force record's delay and the campaign's friction drift (tried only on a campaign whose
+#: tests state their run order).  The force sensor's dynamics is listed by choice
+#: (``candidates=(..., "force_sensor")``, ``--candidates``): with the static friction law
+#: as the base model, a low-pass of the force also smooths the friction's jump at a
+#: reversal, which a presliding transition would explain — it is offered by default once
+#: the base law has that transition.
+DEFAULT_MEMBERS: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag", "friction_drift")
 
 
 @dataclass(frozen=True)
@@ -40,7 +54,8 @@ class DiscrepancySettings:
     Attributes
     ----------
     candidates : tuple of str
-        Candidate effects to consider (default: the whole library).
+        Members to consider: catalogue components and :data:`CHANNEL_MEMBERS`
+        (default :data:`DEFAULT_MEMBERS`).
     top : int
         How many of the best-ranked candidates are re-identified per round.
     max_effects : int
@@ -92,7 +107,7 @@ class DiscrepancySettings:
         validated at its construction; the default is the documented one).
     """
 
-    candidates: tuple[str, ...] = (*CANDIDATES, "drive_lag", "force_lag")
+    candidates: tuple[str, ...] = DEFAULT_MEMBERS
     top: int = 3
     max_effects: int = 3
     max_tests: int | None = None
@@ -129,10 +144,10 @@ class DiscrepancySettings:
             raise ValueError(f"DiscrepancySettings: max_member_fits must be None or an "
                              f"integer >= 1 (member fits), got {self.max_member_fits!r}")
         unknown = [c for c in self.candidates if c not in CANDIDATES
-                   and c not in ("drive_lag", "force_lag")]
+                   and c not in CHANNEL_MEMBERS]
         if unknown:
             raise ValueError(f"DiscrepancySettings: unknown candidates {unknown} "
-                             f"(known: {', '.join((*CANDIDATES, 'drive_lag', 'force_lag'))})")
+                             f"(known: {', '.join((*CANDIDATES, *CHANNEL_MEMBERS))})")
         for name in ("top", "max_effects", "jobs"):
             v = getattr(self, name)
             if not (isinstance(v, int) and v >= 1):

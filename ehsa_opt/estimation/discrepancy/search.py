@@ -83,6 +83,16 @@ class SearchTests:
     validation_dir: Path | None = None
     #: the base model's presliding law (:class:`~.presliding.PreslidingLaw`; None: none)
     presliding: Any = None
+    #: the friction-law terms every model judged carries (the presliding transition, the
+    #: campaign's drift), in the order they were adopted; each has ``correct``
+    laws: list = field(default_factory=list)
+
+    def correct(self, fit_pts, fit_pred, held_pts, held_pred) -> tuple[list, list]:
+        """A model's fit and held-out predictions with each adopted law's own term."""
+        fit_pred, held_pred = list(fit_pred), list(held_pred)
+        for law in self.laws:
+            fit_pred, held_pred = law.correct(fit_pts, fit_pred, held_pts, held_pred)
+        return fit_pred, held_pred
 
     @property
     def eval_pts(self) -> list[PreparedTest]:
@@ -385,7 +395,7 @@ def judge_context(rnd: int, tests: SearchTests, state: SearchState, rk: RoundRan
     return dict(comps=rk.comps, fit_pts=fit_pts, held_pts=held_pts, sse_fit=sse_fit,
                 sse_held=sse_held, n_eff_fit=state.n_eff_fit, n_eff_held=state.n_eff_held,
                 cur_err=cur_err, floor=floor, ch_sse0=ch_sse0, ch_n=ch_n, say=say,
-                cur_ev_pred=state.eval_pred(), masks=masks, presliding=tests.presliding,
+                cur_ev_pred=state.eval_pred(), masks=masks, laws=tests if tests.laws else None,
                 criterion=criterion)
 
 

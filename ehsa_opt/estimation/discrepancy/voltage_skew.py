@@ -43,11 +43,12 @@ and names no catalogue member for it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace as _replace
+from dataclasses import dataclass, field, replace as _replace
 from typing import Sequence
 
 import numpy as np
 
+from .judge import skew_found
 from .criterion import DEFAULT_CRITERION, Criterion
 from .evidence import delta_bic
 from .prepared import PreparedTest
@@ -77,6 +78,8 @@ class VoltageSkew:
         Share of the held-out voltage SSE's excess over noise the delay removes.
     message : str
         The check in words (said, and noted in the result).
+    evidence : dict
+        The statistics the judge decides on (:func:`~.judge.skew_found`).
     """
 
     found: bool
@@ -86,6 +89,7 @@ class VoltageSkew:
     spread: float
     explained: float
     message: str
+    evidence: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         """The check as plain JSON values (the result file's ``voltage_skew``)."""
@@ -169,8 +173,9 @@ def find_voltage_skew(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.nda
             f_moved += float(np.sum(((pt.y[0] - yp[0] - c * dv) * w) ** 2))
     follows = f_on > 0 and delta_bic(f_moved, f_on, 0, n_eff) < criterion.skew_bic
     edge = abs(abs(tau) - float(np.max(np.abs(LAG_GRID_S)))) < 1e-9
-    found = (not edge and spread <= criterion.skew_spread and d_fit < criterion.skew_bic
-             and d_held < criterion.skew_bic and explained >= criterion.skew_explains and not follows)
+    evidence = {"edge": edge, "spread": spread, "delta_bic_fit": d_fit,
+                "delta_bic_heldout": d_held, "explained": explained, "follows": follows}
+    found = skew_found(evidence, criterion)
     word = "late" if tau > 0 else "early"
     why = ("one delay of the voltage record explains its residual" if found else
            "at the edge of the searched delays" if edge else
@@ -193,7 +198,7 @@ def find_voltage_skew(fit_pts: Sequence[PreparedTest], fit_pred: Sequence[np.nda
     if found:
         msg += ("; the voltage record is re-aligned by it before the rounds (a skew of the "
                 "acquisition, not an effect of the rig: no catalogue member is named for it)")
-    return VoltageSkew(found, tau, d_fit, d_held, spread, explained, msg)
+    return VoltageSkew(found, tau, d_fit, d_held, spread, explained, msg, evidence)
 
 
 def realign_voltage(pts: Sequence[PreparedTest], tau: float) -> list[PreparedTest]:

@@ -9,7 +9,7 @@ round after round, then propose a data-driven term for what no catalogue effect 
 2. **Baseline**: identify the base model (friction; inertia and offset without
    generator) on the fit tests, started from a linear least-squares solution.
    With ``DiscrepancySettings.presliding`` (opt-in, ``--presliding``), before the
-   rounds (after the channel members below) the base model's friction law is offered
+   rounds (after the record members below) the base model's friction law is offered
    a presliding transition (:func:`~.presliding.adopt_presliding`:
    a force term sign(v) exp(−s/ℓ) after each reversal, adopted when it earns by the
    rule of step 6); once adopted every model judged has its own such term
@@ -51,34 +51,31 @@ round after round, then propose a data-driven term for what no catalogue effect 
    another shape (:func:`~.terms.names_an_effect`): then ``none``, the shape said.
 
 :func:`run_discrepancy` runs these as named phases: :func:`load_data`,
-:func:`prepare_search_tests` (1), :func:`fit_baseline` (2–3), :func:`name_force_lag`
-(the ``force_lag`` member, before the rounds), :func:`adopt_base_presliding` (the
-presliding transition), :func:`~.search.run_rounds` (4–7),
+:func:`prepare_search_tests` (1), :func:`~.baseline.fit_baseline` (2–3), the record and
+law members (:func:`~.members.run_members` over :data:`~.members.RECORD_MEMBERS`: the
+voltage record's skew, the drive's lag, the force record's delay or sensor dynamics, the
+friction law's presliding transition — each fitted, judged by the criterion, and
+adopted when it earns), :func:`~.search.run_rounds` (4–7),
 :func:`~.terms.propose_term` (8) and :func:`assemble_result`.
 """
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from ...datasets.bench_format import BenchData, BenchDataWarning, load_bench
 from ...utils.process import single_threaded_blas
 from ..identify_options import MIN_RESOLVED_SAMPLES
-from .candidates import CANDIDATES, try_drive_lag, try_lag
-from .budget import budget_reached, budget_set, cut_reason, fits_charged
+from .baseline import CANDIDATE_MAX_SAMPLES, Baseline, fit_baseline
+from .budget import budget_set, fits_charged
+from .evidence import force_noise_floor_percent
 from .executor import cluster_set
-from .evidence import effective_samples, force_error_percent, force_noise_floor_percent
-from ..fit_result import FitResult
-from .fit import fit_group
+from .localise import localise
+from .members import RECORD_MEMBERS, Context, run_members
 from .prepared import prepare_tests
-from .rig import Rig, linear_baseline, predict
-from .localise import Localisation, localise
-from .prepared import decimated, decimation_factor
 from .results import (
     NONE_OF_CATALOGUE,
     UNDECIDED,
@@ -86,19 +83,14 @@ from .results import (
     DiscrepancyResult,
     DiscrepancySettings,
 )
-from .lag_rival import lag_rival
+from .rig import Rig
 from .search import SearchState, SearchTests, run_rounds
 from .split import crop_test, load_split, spread_within
-from .presliding import PreslidingLaw, adopt_presliding
 from .terms import TermProposal, names_an_effect, propose_term
-from .voltage_skew import VoltageSkew, find_voltage_skew, realign_voltage
-from .criterion import DEFAULT_CRITERION, Criterion
-from .judge import withdraw
+from .voltage_skew import VoltageSkew
 
 __all__ = ["run_discrepancy", "load_data", "prepare_search_tests", "fit_baseline", "Baseline",
-           "name_force_lag", "name_drive_lag", "assemble_result", "BASELINE_MAX_SAMPLES",
-           "CANDIDATE_MAX_SAMPLES", "baseline_decimation", "check_voltage_skew",
-           "adopt_base_presliding"]
+           "assemble_result"]
 
 
 def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings | None = None,
@@ -133,22 +125,9 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     all_cands: list[CandidateResult] = []
     # the recorded tests (the open-loop metric's input, whatever the members change)
     raw = ([pt.test for pt in tests.fit_pts], [pt.test for pt in tests.held_pts])
-    skew = None
-    if tests.rig.has_generator:
-        state, skew = check_voltage_skew(tests, base, state, say, notes, settings.criterion)
-    if "drive_lag" in settings.candidates and not tests.rig.has_generator:
-        state = name_drive_lag(tests, base, state, settings, say, all_cands, notes)
-    if "drive_lag" in state.effects and "force_lag" in settings.candidates:
-        # a channel delay would describe the same lead of the recorded force again
-        note = ("force_lag not searched: the drive lag already describes the recorded "
-                "force's lead")
-        say(note)
-        notes.append(note)
-    elif settings.discover and "force_lag" in settings.candidates:
-        state = name_force_lag(tests, base, state, settings, say, all_cands, notes)
-    law = None
-    if settings.presliding:
-        law = adopt_base_presliding(tests, base, state, say, notes, settings.criterion)
+    ctx = Context(tests, base, state, settings, say, notes, all_cands)
+    run_members(RECORD_MEMBERS, ctx)
+    skew, law = ctx.skew, ctx.law
     state = run_rounds(tests, state, settings, say, notes, all_cands)
     term = None
     if settings.discover:
@@ -169,38 +148,6 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         res.message += (f"; the base model's friction has a presliding transition "
                         f"({tests.evaluation} error without it {law.error_before:.3f} %)")
     return res
-
-
-def adopt_base_presliding(tests: SearchTests, base: Baseline, state: SearchState, say,
-                          notes: list[str], criterion: Criterion = DEFAULT_CRITERION
-                          ) -> PreslidingLaw:
-    """The presliding transition of the base model's friction law
-    (:func:`~.presliding.adopt_presliding`), tried on the model that enters the rounds.
-    When adopted, the state's and the baseline's predictions get their presliding term
-    (``state`` and ``base`` changed in place: the error, the effective sample sizes and
-    the localisation are of the corrected model) and ``tests.presliding`` carries the
-    law to every model the search judges."""
-    law = adopt_presliding(tests.fit_pts, state.fit_pred, tests.held_pts, state.held_pred,
-                           tests.floor, state.n_eff_fit, state.n_eff_held,
-                           criterion=criterion)
-    say(law.message)
-    notes.append(law.message)
-    if not law.adopted:
-        return law
-    tests.presliding = law
-    fit_pts, held_pts = tests.fit_pts, tests.held_pts
-    state.fit_pred, state.held_pred = law.correct(fit_pts, state.fit_pred, held_pts,
-                                                  state.held_pred)
-    state.error = force_error_percent(tests.eval_pts, state.eval_pred())
-    state.n_eff_fit = effective_samples(fit_pts, state.fit_pred)
-    state.n_eff_held = effective_samples(held_pts, state.held_pred) if held_pts else math.nan
-    if not state.effects:
-        base.error = state.error
-    base.fit_pred, base.held_pred = law.correct(fit_pts, base.fit_pred, held_pts,
-                                                base.held_pred)
-    base.localisation = localise(fit_pts + held_pts, base.fit_pred + base.held_pred,
-                                 lead_m_per_rad=tests.lead_m_per_rad)
-    return law
 
 
 def load_data(data: BenchData | str | Path, say, notes: list[str]) -> BenchData:
@@ -250,195 +197,6 @@ def prepare_search_tests(data: BenchData, settings: DiscrepancySettings, say,
             if evaluation == "validation set" else None)
     return SearchTests(rig, fit_pts, held_pts, sub_pts,
                        force_noise_floor_percent(held_pts or fit_pts), evaluation, vdir)
-
-
-@dataclass
-class Baseline:
-    """The identified base model: its fit, simulated outputs on the fit and held-out
-    tests, effective sample sizes, the localisation of its residual and its
-    relative force error on the evaluation tests (%)."""
-
-    fit: FitResult
-    rig: Rig
-    fit_pred: list
-    held_pred: list
-    n_eff_fit: float
-    n_eff_held: float
-    localisation: Localisation
-    error: float
-
-    def state(self, settings: DiscrepancySettings) -> SearchState:
-        """The search's start: the base model, every catalogue candidate remaining."""
-        return SearchState(self.rig, dict(self.fit.parameters), self.fit_pred, self.held_pred,
-                           self.n_eff_fit, self.n_eff_held, self.error, [], [],
-                           [n for n in settings.candidates if n in CANDIDATES])
-
-
-def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Baseline:
-    """Identify the base model on the fit tests from a linear least-squares start,
-    simulate it on every test and localise its residual."""
-    rig, fit_pts, held_pts = tests.rig, tests.fit_pts, tests.held_pts
-    lb = linear_baseline(fit_pts, rig)
-    k = baseline_decimation(fit_pts, rig)
-    base = fit_group([decimated(pt, k) for pt in fit_pts], rig, [lb], max_iter=settings.max_iter)
-    if not base.parameters:
-        raise RuntimeError(f"baseline identification failed: {base.message}")
-    say(f"baseline: {base.message}, chi2/N {base.objective:.3g} ({base.seconds:.1f} s"
-        + (f"; collocation on every {k}th sample of the fit tests" if k > 1 else "") + ")")
-    fit_pred = predict(fit_pts, rig, base.parameters)
-    held_pred = predict(held_pts, rig, base.parameters) if held_pts else []
-    loc0 = localise(fit_pts + held_pts, fit_pred + held_pred,
-                    lead_m_per_rad=tests.lead_m_per_rad)
-    n_eff_fit = effective_samples(fit_pts, fit_pred)
-    n_eff_held = effective_samples(held_pts, held_pred) if held_pts else math.nan
-    err0 = force_error_percent(tests.eval_pts, held_pred or fit_pred)
-    return Baseline(base, rig, fit_pred, held_pred, n_eff_fit, n_eff_held, loc0, err0)
-
-
-#: The baseline's collocation fit uses at most this many samples of the fit tests (every
-#: k-th sample, :func:`~.prepared.decimated`).  The cost of building the collocation NLP
-#: grows with the square of its samples (≈ 50 s for 15 000, 7 s for 5 000 on the 2-core
-#: machine), while the rigid model's only state, the winding current, is quasi-static
-#: at any such step (L/R ≈ 0.2 ms): the decimated fit differs from the full one by the
-#: sampling error of fewer samples (held-out error 11.75 % full, 11.79 % on every 4th
-#: sample, on a 16-test mixed campaign).  Every prediction, error and statistic the
-#: decision uses is a simulation on every sample.
-BASELINE_MAX_SAMPLES = 4000
-
-
-#: A cap on the samples of the candidate fits (collocation on every sample: an effect may
-#: ring or ripple at hundreds of Hz): ``max_fit_tests`` spread over the fit tests, fewer
-#: while they hold more (:func:`~.split.spread_within`); None: no cap.  Off: a cap of 6000
-#: samples left the embedded data's full configuration with two fit tests, and its backlash
-#: fit then depended on the platform's floating point (gap +0.1 % on one build of the same
-#: package versions, +12.8 % on another).  The candidates are judged, as always, by
-#: simulation on every fit and held-out test.
-CANDIDATE_MAX_SAMPLES: int | None = None
-
-
-def baseline_decimation(fit_pts, rig: Rig) -> int:
-    """The step k of :data:`BASELINE_MAX_SAMPLES` for a model with states (collocation);
-    1 for a model without (a least-squares fit, whose cost is linear)."""
-    return decimation_factor(fit_pts, BASELINE_MAX_SAMPLES) if rig.model().n_states else 1
-
-
-def check_voltage_skew(tests: SearchTests, base: Baseline, state: SearchState, say,
-                       notes: list[str], criterion: Criterion = DEFAULT_CRITERION
-                       ) -> tuple[SearchState, VoltageSkew | None]:
-    """The voltage-skew check (:func:`~.voltage_skew.find_voltage_skew`) on the baseline;
-    when one delay of the voltage record explains the voltage residual, every test's
-    voltage is re-aligned from here on (``tests`` changed in place; the model's outputs
-    are unchanged — the same samples — and the effective sample sizes are recomputed).
-    Returns the state and the check (None: no voltage channel, or no delay is better
-    than none)."""
-    skew = find_voltage_skew(tests.fit_pts, state.fit_pred, tests.held_pts, state.held_pred,
-                             state.n_eff_fit, state.n_eff_held, tests.rig.harvester,
-                             criterion)
-    if skew is None:
-        return state, None
-    say(skew.message)
-    notes.append(skew.message)
-    if not skew.found:
-        return state, skew
-    fit_ids = {id(pt): k for k, pt in enumerate(tests.fit_pts)}
-    sub_idx = [fit_ids[id(pt)] for pt in tests.sub_pts]
-    tests.fit_pts = realign_voltage(tests.fit_pts, skew.delay_s)
-    tests.held_pts = realign_voltage(tests.held_pts, skew.delay_s)
-    tests.sub_pts = [tests.fit_pts[k] for k in sub_idx]
-    state.n_eff_fit = effective_samples(tests.fit_pts, state.fit_pred)
-    state.n_eff_held = (effective_samples(tests.held_pts, state.held_pred)
-                        if tests.held_pts else math.nan)
-    return state, skew
-
-
-def name_force_lag(tests: SearchTests, base: Baseline, state: SearchState,
-                   settings: DiscrepancySettings, say, all_cands: list,
-                   notes: list[str] | None = None) -> SearchState:
-    """The ``force_lag`` member (:func:`~.candidates.force_lag.try_lag`) tried on the
-    baseline; when it earns, the tests are re-aligned from here on (``tests`` and
-    ``base``'s outputs changed in place: the report compares on the re-aligned tests)
-    and the state starts from the refitted baseline.  The delay is not named when a
-    member the first round would re-identify, fitted on the record as it is, earns and
-    leaves a lower held-out error (:func:`~.lag_rival.lag_rival`)."""
-    if budget_reached():
-        state.cut = (f"{cut_reason()} before the force_lag "
-                     f"member was tried: it was not tried")
-        say(state.cut)
-        return state
-    lagged = try_lag(tests.fit_pts, tests.held_pts, tests.rig, base.fit, state.fit_pred,
-                     state.held_pred, tests.floor, state.n_eff_fit, state.n_eff_held,
-                     base.error, settings, say,
-                     decimation=baseline_decimation(tests.fit_pts, tests.rig))
-    if lagged is None:
-        return state
-    fit_pts, held_pts, base_l = lagged.fit_pts, lagged.held_pts, lagged.baseline
-    cur_fit, cur_held, cur_err = lagged.fit_pred, lagged.held_pred, lagged.error
-    cand = CandidateResult(**lagged.fields)
-    all_cands.append(cand)
-    rival = lag_rival(tests, state, settings, cur_err, say, notes if notes is not None else [])
-    if rival is not None:
-        withdraw(cand, "")
-        note = (f"force_lag: not named — {rival.effect}, fitted on the record as it is, "
-                f"earns and leaves {rival.error_after:.3f} % against the delay's "
-                f"{cur_err:.3f} %: the member's physics accounts for the lead without "
-                f"re-aligning the record")
-        say(note)
-        if notes is not None:
-            notes.append(note)
-        return state
-    tests.fit_pts, tests.held_pts = fit_pts, held_pts
-    state.params = dict(base_l.parameters)
-    state.fit_pred, state.held_pred, state.error = cur_fit, cur_held, cur_err
-    state.effects.append("force_lag")
-    state.steps.append({"effect": "force_lag", "error_after": cur_err,
-                        "excess_reduction": cand.excess_reduction,
-                        "parameters": cand.parameters})
-    state.n_eff_fit = effective_samples(fit_pts, cur_fit)
-    state.n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
-    tests.sub_pts = spread_within(fit_pts, settings.max_fit_tests, CANDIDATE_MAX_SAMPLES)
-    base.fit_pred = predict(fit_pts, tests.rig, base.fit.parameters)
-    base.held_pred = predict(held_pts, tests.rig, base.fit.parameters) if held_pts else []
-    return state
-
-
-def name_drive_lag(tests: SearchTests, base: Baseline, state: SearchState,
-                   settings: DiscrepancySettings, say, all_cands: list,
-                   notes: list[str]) -> SearchState:
-    """The ``drive_lag`` member (:func:`~.candidates.drive_lag.try_drive_lag`, a rig
-    without generator) tried on the baseline; when it earns, the tests' force is the
-    applied force from here on (``tests`` — with its noise floor — and ``base``'s
-    outputs changed in place: later effects are judged on what remains) and the state
-    starts from the baseline refitted on it."""
-    if budget_reached():
-        state.cut = (f"{cut_reason()} before the drive_lag "
-                     f"member was tried: it was not tried")
-        say(state.cut)
-        return state
-    driven = try_drive_lag(tests.fit_pts, tests.held_pts, tests.rig, base.fit, state.fit_pred,
-                           state.held_pred, tests.floor, state.n_eff_fit, state.n_eff_held,
-                           base.error, settings, say)
-    if driven is None:
-        return state
-    fit_pts, held_pts, base_d, floor = (driven.fit_pts, driven.held_pts, driven.baseline,
-                                        driven.floor)
-    cur_fit, cur_held, cur_err, fields = (driven.fit_pred, driven.held_pred, driven.error,
-                                          driven.fields)
-    all_cands.append(CandidateResult(**fields))
-    notes += driven.notes
-    tests.fit_pts, tests.held_pts, tests.floor = fit_pts, held_pts, floor
-    state.params = dict(base_d.parameters)
-    state.fit_pred, state.held_pred, state.error = cur_fit, cur_held, cur_err
-    state.effects.append("drive_lag")
-    state.steps.append({"effect": "drive_lag", "error_after": fields["error_after"],
-                        "error_after_on_applied_force": cur_err,
-                        "excess_reduction": fields["excess_reduction"],
-                        "parameters": fields["parameters"]})
-    state.n_eff_fit = effective_samples(fit_pts, cur_fit)
-    state.n_eff_held = effective_samples(held_pts, cur_held) if held_pts else math.nan
-    tests.sub_pts = spread_within(fit_pts, settings.max_fit_tests, CANDIDATE_MAX_SAMPLES)
-    base.fit_pred = predict(fit_pts, tests.rig, base.fit.parameters)  # on the applied force
-    base.held_pred = predict(held_pts, tests.rig, base.fit.parameters) if held_pts else []
-    return state
 
 
 def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: SearchState,

@@ -110,7 +110,7 @@ def _judge(fp, fpr, hp, hpr, cand_f, cand_h, presliding):
                     sse_held=normalised_sse(hp, hpr), n_eff_fit=effective_samples(fp, fpr),
                     n_eff_held=effective_samples(hp, hpr), cur_err=cur_err,
                     floor=force_noise_floor_percent(hp), ch_sse0=ch_sse0, ch_n=ch_n,
-                    say=said.append, cur_ev_pred=hpr, presliding=presliding)
+                    say=said.append, cur_ev_pred=hpr, laws=presliding)
     return c, said
 
 

@@ -40,7 +40,7 @@ from scipy.signal import bilinear, lfilter, lfilter_zi
 
 from ...covariance import hac_covariance
 from ..evidence import delta_bic, force_error_percent, force_noise_floor_percent, normalised_sse
-from ..judge import excess_reduction, judge_change
+from ..judge import excess_reduction
 from ..fit import fit_group
 from ..prepared import PreparedTest, prepare_tests
 from ..rig import Rig, predict
@@ -378,10 +378,11 @@ def try_drive_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_ef
     tests by the decision rule, with a resolved lead δ + τ (its interval excludes 0); the
     blocked cross-validation within the held-out records is reported beside it.
 
-    Returns None when it does not earn, else (fit tests, held-out tests — both with
-    the applied force —, the refitted baseline, its predictions on both, the
-    evaluation error on the applied force, the candidate's fields, the new noise
-    floor, notes for the report)."""
+    Returns None when the refit failed, else the :class:`~.record_change.RecordChange`
+    (the tests with the applied force, the refitted baseline, its predictions, the
+    evaluation error on the applied force, the member's fields, the new noise floor and
+    the report's notes); the judge decides (:func:`~..judge.judge_attempt`).
+    """
     if rig.has_generator:
         return None
     hold = hold_delay_s(fit_pts[0].time_s)
@@ -421,21 +422,17 @@ def try_drive_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_ef
              resolved=resolved, parameters=dict(p),
              intervals={k: v for k, v in out["intervals"].items()},
              predictions=pf + ph, rig=rig)
-    ok = judge_change(c, e_before, e_after, floor, d_fit, d_held, settings.criterion, resolved)
     it = out["intervals"]["drive_lag_time_constant_s"]
-    say(f"drive_lag: time constant {1e3 * tau:.3f} ms [{1e3 * it[0]:.3f}, {1e3 * it[1]:.3f}] "
-        f"(bandwidth {p['drive_bandwidth_hz']:.0f} Hz)"
-        + (f", delay {1e3 * delay:.3f} ms" if delay else "") + "; "
-        f"recorded-force error {e_before:.3f} -> {e_after:.3f} %, "
-        f"ΔBIC fit {d_fit:.1f}, held-out {d_held:.1f} "
-        f"({'earns' if ok else 'does not earn'})")
+    msg = (f"drive_lag: time constant {1e3 * tau:.3f} ms [{1e3 * it[0]:.3f}, {1e3 * it[1]:.3f}] "
+           f"(bandwidth {p['drive_bandwidth_hz']:.0f} Hz)"
+           + (f", delay {1e3 * delay:.3f} ms" if delay else "") + "; "
+           f"recorded-force error {e_before:.3f} -> {e_after:.3f} %, "
+           f"ΔBIC fit {d_fit:.1f}, held-out {d_held:.1f}")
     for fold in cv:
         say(f"drive_lag, blocked cross-validation within the held-out record (trained on the "
             f"{fold['train']}): τ {1e3 * fold['tau_s']:.3f} ms, "
             f"error of the other blocks "
             f"{fold['error_without']:.2f} -> {fold['error_with']:.2f} %")
-    if not ok:
-        return None
     e_applied = force_error_percent(h2 or f2, ph or pf)
     notes = [f"The drive lag (`drive_lag`) is judged on the recorded force of the held-out record and, because the "
              f"fit record hardly excites the drive, by blocked cross-validation within the "
@@ -447,4 +444,4 @@ def try_drive_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_ef
              + ". From here on the force is the applied force (the recorded force through "
                "the drive): later effects and the per-test errors are judged on it"]
     return RecordChange(f2, h2, b2, pf, ph, e_applied, c, force_noise_floor_percent(h2 or f2),
-                        notes)
+                        notes, msg)

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..criterion import DEFAULT_CRITERION, DEFAULT_POLICY, Criterion
 from ..evidence import delta_bic, force_error_percent, normalised_sse
-from ..judge import excess_reduction, judge_change
+from ..judge import excess_reduction
 from ..fit import fit_group
 from ..prepared import PreparedTest, decimated, prepare_tests
 from ..rig import predict
@@ -78,8 +78,9 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
     delay from a time-shift search on the baseline residual (:func:`~ehsa_opt.estimation.discrepancy.terms.shift_lag`),
     the force re-aligned by it and the baseline refitted (collocation on every
     ``decimation``-th sample, as the baseline); kept when it is one delay for every test
-    (:func:`per_test_delays`) and earns by the decision rule (compared on the re-aligned
-    held-out tests, cropped alike)."""
+    (:func:`per_test_delays`); its evidence is measured on the re-aligned held-out tests,
+    cropped alike (the judge decides, :func:`~..judge.judge_attempt`).  None: not tried
+    (said why)."""
     lag = shift_lag(fit_pts, fit_pred)
     if lag is None:
         return None
@@ -135,12 +136,8 @@ def try_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_eff_fit,
              excess_reduction=excess_reduction(e_before, e_after, floor, crit),
              delta_bic_fit=d_fit, delta_bic_heldout=d_held, sse_heldout=normalised_sse(ev, pe),
              parameters={"force_lag_s": tau}, predictions=pf + ph, rig=rig)
-    judge_change(c, e_before, e_after, floor, d_fit, d_held, crit)
-    say(f"force_lag: {1e3 * tau:.2f} ms, error {e_before:.3f} -> {e_after:.3f} % "
-        f"({'earns' if c['earns'] else 'does not earn'})")
-    if not c["earns"]:
-        return None
-    return RecordChange(f2, h2, b2, pf, ph, e_after, c)
+    msg = f"force_lag: {1e3 * tau:.2f} ms, error {e_before:.3f} -> {e_after:.3f} %"
+    return RecordChange(f2, h2, b2, pf, ph, e_after, c, message=msg)
 
 
 def _crop_like(pt: PreparedTest, like: PreparedTest) -> PreparedTest:

@@ -1,5 +1,5 @@
 """What a member that acts on the record (a delay of the force channel, the drive's lag)
-hands back when it earns: the tests as the search uses them from then on and the
+hands back when fitted (the judge then decides): the tests as the search uses them from then on and the
 baseline refitted on them."""
 
 from __future__ import annotations
@@ -35,6 +35,8 @@ class RecordChange:
         The noise floor of the changed force, % (NaN: unchanged).
     notes : list of str
         What the report says about the member.
+    message : str
+        The member's evidence in words (said with the verdict).
     """
 
     fit_pts: list[PreparedTest]
@@ -46,3 +48,4 @@ class RecordChange:
     fields: dict
     floor: float = math.nan
     notes: list[str] = field(default_factory=list)
+    message: str = ""

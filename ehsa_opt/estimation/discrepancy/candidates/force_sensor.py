@@ -1,0 +1,210 @@
+"""Member ``force_sensor``: the force sensor's own dynamics, a second-order low-pass
+between the force the rod transmits and the force recorded.
+
+A load cell (with its amplifier and the acquisition's anti-alias filter) is a
+mass–spring system: the recorded force is F_m = H(s) F with
+
+    H(s) = ω_c² / (s² + 2 ζ ω_c s + ω_c²),   ω_c = 2π f_c,
+
+whose group delay depends on the frequency — a sine at 2 Hz and a stroke's reversal see
+different delays, so the per-test delays of the force record differ (what refuses
+:mod:`.force_lag`'s one delay).  A pure delay is the limit of H at a bandwidth far
+above the tests' frequencies (its low-frequency group delay 2ζ/ω_c).
+
+Fit (:func:`fit_sensor`): f_c and ζ by least squares of the recorded force against
+H applied to the current model's force on the fit tests (the model fixed: a linear
+filter of a known signal, two parameters; log f_c so that the bandwidth is fitted over
+its decades), started from a grid.  The base model is then refitted on the record
+with the filter's action on the model's own force taken out,
+
+    F_adj = F_m − (H[F̂] − F̂),
+
+so that F_adj − F̂ = F_m − H[F̂] is the recorded-force residual of the filtered model
+(exact at the model the record is adjusted with, to first order for a model close to
+it); the filter and the refit are iterated once.  Its evidence is measured on the
+recorded force of the evaluation tests (:func:`try_sensor`) and the judge decides;
+once adopted, the search judges every later model on the adjusted record.
+
+Its own statistics: the ~95 % interval of f_c and ζ from the Gauss–Newton
+covariance with the residual's autocorrelation (effective samples), and the
+size resolved only when the interval of f_c stays below the highest bandwidth the
+sampling resolves (:data:`MAX_BANDWIDTH_SHARE` of the sample rate) — a filter whose
+bandwidth cannot be told from infinite is no sensor dynamics.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace as _replace
+from typing import Sequence
+
+import numpy as np
+from scipy import signal
+from scipy.optimize import least_squares
+
+from ..channels import channel_effective_samples
+from ..evidence import delta_bic, force_error_percent, normalised_sse
+from ..fit import fit_group
+from ..judge import excess_reduction
+from ..prepared import PreparedTest, decimated
+from ..rig import Rig, predict
+from .record_change import RecordChange
+
+__all__ = ["sensor_filter", "filtered_force", "fit_sensor", "try_sensor",
+           "MAX_BANDWIDTH_SHARE", "MIN_BANDWIDTH_HZ", "DAMPING_RANGE"]
+
+#: The highest bandwidth fitted, as a share of the sample rate: 0.4 f_s (below the
+#: Nyquist frequency, where the discrete filter still follows the continuous one).
+MAX_BANDWIDTH_SHARE = 0.4
+#: The lowest bandwidth fitted, Hz: a force sensor slower than this would not pass the
+#: test frequencies of a damper bench (0.5–20 Hz).
+MIN_BANDWIDTH_HZ = 5.0
+#: Damping ratios fitted: from a lightly damped load cell (0.05) to an overdamped
+#: conditioning filter (2).
+DAMPING_RANGE = (0.05, 2.0)
+#: The grid the least-squares fit starts from (f_c as a share of the highest bandwidth;
+#: ζ): the bandwidth over its decades, damping light to critical.
+_START_SHARES = (0.05, 0.15, 0.4, 1.0)
+_START_DAMPING = (0.2, 0.7, 1.0)
+
+
+def _dt(pt: PreparedTest) -> float:
+    return float(np.median(np.diff(pt.time_s)))
+
+
+def sensor_filter(f_c_hz: float, zeta: float, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """The discrete (b, a) of H(s) = ω²/(s² + 2ζωs + ω²) at the step ``dt_s``: first-order
+    hold (the recorded signal between samples is linear), exact for such a signal."""
+    w = 2.0 * math.pi * f_c_hz
+    b, a, _ = signal.cont2discrete(([w * w], [1.0, 2.0 * zeta * w, w * w]), dt_s,
+                                   method="foh")
+    b = np.atleast_1d(np.squeeze(b))
+    return b / a[0], a / a[0]
+
+
+def filtered_force(pt: PreparedTest, force: np.ndarray, f_c_hz: float, zeta: float
+                   ) -> np.ndarray:
+    """``force`` (N, on the test's samples) through the sensor, started at rest at its
+    first value (the record starts in a steady state of the sensor)."""
+    b, a = sensor_filter(f_c_hz, zeta, _dt(pt))
+    zi = signal.lfilter_zi(b, a) * force[0]
+    return signal.lfilter(b, a, force, zi=zi)[0]
+
+
+def _with_force(pt: PreparedTest, force: np.ndarray) -> PreparedTest:
+    y = pt.y.copy()
+    y[0] = force
+    return _replace(pt, test=_replace(pt.test, force_N=force.copy()), y=y)
+
+
+def _residuals(theta: np.ndarray, pts, preds) -> np.ndarray:
+    f_c, zeta = 10.0 ** theta[0], theta[1]
+    return np.concatenate([(pt.y[0] - filtered_force(pt, yp[0], f_c, zeta)) * pt.wnorm[0]
+                           for pt, yp in zip(pts, preds)])
+
+
+def fit_sensor(pts: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> dict:
+    """f_c (Hz) and ζ of the sensor that best explain the recorded force of ``pts`` from
+    the model's force ``preds`` (see the module docstring), with ~95 % intervals
+    (Gauss–Newton covariance, the residual variance per effective sample of the force
+    residual, :func:`~..channels.channel_effective_samples`).
+
+    Returns
+    -------
+    dict
+        ``f_c_hz``, ``zeta``, ``intervals`` (name → (low, high)), ``sse`` and
+        ``f_max_hz`` (the highest bandwidth fitted).
+    """
+    f_max = MAX_BANDWIDTH_SHARE / _dt(pts[0])
+    lo = np.array([math.log10(MIN_BANDWIDTH_HZ), DAMPING_RANGE[0]])
+    hi = np.array([math.log10(f_max), DAMPING_RANGE[1]])
+    starts = [np.array([math.log10(max(s * f_max, MIN_BANDWIDTH_HZ)), z])
+              for s in _START_SHARES for z in _START_DAMPING]
+    cost = [float(np.sum(_residuals(th, pts, preds) ** 2)) for th in starts]
+    th0 = np.clip(starts[int(np.argmin(cost))], lo, hi)
+    sol = least_squares(_residuals, th0, bounds=(lo, hi), args=(pts, preds),
+                        x_scale=np.array([0.3, 0.2]))
+    r, J = sol.fun, sol.jac
+    lf, z = float(sol.x[0]), float(sol.x[1])
+    # residual variance per effective sample of the force residual (autocorrelated)
+    n_eff = float(channel_effective_samples(pts, _filtered(pts, preds, 10.0 ** lf, z))[0])
+    try:
+        cov = np.linalg.inv(J.T @ J) * float(r @ r) / max(n_eff - 2.0, 1.0)
+    except np.linalg.LinAlgError:
+        cov = np.full((2, 2), np.inf)
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, np.inf))
+    return {"f_c_hz": 10.0 ** lf, "zeta": z,
+            "intervals": {"sensor_bandwidth_hz": (10.0 ** (lf - 1.96 * sd[0]),
+                                                  10.0 ** (lf + 1.96 * sd[0])),
+                          "sensor_damping": (z - 1.96 * sd[1], z + 1.96 * sd[1])},
+            "sse": float(r @ r), "f_max_hz": f_max}
+
+
+def _adjusted(pts, preds, f_c, zeta) -> list[PreparedTest]:
+    """The tests with the filter's action on the model's force taken out of the record."""
+    return [_with_force(pt, pt.y[0] - (filtered_force(pt, yp[0], f_c, zeta) - yp[0]))
+            for pt, yp in zip(pts, preds)]
+
+
+def _filtered(pts, preds, f_c, zeta) -> list[np.ndarray]:
+    out = []
+    for pt, yp in zip(pts, preds):
+        q = np.array(yp, float, copy=True)
+        q[0] = filtered_force(pt, yp[0], f_c, zeta)
+        out.append(q)
+    return out
+
+
+def try_sensor(fit_pts, held_pts, rig: Rig, base, fit_pred, held_pred, floor: float,
+               n_eff_fit: float, n_eff_held: float, settings, decimation: int = 1
+               ) -> RecordChange | None:
+    """Member ``force_sensor``: the filter fitted on the current model's force, the base
+    model refitted on the adjusted record (collocation on every ``decimation``-th sample,
+    as the baseline), the filter refitted once on the refit, and the evidence on the
+    recorded force (the refitted model through the filter against the model before it).
+    None when the refit failed."""
+    f_c = zeta = math.nan
+    preds_f, params, est = fit_pred, base.parameters, None
+    b2 = None
+    for _ in range(2):
+        est = fit_sensor(fit_pts, preds_f)
+        f_c, zeta = est["f_c_hz"], est["zeta"]
+        adj = _adjusted(fit_pts, preds_f, f_c, zeta)
+        b2 = fit_group([decimated(pt, decimation) for pt in adj], rig, [params],
+                       max_iter=settings.max_iter)
+        if not b2.parameters:
+            return None
+        params = b2.parameters
+        preds_f = predict(fit_pts, rig, params)
+    est = fit_sensor(fit_pts, preds_f)
+    f_c, zeta = est["f_c_hz"], est["zeta"]
+    pf = preds_f
+    ph = predict(held_pts, rig, params) if held_pts else []
+    mf, mh = _filtered(fit_pts, pf, f_c, zeta), _filtered(held_pts, ph, f_c, zeta)
+    ev, pe, pe0 = (held_pts, mh, held_pred) if held_pts else (fit_pts, mf, fit_pred)
+    e_before, e_after = force_error_percent(ev, pe0), force_error_percent(ev, pe)
+    d_fit = delta_bic(normalised_sse(fit_pts, mf), normalised_sse(fit_pts, fit_pred), 2,
+                      n_eff_fit)
+    d_held = delta_bic(normalised_sse(ev, pe), normalised_sse(ev, pe0), 2,
+                       n_eff_held if held_pts else n_eff_fit)
+    iv = est["intervals"]
+    resolved = iv["sensor_bandwidth_hz"][1] < est["f_max_hz"]
+    # from here on: the record with the filter's action on this model's force taken out
+    f2, h2 = _adjusted(fit_pts, pf, f_c, zeta), _adjusted(held_pts, ph, f_c, zeta)
+    params_out = {"sensor_bandwidth_hz": f_c, "sensor_damping": zeta,
+                  "sensor_group_delay_s": 2.0 * zeta / (2.0 * math.pi * f_c)}
+    c = dict(effect="force_sensor", applicable=True, score=math.nan, chi2=math.nan, round=1,
+             fitted=True, fit=b2, error_before=e_before, error_after=e_after,
+             excess_reduction=excess_reduction(e_before, e_after, floor, settings.criterion),
+             delta_bic_fit=d_fit, delta_bic_heldout=d_held, sse_heldout=normalised_sse(ev, pe),
+             resolved=resolved, parameters=params_out,
+             intervals={k: tuple(v) for k, v in iv.items()}, predictions=pf + ph, rig=rig)
+    lo, hi = iv["sensor_bandwidth_hz"]
+    msg = (f"force_sensor: bandwidth {f_c:.1f} Hz [{lo:.1f}, {hi:.1f}], damping {zeta:.2f} "
+           f"(group delay at low frequency {1e3 * params_out['sensor_group_delay_s']:.2f} ms); "
+           f"recorded-force error {e_before:.3f} -> {e_after:.3f} %, ΔBIC fit {d_fit:.1f}, "
+           f"held-out {d_held:.1f}"
+           + ("" if resolved else f"; the bandwidth is not resolved below "
+                                  f"{est['f_max_hz']:.0f} Hz"))
+    err = force_error_percent(h2 or f2, ph or pf)
+    return RecordChange(f2, h2, b2, pf, ph, err, c, message=msg)

@@ -1,0 +1,93 @@
+"""The ``friction_drift`` member: a friction level that falls over the campaign as the
+rig runs in, tried only when the tests state their run order."""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from ehsa_opt.datasets.synthetic import PROTOTYPE_FRICTION, SyntheticSpec, generate_bench_tests
+from ehsa_opt.estimation.discrepancy.candidates.friction_drift import (FrictionDrift,
+                                                                       travel_coordinates)
+from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
+
+#: the order the six tests of the grid were run in (not the grid's)
+RUN_ORDER = (4, 1, 6, 2, 5, 3)
+
+
+def _campaign(drop_N: float, run_in_share: float, with_order: bool = True):
+    """Six tests, each generated with the nut's Coulomb and breakaway levels of the
+    moment it was run: F_C = 40 N + drop·(1 − exp(−s/s₀)) at the test's start, s the
+    sliding distance of the tests run before (s₀ = share × the campaign's travel)."""
+    spec = SyntheticSpec(effects={}, frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(22.0, 100.0),
+                         cycles=2.0, seed=5)
+    grid = generate_bench_tests(spec)
+    travel = [float(np.sum(np.abs(np.diff(t.displacement_m)))) for t in grid]
+    total = sum(travel)
+    before, s_at = 0.0, {}
+    for k in sorted(range(len(grid)), key=lambda k: RUN_ORDER[k]):
+        s_at[k] = before
+        before += travel[k]
+    tests = []
+    for k, t in enumerate(grid):
+        d = drop_N * (1.0 - math.exp(-s_at[k] / (run_in_share * total)))
+        fr = replace(PROTOTYPE_FRICTION, nut_coulomb_N=40.0 + d, nut_breakaway_N=60.0 + d)
+        one = generate_bench_tests(replace(spec, friction=fr, frequencies_hz=(t.frequency_hz,),
+                                           loads_ohm=(t.load_ohm,)))[0]
+        tests.append(replace(one, run_order=RUN_ORDER[k] if with_order else None))
+    return tests, total
+
+
+def test_travel_coordinates_follow_the_run_order():
+    tests, total = _campaign(0.0, 1.0)
+    pts = prepare_tests(tests, True)
+    coords = travel_coordinates(pts)
+    first = next(pt for pt in pts if pt.test.run_order == 1)
+    last = next(pt for pt in pts if pt.test.run_order == 6)
+    assert coords[first.test.file][1][0] == pytest.approx(0.0, abs=1e-3 * total)
+    assert coords[last.test.file][1][-1] == pytest.approx(total, rel=0.02)
+
+
+def test_a_falling_friction_level_is_recovered_with_its_sign_and_size():
+    """A Coulomb level 12 N lower at the end of the run-in: the drift's amplitude is
+    negative, within 30 % of the drop reached, its interval excludes zero, and it
+    explains the held-out tests (the baseline's residual: the campaign-average model)."""
+    tests, _ = _campaign(-12.0, 0.3)
+    pts = prepare_tests(tests, True)
+    base = prepare_tests(_campaign(0.0, 0.3)[0], True)  # the model at the average level
+    mean_shift = np.mean([-12.0 * (1 - math.exp(-k / 6 / 0.3)) for k in range(6)])
+    preds = []
+    for pt, b in zip(pts, base):
+        p = np.array(b.y, copy=True)
+        p[0] = p[0] + mean_shift * np.tanh(b.u[1] / 1e-3)
+        preds.append(p)
+    fit_pts, fit_pred = pts[::2] + pts[1::4], preds[::2] + preds[1::4]
+    held_pts, held_pred = pts[3::4], preds[3::4]
+    law = FrictionDrift.fit(fit_pts, fit_pred, held_pts, held_pred, 2000.0, 1000.0)
+    assert law.amplitude_N < 0 and law.resolved
+    assert law.error_after < law.error_before
+    assert law.delta_bic_fit < 0
+
+
+@pytest.mark.slow
+def test_the_workflow_names_the_drift_only_when_the_run_order_is_stated(tmp_path):
+    """The same campaign with and without its run order: named ``friction_drift`` with
+    the level change over the campaign within 30 % of the truth's, and not tried (no
+    effect named) without the order."""
+    from ehsa_opt.datasets.bench_format import write_bench
+    from ehsa_opt.estimation.discrepancy import DiscrepancySettings, run_discrepancy
+    answers = {}
+    for order in (True, False):
+        tests, total = _campaign(-12.0, 0.3, with_order=order)
+        d = tmp_path / f"drift_{order}"
+        write_bench(d, tests, harvester=SyntheticSpec().harvester,
+                    rig={"name": "run-in", "has_generator": True})
+        answers[order] = run_discrepancy(d, DiscrepancySettings(max_effects=1))
+    named = answers[True]
+    assert named.effect == "friction_drift", named.message
+    # the last test run starts after 5/6 of the travel (the truth is a step per test)
+    last = -12.0 * (1 - math.exp(-(5 / 6) / 0.3))
+    assert named.steps[0]["parameters"]["drift_over_campaign_N"] == pytest.approx(last, rel=0.3)
+    assert named.error_after < named.error_before
+    assert answers[False].effect == "none", answers[False].message
