@@ -21,6 +21,17 @@ what they would mean:
     falling with current (magnetic saturation).
 ``velocity``
     tanh(v/u), v, v|v|, a, 1: a friction or inertia law of another shape.
+``sensor``
+    H[F̂] − F̂ for second-order low-passes H = ω²/(s² + 2ζωs + ω²) on
+    :data:`SENSOR_GRID` (bandwidths below 0.4 × the sample rate): a record through a
+    sensor whose lag depends on the frequency (the force sensor's own dynamics).  Not
+    a Taylor series in the derivatives of F̂: the model's friction turns over in a few
+    ms at a reversal, where a low-pass's transient is what the record shows.
+``drift``
+    (s_c/S) tanh(v/u) and (s_c/S) v, s_c the campaign's cumulative sliding distance in
+    the tests' run order and S its total (:mod:`.campaign_travel`): a friction level
+    that changes over the campaign (a rig running in); only when the tests state their
+    run order.
 ``presliding``
     sign(v) exp(−s/ℓ), s the rod's travel since the last reversal, ℓ on
     :data:`PRESLIDING_LENGTHS_M`: friction that changes over a *distance* after each
@@ -56,14 +67,23 @@ from .judge import judge_change
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 from .presliding import travel_since_reversal_m
+from .campaign_travel import campaign_travel_m, run_order_known, travel_coordinates
+from .sensor_filter import filtered_force, sample_step_s
 
 __all__ = ["TermProposal", "shifted_force", "names_an_effect", "travel_since_reversal_m",
            "FRICTION_LAW_GROUPS",
            "PRESLIDING_LENGTHS_M", "feature_library", "discover_term", "propose_term", "shift_lag",
-           "shift_sse_curves", "per_test_delays", "GROUPS", "LAG_GRID_S"]
+           "shift_sse_curves", "per_test_delays", "GROUPS", "LAG_GRID_S", "SENSOR_GRID"]
 
 #: Feature groups of the library, in the order they are described.
-GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "current", "velocity", "presliding")
+GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "sensor", "current", "velocity",
+                           "drift", "presliding")
+#: Second-order sensors whose action H[F̂] − F̂ on the model force is a ``sensor``
+#: column: (bandwidth Hz, damping ratio) — bandwidths an octave apart over the load
+#: cells and conditioning filters of damper benches (10–160 Hz), a light and a
+#: Butterworth-like damping.
+SENSOR_GRID: tuple[tuple[float, float], ...] = tuple(
+    (f, z) for f in (10.0, 20.0, 40.0, 80.0, 160.0) for z in (0.2, 0.7))
 #: Groups that describe the friction (or inertia) law itself: a term of these is a
 #: friction law of another shape, not an effect outside the catalogue.
 FRICTION_LAW_GROUPS: tuple[str, ...] = ("velocity", "presliding")
@@ -142,9 +162,12 @@ def _stroke_centres(pts: Sequence[PreparedTest]) -> tuple[np.ndarray, float]:
 
 
 def feature_library(pt: PreparedTest, pred: np.ndarray, *, lead_m_per_rad: float,
-                    centres: np.ndarray, width_m: float, u_s: float = 2e-3
+                    centres: np.ndarray, width_m: float, u_s: float = 2e-3,
+                    travel: dict | None = None
                     ) -> tuple[np.ndarray, list[str], list[str]]:
-    """Feature columns of one test (N samples × features), their names and groups."""
+    """Feature columns of one test (N samples × features), their names and groups.
+    ``travel``: the campaign's sliding distance by test (:mod:`.campaign_travel`; None:
+    the run order is not known, no ``drift`` columns)."""
     x, v, a = pt.u
     sg = np.tanh(v / u_s)
     cols, names, groups = [], [], []
@@ -168,6 +191,11 @@ def feature_library(pt: PreparedTest, pred: np.ndarray, *, lead_m_per_rad: float
             add(i * np.sin(k * th), f"i*sin({k} theta)", "rotor_angle")
             add(i * np.cos(k * th), f"i*cos({k} theta)", "rotor_angle")
     add(np.gradient(pred[0], pt.time_s), "dF/dt", "lag")
+    f_max = 0.4 / sample_step_s(pt)
+    for f_c, zeta in SENSOR_GRID:
+        if f_c < f_max:
+            add(filtered_force(pt, pred[0], f_c, zeta) - pred[0],
+                f"H({f_c:g} Hz, {zeta:g})[F]-F", "sensor")
     if pred.shape[0] > 1 and "load_ohm" in pt.fixed:
         add(i * np.abs(i), "i|i|", "current")
         add(i ** 3, "i^3", "current")
@@ -176,18 +204,23 @@ def feature_library(pt: PreparedTest, pred: np.ndarray, *, lead_m_per_rad: float
     add(v * np.abs(v), "v|v|", "velocity")
     add(a, "a", "velocity")
     add(np.ones_like(v), "1", "velocity")
+    if travel is not None:
+        total = max(float(max(c[1][-1] for c in travel.values())), 1e-12)
+        sc = campaign_travel_m(pt, travel) / total
+        add(sc * sg, "s_c/S*sign(v)", "drift")
+        add(sc * v, "s_c/S*v", "drift")
     s = travel_since_reversal_m(x, v)
     for ell in PRESLIDING_LENGTHS_M:
         add(np.sign(v) * np.exp(-s / ell), f"sign(v)*exp(-s/{1e6 * ell:.0f} um)", "presliding")
     return np.column_stack(cols), names, groups
 
 
-def _stack(pts, preds, lead, centres, width):
+def _stack(pts, preds, lead, centres, width, travel=None):
     Xs, ys, ws = [], [], []
     names = groups = None
     for pt, yp in zip(pts, preds):
         X, names, groups = feature_library(pt, yp, lead_m_per_rad=lead, centres=centres,
-                                           width_m=width)
+                                           width_m=width, travel=travel)
         w = pt.wnorm[0]  # noise-weighted (resolved samples), like the fits
         Xs.append(X * w[:, None])
         ys.append((pt.y[0] - yp[0]) * w)
@@ -257,6 +290,21 @@ def _describe(group: str, sel: dict[str, float], centres: np.ndarray, width: flo
     if group == "current":
         return ("force term in the current (i|i|, i³): a generator constant changing with "
                 "current (e.g. magnetic saturation)", {k: v for k, v in sel.items()})
+    if group == "sensor":
+        (name, c) = max(((n, c) for n, c in sel.items() if n.startswith("H(")),
+                        key=lambda t: abs(t[1]))
+        f_c = float(name[2:].split(" Hz")[0])
+        zeta = float(name.split(", ")[1].split(")")[0])
+        return (f"the force record low-passed by a sensor (a lag that depends on the "
+                f"frequency: the force sensor's own dynamics), nearest second-order "
+                f"sensor ≈ {f_c:g} Hz, damping {zeta:g} (weight {c:.2f})",
+                {"bandwidth_hz": f_c, "damping": zeta, **sel})
+    if group == "drift":
+        level = sel.get("s_c/S*sign(v)", 0.0)
+        return (f"friction changing over the campaign in the order the tests were run "
+                f"(a rig running in): the Coulomb level {level:+.1f} N from the first "
+                f"test's start to the last test's end",
+                {"coulomb_change_N": level, **sel})
     if group == "presliding":
         return ("friction changing over a distance after each reversal (presliding, a "
                 "transition length)",
@@ -276,7 +324,10 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     Returns a :class:`TermProposal` (``earns`` is left to the caller's decision rule).
     """
     centres, width = _stroke_centres(list(fit_pts) + list(eval_pts))
-    X, y, _, names, groups = _stack(fit_pts, fit_preds, lead_m_per_rad, centres, width)
+    every = list(fit_pts) + list(eval_pts)
+    travel = travel_coordinates(every) if run_order_known(every) else None
+    X, y, _, names, groups = _stack(fit_pts, fit_preds, lead_m_per_rad, centres, width,
+                                    travel)
     use = np.array([g not in exclude for g in groups])
     X = X[:, use]
     names = [n for n, u in zip(names, use) if u]
@@ -339,7 +390,7 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     pb, pa, ym = [], [], []
     for pt, yp in zip(eval_pts, eval_preds):
         Xe, _, _ = feature_library(pt, yp, lead_m_per_rad=lead_m_per_rad, centres=centres,
-                                   width_m=width)
+                                   width_m=width, travel=travel)
         corr = Xe[:, use] @ coef
         r0 = (pt.y[0] - yp[0]) * pt.wnorm[0]
         r1 = (pt.y[0] - yp[0] - corr) * pt.wnorm[0]

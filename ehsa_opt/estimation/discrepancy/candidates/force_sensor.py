@@ -39,7 +39,6 @@ from dataclasses import replace as _replace
 from typing import Sequence
 
 import numpy as np
-from scipy import signal
 from scipy.optimize import least_squares
 
 from ..channels import channel_effective_samples
@@ -47,6 +46,7 @@ from ..evidence import delta_bic, force_error_percent, normalised_sse
 from ..fit import fit_group
 from ..judge import excess_reduction
 from ..prepared import PreparedTest, decimated
+from ..sensor_filter import filtered_force, sample_step_s, sensor_filter
 from ..rig import Rig, predict
 from .record_change import RecordChange
 
@@ -66,29 +66,6 @@ DAMPING_RANGE = (0.05, 2.0)
 #: ζ): the bandwidth over its decades, damping light to critical.
 _START_SHARES = (0.05, 0.15, 0.4, 1.0)
 _START_DAMPING = (0.2, 0.7, 1.0)
-
-
-def _dt(pt: PreparedTest) -> float:
-    return float(np.median(np.diff(pt.time_s)))
-
-
-def sensor_filter(f_c_hz: float, zeta: float, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """The discrete (b, a) of H(s) = ω²/(s² + 2ζωs + ω²) at the step ``dt_s``: first-order
-    hold (the recorded signal between samples is linear), exact for such a signal."""
-    w = 2.0 * math.pi * f_c_hz
-    b, a, _ = signal.cont2discrete(([w * w], [1.0, 2.0 * zeta * w, w * w]), dt_s,
-                                   method="foh")
-    b = np.atleast_1d(np.squeeze(b))
-    return b / a[0], a / a[0]
-
-
-def filtered_force(pt: PreparedTest, force: np.ndarray, f_c_hz: float, zeta: float
-                   ) -> np.ndarray:
-    """``force`` (N, on the test's samples) through the sensor, started at rest at its
-    first value (the record starts in a steady state of the sensor)."""
-    b, a = sensor_filter(f_c_hz, zeta, _dt(pt))
-    zi = signal.lfilter_zi(b, a) * force[0]
-    return signal.lfilter(b, a, force, zi=zi)[0]
 
 
 def _with_force(pt: PreparedTest, force: np.ndarray) -> PreparedTest:
@@ -115,7 +92,7 @@ def fit_sensor(pts: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> dict
         ``f_c_hz``, ``zeta``, ``intervals`` (name → (low, high)), ``sse`` and
         ``f_max_hz`` (the highest bandwidth fitted).
     """
-    f_max = MAX_BANDWIDTH_SHARE / _dt(pts[0])
+    f_max = MAX_BANDWIDTH_SHARE / sample_step_s(pts[0])
     lo = np.array([math.log10(MIN_BANDWIDTH_HZ), DAMPING_RANGE[0]])
     hi = np.array([math.log10(f_max), DAMPING_RANGE[1]])
     starts = [np.array([math.log10(max(s * f_max, MIN_BANDWIDTH_HZ)), z])

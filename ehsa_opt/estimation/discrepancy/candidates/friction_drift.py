@@ -29,13 +29,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..channels import channel_effective_samples
 from ..evidence import delta_bic, force_error_percent, normalised_sse
+from ..campaign_travel import campaign_travel_m, run_order_known, travel_coordinates
 from ..prepared import PreparedTest
 
 __all__ = ["FrictionDrift", "run_order_known", "travel_coordinates", "fit_drift",
@@ -50,35 +50,9 @@ SPAN_SHARES: tuple[float, ...] = (0.1, 0.3, 1.0, 3.0)
 SMOOTHING_M_PER_S = 1e-3
 
 
-def run_order_known(pts: Sequence[PreparedTest]) -> bool:
-    """Every test states its place in the campaign (``run_order``)."""
-    return bool(pts) and all(getattr(pt.test, "run_order", None) is not None for pt in pts)
-
-
-def travel_coordinates(pts: Sequence[PreparedTest]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """The cumulative sliding distance of the campaign, by test file: (time stamps, s in
-    m at them), the tests taken in run order.  A test cropped to its last samples counts
-    its cropped head at its mean speed (the time stamps are the record's own)."""
-    order = sorted(pts, key=lambda pt: pt.test.run_order)
-    out, before = {}, 0.0
-    for pt in order:
-        t, v = pt.time_s, np.abs(pt.u[1])
-        inside = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
-        head = float(np.mean(v)) * max(float(t[0]), 0.0)
-        out[pt.test.file] = (np.array(t, float), before + head + inside)
-        before += head + float(inside[-1])
-    return out
-
-
-def _travel(pt: PreparedTest, coords: dict) -> np.ndarray:
-    """s (m) on this test's samples (a record member may have cropped its ends)."""
-    t, s = coords[pt.test.file]
-    return np.interp(pt.time_s, t, s)
-
-
 def _columns(pt: PreparedTest, coords: dict, s0: float) -> np.ndarray:
     c = np.tanh(pt.u[1] / SMOOTHING_M_PER_S)
-    return np.column_stack([(1.0 - np.exp(-_travel(pt, coords) / s0)) * c, c])
+    return np.column_stack([(1.0 - np.exp(-campaign_travel_m(pt, coords) / s0)) * c, c])
 
 
 def fit_drift(pts, preds, coords: dict, s0: float) -> tuple[np.ndarray, float, np.ndarray]:
