@@ -46,7 +46,7 @@ from validation.second_generator import Campaign, write_campaign  # noqa: E402
 from validation.second_generator_cases import CASES, TUNING, TUNING2, TUNING3  # noqa: E402
 
 BUDGET_S, BUDGET_MB = 180.0, 1024.0
-NO_NAME = ("none", "none of the catalogue")
+NO_NAME = ("none", "none of the catalogue", "base model inadequate")
 
 
 @contextmanager

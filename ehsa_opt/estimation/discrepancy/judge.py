@@ -82,8 +82,9 @@ def judge_attempt(att: Any, floor: float, criterion: Criterion = DEFAULT_CRITERI
         ok, by = skew_found(att.evidence, criterion), "one delay of the voltage record"
     else:
         ok = earns(att.error_before, att.error_after, floor, att.delta_bic_fit,
-                   att.delta_bic_heldout, criterion=criterion) and bool(att.resolved)
-        by = "total excess"
+                   att.delta_bic_heldout, att.sse_excess_reduction, n_force=att.n_force,
+                   criterion=criterion) and bool(att.resolved)
+        by = "total excess" if att.sse_excess_reduction is None else "channel SSE"
     if att.fields is not None:
         record_verdict(att.fields, ok, by)
     return record_verdict(att, ok, by)

@@ -25,17 +25,23 @@ from .criterion import DEFAULT_CRITERION, Criterion
 from .terms import TermProposal
 
 __all__ = ["DiscrepancySettings", "CandidateResult", "DiscrepancyResult", "NONE_OF_CATALOGUE",
-           "UNDECIDED", "CHANNEL_MEMBERS", "DEFAULT_MEMBERS"]
+           "UNDECIDED", "BASE_INADEQUATE", "CHANNEL_MEMBERS", "DEFAULT_MEMBERS"]
 
 #: The answer when the residual is structured but no catalogue effect earns.
 NONE_OF_CATALOGUE = "none of the catalogue"
 #: The answer of a run cut at its time budget before any effect was named.
 UNDECIDED = "undecided"
+#: The answer when no member is named but the evaluation error stays far above the noise
+#: floor (the criterion's ``inadequate_ratio``): the base model cannot represent the rig
+#: there; the message says how (the residual's physical support).
+BASE_INADEQUATE = "base model inadequate"
 
 #: The members beside the catalogue's components that
 #: :attr:`DiscrepancySettings.candidates` may list (:mod:`.members`: the drive's lag, a
-#: delay of the force record, the force sensor's dynamics, the friction's drift).
-CHANNEL_MEMBERS: tuple[str, ...] = ("drive_lag", "force_lag", "force_sensor", "friction_drift")
+#: delay of the force record, the force and voltage sensors' dynamics, the friction's
+#: drift).
+CHANNEL_MEMBERS: tuple[str, ...] = ("drive_lag", "force_lag", "force_sensor", "voltage_sensor",
+                                    "friction_drift")
 
 #: The members searched by default: every catalogue component, the drive's lag, the
 #: force record's delay and the campaign's friction drift (tried only on a campaign whose
@@ -230,8 +236,11 @@ class DiscrepancyResult:
     Attributes
     ----------
     effect : str
-        The named effects joined by " + ", ``"none"`` (the residual is noise) or
-        ``"none of the catalogue"`` (structured, explained by the proposed term).
+        The named effects joined by " + ", ``"none"`` (the residual is noise),
+        ``"none of the catalogue"`` (structured, explained by the proposed term),
+        :data:`BASE_INADEQUATE` (no member earns and the error stays above the
+        criterion's ``inadequate_ratio`` × the noise floor) or :data:`UNDECIDED` (cut
+        before anything was named).
     effects : list of str
         The named effects in the order they were added.
     error_before, error_after : float

@@ -1,5 +1,5 @@
 """A second-order sensor low-pass H(s) = ω_c²/(s² + 2ζω_c s + ω_c²) applied to a sampled
-signal: the force sensor's own dynamics (:mod:`.candidates.force_sensor`, the data-driven
+signal: the force sensor's own dynamics (:mod:`.candidates.sensor_dynamics`, the data-driven
 term's ``sensor`` group)."""
 
 from __future__ import annotations

@@ -76,7 +76,9 @@ from .executor import cluster_set
 from .localise import localise
 from .members import RECORD_MEMBERS, Context, run_members
 from .prepared import prepare_tests
+from .criterion import DEFAULT_CRITERION, Criterion
 from .results import (
+    BASE_INADEQUATE,
     NONE_OF_CATALOGUE,
     UNDECIDED,
     CandidateResult,
@@ -140,7 +142,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
                 f"{term.error_before:.3f} -> {term.error_after:.3f} % "
                 f"({'earns' if term.earns else 'does not earn'})")
     res = assemble_result(data, tests, base, state, all_cands, term, notes,
-                          time.perf_counter() - t_start, raw, skew)
+                          time.perf_counter() - t_start, raw, skew, settings.criterion)
     res.baseline_presliding = law.as_dict() if law is not None else None
     res.criterion = settings.criterion
     res.member_fits = fits_charged()
@@ -202,7 +204,8 @@ def prepare_search_tests(data: BenchData, settings: DiscrepancySettings, say,
 def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: SearchState,
                     all_cands: list, term: TermProposal | None, notes: list[str],
                     seconds: float, raw: tuple | None = None,
-                    skew: VoltageSkew | None = None) -> DiscrepancyResult:
+                    skew: VoltageSkew | None = None,
+                    criterion: Criterion = DEFAULT_CRITERION) -> DiscrepancyResult:
     """The named effect(s), the message, the localisation of the final residual and,
     on a validation set of a rig without generator, the open-loop validation
     (``raw``: the recorded fit and held-out tests, before any member changed them)."""
@@ -216,6 +219,8 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
     else:
         skewed = skew is not None and skew.found
         effect = NONE_OF_CATALOGUE if names_an_effect(term) or skewed else "none"
+        if cur_err > criterion.inadequate_ratio * floor:
+            effect = BASE_INADEQUATE
     loc1 = localise(fit_pts + held_pts, state.fit_pred + state.held_pred,
                     lead_m_per_rad=tests.lead_m_per_rad) if effects else None
     ok = base.fit.success and not state.cut and all(c.fit is not None and c.fit.parameters
@@ -232,6 +237,18 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
                 f"test; re-aligned before the rounds, no catalogue member named for it)")
     if effect == NONE_OF_CATALOGUE and names_an_effect(term):
         msg += f"; proposed term: {term.description}"
+    if effect == BASE_INADEQUATE:
+        how = (f"the residual's physical support: {term.description} ({evaluation} error "
+               f"{term.error_before:.3f} -> {term.error_after:.3f} % with that term"
+               f"{'' if term.earns else ', which does not earn'})"
+               if term is not None and term.columns else
+               "no feature of the term library describes the residual")
+        note = (f"no member earns, yet the {evaluation} error stays "
+                f"{cur_err / floor:.1f} × the noise floor (above "
+                f"{criterion.inadequate_ratio:g} ×): the base model cannot represent the rig "
+                f"there; {how}")
+        msg += f"; {note}"
+        notes.append(note)
     if (not effects and not state.cut and term is not None and term.earns
             and not names_an_effect(term)):
         # a friction law of another shape: said, but it is not an effect the rig lacks

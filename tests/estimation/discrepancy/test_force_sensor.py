@@ -12,8 +12,8 @@ from scipy import signal
 from ehsa_opt.datasets.bench_format import write_bench
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.discrepancy import DiscrepancySettings, run_discrepancy
-from ehsa_opt.estimation.discrepancy.candidates.force_sensor import (filtered_force,
-                                                                     fit_sensor)
+from ehsa_opt.estimation.discrepancy.candidates.sensor_dynamics import fit_sensor
+from ehsa_opt.estimation.discrepancy.sensor_filter import filtered_force
 from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
 
 
@@ -95,3 +95,40 @@ def test_a_pure_delay_stays_force_lag_when_the_sensor_is_offered_too(tmp_path):
     res = run_discrepancy(path, DiscrepancySettings(candidates=("force_lag", "force_sensor"),
                                                     max_effects=1))
     assert res.effect == "force_lag", res.message
+
+
+@pytest.mark.slow
+def test_an_unexplained_residual_far_above_the_floor_is_not_answered_none(tmp_path):
+    """The load-cell campaign searched with a member that cannot explain it: no member
+    earns, the error stays far above the noise floor, so the answer is that the base
+    model is inadequate there, with the residual's support (the sensor) in words."""
+    from ehsa_opt.estimation.discrepancy.results import BASE_INADEQUATE
+    path = _campaign(tmp_path, "load cell",
+                     lambda t: _load_cell(t.time_s, t.force_N, 60.0, 0.5))
+    res = run_discrepancy(path, DiscrepancySettings(candidates=("cogging",), max_effects=1))
+    assert res.effect == BASE_INADEQUATE, res.message
+    assert "sensor" in res.message and "noise floor" in res.message
+
+
+def test_the_member_names_match_the_settings():
+    """Every record or law member the settings may list is a member of the engine."""
+    from ehsa_opt.estimation.discrepancy.members import RECORD_MEMBER_NAMES
+    from ehsa_opt.estimation.discrepancy.results import CHANNEL_MEMBERS
+    assert set(RECORD_MEMBER_NAMES) == set(CHANNEL_MEMBERS)
+
+
+@pytest.mark.slow
+def test_a_voltage_records_conditioning_is_named_voltage_sensor(tmp_path):
+    """The voltage recorded through a 30 Hz, ζ 0.5 conditioning filter: named
+    ``voltage_sensor`` on the voltage channel (the force kept), bandwidth within 30 %."""
+    spec = SyntheticSpec(effects={}, frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(22.0, 100.0),
+                         cycles=1.0, seed=21)
+    tests = [replace(t, voltage_V=_load_cell(t.time_s, t.voltage_V, 30.0, 0.5))
+             for t in generate_bench_tests(spec)]
+    write_bench(tmp_path / "v", tests, harvester=spec.harvester,
+                rig={"name": "filtered voltage", "has_generator": True})
+    res = run_discrepancy(tmp_path / "v", DiscrepancySettings(
+        candidates=("voltage_sensor",), max_effects=1))
+    assert res.effect == "voltage_sensor", res.message
+    p = res.steps[0]["parameters"]
+    assert p["voltage_sensor_bandwidth_hz"] == pytest.approx(30.0, rel=0.3)

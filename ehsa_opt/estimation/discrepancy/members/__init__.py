@@ -3,10 +3,11 @@
 The record and law members, in the order they are offered before the rounds
 (:data:`RECORD_MEMBERS`; the members of one channel are rivals):
 
-* :mod:`.voltage_skew` — a delay of the voltage record (a rig with a generator);
+* :mod:`.voltage_skew` and :mod:`.sensor_dynamics` (``voltage_sensor``) — a delay of the
+  voltage record and its conditioning's second-order dynamics (a rig with a generator);
 * :mod:`.drive_lag` — the drive's hold and lag (a rig without generator);
-* :mod:`.force_lag` and :mod:`.force_sensor` — a delay of the force record, and the
-  force sensor's second-order dynamics whose limit the delay is;
+* :mod:`.force_lag` and :mod:`.sensor_dynamics` (``force_sensor``) — a delay of the
+  force record, and the force sensor's second-order dynamics whose limit the delay is;
 * :mod:`.presliding` — a presliding transition of the friction law (opt-in);
 * :mod:`.friction_drift` — the friction level drifting over the campaign (a campaign
   whose tests state their run order).
@@ -18,18 +19,20 @@ signature scores and fitted in the forward-selection rounds
 
 from .drive_lag import DriveLagMember
 from .force_lag import ForceLagMember
-from .force_sensor import ForceSensorMember
+from .sensor_dynamics import ForceSensorMember, VoltageSensorMember
 from .friction_drift import FrictionDriftMember
 from .presliding import PreslidingMember
 from .protocol import Attempt, Context, Member, run_members
 from .voltage_skew import VoltageSkewMember
 
 __all__ = ["Member", "Attempt", "Context", "run_members", "RECORD_MEMBERS", "RECORD_MEMBER_NAMES",
-           "VoltageSkewMember", "DriveLagMember", "ForceLagMember", "ForceSensorMember",
+           "VoltageSkewMember", "VoltageSensorMember", "DriveLagMember", "ForceLagMember",
+           "ForceSensorMember",
            "PreslidingMember", "FrictionDriftMember"]
 
 #: The record and law members, in the order they are offered before the rounds.
-RECORD_MEMBERS: tuple[Member, ...] = (VoltageSkewMember(), DriveLagMember(), ForceLagMember(),
+RECORD_MEMBERS: tuple[Member, ...] = (VoltageSkewMember(), VoltageSensorMember(),
+                                      DriveLagMember(), ForceLagMember(),
                                       ForceSensorMember(), PreslidingMember(),
                                       FrictionDriftMember())
 

@@ -97,6 +97,11 @@ class Attempt:
         criterion the judge applies (the voltage skew's).
     evidence : dict
         The member's own statistics (e.g. the voltage skew's spread and share).
+    sse_excess_reduction : float or None
+        For a member seen in the voltage: the share of that channel's SSE excess over
+        noise it removes (the decision rule's other-channel route), with ``n_force`` the
+        evaluation tests' force samples (the force must not grow beyond what they
+        resolve).
     """
 
     member: str
@@ -113,6 +118,8 @@ class Attempt:
     earns_by: str = ""
     decided_by: str = "earns"
     evidence: dict = field(default_factory=dict)
+    sse_excess_reduction: float | None = None
+    n_force: int | None = None
 
     @property
     def sse_heldout(self) -> float:

@@ -1,5 +1,9 @@
-"""Member ``force_sensor``: the force sensor's own dynamics, a second-order low-pass
-between the force the rod transmits and the force recorded.
+"""Members ``force_sensor`` and ``voltage_sensor``: a measurement channel's own dynamics,
+a second-order low-pass between the quantity and its record — the load cell between the
+force the rod transmits and the force recorded, the conditioning (an isolation
+amplifier, an anti-alias filter) between the generator's load voltage and the voltage
+recorded.  Written below for the force; the voltage's is the same with V for F, judged
+on the voltage channel's SSE (the force kept).
 
 A load cell (with its amplifier and the acquisition's anti-alias filter) is a
 mass–spring system: the recorded force is F_m = H(s) F with
@@ -44,13 +48,14 @@ from scipy.optimize import least_squares
 from ..channels import channel_effective_samples
 from ..evidence import delta_bic, force_error_percent, normalised_sse
 from ..fit import fit_group
-from ..judge import excess_reduction
+from ..channels import channel_sse
+from ..judge import channel_sse_excess_reduction, excess_reduction
 from ..prepared import PreparedTest, decimated
-from ..sensor_filter import filtered_force, sample_step_s, sensor_filter
+from ..sensor_filter import filtered_force, sample_step_s
 from ..rig import Rig, predict
 from .record_change import RecordChange
 
-__all__ = ["sensor_filter", "filtered_force", "fit_sensor", "try_sensor",
+__all__ = ["NAMES", "fit_sensor", "try_sensor",
            "MAX_BANDWIDTH_SHARE", "MIN_BANDWIDTH_HZ", "DAMPING_RANGE"]
 
 #: The highest bandwidth fitted, as a share of the sample rate: 0.4 f_s (below the
@@ -68,23 +73,29 @@ _START_SHARES = (0.05, 0.15, 0.4, 1.0)
 _START_DAMPING = (0.2, 0.7, 1.0)
 
 
-def _with_force(pt: PreparedTest, force: np.ndarray) -> PreparedTest:
+#: The member's name and its parameters' prefix, by channel (0 force, 1 voltage).
+NAMES = {0: "force_sensor", 1: "voltage_sensor"}
+
+
+def _with_channel(pt: PreparedTest, ch: int, values: np.ndarray) -> PreparedTest:
     y = pt.y.copy()
-    y[0] = force
-    return _replace(pt, test=_replace(pt.test, force_N=force.copy()), y=y)
+    y[ch] = values
+    test = (_replace(pt.test, force_N=values.copy()) if ch == 0 else
+            _replace(pt.test, voltage_V=values.copy()))
+    return _replace(pt, test=test, y=y)
 
 
-def _residuals(theta: np.ndarray, pts, preds) -> np.ndarray:
+def _residuals(theta: np.ndarray, pts, preds, ch: int = 0) -> np.ndarray:
     f_c, zeta = 10.0 ** theta[0], theta[1]
-    return np.concatenate([(pt.y[0] - filtered_force(pt, yp[0], f_c, zeta)) * pt.wnorm[0]
+    return np.concatenate([(pt.y[ch] - filtered_force(pt, yp[ch], f_c, zeta)) * pt.wnorm[ch]
                            for pt, yp in zip(pts, preds)])
 
 
-def fit_sensor(pts: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> dict:
-    """f_c (Hz) and ζ of the sensor that best explain the recorded force of ``pts`` from
-    the model's force ``preds`` (see the module docstring), with ~95 % intervals
-    (Gauss–Newton covariance, the residual variance per effective sample of the force
-    residual, :func:`~..channels.channel_effective_samples`).
+def fit_sensor(pts: Sequence[PreparedTest], preds: Sequence[np.ndarray], ch: int = 0) -> dict:
+    """f_c (Hz) and ζ of the sensor that best explain the record of channel ``ch`` (0
+    force, 1 voltage) of ``pts`` from the model's ``preds`` (see the module docstring),
+    with ~95 % intervals (Gauss–Newton covariance, the residual variance per effective
+    sample of the channel's residual, :func:`~..channels.channel_effective_samples`).
 
     Returns
     -------
@@ -97,14 +108,14 @@ def fit_sensor(pts: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> dict
     hi = np.array([math.log10(f_max), DAMPING_RANGE[1]])
     starts = [np.array([math.log10(max(s * f_max, MIN_BANDWIDTH_HZ)), z])
               for s in _START_SHARES for z in _START_DAMPING]
-    cost = [float(np.sum(_residuals(th, pts, preds) ** 2)) for th in starts]
+    cost = [float(np.sum(_residuals(th, pts, preds, ch) ** 2)) for th in starts]
     th0 = np.clip(starts[int(np.argmin(cost))], lo, hi)
-    sol = least_squares(_residuals, th0, bounds=(lo, hi), args=(pts, preds),
+    sol = least_squares(_residuals, th0, bounds=(lo, hi), args=(pts, preds, ch),
                         x_scale=np.array([0.3, 0.2]))
     r, J = sol.fun, sol.jac
     lf, z = float(sol.x[0]), float(sol.x[1])
     # residual variance per effective sample of the force residual (autocorrelated)
-    n_eff = float(channel_effective_samples(pts, _filtered(pts, preds, 10.0 ** lf, z))[0])
+    n_eff = float(channel_effective_samples(pts, _filtered(pts, preds, 10.0 ** lf, z, ch))[ch])
     try:
         cov = np.linalg.inv(J.T @ J) * float(r @ r) / max(n_eff - 2.0, 1.0)
     except np.linalg.LinAlgError:
@@ -117,70 +128,85 @@ def fit_sensor(pts: Sequence[PreparedTest], preds: Sequence[np.ndarray]) -> dict
             "sse": float(r @ r), "f_max_hz": f_max}
 
 
-def _adjusted(pts, preds, f_c, zeta) -> list[PreparedTest]:
-    """The tests with the filter's action on the model's force taken out of the record."""
-    return [_with_force(pt, pt.y[0] - (filtered_force(pt, yp[0], f_c, zeta) - yp[0]))
+def _adjusted(pts, preds, f_c, zeta, ch: int = 0) -> list[PreparedTest]:
+    """The tests with the filter's action on the model's output taken out of the record."""
+    return [_with_channel(pt, ch, pt.y[ch] - (filtered_force(pt, yp[ch], f_c, zeta) - yp[ch]))
             for pt, yp in zip(pts, preds)]
 
 
-def _filtered(pts, preds, f_c, zeta) -> list[np.ndarray]:
+def _filtered(pts, preds, f_c, zeta, ch: int = 0) -> list[np.ndarray]:
     out = []
     for pt, yp in zip(pts, preds):
         q = np.array(yp, float, copy=True)
-        q[0] = filtered_force(pt, yp[0], f_c, zeta)
+        q[ch] = filtered_force(pt, yp[ch], f_c, zeta)
         out.append(q)
     return out
 
 
 def try_sensor(fit_pts, held_pts, rig: Rig, base, fit_pred, held_pred, floor: float,
-               n_eff_fit: float, n_eff_held: float, settings, decimation: int = 1
-               ) -> RecordChange | None:
-    """Member ``force_sensor``: the filter fitted on the current model's force, the base
-    model refitted on the adjusted record (collocation on every ``decimation``-th sample,
-    as the baseline), the filter refitted once on the refit, and the evidence on the
-    recorded force (the refitted model through the filter against the model before it).
-    None when the refit failed."""
+               n_eff_fit: float, n_eff_held: float, settings, decimation: int = 1,
+               ch: int = 0) -> RecordChange | None:
+    """Member ``force_sensor`` (``ch`` 0) or ``voltage_sensor`` (``ch`` 1): the filter
+    fitted on the current model's output, the base model refitted on the adjusted record
+    (collocation on every ``decimation``-th sample, as the baseline), the filter refitted
+    once on the refit, and the evidence on the record (the refitted model through the
+    filter against the model before it): the relative force error, ΔBIC on every
+    channel, and for the voltage its channel's SSE excess removed.  None when the refit
+    failed."""
+    name = NAMES[ch]
     f_c = zeta = math.nan
     preds_f, params, est = fit_pred, base.parameters, None
     b2 = None
     for _ in range(2):
-        est = fit_sensor(fit_pts, preds_f)
+        est = fit_sensor(fit_pts, preds_f, ch)
         f_c, zeta = est["f_c_hz"], est["zeta"]
-        adj = _adjusted(fit_pts, preds_f, f_c, zeta)
+        adj = _adjusted(fit_pts, preds_f, f_c, zeta, ch)
         b2 = fit_group([decimated(pt, decimation) for pt in adj], rig, [params],
                        max_iter=settings.max_iter)
         if not b2.parameters:
             return None
         params = b2.parameters
         preds_f = predict(fit_pts, rig, params)
-    est = fit_sensor(fit_pts, preds_f)
+    est = fit_sensor(fit_pts, preds_f, ch)
     f_c, zeta = est["f_c_hz"], est["zeta"]
     pf = preds_f
     ph = predict(held_pts, rig, params) if held_pts else []
-    mf, mh = _filtered(fit_pts, pf, f_c, zeta), _filtered(held_pts, ph, f_c, zeta)
+    mf, mh = _filtered(fit_pts, pf, f_c, zeta, ch), _filtered(held_pts, ph, f_c, zeta, ch)
     ev, pe, pe0 = (held_pts, mh, held_pred) if held_pts else (fit_pts, mf, fit_pred)
     e_before, e_after = force_error_percent(ev, pe0), force_error_percent(ev, pe)
     d_fit = delta_bic(normalised_sse(fit_pts, mf), normalised_sse(fit_pts, fit_pred), 2,
                       n_eff_fit)
     d_held = delta_bic(normalised_sse(ev, pe), normalised_sse(ev, pe0), 2,
                        n_eff_held if held_pts else n_eff_fit)
+    sse_red = None
+    if ch > 0:
+        s0, n = channel_sse(ev, pe0)
+        s1, _ = channel_sse(ev, pe)
+        sse_red = float(channel_sse_excess_reduction(s0[[ch]], s1[[ch]], n[[ch]],
+                                                     settings.criterion))
     iv = est["intervals"]
     resolved = iv["sensor_bandwidth_hz"][1] < est["f_max_hz"]
-    # from here on: the record with the filter's action on this model's force taken out
-    f2, h2 = _adjusted(fit_pts, pf, f_c, zeta), _adjusted(held_pts, ph, f_c, zeta)
-    params_out = {"sensor_bandwidth_hz": f_c, "sensor_damping": zeta,
-                  "sensor_group_delay_s": 2.0 * zeta / (2.0 * math.pi * f_c)}
-    c = dict(effect="force_sensor", applicable=True, score=math.nan, chi2=math.nan, round=1,
+    # from here on: the record with the filter's action on this model's output taken out
+    f2, h2 = _adjusted(fit_pts, pf, f_c, zeta, ch), _adjusted(held_pts, ph, f_c, zeta, ch)
+    prefix = "sensor" if ch == 0 else "voltage_sensor"
+    params_out = {f"{prefix}_bandwidth_hz": f_c, f"{prefix}_damping": zeta,
+                  f"{prefix}_group_delay_s": 2.0 * zeta / (2.0 * math.pi * f_c)}
+    c = dict(effect=name, applicable=True, score=math.nan, chi2=math.nan, round=1,
              fitted=True, fit=b2, error_before=e_before, error_after=e_after,
              excess_reduction=excess_reduction(e_before, e_after, floor, settings.criterion),
              delta_bic_fit=d_fit, delta_bic_heldout=d_held, sse_heldout=normalised_sse(ev, pe),
-             resolved=resolved, parameters=params_out,
-             intervals={k: tuple(v) for k, v in iv.items()}, predictions=pf + ph, rig=rig)
+             sse_reduction=sse_red, sse_route=sse_red is not None, resolved=resolved,
+             parameters=params_out,
+             intervals={k.replace("sensor", prefix, 1): tuple(v) for k, v in iv.items()},
+             predictions=pf + ph, rig=rig)
     lo, hi = iv["sensor_bandwidth_hz"]
-    msg = (f"force_sensor: bandwidth {f_c:.1f} Hz [{lo:.1f}, {hi:.1f}], damping {zeta:.2f} "
-           f"(group delay at low frequency {1e3 * params_out['sensor_group_delay_s']:.2f} ms); "
-           f"recorded-force error {e_before:.3f} -> {e_after:.3f} %, ΔBIC fit {d_fit:.1f}, "
-           f"held-out {d_held:.1f}"
+    what = "recorded-force error" if ch == 0 else "force error"
+    msg = (f"{name}: bandwidth {f_c:.1f} Hz [{lo:.1f}, {hi:.1f}], damping {zeta:.2f} "
+           f"(group delay at low frequency {1e3 * params_out[f'{prefix}_group_delay_s']:.2f} ms); "
+           f"{what} {e_before:.3f} -> {e_after:.3f} %"
+           + (f", voltage SSE excess removed {100 * sse_red:.0f} %" if sse_red is not None
+              else "")
+           + f", ΔBIC fit {d_fit:.1f}, held-out {d_held:.1f}"
            + ("" if resolved else f"; the bandwidth is not resolved below "
                                   f"{est['f_max_hz']:.0f} Hz"))
     err = force_error_percent(h2 or f2, ph or pf)
