@@ -153,7 +153,10 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
 
     from .datasets.embedded import load_truth
     load_truth(args.data_dir)  # a truth.toml that cannot be used is refused before the work
+    members = DiscrepancySettings().candidates
+    members += tuple(m for m in args.with_members if m not in members)
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
+                                   candidates=members,
                                    max_tests=args.max_tests, presliding=args.presliding,
                                    scheduler=args.scheduler,
                                    **({} if args.max_fits is None
@@ -325,6 +328,11 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--presliding", action="store_true",
                    help="offer the base friction law a presliding transition (adopted only "
                         "when it earns on the baseline; off by default)")
+    d.add_argument("--with", dest="with_members", action="append", default=[],
+                   metavar="MEMBER",
+                   help="also search a member listed by choice (force_sensor, "
+                        "voltage_sensor: a channel's second-order sensor dynamics); "
+                        "repeatable")
     d.set_defaults(func=_cmd_discrepancy)
     _writes_folder(d, "report.md", "discrepancy.json")
 

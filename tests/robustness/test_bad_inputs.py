@@ -269,3 +269,13 @@ def test_two_runs_into_one_folder_refused(tmp_path, capsys):
     from ehsa_opt.utils.lock import output_lock
     with output_lock(out):  # the stale lock file does not block
         pass
+
+
+def test_an_unknown_member_is_refused_with_the_known_ones(tmp_path, capsys):
+    """``discrepancy --with`` names a member the engine does not have: exit 2 before any
+    work, the message lists the members, the output folder is not created."""
+    out = tmp_path / "o"
+    rc, err = run(capsys, "discrepancy", ROOT / "data/bench_prototype", "--out", out,
+                  "--with", "load_cell")
+    assert rc == 2 and "load_cell" in err and "force_sensor" in err
+    assert not out.exists()
