@@ -19,6 +19,8 @@ Layout of a data directory::
     amplitude_m = 0.015
     load_ohm = 47.0             # required when the rig has a generator
     # excitation = "recorded"   # arbitrary motion: frequency/amplitude not required
+    # run_order = 3             # optional: the test's place in the campaign (:mod:`.run_order`)
+    # started_at = 2026-03-02T09:15:30Z   # optional: when its first sample was taken
 
 The loader is strict: every problem is a :class:`BenchDataError` that names the
 file (or ``bench.toml``), the row or key, and the fix.  The writer writes into a
@@ -27,6 +29,7 @@ temporary directory and renames it into place, so nothing is half-written.
 
 from __future__ import annotations
 
+import datetime
 import io
 import math
 import os
@@ -51,6 +54,7 @@ from ..physics.params import (
 from ..utils.output_folder import unlisted_content, write_listing
 from ..utils.limits import scan_csv
 from .checks import check_test_signals
+from .run_order import RUN_KEYS, check_run_sequence, parse_run_keys
 
 __all__ = ["BenchDataError", "BenchDataWarning", "BenchTest", "BenchData", "load_bench",
            "write_bench", "check_bench", "COLUMNS", "MARKER_NAME", "foreign_content",
@@ -59,7 +63,8 @@ __all__ = ["BenchDataError", "BenchDataWarning", "BenchTest", "BenchData", "load
 #: Required CSV columns, in order; ``voltage_V`` only for rigs with a generator.
 COLUMNS = ("time_s", "displacement_m", "force_N", "voltage_V")
 
-_TEST_KEYS = ("file", "frequency_hz", "amplitude_m", "load_ohm", "excitation", "description")
+_TEST_KEYS = ("file", "frequency_hz", "amplitude_m", "load_ohm", "excitation", "description",
+              *RUN_KEYS)
 _RIG_KEYS = ("name", "has_generator", "description")
 _TOP_KEYS = ("rig", "harvester", "test")
 _EXCITATIONS = ("sine", "recorded")
@@ -97,6 +102,10 @@ class BenchTest:
         ``"sine"`` or ``"recorded"``.
     time_s, displacement_m, force_N : ndarray
     voltage_V : ndarray or None
+    run_order : int or None
+        The test's place in the campaign (1 = run first), if stated.
+    started_at : datetime or None
+        When its first sample was taken, if stated.
     """
 
     file: str
@@ -109,6 +118,8 @@ class BenchTest:
     force_N: np.ndarray = field(repr=False)
     voltage_V: np.ndarray | None = field(repr=False, default=None)
     description: str = ""
+    run_order: int | None = None
+    started_at: datetime.datetime | None = None
 
     @property
     def n_samples(self) -> int:
@@ -414,13 +425,16 @@ def load_bench(path: str | Path, *, lenient: bool = False) -> BenchData:
                                         " (sine tests need it; or set excitation = \"recorded\")"))
             else:
                 values[key] = None
+        run_order, started_at = parse_run_keys(entry, where, BenchDataError)
         cols = _read_csv(target, need_voltage=has_gen)
         tests.append(BenchTest(file=file, excitation=excitation,
                                frequency_hz=values["frequency_hz"],
                                amplitude_m=values["amplitude_m"], load_ohm=values["load_ohm"],
                                time_s=cols["time_s"], displacement_m=cols["displacement_m"],
                                force_N=cols["force_N"], voltage_V=cols.get("voltage_V"),
-                               description=str(entry.get("description", ""))))
+                               description=str(entry.get("description", "")),
+                               run_order=run_order, started_at=started_at))
+    check_run_sequence(tests, BenchDataError)
     problems = [m for t in tests for m in check_test_signals(
         t, harvester, has_generator=has_gen, harvester_given="harvester" in doc)]
     if problems and not lenient:
@@ -526,6 +540,7 @@ def write_bench(path: str | Path, tests: list[BenchTest], *,
                                   f"(--overwrite) to replace it")
     if not tests:
         raise ValueError("write_bench: no tests to write")
+    check_run_sequence(tests, ValueError)
     doc: dict[str, Any] = {}
     if rig:
         doc["rig"] = dict(rig)
@@ -541,6 +556,9 @@ def write_bench(path: str | Path, tests: list[BenchTest], *,
                 e[key] = float(getattr(t, key))
         if t.description:
             e["description"] = t.description
+        for key in RUN_KEYS:
+            if getattr(t, key) is not None:
+                e[key] = getattr(t, key)
         entries.append(e)
     doc["test"] = entries
     path.parent.mkdir(parents=True, exist_ok=True)
