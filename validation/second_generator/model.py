@@ -73,10 +73,13 @@ joint friction of industrial manipulators", Robotica, doi:10.1017/S0263574717000
     C_g d(theta)/dt = P_nut - theta / R_g,     P_nut = F_n u - sigma0 z dz/dt >= 0
 
 with theta the temperature rise over the ambient (K).  Friction falls with temperature
-(the grease's viscosity falls exponentially with it, Reynolds' law; Bittencourt,
-Wernholt, Sander-Tavallaey & Brogardh 2010, "An extended friction model to capture load
-and temperature effects in robot joints", IROS, measured the joint friction falling by
-tens of percent as the joint warms by tens of kelvin, most in the viscous part)::
+(Bittencourt, Wernholt, Sander-Tavallaey & Brogardh 2010, "An extended friction model
+to capture load and temperature effects in robot joints", IROS, found a robot joint's
+friction to depend on its temperature strongly enough to need it in the friction model);
+the law here is Reynolds' exponential fall of a lubricant's viscosity with temperature,
+of about 3 %/K near room temperature for a mineral oil (an ISO VG 68 oil of viscosity
+index 100 goes from 68 mm^2/s at 40 C to about 8.7 mm^2/s at 100 C), with a smaller
+coefficient for the boundary-lubricated Coulomb level::
 
     F_C,dir, F_S  x exp(-beta_C theta),      sigma2,dir  x exp(-beta_v theta)
 
