@@ -2,7 +2,7 @@
 
     PYTHONPATH=. python -m validation.second_generator OUT_DIR [--rig rig_b|rig_c]
         [--protocol sines|strokes|multi|mixed|campaign27|smoke] [--seed N]
-        [--effect NAME=VALUE ...] [--asym-coulomb-N X] [--overwrite]
+        [--effect NAME=VALUE ...] [--asym-coulomb-N X] [--pause-s S] [--overwrite]
 
 ``--effect`` sets any field of :class:`~validation.second_generator.model.Effects`
 (e.g. ``--effect play_m=3e-4 --effect contact_stiffness=3e10``).
@@ -28,6 +28,8 @@ def main(argv=None) -> int:
     ap.add_argument("--effect", action="append", default=[], metavar="NAME=VALUE")
     ap.add_argument("--asym-coulomb-N", type=float, default=0.0)
     ap.add_argument("--asym-viscous-Ns-per-m", type=float, default=0.0)
+    ap.add_argument("--pause-s", type=float, default=20.0,
+                    help="rig at rest between two tests, s (the drift's grease cools)")
     ap.add_argument("--overwrite", action="store_true")
     args = ap.parse_args(argv)
     known = {f.name: f.type for f in fields(Effects)}
@@ -39,7 +41,7 @@ def main(argv=None) -> int:
         kw[name] = int(value) if name == "cogging_detents" else float(value)
     c = Campaign(rig=args.rig, protocol=args.protocol, seed=args.seed, effects=Effects(**kw),
                  asym_coulomb_N=args.asym_coulomb_N,
-                 asym_viscous_Ns_per_m=args.asym_viscous_Ns_per_m)
+                 asym_viscous_Ns_per_m=args.asym_viscous_Ns_per_m, pause_s=args.pause_s)
     d = write_campaign(args.out, c, overwrite=args.overwrite)
     print(f"wrote {d} ({sum(1 for _ in d.glob('*.csv'))} tests; truth in "
           f"{d / 'generator_truth.toml'})")

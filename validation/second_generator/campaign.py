@@ -3,10 +3,24 @@ bench directory format (``bench.toml`` + one CSV per test) with a truth file.
 
 The truth is written to ``generator_truth.toml`` (not ``truth.toml``: that name is the
 product's own generator's, whose friction law this generator does not share).
+
+Run order
+---------
+A campaign's tests are run one after the other in a stated order that is *not* the
+order of the list (which is sorted by kind, speed and load): :func:`run_order` draws a
+permutation from the seed and keeps the first one whose rank correlation with the list
+position, the load and the peak speed are all below :data:`MAX_ORDER_CORRELATION`, so
+that a drift over the campaign is not confounded with a test's load, speed or stroke.
+Each test starts ``pause_s`` after the previous one ended (its unrecorded settling
+cycles included).  The order and the start time of each record (its first sample) are
+written to ``bench.toml`` as ``run_order`` and ``started_at``; a state of the whole
+campaign (the grease temperature of the drift, :mod:`.model`) is carried across the
+tests in that order.
 """
 
 from __future__ import annotations
 
+import datetime as dt
 import math
 import os
 import shutil
@@ -21,7 +35,14 @@ from .model import Effects, Harvester, LuGre, RigModel
 from .motions import Sine, multisine, road_like, trapezoid, triangle
 
 __all__ = ["Rig", "RIGS", "PROTOCOL_SETS", "Noise", "Campaign", "TestSpec", "test_specs",
-           "generate", "write_campaign"]
+           "generate", "write_campaign", "run_order", "MAX_ORDER_CORRELATION",
+           "CAMPAIGN_START"]
+
+#: Largest |Spearman rank correlation| allowed between the run order and the list
+#: position, the load and the peak speed of the tests (a run order "not sorted").
+MAX_ORDER_CORRELATION = 0.3
+#: When the first test of every generated campaign starts (the record's first sample).
+CAMPAIGN_START = dt.datetime(2026, 3, 2, 9, 0, 0, tzinfo=dt.timezone.utc)
 
 
 @dataclass(frozen=True)
@@ -171,8 +192,11 @@ class Campaign:
     noise: Noise = field(default_factory=Noise)
     seed: int = 0
     sample_rate_hz: float = 1000.0
+    pause_s: float = 20.0             # rig at rest between two tests
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.pause_s) and self.pause_s >= 0):
+            raise ValueError(f"Campaign: pause_s must be >= 0, got {self.pause_s}")
         if self.rig not in RIGS:
             raise ValueError(f"Campaign: unknown rig {self.rig!r}; choose one of {sorted(RIGS)}")
         if self.protocol not in PROTOCOL_SETS:
@@ -199,24 +223,86 @@ def _ar1(rng: np.random.Generator, n: int, sigma: float, phi: float) -> np.ndarr
     return e
 
 
+def _ranks(a) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    r = np.empty(a.size)
+    r[np.argsort(a, kind="stable")] = np.arange(a.size)
+    for v in np.unique(a):  # ties share their mean rank
+        r[a == v] = r[a == v].mean()
+    return r
+
+
+def _spearman(a, b) -> float:
+    ra, rb = _ranks(a), _ranks(b)
+    if np.ptp(ra) == 0 or np.ptp(rb) == 0:
+        return 0.0
+    return float(np.corrcoef(ra, rb)[0, 1])
+
+
+def _peak_speed(motion) -> float:
+    t = np.linspace(0.0, motion.duration_s, 2001)
+    return float(np.max(np.abs(motion.kinematics(t)[1])))
+
+
+def run_order(specs: list[TestSpec], seed: int) -> list[int]:
+    """The order the tests are run in: ``order[k]`` is the list index of the k-th test
+    run.  The first permutation drawn from ``seed`` whose rank correlation with the
+    list position, the load and the peak speed is within :data:`MAX_ORDER_CORRELATION`."""
+    n = len(specs)
+    if n < 4:
+        return list(range(n))
+    rng = np.random.default_rng([seed, 505])
+    keys = (np.arange(n), [s.load_ohm for s in specs], [_peak_speed(s.motion) for s in specs])
+    for _ in range(10000):
+        order = rng.permutation(n)
+        position = np.empty(n)
+        position[order] = np.arange(n)           # when each listed test is run
+        if all(abs(_spearman(position, k)) <= MAX_ORDER_CORRELATION for k in keys):
+            return [int(k) for k in order]
+    raise RuntimeError(f"run_order: no permutation of {n} tests within the correlation limit")
+
+
 def generate(c: Campaign, only: tuple[int, ...] | None = None) -> list[dict]:
-    """Simulate the tests of the campaign (all, or the indices ``only``); returns dicts
-    with the spec and the signals.  Test k's noise is seeded by ``(seed, k)``."""
+    """Simulate the tests of the campaign (all, or the list indices ``only``) in their run
+    order (:func:`run_order`), carrying the grease temperature from test to test; returns
+    dicts in list order with the spec, the signals, ``run_order`` (1 = first run),
+    ``start_s`` (the record's first sample, from the campaign's start) and ``grease_K``
+    (the grease temperature rise at the record's start and end).  Test k's noise is seeded
+    by ``(seed, k)``."""
     model = c.model()
-    out = []
-    for k, spec in enumerate(test_specs(RIGS[c.rig], c.protocol, c.seed)):
-        if only is not None and k not in only:
+    specs = test_specs(RIGS[c.rig], c.protocol, c.seed)
+    order = run_order(specs, c.seed)
+    wanted = set(range(len(specs)) if only is None else only)
+    last = max(p for p, k in enumerate(order) if k in wanted) if wanted else -1
+    tau = c.effects.grease_capacity_J_per_K * c.effects.grease_resistance_K_per_W
+    out, clock, grease = {}, 0.0, 0.0
+    for pos, k in enumerate(order[:last + 1]):
+        spec = specs[k]
+        if pos:
+            clock += c.pause_s
+            grease *= math.exp(-c.pause_s / tau) if tau > 0 else 0.0
+        start_s = clock + spec.motion.preroll_s
+        clock = start_s + spec.motion.duration_s
+        if k not in wanted and not model.drifts:
             continue
-        t, x, F, V, _, _ = model.simulate(spec.motion, spec.load_ohm, c.sample_rate_hz)
+        t, x, F, V, Y, lay = model.simulate(spec.motion, spec.load_ohm, c.sample_rate_hz,
+                                            grease_K=grease)
+        g0 = grease
+        if model.drifts:
+            g0 = float(Y[lay["Tg"], 0])
+            grease = float(Y[lay["Tg"], -1])
+        if k not in wanted:
+            continue
         if c.effects.voltage_delay_s:
             V = np.interp(t - c.effects.voltage_delay_s, t, V)
         rng = np.random.default_rng([c.seed, k])
         n = t.size
-        out.append({"spec": spec, "time_s": t,
-                    "displacement_m": x + rng.standard_normal(n) * c.noise.displacement_m,
-                    "force_N": F + _ar1(rng, n, c.noise.force_N, c.noise.force_ar),
-                    "voltage_V": V + _ar1(rng, n, c.noise.voltage_V, c.noise.voltage_ar)})
-    return out
+        out[k] = {"spec": spec, "time_s": t, "run_order": pos + 1, "start_s": start_s,
+                  "grease_K": (g0, grease),
+                  "displacement_m": x + rng.standard_normal(n) * c.noise.displacement_m,
+                  "force_N": F + _ar1(rng, n, c.noise.force_N, c.noise.force_ar),
+                  "voltage_V": V + _ar1(rng, n, c.noise.voltage_V, c.noise.voltage_ar)}
+    return [out[k] for k in sorted(out)]
 
 
 def _declared_harvester(h: Harvester) -> dict[str, float]:
@@ -231,10 +317,28 @@ def _declared_harvester(h: Harvester) -> dict[str, float]:
             "inductance_H": h.inductance_H}
 
 
-def _truth(c: Campaign, model: RigModel) -> dict:
+def _runs(model: RigModel, tests: list[dict]) -> list[dict]:
+    """Per test, in run order: when it ran, the grease temperature rise and the nut's
+    friction factors (Coulomb, viscous) at the record's start and end."""
+    rows = []
+    for tt in sorted(tests, key=lambda d: d["run_order"]):
+        row = {"file": tt["spec"].file, "run_order": tt["run_order"],
+               "start_s": float(tt["start_s"])}
+        if model.drifts:
+            (c0, v0), (c1, v1) = (model.drift_scales(g) for g in tt["grease_K"])
+            row.update(grease_rise_start_K=tt["grease_K"][0], grease_rise_end_K=tt["grease_K"][1],
+                       coulomb_factor_start=float(c0), coulomb_factor_end=float(c1),
+                       viscous_factor_start=float(v0), viscous_factor_end=float(v1))
+        rows.append(row)
+    return rows
+
+
+def _truth(c: Campaign, model: RigModel, tests: list[dict]) -> dict:
     return {"generator": "validation/second_generator (LuGre friction, own ODEs)",
             "campaign": {"rig": c.rig, "protocol": c.protocol, "seed": c.seed,
-                         "sample_rate_hz": c.sample_rate_hz},
+                         "sample_rate_hz": c.sample_rate_hz, "pause_s": c.pause_s,
+                         "start": CAMPAIGN_START},
+            "run": _runs(model, tests),
             "harvester": asdict(model.harvester), "nut_friction": asdict(model.nut),
             "bearing_friction": asdict(model.bearing),
             "changed_from_default": sorted(k for k, v in asdict(c.effects).items()
@@ -256,7 +360,8 @@ def write_campaign(path: str | Path, c: Campaign, *, overwrite: bool = False) ->
            "harvester": _declared_harvester(rig.harvester), "test": []}
     for tt in tests:
         s = tt["spec"]
-        e = {"file": s.file, "load_ohm": float(s.load_ohm)}
+        e = {"file": s.file, "load_ohm": float(s.load_ohm), "run_order": tt["run_order"],
+             "started_at": CAMPAIGN_START + dt.timedelta(seconds=round(tt["start_s"], 3))}
         if s.excitation == "sine":
             e.update(frequency_hz=float(s.motion.frequency_hz),
                      amplitude_m=float(s.motion.amplitude_m))
@@ -268,7 +373,7 @@ def write_campaign(path: str | Path, c: Campaign, *, overwrite: bool = False) ->
     try:
         tmp.chmod(0o755)
         (tmp / "bench.toml").write_text(tomli_w.dumps(doc), encoding="utf-8")
-        (tmp / "generator_truth.toml").write_text(tomli_w.dumps(_truth(c, c.model())),
+        (tmp / "generator_truth.toml").write_text(tomli_w.dumps(_truth(c, c.model(), tests)),
                                                   encoding="utf-8")
         for tt in tests:
             cols = np.column_stack([tt["time_s"], tt["displacement_m"], tt["force_N"],

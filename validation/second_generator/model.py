@@ -46,6 +46,50 @@ Contacts and other effects
 * eddy-current damping (a conducting sleeve on the rotor): T_e = c_e omega / (1 +
   (omega / omega_c)^2), the Wouterse law, linear at low speed, falling above omega_c.
 
+Sensors
+-------
+Both measured channels can have their own dynamics, a second-order low-pass with unity
+gain at DC (natural frequency f_c, damping ratio zeta, omega_c = 2 pi f_c)::
+
+    y'' + 2 zeta omega_c y' + omega_c^2 y = omega_c^2 u
+
+* force channel: u the force the rod transmits, y the load-cell reading (a piezo or
+  strain-gauge cell with its seismic mass and its amplifier: ``load_cell_hz``,
+  ``load_cell_damping``);
+* voltage channel: u = R_e i, y the recorded voltage (the acquisition's anti-alias filter
+  or an isolation amplifier, a 2nd-order Butterworth has zeta = 0.707:
+  ``voltage_sensor_hz``, ``voltage_sensor_damping``).
+
+At f_c the gain is 1 / (2 zeta) and the phase -90 deg; well below f_c the filter is a
+delay of zeta / (pi f_c) (its group delay at DC) -- a pure delay is its limit.
+
+Drift over a campaign (thermal run-in of the grease)
+----------------------------------------------------
+The grease of the nut warms with the power its friction dissipates and cools to the
+ambient through a thermal resistance, a first-order lumped model (as the joint
+temperature of Simoni, Beschi, Legnani & Visioli 2017, "Modelling the temperature in
+joint friction of industrial manipulators", Robotica, doi:10.1017/S0263574717000509)::
+
+    C_g d(theta)/dt = P_nut - theta / R_g,     P_nut = F_n u - sigma0 z dz/dt >= 0
+
+with theta the temperature rise over the ambient (K).  Friction falls with temperature
+(Bittencourt, Wernholt, Sander-Tavallaey & Brogardh 2010, "An extended friction model
+to capture load and temperature effects in robot joints", IROS, found a robot joint's
+friction to depend on its temperature strongly enough to need it in the friction model);
+the law here is Reynolds' exponential fall of a lubricant's viscosity with temperature,
+of about 3 %/K near room temperature for a mineral oil (an ISO VG 68 oil of viscosity
+index 100 goes from 68 mm^2/s at 40 C to about 8.7 mm^2/s at 100 C), with a smaller
+coefficient for the boundary-lubricated Coulomb level::
+
+    F_C,dir, F_S  x exp(-beta_C theta),      sigma2,dir  x exp(-beta_v theta)
+
+(``drift_coulomb_per_K`` = beta_C, ``drift_viscous_per_K`` = beta_v, ``grease_capacity_J_per_K``
+= C_g, ``grease_resistance_K_per_W`` = R_g).  theta is a state of the whole campaign: the
+campaign (:mod:`.campaign`) runs its tests in a stated order and carries theta from one
+test to the next, cooling it over the pause between them (theta x exp(-pause / (R_g C_g))).
+C_g is the capacity of the fast thermal mode (grease and the raceway surface that heat
+first), not of the whole nut.
+
 Energy bookkeeping: with ``audit=True`` three quadrature states integrate the input
 work of the rod, the dissipated energy (friction, contact and mount damping, eddy
 currents, copper and diode losses) and the electrical energy delivered to the load;
@@ -145,8 +189,16 @@ class Effects:
     eddy_Nms_per_rad: float = 0.0             # c_e
     eddy_corner_rad_per_s: float = 60.0       # omega_c
     voltage_delay_s: float = 0.0              # sampling skew of the voltage channel
-    load_cell_hz: float = 0.0                 # 2nd-order load cell (0: ideal)
-    load_cell_damping: float = 0.05
+    # sensor dynamics (2nd-order low-pass, unity DC gain)
+    load_cell_hz: float = 0.0                 # force channel f_c, Hz (0: ideal)
+    load_cell_damping: float = 0.05           # force channel zeta
+    voltage_sensor_hz: float = 0.0            # voltage channel f_c, Hz (0: ideal)
+    voltage_sensor_damping: float = 0.707     # voltage channel zeta (Butterworth)
+    # drift over the campaign: grease temperature rise theta, friction falling with it
+    grease_capacity_J_per_K: float = 0.0      # C_g (0: no drift)
+    grease_resistance_K_per_W: float = 20.0   # R_g
+    drift_coulomb_per_K: float = 0.0          # beta_C: F_C, F_S x exp(-beta_C theta)
+    drift_viscous_per_K: float = 0.0          # beta_v: sigma2 x exp(-beta_v theta)
 
 
 @dataclass(frozen=True)
@@ -180,6 +232,17 @@ class RigModel:
     def play(self) -> bool:
         return self.effects.play_m > 0
 
+    @property
+    def drifts(self) -> bool:
+        return self.effects.grease_capacity_J_per_K > 0
+
+    def drift_scales(self, theta):
+        """(Coulomb/static factor, viscous factor) of the nut friction at a grease
+        temperature rise ``theta`` (K)."""
+        e = self.effects
+        return (np.exp(-e.drift_coulomb_per_K * np.asarray(theta)),
+                np.exp(-e.drift_viscous_per_K * np.asarray(theta)))
+
     def layout(self, audit: bool = False) -> dict[str, int]:
         names = []
         if self.compliant:
@@ -189,17 +252,22 @@ class RigModel:
         names += ["i", "zn", "zb"]
         if self.effects.thermal_capacity_J_per_K > 0:
             names.append("T")
+        if self.drifts:
+            names.append("Tg")
         if self.effects.load_cell_hz > 0:
             names += ["fc", "dfc"]
+        if self.effects.voltage_sensor_hz > 0:
+            names += ["vm", "dvm"]
         if audit:
             names += ["Ein", "Ediss", "Eload"]
         return {n: k for k, n in enumerate(names)}
 
     # -- pieces ------------------------------------------------------------------------
-    def _lugre(self, fr: LuGre, u: float, z: float, scale: float = 1.0):
+    def _lugre(self, fr: LuGre, u: float, z: float, scale: float = 1.0,
+               visc_scale: float = 1.0):
         g = scale * fr.level(u)
         dz = u - fr.stiffness * abs(u) * z / g
-        visc = (fr.viscous_pos if u >= 0 else fr.viscous_neg) * scale
+        visc = (fr.viscous_pos if u >= 0 else fr.viscous_neg) * scale * visc_scale
         f = fr.stiffness * z + fr.micro_damping * math.exp(-(u / fr.stribeck_velocity) ** 2) * dz \
             + visc * u
         return f, dz
@@ -278,7 +346,10 @@ class RigModel:
             th, om = xn / r, vn / r
         i = y[lay["i"]]
         di, tq_gen, Ri, vd = self._electrical(i, om, T, load_ohm)
-        fn, dzn = self._lugre(self.nut, r * om, y[lay["zn"]], self._nut_scale(th, xn))
+        sc, sv = (math.exp(-e.drift_coulomb_per_K * y[lay["Tg"]]),
+                  math.exp(-e.drift_viscous_per_K * y[lay["Tg"]])) if "Tg" in lay else (1., 1.)
+        fn, dzn = self._lugre(self.nut, r * om, y[lay["zn"]], self._nut_scale(th, xn) * sc,
+                              sv / sc)
         tb, dzb = self._lugre(self.bearing, om, y[lay["zb"]])
         t_eddy = e.eddy_Nms_per_rad * om / (1.0 + (om / e.eddy_corner_rad_per_s) ** 2) \
             if e.eddy_Nms_per_rad else 0.0
@@ -309,11 +380,17 @@ class RigModel:
         if "T" in lay:
             dy[lay["T"]] = (Ri * i * i - T / e.thermal_resistance_K_per_W) \
                 / e.thermal_capacity_J_per_K
-        if "fc" in lay:
-            wn = 2 * math.pi * e.load_cell_hz
-            dy[lay["fc"]] = y[lay["dfc"]]
-            dy[lay["dfc"]] = wn * wn * (force - y[lay["fc"]]) \
-                - 2 * e.load_cell_damping * wn * y[lay["dfc"]]
+        if "Tg" in lay:
+            p_nut = fn * r * om - self.nut.stiffness * y[lay["zn"]] * dzn
+            dy[lay["Tg"]] = (p_nut - y[lay["Tg"]] / e.grease_resistance_K_per_W) \
+                / e.grease_capacity_J_per_K
+        for name, fc_hz, zeta, u in (("fc", e.load_cell_hz, e.load_cell_damping, force),
+                                     ("vm", e.voltage_sensor_hz, e.voltage_sensor_damping,
+                                      load_ohm * i)):
+            if name in lay:   # y'' + 2 zeta wc y' + wc^2 y = wc^2 u
+                wc, k = 2 * math.pi * fc_hz, lay[name]
+                dy[k] = y[k + 1]
+                dy[k + 1] = wc * wc * (u - y[k]) - 2 * zeta * wc * y[k + 1]
         if "Ein" in lay:
             fr_n, fr_b = self.nut, self.bearing
             u = r * om
@@ -326,7 +403,11 @@ class RigModel:
         return dy, force
 
     # -- simulation --------------------------------------------------------------------
-    def initial_state(self, motion, t0: float, lay: dict[str, int]) -> np.ndarray:
+    def initial_state(self, motion, t0: float, lay: dict[str, int],
+                      grease_K: float = 0.0) -> np.ndarray:
+        """State at ``t0``: the rig on the motion, bristles relaxed, no current, the
+        sensors reading the force and voltage at ``t0``, the grease ``grease_K`` above
+        the ambient."""
         x, v, _ = (float(q) for q in motion.kinematics(t0))
         y = np.zeros(len(lay))
         r = self.harvester.r
@@ -334,6 +415,10 @@ class RigModel:
             y[lay["xn"]], y[lay["vn"]] = x, v
         if "th" in lay:
             y[lay["th"]], y[lay["om"]] = x / r, v / r
+        if "Tg" in lay:
+            y[lay["Tg"]] = grease_K
+        if "fc" in lay:
+            y[lay["fc"]] = self.rhs(t0, y, motion, 1.0, lay)[1]
         return y
 
     def stored_energy(self, t, Y, motion, lay) -> np.ndarray:
@@ -364,10 +449,12 @@ class RigModel:
         return E
 
     def simulate(self, motion, load_ohm: float, sample_rate_hz: float, *, audit: bool = False,
-                 rtol: float = 1e-6, max_step_s: float | None = None):
+                 rtol: float = 1e-6, max_step_s: float | None = None, grease_K: float = 0.0):
         """Integrate (Radau, piecewise between the motion's acceleration jumps) and sample
         the record.  Returns ``(t, x, force, voltage, Y, lay)``; ``t`` starts at 0 at the
-        record's start, ``Y`` are the states at the samples."""
+        record's start, ``Y`` are the states at the samples.  ``grease_K``: the grease
+        temperature rise when the test starts (with drift; ``Y[lay["Tg"], -1]`` is its
+        value at the end)."""
         lay = self.layout(audit)
         t0, t1 = -motion.preroll_s, motion.duration_s
         n = int(math.floor(motion.duration_s * sample_rate_hz + 1e-9)) + 1
@@ -375,7 +462,7 @@ class RigModel:
         breaks = sorted({t0, t1, *[b for b in motion.breaks_s if t0 < b < t1]})
         scale = self._atol(lay)
         dt = max_step_s or np.inf
-        y = self.initial_state(motion, t0, lay)
+        y = self.initial_state(motion, t0, lay, grease_K)
         Ys = np.empty((len(lay), n))
 
         def fun(t, yy):
@@ -395,12 +482,13 @@ class RigModel:
         F = np.array([self.rhs(t, Ys[:, k], motion, load_ohm, lay)[1] for k, t in enumerate(ts)])
         if "fc" in lay:
             F = Ys[lay["fc"]]
-        V = load_ohm * Ys[lay["i"]]
+        V = Ys[lay["vm"]] if "vm" in lay else load_ohm * Ys[lay["i"]]
         return ts, np.asarray(x, dtype=float), F, V, Ys, lay
 
     def _atol(self, lay: dict[str, int]) -> np.ndarray:
         r = self.harvester.r
         ref = {"xn": 1e-9, "vn": 1e-6, "th": 1e-9 / r, "om": 1e-6 / r, "i": 1e-6,
-               "zn": 1e-11, "zb": 1e-9, "T": 1e-6, "fc": 1e-4, "dfc": 1e-1,
+               "zn": 1e-11, "zb": 1e-9, "T": 1e-6, "Tg": 1e-6, "fc": 1e-4, "dfc": 1e-1,
+               "vm": 1e-6, "dvm": 1e-3,
                "Ein": 1e-7, "Ediss": 1e-7, "Eload": 1e-7}
         return np.array([ref[k] for k in lay])
