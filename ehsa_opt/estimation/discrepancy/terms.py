@@ -79,11 +79,14 @@ __all__ = ["TermProposal", "shifted_force", "names_an_effect", "travel_since_rev
 GROUPS: tuple[str, ...] = ("stroke", "rotor_angle", "lag", "sensor", "current", "velocity",
                            "drift", "presliding")
 #: Second-order sensors whose action H[F̂] − F̂ on the model force is a ``sensor``
-#: column: (bandwidth Hz, damping ratio) — bandwidths an octave apart over the load
-#: cells and conditioning filters of damper benches (10–160 Hz), a light and a
-#: Butterworth-like damping.
+#: column: (bandwidth Hz, damping ratio) — bandwidths half an octave apart over the load
+#: cells and conditioning filters of damper benches (10–160 Hz), dampings from light to
+#: critical.
 SENSOR_GRID: tuple[tuple[float, float], ...] = tuple(
-    (f, z) for f in (10.0, 20.0, 40.0, 80.0, 160.0) for z in (0.2, 0.7))
+    (round(10.0 * 2 ** (k / 2), 1), z) for k in range(9) for z in (0.2, 0.45, 0.7, 1.0))
+#: Groups whose term is one of their columns (a sensor is one low-pass): when the sparse
+#: regression selects any of them, the group's term is its best column alone (BIC).
+SINGLE_COLUMN_GROUPS: tuple[str, ...] = ("sensor",)
 #: Groups that describe the friction (or inertia) law itself: a term of these is a
 #: friction law of another shape, not an effect outside the catalogue.
 FRICTION_LAW_GROUPS: tuple[str, ...] = ("velocity", "presliding")
@@ -367,11 +370,18 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
         sup = np.array([k for k in support if groups[k] == g], dtype=int)
         if not sup.size:
             continue
-        bg, *_ = np.linalg.lstsq(X[:, sup], y, rcond=None)
-        res = y - X[:, sup] @ bg
-        bic = n_eff * math.log(max(float(res @ res), 1e-300)) + sup.size * pen
-        if best is None or bic < best[0]:
-            best = (bic, g, sup, bg)
+        # a sensor is one low-pass (one column), not a mixture of them: free mixtures
+        # of filters mimic any lag, a per-test one included
+        if g in SINGLE_COLUMN_GROUPS:  # every column of the group, each alone
+            subs = [np.array([k]) for k in range(len(groups)) if groups[k] == g]
+        else:
+            subs = [sup]
+        for sub in subs:
+            bg, *_ = np.linalg.lstsq(X[:, sub], y, rcond=None)
+            res = y - X[:, sub] @ bg
+            bic = n_eff * math.log(max(float(res @ res), 1e-300)) + sub.size * pen
+            if best is None or bic < best[0]:
+                best = (bic, g, sub, bg)
     if best is None:
         return TermProposal(True, "the sparse regression selects no feature (residual is noise)")
     _, group, support, b = best
@@ -489,6 +499,20 @@ def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
 
 
 
+def _with_sensor_term(pts, preds, columns: dict) -> list[np.ndarray]:
+    """``preds`` with the term's sensor column(s) c (H[F̂] − F̂) added to the force."""
+    out = []
+    for pt, yp in zip(pts, preds):
+        q = np.array(yp, float, copy=True)
+        for name, c in columns.items():
+            if name.startswith("H("):
+                f_c = float(name[2:].split(" Hz")[0])
+                zeta = float(name.split(", ")[1].split(")")[0])
+                q[0] = q[0] + c * (filtered_force(pt, yp[0], f_c, zeta) - yp[0])
+        out.append(q)
+    return out
+
+
 def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff,
                  criterion: Criterion = DEFAULT_CRITERION) -> TermProposal:
     """The data-driven term of the current residual, judged like a catalogue effect.
@@ -501,6 +525,11 @@ def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_ef
       ``force_lag`` member makes): otherwise the shift stands for a lead that depends
       on the motion (friction presliding), it is refused (``refused`` says why) and the
       term is sought again without the lag features.
+    * A term of the ``sensor`` group (the force through a low-pass) is a sensor only when
+      the lag it leaves is one delay for every test: a sensor's lag at the tests'
+      frequencies is its own, so per-test delays that still differ after it stand for a
+      lead that depends on the motion; it is refused and the term sought again without
+      the lag and sensor features.
     * The term earns by :func:`~.judge.earns` with ``criterion``: its share of the
       held-out error above the noise floor, ΔBIC on the fit tests (``N_eff`` of the fit
       residual) and on the held-out tests (``n_eff``), one parameter per selected column.
@@ -521,6 +550,16 @@ def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_ef
                        f"ΔBIC {spread:.3g} < {criterion.delay_spread_bic:g})")
             term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead,
                                  seed=seed, exclude=("lag",))
+    if term.group == "sensor" and len(fit_pts) > 1:
+        spread = per_test_delays(fit_pts, _with_sensor_term(fit_pts, fit_pred, term.columns),
+                                 n_eff_fit)
+        if spread < criterion.delay_spread_bic:
+            refused = ((refused + "; ") if refused else "") + (
+                f"{term.description}: refused — not a sensor's lag, the best delay left after "
+                f"the low-pass still differs from test to test (per-test delays against one: "
+                f"ΔBIC {spread:.3g} < {criterion.delay_spread_bic:g})")
+            term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead,
+                                 seed=seed, exclude=("lag", "sensor"))
     term.refused = refused
     if term.columns:
         k = len(term.columns)
