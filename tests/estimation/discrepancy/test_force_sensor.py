@@ -12,7 +12,7 @@ from scipy import signal
 from ehsa_opt.datasets.bench_format import write_bench
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.discrepancy import DiscrepancySettings, run_discrepancy
-from ehsa_opt.estimation.discrepancy.candidates.sensor_dynamics import fit_sensor
+from ehsa_opt.estimation.discrepancy.sensor_filter import fit_sensor
 from ehsa_opt.estimation.discrepancy.sensor_filter import filtered_force
 from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
 

@@ -50,12 +50,12 @@ def _lowpass(f_c, zeta):
 
 def test_a_sensor_low_pass_is_described_as_the_force_records_dynamics():
     """A 50 Hz, ζ 0.3 load cell (off the term's grid of sensors): the ``sensor`` group,
-    its nearest sensor within an octave, and most of the error explained (the grid is half
-    an octave in bandwidth: 9.08 -> 2.42 %)."""
+    its bandwidth refined from the grid's nearest within 10 %, most of the error
+    explained."""
     term = _term(_lowpass(50.0, 0.3))
     assert term.group == "sensor", term.description
-    assert 25.0 <= term.quantity["bandwidth_hz"] <= 100.0
-    assert term.error_after < 0.35 * term.error_before  # the nearest sensor of the grid
+    assert term.quantity["bandwidth_hz"] == pytest.approx(50.0, rel=0.1)
+    assert term.error_after < 0.2 * term.error_before
 
 
 def test_a_drift_over_the_campaign_is_described_as_a_drift():
@@ -72,3 +72,12 @@ def test_a_presliding_transition_is_described_as_presliding():
         return force - 30.0 * np.sign(pt.u[1]) * np.exp(-s / 2e-5)
     term = _term(pres)
     assert term.group == "presliding", term.description
+
+
+def test_a_sensor_is_proposed_and_not_refused_by_its_consistency_checks():
+    """The same load cell through :func:`propose_term`: one sensor for every test (its
+    delay and weight do not differ from test to test), so it is not refused."""
+    from ehsa_opt.estimation.discrepancy.terms import propose_term
+    fp, fpr, hp, hpr = _campaign(_lowpass(50.0, 0.3))
+    term = propose_term(fp, fpr, hp, hpr, 0.01 / (2 * math.pi), 0, 0.05, 2000.0)
+    assert term.group == "sensor" and not term.refused, term.refused

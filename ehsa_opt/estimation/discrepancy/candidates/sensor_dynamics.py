@@ -32,7 +32,7 @@ once adopted, the search judges every later model on the adjusted record.
 Its own statistics: the ~95 % interval of f_c and ζ from the Gauss–Newton
 covariance with the residual's autocorrelation (effective samples), and the
 size resolved only when the interval of f_c stays below the highest bandwidth the
-sampling resolves (:data:`MAX_BANDWIDTH_SHARE` of the sample rate) — a filter whose
+sampling resolves (:data:`~..sensor_filter.MAX_BANDWIDTH_SHARE` of the sample rate) — a filter whose
 bandwidth cannot be told from infinite is no sensor dynamics.
 """
 
@@ -40,38 +40,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace as _replace
-from typing import Sequence
 
 import numpy as np
-from scipy.optimize import least_squares
 
-from ..channels import channel_effective_samples
 from ..evidence import delta_bic, force_error_percent, normalised_sse
 from ..fit import fit_group
 from ..channels import channel_sse
 from ..judge import channel_sse_excess_reduction, excess_reduction
 from ..prepared import PreparedTest, decimated
-from ..sensor_filter import filtered_force, sample_step_s
+from ..sensor_filter import filtered_channel as _filtered, filtered_force, fit_sensor
 from ..rig import Rig, predict
 from .record_change import RecordChange
 
-__all__ = ["NAMES", "fit_sensor", "try_sensor",
-           "MAX_BANDWIDTH_SHARE", "MIN_BANDWIDTH_HZ", "DAMPING_RANGE"]
-
-#: The highest bandwidth fitted, as a share of the sample rate: 0.4 f_s (below the
-#: Nyquist frequency, where the discrete filter still follows the continuous one).
-MAX_BANDWIDTH_SHARE = 0.4
-#: The lowest bandwidth fitted, Hz: a force sensor slower than this would not pass the
-#: test frequencies of a damper bench (0.5–20 Hz).
-MIN_BANDWIDTH_HZ = 5.0
-#: Damping ratios fitted: from a lightly damped load cell (0.05) to an overdamped
-#: conditioning filter (2).
-DAMPING_RANGE = (0.05, 2.0)
-#: The grid the least-squares fit starts from (f_c as a share of the highest bandwidth;
-#: ζ): the bandwidth over its decades, damping light to critical.
-_START_SHARES = (0.05, 0.15, 0.4, 1.0)
-_START_DAMPING = (0.2, 0.7, 1.0)
-
+__all__ = ["NAMES", "try_sensor"]
 
 #: The member's name and its parameters' prefix, by channel (0 force, 1 voltage).
 NAMES = {0: "force_sensor", 1: "voltage_sensor"}
@@ -85,62 +66,10 @@ def _with_channel(pt: PreparedTest, ch: int, values: np.ndarray) -> PreparedTest
     return _replace(pt, test=test, y=y)
 
 
-def _residuals(theta: np.ndarray, pts, preds, ch: int = 0) -> np.ndarray:
-    f_c, zeta = 10.0 ** theta[0], theta[1]
-    return np.concatenate([(pt.y[ch] - filtered_force(pt, yp[ch], f_c, zeta)) * pt.wnorm[ch]
-                           for pt, yp in zip(pts, preds)])
-
-
-def fit_sensor(pts: Sequence[PreparedTest], preds: Sequence[np.ndarray], ch: int = 0) -> dict:
-    """f_c (Hz) and ζ of the sensor that best explain the record of channel ``ch`` (0
-    force, 1 voltage) of ``pts`` from the model's ``preds`` (see the module docstring),
-    with ~95 % intervals (Gauss–Newton covariance, the residual variance per effective
-    sample of the channel's residual, :func:`~..channels.channel_effective_samples`).
-
-    Returns
-    -------
-    dict
-        ``f_c_hz``, ``zeta``, ``intervals`` (name → (low, high)), ``sse`` and
-        ``f_max_hz`` (the highest bandwidth fitted).
-    """
-    f_max = MAX_BANDWIDTH_SHARE / sample_step_s(pts[0])
-    lo = np.array([math.log10(MIN_BANDWIDTH_HZ), DAMPING_RANGE[0]])
-    hi = np.array([math.log10(f_max), DAMPING_RANGE[1]])
-    starts = [np.array([math.log10(max(s * f_max, MIN_BANDWIDTH_HZ)), z])
-              for s in _START_SHARES for z in _START_DAMPING]
-    cost = [float(np.sum(_residuals(th, pts, preds, ch) ** 2)) for th in starts]
-    th0 = np.clip(starts[int(np.argmin(cost))], lo, hi)
-    sol = least_squares(_residuals, th0, bounds=(lo, hi), args=(pts, preds, ch),
-                        x_scale=np.array([0.3, 0.2]))
-    r, J = sol.fun, sol.jac
-    lf, z = float(sol.x[0]), float(sol.x[1])
-    # residual variance per effective sample of the force residual (autocorrelated)
-    n_eff = float(channel_effective_samples(pts, _filtered(pts, preds, 10.0 ** lf, z, ch))[ch])
-    try:
-        cov = np.linalg.inv(J.T @ J) * float(r @ r) / max(n_eff - 2.0, 1.0)
-    except np.linalg.LinAlgError:
-        cov = np.full((2, 2), np.inf)
-    sd = np.sqrt(np.clip(np.diag(cov), 0.0, np.inf))
-    return {"f_c_hz": 10.0 ** lf, "zeta": z,
-            "intervals": {"sensor_bandwidth_hz": (10.0 ** (lf - 1.96 * sd[0]),
-                                                  10.0 ** (lf + 1.96 * sd[0])),
-                          "sensor_damping": (z - 1.96 * sd[1], z + 1.96 * sd[1])},
-            "sse": float(r @ r), "f_max_hz": f_max}
-
-
 def _adjusted(pts, preds, f_c, zeta, ch: int = 0) -> list[PreparedTest]:
     """The tests with the filter's action on the model's output taken out of the record."""
     return [_with_channel(pt, ch, pt.y[ch] - (filtered_force(pt, yp[ch], f_c, zeta) - yp[ch]))
             for pt, yp in zip(pts, preds)]
-
-
-def _filtered(pts, preds, f_c, zeta, ch: int = 0) -> list[np.ndarray]:
-    out = []
-    for pt, yp in zip(pts, preds):
-        q = np.array(yp, float, copy=True)
-        q[ch] = filtered_force(pt, yp[ch], f_c, zeta)
-        out.append(q)
-    return out
 
 
 def try_sensor(fit_pts, held_pts, rig: Rig, base, fit_pred, held_pred, floor: float,
