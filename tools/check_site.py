@@ -1,6 +1,6 @@
 """Check a built documentation site: no raw Sphinx/numpydoc role (``:class:`…```) left as
-text, no unexpanded ``{{ ehsa-opt-help … }}`` line, and no broken internal link (the file
-and, when given, the anchor exist).
+text, no unexpanded ``{{ ehsa-opt-help … }}`` or ``{{ ehsa-opt-gallery }}`` line, no broken
+internal link (the file and, when given, the anchor exist) and no missing image.
 
     python tools/check_site.py site          # exit 1 and the offenders, else a summary
 """
@@ -23,6 +23,7 @@ class _Page(HTMLParser):
         super().__init__()
         self.ids: set[str] = set()
         self.hrefs: list[str] = []
+        self.images: list[str] = []
 
     def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         for key, value in attrs:
@@ -30,6 +31,8 @@ class _Page(HTMLParser):
                 self.ids.add(value)
             if tag == "a" and key == "href" and value:
                 self.hrefs.append(value)
+            if tag == "img" and key == "src" and value:
+                self.images.append(value)
 
 
 def check_site(site: Path) -> list[str]:
@@ -41,8 +44,9 @@ def check_site(site: Path) -> list[str]:
         for m in RAW_ROLE.finditer(text):
             problems.append(f"{path.relative_to(site)}: raw role "
                             f"{text[m.start():m.end() + 40]!r}")
-        if "{{ ehsa-opt-help" in text:
-            problems.append(f"{path.relative_to(site)}: unexpanded ehsa-opt-help line")
+        for marker in ("{{ ehsa-opt-help", "{{ ehsa-opt-gallery"):
+            if marker in text:
+                problems.append(f"{path.relative_to(site)}: unexpanded {marker[3:]} line")
         parser = _Page()
         parser.feed(text)
         pages[path.resolve()] = parser
@@ -51,6 +55,13 @@ def check_site(site: Path) -> list[str]:
         for m in RAW_ROLE.finditer(index.read_text(encoding="utf-8")):
             problems.append(f"search index: raw role {m.group()!r}")
     for path, page in pages.items():
+        for src in page.images:
+            parts = urlsplit(src)
+            if parts.scheme or parts.netloc or src.startswith("data:"):
+                continue
+            base = site if parts.path.startswith("/") else path.parent
+            if not (base / unquote(parts.path).lstrip("/")).resolve().is_file():
+                problems.append(f"{path.relative_to(site.resolve())}: missing image {src}")
         for href in page.hrefs:
             parts = urlsplit(href)
             if parts.scheme or parts.netloc or href.startswith("mailto:"):
