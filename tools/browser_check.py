@@ -5,7 +5,8 @@ The site is served over HTTP from a local port (as a reader's browser would get 
 each page is opened in headless Chromium through Playwright.  A page fails when the
 browser reports a console error or an uncaught exception, a request of the page answers
 4xx/5xx, an image does not load (lazy images are loaded first), or its rendered text
-shows a raw Sphinx role (``:class:`…```) or an unexpanded ``{{ ehsa-opt-… }}`` line.
+shows a raw Sphinx role (``:class:`…```), HTML markup (an attribute broken by a quote) or an
+unexpanded ``{{ ehsa-opt-… }}`` line.
 A full-page screenshot of each page goes to ``--shots``.
 
     pip install ".[docs]"                      # mkdocs, and playwright (the Python package)
@@ -44,6 +45,8 @@ RAW_ROLE_TEXT = re.compile(r":(?:py:)?(?:class|func|meth|mod|data|attr|obj|exc|c
                            r"[`~\w]")
 #: A docs-hook line left unexpanded.
 RAW_HOOK_TEXT = re.compile(r"\{\{ ehsa-opt-[a-z]+")
+#: HTML markup shown as text (an attribute value with an unescaped quote ended early).
+MARKUP_TEXT = re.compile(r'" (?:href|class|title)="')
 
 #: System browsers tried after Playwright's own, in order.
 SYSTEM_BROWSERS = ("chromium-headless-shell", "chromium", "chromium-browser",
@@ -61,6 +64,8 @@ def text_problems(text: str) -> list[str]:
     """The raw roles and unexpanded hook lines in a page's rendered text."""
     found = [f"raw role {m.group()!r} in {text[max(0, m.start() - 30):m.end() + 30]!r}"
              for m in RAW_ROLE_TEXT.finditer(text)]
+    found += [f"HTML markup as text: {text[max(0, m.start() - 40):m.end() + 20]!r}"
+              for m in MARKUP_TEXT.finditer(text)]
     return found + [f"unexpanded {m.group()!r}" for m in RAW_HOOK_TEXT.finditer(text)]
 
 

@@ -18,12 +18,21 @@ RAW_ROLE = re.compile(r":(?:py:)?(?:class|func|meth|mod|data|attr|obj|exc|const|
                       r"(?:<code>|`|&lt;code&gt;)")
 
 
+#: HTML markup in a page's text: an attribute value with an unescaped quote ended early.
+MARKUP_AS_TEXT = re.compile(r'" (?:href|class|title)="')
+
+
 class _Page(HTMLParser):
     def __init__(self) -> None:
         super().__init__()
         self.ids: set[str] = set()
         self.hrefs: list[str] = []
         self.images: list[str] = []
+        self.leaks: list[str] = []
+
+    def handle_data(self, data: str) -> None:
+        if MARKUP_AS_TEXT.search(data):  # an attribute broken by a quote: markup as text
+            self.leaks.append(data.strip()[:80])
 
     def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         for key, value in attrs:
@@ -49,6 +58,8 @@ def check_site(site: Path) -> list[str]:
                 problems.append(f"{path.relative_to(site)}: unexpanded {marker[3:]} line")
         parser = _Page()
         parser.feed(text)
+        problems += [f"{path.relative_to(site)}: HTML markup shown as text: {leak!r}"
+                     for leak in parser.leaks]
         pages[path.resolve()] = parser
     index = site / "search" / "search_index.json"
     if index.is_file():

@@ -42,6 +42,20 @@ def test_text_problems_find_raw_roles_and_hook_lines() -> None:
     found = bc.text_problems("uses :meth:`.DesignProblem.with_objective` and {{ ehsa-opt-help x }}")
     assert len(found) == 2 and "raw role ':meth:`'" in found[0] and "ehsa-opt-help" in found[1]
     assert bc.text_problems("a ratio 1:2, the time 10:30 and `code`") == []
+    leak = bc.text_problems('evidence\', 0.0)) dataclass " href="#ehsa_opt.Criterion">Criterion')
+    assert len(leak) == 1 and "HTML markup as text" in leak[0]
+
+
+def test_site_check_finds_markup_shown_as_text(tmp_path) -> None:
+    """An attribute value with an unescaped double quote ends early: the rest of the tag
+    is page text (a link title that carried a signature did this)."""
+    check = _load("check_site")
+    (tmp_path / "index.html").write_text(
+        '<p>decided by <a title="C(x=_f("|dBIC| > 10 is strong", 1)) dataclass" '
+        'href="#c"><code>C</code></a></p>'
+        '<h2 id="c">C</h2>')
+    problems = check.check_site(tmp_path)
+    assert len(problems) == 1 and "HTML markup shown as text" in problems[0], problems
 
 
 def test_pages_and_server(tmp_path) -> None:
