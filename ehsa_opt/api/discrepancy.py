@@ -108,11 +108,19 @@ class DiscrepancyReport:
         if self.result is not None:
             return self.result.table()
         from ..utils.tables import tidy_table
-        rows = [c for c in self.record.get("candidates") or [] if c.get("fitted", True)]
-        return tidy_table({k: [c.get(k) for c in rows] for k in (
-            "round", "effect", "earns", "earns_by", "error_before", "error_after")},
+
+        def num(v: Any) -> float:
+            return float("nan") if v is None else float(v)
+        rows = [c for c in self.record.get("candidates") or [] if c.get("re_identified", True)]
+        return tidy_table({
+            "round": [c.get("round") for c in rows], "effect": [c.get("effect") for c in rows],
+            "earns": [bool(c.get("earns_its_parameters")) for c in rows],
+            "earns_by": [c.get("earns_by") or "" for c in rows],
+            "error_before_pct": [num(c.get("error_before")) for c in rows],
+            "error_after_pct": [num(c.get("error_after")) for c in rows],
+            "delta_bic_heldout": [num(c.get("delta_bic_heldout")) for c in rows]},
             {"round": "-", "earns": "", "effect": "", "earns_by": "",
-             "error_before": "%", "error_after": "%"})
+             "delta_bic_heldout": "-"})
 
     def plot(self, ax: Any = None) -> dict:
         """The report's figures keyed by file name (needs :attr:`result`)."""

@@ -174,6 +174,10 @@ def test_discrepancy_report_api_equals_cli(tmp_path, monkeypatch, capsys) -> Non
             assert api[name] == cli[name], name
     back = ehsa_opt.DiscrepancyReport.load(tmp_path / "cli")
     assert back.summary() == report.summary() and back.partial
+    t_mem, t_back = report.table(), back.table()  # the loaded record's table is the result's
+    assert list(t_mem) == list(t_back) and list(t_mem["effect"]) == list(t_back["effect"])
+    np.testing.assert_allclose(np.asarray(t_mem["error_after_pct"], float),
+                               np.asarray(t_back["error_after_pct"], float))
     assert sorted(back.figures) == sorted(n.split("/", 1)[1] for n in cli if
                                           n.startswith("figures/"))
 
