@@ -128,3 +128,13 @@ def test_gallery_captions_every_report_figure(tmp_path) -> None:
     assert any("no such file" in p for p in problems)
     md = g.markdown()
     assert md.count("![") == len(listed) and "{#discrepancy}" in md
+
+
+def test_gallery_line_expands_with_paths_from_the_page() -> None:
+    from types import SimpleNamespace
+    hooks = _load("docs_hooks")
+    page = SimpleNamespace(file=SimpleNamespace(src_uri="guide/gallery.md"))
+    md = hooks.on_page_markdown("# G\n\n{{ ehsa-opt-gallery }}\n", page, None, None)
+    assert "{{ ehsa-opt-gallery }}" not in md
+    assert "](../gallery/figures/bench_truth_fit.png)" in md  # relative to the page
+    assert "(../guide/identify.md)" in md
