@@ -195,8 +195,7 @@ def discrepancy_report(data: Any, settings: DiscrepancySettings | None = None, *
     settings = _settings(settings, options)
     path = data if isinstance(data, (str, Path)) else getattr(data, "path", None)
     if isinstance(data, (str, Path)) and not Path(data).is_dir():
-        raise ValueError(f"discrepancy: {data} is not a bench data directory (bench.toml and "
-                         f"the tests' CSV files); give its folder")
+        load_bench(data)  # refused: names the path and the fix
     if path is not None and Path(path).is_dir():
         load_truth(path)  # a truth.toml that cannot be used is refused before the work
     if isinstance(settings.scheduler, str):  # refused before any work, not in a worker
