@@ -21,13 +21,34 @@ discrepancy(data_dir, settings=None, **options)
     The effects the model misses, named, identified and judged on held-out data by one
     criterion (``DiscrepancySettings``: jobs, a Dask scheduler, the work budget …): a
     ``DiscrepancyResult`` (``effect``, ``effects``, ``summary()``, ``table()``).
+discrepancy_report(data_dir, settings=None, wall_cap_s=None, **options)
+    The same with its report (``report.md``, figures, the true parameters' error of
+    synthetic data) and a wall-time safety cap: a :class:`DiscrepancyReport`.
+plan_tests(identification, vehicle, rig, n_tests=3)
+    The next bench tests that narrow the friction band the road needs: a
+    :class:`TestPlanResult` (``save`` writes the ``bench.toml`` skeleton).
+generate_bench(spec=None, **options), check_bench(data_dir), convert_emps(source_dir)
+    Bench data in memory (synthetic with hidden effects, a checked directory, the EMPS
+    benchmark): a :class:`BenchSet` (``save`` writes a bench data directory).
+reproduce(quick=False, data=None, vehicle=None)
+    The paper end to end: a :class:`ReproduceResult` (``REPORT.md``, tables, figures).
 
 Messages go to the ``ehsa_opt`` logger (``logging.getLogger("ehsa_opt")``); the
 physics (:class:`BenchModel`, :class:`HarvesterParams`, friction laws …) is below.
 """
 
 from .api import (
+                  BenchSet,
+                  DiscrepancyReport,
                   IdentificationResult,
+                  ReproduceResult,
+                  TestPlanResult,
+                  check_bench,
+                  convert_emps,
+                  discrepancy_report,
+                  generate_bench,
+                  plan_tests,
+                  reproduce,
                   SimulationResult,
                   SweepResult,
                   discrepancy,
@@ -41,7 +62,8 @@ from .datasets.bench_format import BenchData, BenchDataError, load_bench
 from .design.outcome import DesignResult
 from .estimation.discrepancy import Criterion, DiscrepancyResult, DiscrepancySettings
 from .design.problem import DesignProblem, DesignSpace
-from .physics import BenchModel
+from .datasets.synthetic import SyntheticSpec
+from .physics import COMPONENTS, BenchModel
 from .physics.bench_sim import BenchSimulation, simulate_bench
 from .physics.friction import (
                      bearing_friction_Nm,
@@ -62,11 +84,15 @@ from .physics.params import (
 from .utils.version import __version__
 
 #: The scripting entry points, first in ``help(ehsa_opt)`` and in the API reference.
-ENTRY_POINTS = ("load_problem", "optimize", "sweep", "simulate", "identify", "discrepancy")
+ENTRY_POINTS = ("load_problem", "optimize", "sweep", "simulate", "identify", "discrepancy",
+                "discrepancy_report", "plan_tests", "generate_bench", "check_bench",
+                "convert_emps", "reproduce")
 
 __all__ = [*ENTRY_POINTS, "DesignProblem", "DesignSpace", "DesignResult", "SweepResult",
            "SimulationResult", "IdentificationResult", "DiscrepancySettings",
-           "DiscrepancyResult", "Criterion", "load_bench", "BenchData",
+           "DiscrepancyResult", "DiscrepancyReport", "Criterion", "TestPlanResult",
+           "BenchSet", "SyntheticSpec", "COMPONENTS", "ReproduceResult", "load_bench",
+           "BenchData",
            "BenchDataError", "ParameterError",
            "BenchModel", "BenchSimulation", "simulate_bench", "SineMotion", "SampledMotion",
            "HarvesterParams", "FrictionParams", "VehicleParams", "RoadParams",

@@ -43,19 +43,8 @@ def _writes_folder(p: argparse.ArgumentParser, *produces: str) -> None:
 
 # ------------------------------------------------------------------ bench
 def _cmd_bench_generate(args: argparse.Namespace) -> int:
-    from .datasets.synthetic import spec_from_options, write_synthetic
+    from . import generate_bench
     from .utils.progress import progress_bar
-
-    try:
-        spec = spec_from_options(
-            effects=args.effect, effect_params=args.effect_param, harvester=args.harvester,
-            frequencies_hz=args.frequencies_hz, loads_ohm=args.loads_ohm,
-            amplitudes_m=args.amplitude_m, protocols=args.protocol, seed=args.seed,
-            noise_force_N=args.noise_force_N, noise_voltage_V=args.noise_voltage_V,
-            cycles=args.cycles)
-    except ValueError as exc:
-        raise _UsageError(str(exc)) from None
-    n = spec.n_tests
     command = "ehsa-opt bench generate " + " ".join(
         [args.out_dir] + [f"--effect {e}" for e in args.effect]
         + [f"--effect-param {e}" for e in args.effect_param]
@@ -66,22 +55,30 @@ def _cmd_bench_generate(args: argparse.Namespace) -> int:
         + [f"{o} '{v}'" for o, v in (("--frequencies-hz", args.frequencies_hz),
                                       ("--loads-ohm", args.loads_ohm)) if v is not None]
         + [f"--protocol '{p}'" for p in args.protocol])
-    with progress_bar(total=n, desc="bench tests", unit="test") as bar:
-        out = write_synthetic(args.out_dir, spec, command=command, overwrite=args.overwrite,
-                              progress=lambda k: bar.update(1))
-    print(f"wrote {n} tests to {out} (truth in {Path(out) / 'truth.toml'})")
+    with progress_bar(desc="bench tests", unit="test") as bar:
+        def tick(done: int, total: int) -> None:
+            bar.total, bar.n = total, done
+            bar.refresh()
+        bench = generate_bench(
+            effects=args.effect, effect_params=args.effect_param, harvester=args.harvester,
+            frequencies_hz=args.frequencies_hz, loads_ohm=args.loads_ohm,
+            amplitudes_m=args.amplitude_m, protocols=args.protocol, seed=args.seed,
+            noise_force_N=args.noise_force_N, noise_voltage_V=args.noise_voltage_V,
+            cycles=args.cycles, command=command, progress=tick)
+    out = bench.save(args.out_dir, overwrite=args.overwrite)
+    print(f"wrote {len(bench.tests)} tests to {out} (truth in {Path(out) / 'truth.toml'})")
     return 0
 
 
 def _cmd_bench_check(args: argparse.Namespace) -> int:
-    from .datasets.bench_format import check_bench
-    print(check_bench(args.data_dir, lenient=args.lenient))
+    from . import check_bench
+    print(check_bench(args.data_dir, lenient=args.lenient).summary())
     return 0
 
 
 def _cmd_bench_convert_emps(args: argparse.Namespace) -> int:
-    from .datasets.emps import convert_emps
-    out = convert_emps(args.source_dir, args.out_dir, overwrite=args.overwrite)
+    from . import convert_emps
+    out = convert_emps(args.source_dir).save(args.out_dir, overwrite=args.overwrite)
     print(f"wrote EMPS bench data to {out}")
     return 0
 
@@ -141,18 +138,19 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
 
 def _cmd_plan_tests(args: argparse.Namespace) -> int:
-    from .design.test_plan import plan_from_files
-    plan, harv = plan_from_files(args.identification, args.vehicle, args.rig, n_tests=args.n,
-                                 weight=args.weight)
-    print("\n".join(plan.lines() + plan.write(args.out, harv)))
-    return 0 if plan.success else 1
+    from . import plan_tests
+    result = plan_tests(args.identification, args.vehicle, args.rig, n_tests=args.n,
+                        weight=args.weight)
+    print(result.summary())
+    written = result.save(args.out)
+    if written:
+        print(f"wrote {written[0]} (skeleton for the rig operator) and {written[1]}")
+    return 0 if result.success else 1
+
+
 # ------------------------------------------------------------------ discrepancy
 def _cmd_discrepancy(args: argparse.Namespace) -> int:
-    from . import DiscrepancySettings
-    from .pipeline.discrepancy_report import run_with_budget
-
-    from .datasets.embedded import load_truth
-    load_truth(args.data_dir)  # a truth.toml that cannot be used is refused before the work
+    from . import DiscrepancySettings, discrepancy_report
     members = DiscrepancySettings().candidates
     members += tuple(m for m in args.with_members if m not in members)
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
@@ -161,17 +159,23 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
                                    scheduler=args.scheduler,
                                    **({} if args.max_fits is None
                                       else {"max_member_fits": args.max_fits or None}))
-    return run_with_budget(args.data_dir, args.out, settings, args.wall_cap_s,
-                           lambda m: print(m, flush=True))
+    report = discrepancy_report(args.data_dir, settings, wall_cap_s=args.wall_cap_s,
+                                on_message=lambda m: print(m, flush=True))
+    js, md = report.save(args.out)[:2]
+    seconds = report.record.get("seconds")
+    print(f"wrote {js} and {md}" + ("" if seconds is None else f" ({seconds:.0f} s)"))
+    return 0 if report.success else 1
 
 
 # ------------------------------------------------------------------ reproduce
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from .pipeline.reproduce import reproduce
-    report = reproduce(out_dir=args.out, quick=args.quick, jobs=args.jobs,
-                       data_dir=args.data, vehicle=args.vehicle,
-                       friction_bounds=args.friction_bounds)
-    print(f"report: {report}")
+    from tqdm.auto import tqdm
+
+    from . import reproduce
+    reproduce(quick=args.quick, jobs=args.jobs, data=args.data, vehicle=args.vehicle,
+              friction_bounds=args.friction_bounds, workdir=args.out,
+              on_message=tqdm.write)  # prints above the progress bar
+    print(f"report: {Path(args.out) / 'REPORT.md'}")
     return 0
 
 
@@ -198,7 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "default; other rigs, amplitudes and non-sine protocols)")
     g.add_argument("out_dir", metavar="OUT_DIR")
     g.add_argument("--seed", type=_NON_NEGATIVE, default=0, help="noise seed (default 0)")
-    from .physics.components import COMPONENTS
+    from . import COMPONENTS
     g.add_argument("--effect", action="append", default=[], metavar="EFFECT",
                    help="hide a physical effect in the data (repeatable): "
                         + ", ".join(sorted(COMPONENTS)))

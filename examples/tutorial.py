@@ -21,15 +21,14 @@ import tempfile
 from pathlib import Path
 
 import ehsa_opt
-from ehsa_opt.datasets.synthetic import SyntheticSpec, write_synthetic
 
 HERE = Path(__file__).parent
 
 
 def main(out: Path) -> None:
     # 1. bench data (a stand-in for your own CSVs)
-    data_dir = write_synthetic(out / "bench", SyntheticSpec(
-        effects={}, frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(15.0, 47.0), seed=3))
+    data_dir = ehsa_opt.generate_bench(frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(15.0, 47.0),
+                                       seed=3).save(out / "bench")
     data = ehsa_opt.load_bench(data_dir)  # strict checks: a bad file is refused, named
     print(f"1. {len(data.tests)} bench tests in {data_dir}")
 

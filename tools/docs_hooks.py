@@ -20,6 +20,13 @@ Command help
     A line ``{{ ehsa-opt-help bench generate }}`` in a page becomes a console block with
     ``ehsa-opt bench generate --help`` as the code prints it (100 columns), so the
     documented options are always the real ones.
+
+Gallery
+    :func:`on_files` adds the figures of the committed reference report
+    (``results/reference``) to the site under ``gallery/``, and the line
+    ``{{ ehsa-opt-gallery }}`` becomes the gallery of ``tools/gallery.py`` (a caption per
+    figure); a report figure without caption, or a caption without its file, fails the
+    build.
 """
 
 from __future__ import annotations
@@ -43,6 +50,7 @@ _ROLE = re.compile(r":(?:%s):<code>([^<]+)</code>" % "|".join(re.escape(r) for r
 _XREF = re.compile(r'<code class="xref" data-xref="([^"]+)">([^<]*)</code>')
 _ANCHOR = re.compile(r'id="(ehsa_opt(?:\.[A-Za-z_][A-Za-z0-9_]*)*)"')
 _HELP = re.compile(r"^\{\{ ehsa-opt-help ([a-z -]*?) ?\}\}$", re.MULTILINE)
+_GALLERY = re.compile(r"^\{\{ ehsa-opt-gallery \}\}$", re.MULTILINE)
 
 _anchors: dict[str, str] = {}  # documented dotted name -> page url
 
@@ -72,8 +80,36 @@ def _mark(match: re.Match) -> str:
             f"{html.escape(shown)}</code>")
 
 
+def _gallery() -> Any:
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("ehsa_opt_gallery", ROOT / "tools" / "gallery.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def on_files(files: Any, config: Any) -> Any:
+    """Add the reference report's figures to the site (``gallery/…``); refuse a figure
+    without caption."""
+    from mkdocs.structure.files import File
+    gallery = _gallery()
+    problems = gallery.check()
+    if problems:
+        raise ValueError("gallery (tools/gallery.py):\n" + "\n".join(problems))
+    for figs in gallery.FIGURES.values():
+        for f in figs:
+            files.append(File.generated(config, f"{gallery.SITE_DIR}/{f.path}",
+                                        abs_src_path=str(gallery.REFERENCE / f.path)))
+    return files
+
+
 def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
-    """Expand the ``{{ ehsa-opt-help COMMAND }}`` lines."""
+    """Expand the ``{{ ehsa-opt-help COMMAND }}`` lines and ``{{ ehsa-opt-gallery }}``."""
+    if _GALLERY.search(markdown):
+        depth = page.file.src_uri.count("/")
+        up = "../" * depth
+        text = _gallery().markdown(image_prefix=up + "gallery/", guide_prefix=up)
+        markdown = _GALLERY.sub(lambda m: text, markdown)
     return _HELP.sub(lambda m: command_help(m.group(1).split()), markdown)
 
 

@@ -57,7 +57,8 @@ from .checks import check_test_signals
 from .run_order import RUN_KEYS, check_run_sequence, parse_run_keys
 
 __all__ = ["BenchDataError", "BenchDataWarning", "BenchTest", "BenchData", "load_bench",
-           "write_bench", "check_bench", "COLUMNS", "MARKER_NAME", "foreign_content",
+           "write_bench", "check_bench", "load_bench_checked", "check_summary",
+           "COLUMNS", "MARKER_NAME", "foreign_content",
            "write_marker", "read_number_table"]
 
 #: Required CSV columns, in order; ``voltage_V`` only for rigs with a generator.
@@ -454,10 +455,24 @@ def check_bench(path: str | Path, *, lenient: bool = False) -> str:
 
     With ``lenient``, physics problems are listed in the summary as warnings.
     """
+    data, notes = load_bench_checked(path, lenient=lenient)
+    return check_summary(data, notes)
+
+
+def load_bench_checked(path: str | Path, *, lenient: bool = False
+                       ) -> tuple[BenchData, list[str]]:
+    """:func:`load_bench` and the warnings it gave (``lenient``: physics problems as
+    warnings instead of errors), as text."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", BenchDataWarning)
         data = load_bench(path, lenient=lenient)
-    notes = [str(w.message) for w in caught if issubclass(w.category, BenchDataWarning)]
+    return data, [str(w.message) for w in caught if issubclass(w.category, BenchDataWarning)]
+
+
+def check_summary(data: BenchData, notes: Iterable[str] = ()) -> str:
+    """The summary ``ehsa-opt bench check`` prints: tests, samples, rig, and ``OK`` or
+    the warnings (``notes``)."""
+    notes = list(notes)
     n = sum(t.n_samples for t in data.tests)
     kind = "with generator" if data.has_generator else "without generator (no voltage)"
     head = (f"{data.path}: {len(data.tests)} tests, {n} samples, rig "

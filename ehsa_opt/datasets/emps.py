@@ -11,7 +11,7 @@ import numpy as np
 
 from .bench_format import BenchTest, write_bench
 
-__all__ = ["GAIN_N_PER_V", "EMPS_REFERENCE", "convert_emps"]
+__all__ = ["GAIN_N_PER_V", "EMPS_REFERENCE", "read_emps", "convert_emps"]
 
 #: Drive gain g_τ (N/V): force on the load side = g_τ × controller voltage.
 GAIN_N_PER_V = 35.15065188248547
@@ -53,18 +53,14 @@ def _read(path: Path, columns: tuple[str, ...], min_columns: int) -> np.ndarray:
 _EST_COLUMNS = ("time_s", "position_m", "reference_position_m", "control_voltage_V")
 
 
-def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = False) -> Path:
-    """Convert ``emps_estimation.csv`` (and the validation set) to bench format.
-
-    Writes ``out_dir/bench.toml`` + ``emps_estimation.csv`` and
-    ``out_dir/validation/`` with the pulse test (``pulses.csv``: the pulse signal, a
-    0/5 square wave that the benchmark calls ``pulses_N``; at each edge the recorded force
-    steps by g_tau x 5 V, so it is 5 V added to the controller output, already contained
-    in the force — a marker of the pulse edges, not a missing force).
-    Both sources are validated (header, columns, rows, finite values, increasing time)
-    before anything is written.
-    """
-    from .bench_format import write_marker
+def read_emps(source_dir: str | Path) -> tuple[BenchTest, BenchTest, dict, str]:
+    """The raw EMPS files of ``source_dir`` as bench tests: the estimation test, the
+    validation test (the force contains the pulses), the ``[rig]`` table and the text of
+    ``pulses.csv`` (the pulse signal, a 0/5 square wave that the benchmark calls
+    ``pulses_N``; at each edge the recorded force steps by g_tau x 5 V, so it is 5 V added
+    to the controller output, already contained in the force — a marker of the pulse
+    edges, not a missing force).  Both sources are validated (header, columns, rows,
+    finite values, increasing time); nothing is written."""
     src = Path(source_dir)
     est = _read(src / "emps_estimation.csv", _EST_COLUMNS, 4)
     val = _read(src / "emps_validation_pulses.csv", _EST_COLUMNS, 5)  # + the pulse force
@@ -84,13 +80,26 @@ def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = 
                                   "steps the recorded force by g_tau x 5 V = 176 N; the force "
                                   "here contains the pulses, pulses.csv marks them")
     pulses = "time_s,pulse_V\n" + "\n".join(
-        f"{t:.9g},{f:.9g}" for t, f in zip(val[:, 0], val[:, 4]))
+        f"{t:.9g},{f:.9g}" for t, f in zip(val[:, 0], val[:, 4])) + "\n"
+    return test, vtest, rig, pulses
+
+
+def convert_emps(source_dir: str | Path, out_dir: str | Path, overwrite: bool = False) -> Path:
+    """Convert ``emps_estimation.csv`` (and the validation set) to bench format.
+
+    Writes ``out_dir/bench.toml`` + ``emps_estimation.csv`` and
+    ``out_dir/validation/`` with the pulse test and ``pulses.csv``
+    (:func:`read_emps`); an existing ``README.md`` of ``out_dir`` is kept.  Both sources
+    are validated before anything is written.
+    """
+    from .bench_format import write_marker
+    test, vtest, rig, pulses = read_emps(source_dir)
     out = Path(out_dir)
     readme = (out / "README.md").read_text() \
         if (out / "README.md").is_file() and not (out / "README.md").is_symlink() else ""
     write_bench(out, [test], rig=rig, overwrite=overwrite,
                 extra_files={"README.md": readme} if readme else None)
     write_bench(out / "validation", [vtest], rig=rig, overwrite=True,
-                extra_files={"pulses.csv": pulses + "\n"})
+                extra_files={"pulses.csv": pulses})
     write_marker(out)  # the validation folder is ours too
     return out

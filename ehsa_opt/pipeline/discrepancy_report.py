@@ -3,7 +3,6 @@ figures, plus the ``reproduce`` step (bench_prototype in quick mode, and EMPS)."
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 import re
@@ -19,7 +18,8 @@ from ..utils.io import atomic_write_json, atomic_write_text
 from .base import Context, StepOutput
 from .paper_reference import EMPS_PUBLISHED, EMPS_REFERENCE
 
-__all__ = ["write_report", "write_partial_report", "run_with_budget", "report_markdown", "step_discrepancy",
+__all__ = ["write_report", "report_documents", "write_partial_report", "partial_report",
+           "report_markdown", "step_discrepancy",
            "truth_error"]
 
 
@@ -279,19 +279,26 @@ def _validation_markdown(res: DiscrepancyResult) -> list[str]:
     return L
 
 
+def report_documents(res: DiscrepancyResult) -> tuple[dict, str]:
+    """``discrepancy.json`` (standard-JSON types, with the true parameters' error of
+    synthetic data) and ``report.md`` of a result; nothing written."""
+    floor = _floor(res)
+    doc = json.loads(json.dumps({**res.as_dict(), "error_true_parameters": floor},
+                                default=_json_default))
+    return doc, (f"# Model-discrepancy report: {res.data_path}\n\n"
+                 + report_markdown(res, floor=floor))
+
+
 def write_report(res: DiscrepancyResult, out_dir: str | Path) -> tuple[Path, Path]:
     """Write ``discrepancy.json``, ``report.md`` and ``figures/`` into ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     res.write(out / "figures")
-    floor = _floor(res)
+    doc, markdown = report_documents(res)
     js = out / "discrepancy.json"
-    doc = json.loads(json.dumps({**res.as_dict(), "error_true_parameters": floor},
-                                default=_json_default))
     atomic_write_json(js, doc, indent=2)  # standard JSON: NaN -> null
     md = out / "report.md"
-    atomic_write_text(md, f"# Model-discrepancy report: {res.data_path}\n\n"
-                      + report_markdown(res, floor=floor))
+    atomic_write_text(md, markdown)
     return js, md
 
 
@@ -313,78 +320,32 @@ def inner_budget_s(budget_s: float) -> float:
     return max(INNER_BUDGET_SHARE * budget_s, budget_s - RESERVE_S)
 
 
-def run_with_budget(data_dir: str | Path, out_dir: str | Path, settings: DiscrepancySettings,
-                    budget_s: float | None, say) -> int:
-    """``ehsa-opt discrepancy``: the workflow and its report, within its work budget and a
-    wall-time safety cap.
-
-    The run goes to a forked worker (:func:`~ehsa_opt.utils.process.run_with_deadline`)
-    that is killed when ``budget_s`` is reached; the report is then the partial answer of
-    :func:`write_partial_report`.  Syntax and layout errors of the data are raised here,
-    before any work.  Returns the exit code: 0 done, 1 cut at the budget (by the kill or
-    by the workflow's own deadline, :func:`inner_budget_s`).
-    ``budget_s`` (the wall-time safety cap, s) 0 or None: none, the run stays in this
-    process; the work budget is ``settings.max_member_fits``."""
-    def job(send) -> None:
-        res = run_discrepancy(data_dir, settings, log=send)
-        js, md = write_report(res, out_dir)
-        send(res.message)
-        floor = json.loads(js.read_text()).get("error_true_parameters")
-        if floor is not None:
-            send(f"true parameters (truth.toml) on the same tests: {floor:.3f} %")
-        send(f"wrote {js} and {md} ({res.seconds:.0f} s)")
-
-    if isinstance(settings.scheduler, str):  # refused before any work, not in the worker
-        from ..utils.cluster import check_scheduler
-        check_scheduler(settings.scheduler)
-    if not budget_s:
-        job(say)
-        return 0
-    import warnings
-
-    from ..datasets.bench_format import load_bench
-    from ..utils.process import run_with_deadline
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        load_bench(data_dir, lenient=True)
-    # the workflow itself stops starting candidate fits at inner_budget_s (a partial
-    # answer decided on what was fitted); the kill at the budget is the backstop for a
-    # fit or baseline that overruns
-    inner = inner_budget_s(budget_s)
-    if settings.wall_cap_s is None or settings.wall_cap_s > inner:
-        settings = dataclasses.replace(settings, wall_cap_s=inner)
-    say(f"wall-time safety cap {budget_s:g} s (--wall-cap-s; 0 for none): no candidate fit "
-        f"starts after {inner:.0f} s; work budget "
-        + (f"{settings.max_member_fits} member fits" if settings.max_member_fits else "none")
-        + " (--max-fits)")
-    run = run_with_deadline(job, budget_s, say)
-    if run.error is not None:
-        raise ValueError(f"discrepancy on {data_dir}: {run.error[0]}: {run.error[1]}")
-    if not run.finished:
-        js, msg = write_partial_report(out_dir, data_dir, run.messages, budget_s, run.seconds)
-        say(msg)
-        say(f"wrote {js}")
-        return 1
-    js = Path(out_dir) / "discrepancy.json"
-    if js.exists() and json.loads(js.read_text()).get("partial"):
-        return 1  # the workflow stopped at its own deadline: a stated partial answer
-    return 0
-
-
 _ROUND = re.compile(r"^round (\d+) \(error ([0-9.eE+-]+) %, floor ([0-9.eE+-]+) %")
 _ADDED = re.compile(r"^round (\d+): added (.+), (.+?) error ([0-9.eE+-]+) %")
 
 
 def write_partial_report(out_dir: str | Path, data_dir: str | Path, messages: list[str],
                          budget_s: float, seconds: float) -> tuple[Path, str]:
-    """The stated result of a run cut at its time budget: ``discrepancy.json`` (with
-    ``success = false``, ``partial = true``) and ``report.md``, built from the progress
-    messages of the workflow — the effects named in the rounds that completed, the error
-    before and after them, and the last message (where it was cut).
-
-    Returns the JSON path and the one-line message."""
+    """Write :func:`partial_report` (``discrepancy.json`` and ``report.md``) into
+    ``out_dir``.  Returns the JSON path and the one-line message."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    doc, markdown, msg = partial_report(data_dir, messages, budget_s, seconds)
+    js = out / "discrepancy.json"
+    atomic_write_json(js, doc, indent=2)
+    atomic_write_text(out / "report.md", markdown)
+    return js, msg
+
+
+def partial_report(data_dir: str | Path, messages: list[str], budget_s: float,
+                   seconds: float) -> tuple[dict, str, str]:
+    """The stated result of a run cut at its time budget: ``discrepancy.json``'s content
+    (with ``success = false``, ``partial = true``) and ``report.md``, built from the
+    progress messages of the workflow — the effects named in the rounds that completed,
+    the error before and after them, and the last message (where it was cut); nothing
+    written.
+
+    Returns the document, the Markdown and the one-line message."""
     before = floor = None
     steps, rounds = [], 0
     for m in messages:
@@ -412,13 +373,10 @@ def write_partial_report(out_dir: str | Path, data_dir: str | Path, messages: li
            "error_before": before, "error_after": steps[-1]["error_after"] if steps else before,
            "noise_floor_percent": floor, "data": str(data_dir),
            "last_message": messages[-1] if messages else None, "log": messages}
-    js = out / "discrepancy.json"
-    atomic_write_json(js, doc, indent=2)
-    atomic_write_text(out / "report.md",
-                      f"# Model-discrepancy report: {data_dir}\n\n**Cut at the wall-time safety cap.** "
-                      f"{msg}.\n\nLast progress message: `{doc['last_message']}`\n\n"
-                      "Progress of the run:\n\n" + "\n".join(f"- {m}" for m in messages) + "\n")
-    return js, msg
+    markdown = (f"# Model-discrepancy report: {data_dir}\n\n**Cut at the wall-time safety cap.** "
+                f"{msg}.\n\nLast progress message: `{doc['last_message']}`\n\n"
+                "Progress of the run:\n\n" + "\n".join(f"- {m}" for m in messages) + "\n")
+    return json.loads(json.dumps(doc)), markdown, msg
 
 
 def _floor(res: DiscrepancyResult) -> float | None:

@@ -39,14 +39,17 @@ def snapshot(folder: Path) -> dict[str, bytes]:
 def no_work(monkeypatch):
     """The commands' library entry points fail the test if they are reached: a refusal
     must come before any work."""
+    import importlib
+
     import ehsa_opt.design.test_plan as test_plan
-    import ehsa_opt.pipeline.discrepancy_report as discrepancy_report
     import ehsa_opt.pipeline.reproduce as reproduce
 
     def reached(*a, **k):
         raise AssertionError("the work started before the output folder was checked")
     monkeypatch.setattr(test_plan, "plan_from_files", reached)
-    monkeypatch.setattr(discrepancy_report, "run_with_budget", reached)
+    # the module (``ehsa_opt.api.discrepancy`` as an attribute is the function)
+    discrepancy = importlib.import_module("ehsa_opt.api.discrepancy")
+    monkeypatch.setattr(discrepancy, "run_discrepancy", reached)
     monkeypatch.setattr(reproduce, "reproduce", reached)
 
 
