@@ -52,7 +52,7 @@ from .judge import skew_found
 from .criterion import DEFAULT_CRITERION, Criterion
 from .evidence import delta_bic
 from .prepared import PreparedTest
-from .terms import LAG_GRID_S
+from .record_shift import LAG_GRID_S
 
 __all__ = ["VoltageSkew", "find_voltage_skew", "em_force_per_volt", "realign_voltage",
            "voltage_shift_curves"]

@@ -35,7 +35,7 @@ from ..fit import fit_group
 from ..prepared import PreparedTest, decimated, prepare_tests
 from ..rig import predict
 from .record_change import RecordChange
-from ..terms import LAG_GRID_S, per_test_delays, shifted_force, shift_lag
+from ..record_shift import LAG_GRID_S, per_test_delays, shifted_force, shift_lag
 
 __all__ = ["try_lag", "per_test_delays", "screen_lag", "SCREEN_SHARE"]
 
