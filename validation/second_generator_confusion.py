@@ -77,10 +77,14 @@ def campaign_dir(root: Path, case: tuple) -> Path:
     return d
 
 
-def run_cli(data: Path, out: Path, jobs: int, cut_s: float, budget_s: float | None) -> dict:
-    """Run ``ehsa-opt discrepancy`` in a fresh process group; wall time, ru_maxrss, log."""
+def run_cli(data: Path, out: Path, jobs: int, cut_s: float, budget_s: float | None,
+            members: tuple[str, ...] = ()) -> dict:
+    """Run ``ehsa-opt discrepancy`` in a fresh process group; wall time, ru_maxrss, log.
+    ``members``: members listed by choice (``--with``)."""
     cmd = [sys.executable, "-m", "ehsa_opt.cli", "discrepancy", str(data), "--out", str(out),
            "--jobs", str(jobs)] + ([] if budget_s is None else ["--budget-s", f"{budget_s:g}"])
+    for m in members:
+        cmd += ["--with", m]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     log_path = out.with_suffix(".log")
     t0 = time.perf_counter()
@@ -125,7 +129,8 @@ def run_case(case: tuple, args) -> dict:
         shutil.rmtree(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     with heavy_lock(args.lock):
-        run = run_cli(data, out, args.jobs, args.cut_s, args.budget_s)
+        run = run_cli(data, out, args.jobs, args.cut_s, args.budget_s,
+                      tuple(m for m in (args.with_members or "").split(",") if m))
     row = {"case": cid, "expected": expected, "rig": rig, "protocol": protocol,
            "tests": n_tests, "seed": seed, **{k: v for k, v in run.items() if k != "log"}}
     js = out / "discrepancy.json"
@@ -212,6 +217,8 @@ def main(argv=None) -> int:
     ap.add_argument("--budget-s", type=float, default=None,
                     help="--budget-s of ehsa-opt discrepancy (default: the command's own; "
                          "0 for none, to see how long an uncut run takes)")
+    ap.add_argument("--with", dest="with_members", default="",
+                    help="members listed by choice, comma-separated (discrepancy --with)")
     ap.add_argument("--lock", default="/tmp/ehsa-heavy.lock",
                     help="lock file held while generating and running ('' for none)")
     ap.add_argument("--data-root", default=str(ROOT / "results" / "second_generator" / "data"))
