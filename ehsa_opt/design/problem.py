@@ -85,9 +85,14 @@ class DesignSpace:
     upper: tuple[float, ...]
     log: tuple[bool, ...]
     where: str = "design space"
+    #: integer variables (a catalogue index): value lo + ⌊u (hi − lo + 1)⌋ of the unit
+    #: coordinate u, the rounding pymoo applies to integer variables of a real-coded genome
+    integer: tuple[bool, ...] = ()
 
     def __post_init__(self) -> None:
         n = len(self.names)
+        if self.integer and len(self.integer) != n:
+            raise ParameterError(f"{self.where}: integer flags differ in length from names")
         if n == 0:
             raise ParameterError(f"{self.where}: no design variables; give at least one bound")
         if not (len(self.lower) == len(self.upper) == len(self.log) == n):
@@ -148,22 +153,31 @@ class DesignSpace:
         for k, (name, lo, hi, lg) in enumerate(zip(self.names, self.lower, self.upper,
                                                    self.log)):
             u = U[..., k]
-            out[name] = lo * (hi / lo) ** u if lg else lo + (hi - lo) * u
+            if self.integer and self.integer[k]:
+                out[name] = lo + np.minimum(np.floor(u * (hi - lo + 1.0)), hi - lo)
+            else:
+                out[name] = lo * (hi / lo) ** u if lg else lo + (hi - lo) * u
         return out
 
     def to_unit(self, design: Mapping[str, Any]) -> np.ndarray:
         """Unit-cube coordinates of a physical design (dict of scalars/arrays)."""
         cols = []
-        for name, lo, hi, lg in zip(self.names, self.lower, self.upper, self.log):
+        for k, (name, lo, hi, lg) in enumerate(zip(self.names, self.lower, self.upper,
+                                                   self.log)):
             if name not in design:
                 raise ParameterError(f"{self.where}: design lacks '{name}'")
             v = np.asarray(design[name], dtype=float)
-            cols.append(np.log(v / lo) / np.log(hi / lo) if lg else (v - lo) / (hi - lo))
+            if self.integer and self.integer[k]:  # the middle of the value's interval
+                cols.append((np.round(v) - lo + 0.5) / (hi - lo + 1.0))
+            else:
+                cols.append(np.log(v / lo) / np.log(hi / lo) if lg else (v - lo) / (hi - lo))
         return np.stack(cols, axis=-1)
 
     def as_dict(self) -> dict[str, Any]:
-        return {n: {"lower": lo, "upper": hi, "log": lg}
-                for n, lo, hi, lg in zip(self.names, self.lower, self.upper, self.log)}
+        integer = self.integer or (False,) * self.n
+        return {n: {"lower": lo, "upper": hi, "log": lg, **({"integer": True} if it else {})}
+                for n, lo, hi, lg, it in zip(self.names, self.lower, self.upper, self.log,
+                                             integer)}
 
 
 #: Paper Table 3 (R_e lower bound 1 Ω is our assumption).

@@ -82,9 +82,16 @@ def test_goal_attainment_and_nsga2_respect_the_rated_limits():
 def test_catalogue_file_is_read_and_bad_entries_are_refused(tmp_path):
     motors = load_catalogue()
     assert len(motors) >= 2 and all(m.source for m in motors)
-    maxon = next(m for m in motors if m.name.startswith("maxon"))
+    maxon = next(m for m in motors if m.name.startswith("maxon RE 65 353297"))
     assert maxon.speed_constant_rpm_per_V == pytest.approx(77.8)
     assert maxon.rating.current_A == 6.8
+    # the 50–1000 W class, each with its limits; a series' winding range rewinds the frame
+    assert len(motors) >= 10 and all(m.rating.current_A and m.max_speed_rpm for m in motors)
+    w = maxon.winding(2 * maxon.voltage_constant_Vs_per_rad)  # k_n 38.9: the 70 V winding
+    assert w["internal_resistance_ohm"] == pytest.approx(4 * 0.365)
+    assert w["rated_current_A"] == pytest.approx(3.4) and w["max_speed_rpm"] == 5500.0
+    re65_70 = next(m for m in motors if m.name == "maxon RE 65 (70 V)")
+    assert re65_70.internal_resistance_ohm == pytest.approx(1.41)  # the real 70 V winding
     bad = tmp_path / "c.toml"
     bad.write_text('[[motor]]\nname = "x"\nspeed_constant_rpm_per_V = 100.0\n'
                    'internal_resistance_ohm = 1.0\ninductance_H = 1e-4\n'
