@@ -227,7 +227,7 @@ class CatalogueMotor:
         return d
 
 
-MOTOR_MODELS: tuple[str, ...] = ("scaling", "paper", "catalogue")
+MOTOR_MODELS: tuple[str, ...] = ("scaling", "paper", "catalogue", "select")
 
 _MOTOR_KEYS = ("name", "speed_constant_rpm_per_V", "voltage_constant_Vs_per_rad",
                "internal_resistance_ohm", "inductance_H", "motor_inertia_gcm2",
