@@ -171,10 +171,12 @@ class DesignConfig:
     raw: Mapping[str, Any] = field(default_factory=dict)
     n_freq: int = 1024
     physical: Any = None  #: the :class:`ehsa_opt.datasets.problem_file.QuarterCarProblem` of the file
-    #: generator model of the design space: "scaling" (default: the [harvester]'s frame
-    #: rewound, R_i, L_i ∝ K_e², with rated limits), "paper" (R_i, L_i fixed, no limits:
-    #: the paper's assumption) or "catalogue" (one run per motor of ``catalogue``)
-    motor_model: str = "scaling"
+    #: generator model of the design space: "select" (motor, winding and screw chosen from
+    #: catalogues, every hardware limit a constraint), "scaling" (the [harvester]'s frame
+    #: rewound, R_i, L_i ∝ K_e², with the ratings [motor] gives), "catalogue" (one run per
+    #: motor of ``catalogue``) or "paper" (R_i, L_i fixed, no limits: the paper's
+    #: assumption; the default without a [motor] table)
+    motor_model: str = "paper"
     motor_rating: Any = None  #: RatedLimits of the scaling frame (None: the default)
     catalogue: str | None = None
     #: screw catalogue of a "select" model (None: the lead stays a continuous variable)
@@ -362,7 +364,10 @@ def _parse_motor(mt: Mapping[str, Any], path: str, space: DesignSpace
     where = f"{path} [motor]"
     _check_keys(mt, ("model", "catalogue", "rated_voltage_V", "rated_current_A",
                      "rated_power_W"), where)
-    model = str(mt.get("model", "catalogue" if "catalogue" in mt else "scaling"))
+    # default: a catalogue when one is named, the scaling frame when its ratings are given,
+    # else the paper's space (no hardware data, no limits: labelled as the paper's)
+    model = str(mt.get("model", "catalogue" if "catalogue" in mt else "scaling" if any(
+        k.startswith("rated_") for k in mt) else "paper"))
     if model not in MOTOR_MODELS:
         near = nearest_name(model, MOTOR_MODELS)
         raise ParameterError(f"{where} model: unknown '{model}'"

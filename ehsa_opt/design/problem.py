@@ -324,6 +324,11 @@ class QuarterCarObjectives:
                                          st.peak_quantile)
                       if rate is not None else z2 * m["voltage_rms_V"])
             out["peak_voltage_V"] = v_peak
+            if rate is not None:  # the 95 % interval of the road's peak (2.5 %, 97.5 %)
+                for key, q in (("peak_voltage_low_V", 0.025), ("peak_voltage_high_V", 0.975)):
+                    out[key] = rice_peak_quantile(m["voltage_rms_V"], re * rate,
+                                                  self.road.length_m / self.road.speed_m_per_s,
+                                                  q)
             out.update(limit_entry("rated_voltage", v_peak, v_lim,
                                    gaussian_fraction_beyond(v_lim, m["voltage_rms_V"])))
         if "rated_power" in names:
