@@ -36,7 +36,8 @@ from ..physics.params import HarvesterParams, RoadParams, VehicleParams
 from .limits import LimitSettings, gaussian_fraction_beyond, limit_entry, rice_peak_quantile
 from .problem import OBJECTIVE_NAMES, DesignSpace
 
-__all__ = ["SelectionObjectives", "selection_space", "SELECTION_EXTRAS", "motor_names"]
+__all__ = ["SelectionObjectives", "selection_space", "SELECTION_EXTRAS", "motor_names",
+           "realisable_winding"]
 
 #: Evaluator outputs besides objectives and limits.
 SELECTION_EXTRAS = ("comfort_weighted_rms_m_s2", "power_W", "efficiency", "power_dimensionless",
@@ -274,3 +275,34 @@ def motor_names(ev: Any, designs: Mapping[str, Any]) -> Sequence[str]:
     """The motor name of each design of a selection evaluator."""
     idx = np.ravel(ev.hardware(designs)["motor_index"])
     return [ev.motors[int(i)].name for i in idx]
+
+
+def realisable_winding(speed_constant_rpm_per_V: float, motors: Sequence[Any]
+                       ) -> dict[str, Any]:
+    """The winding a real series offers nearest a wanted k_n (e.g. the paper's Table 4
+    optimum, designed with R_i fixed): among the catalogue ``motors``, the one whose
+    winding range holds k_n (or whose range comes nearest, in log k_n), rewound to the
+    nearest k_n it offers.  Returns the motor's name and source and the harvester fields
+    of that winding (``speed_constant_rpm_per_V``, ``voltage_constant_Vs_per_rad``,
+    ``internal_resistance_ohm``, ``inductance_H``, ``motor_inertia_gcm2``) with its limits,
+    so a table computed at the paper's assumption can be recomputed beside it."""
+    want = math.log(float(speed_constant_rpm_per_V))
+
+    def span(m: Any) -> tuple[float, float]:
+        r = m.speed_constant_range_rpm_per_V if m.rewindable else (
+            m.speed_constant_rpm_per_V, m.speed_constant_rpm_per_V)
+        return math.log(r[0]), math.log(r[1])
+
+    def gap(m: Any) -> float:
+        lo, hi = span(m)
+        return max(lo - want, want - hi, 0.0)
+    best = min(motors, key=gap)
+    lo, hi = span(best)
+    kn = math.exp(min(max(want, lo), hi))
+    ke = 60.0 / (2.0 * math.pi * kn)
+    w = best.winding(ke)
+    out = {"motor": best.name, "source": best.source, "speed_constant_rpm_per_V": kn,
+           "voltage_constant_Vs_per_rad": ke, "motor_inertia_gcm2": best.motor_inertia_gcm2,
+           "log_distance": gap(best)}
+    out.update({k: float(np.ravel(v)[0]) for k, v in w.items()})
+    return out
