@@ -338,11 +338,13 @@ def _explain(cfg: DesignConfig, problem: DesignProblem, rec: dict[str, Any], met
     if method == "nsga2" and front:
         from .selection import motor_names
         designs = {k: np.asarray(front[k], float) for k in problem.space.names}
-        front["motor"] = np.array(motor_names(ev, designs), dtype=object)
-        rec["front_motors"] = sorted(set(front["motor"][np.asarray(front["feasible"], bool)]))
+        front["motor_name"] = np.array(motor_names(ev, designs), dtype=object)
+        rec["front_motors"] = sorted(set(front["motor_name"][np.asarray(front["feasible"],
+                                                                        bool)]))
         if ev.screws:
             idx = np.ravel(ev.hardware(designs)["screw_index"])
-            front["screw"] = np.array([ev.screws[int(i)].name for i in idx], dtype=object)
+            front["screw_name"] = np.array([ev.screws[int(i)].name for i in idx],
+                                           dtype=object)
         roads = rec.get("time_domain_check", {}).get("held_out_roads", {})
         if roads.get("objectives"):
             from .limit_check import hypervolume_interval

@@ -252,7 +252,8 @@ class DesignResult:
             ga_rec = self.record.get("goal_attainment")
             ga_pt = ga_rec["objectives"] if ga_rec else None
             figs["pareto"] = pd.pareto_projections(
-                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"))
+                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"),
+                self._front_marks(res))
             figs["parallel"] = pd.parallel_coordinates(
                 res, None if ga_rec is None else {**ga_rec["design"], **ga_pt})
             figs["hypervolume"] = pd.hypervolume_history({front_label: res.history},
@@ -296,6 +297,27 @@ class DesignResult:
             if k != key:
                 plt.close(f)
         return figs[key]
+
+    def _front_marks(self, res: Any) -> dict[str, Any]:
+        """What the front figure marks: feasibility, the motor per point, the motor model
+        and the pick's active bounds."""
+        import numpy as np
+        r, front = self.record, self.front or {}
+        n = res.F.shape[0]
+        marks: dict[str, Any] = {"active_bounds": r.get("active_bounds") or []}
+        if r.get("feasible_front") is not None and len(r["feasible_front"]) == n:
+            marks["feasible"] = np.asarray(r["feasible_front"], bool)
+        for key in ("motor_name", "motor"):  # a selection's names; a catalogue's column
+            col = front.get(key)
+            if col is not None and len(col) == n and not np.issubdtype(
+                    np.asarray(col).dtype, np.number):
+                marks["motor"] = [str(m) for m in col]
+                break
+        mb = r.get("motor") or {}
+        marks["motor_label"] = mb.get("chosen") or mb.get("label") or (
+            "selected from " + ", ".join(r["front_motors"]) if r.get("front_motors") else
+            mb.get("model"))
+        return marks
 
     def write_figures(self, fig_dir: str | Path, names: Mapping[str, str] | None = None,
                       front_label: str = "NSGA-II") -> list[Path]:
