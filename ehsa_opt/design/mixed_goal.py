@@ -19,7 +19,7 @@ import numpy as np
 from .goal import GoalAttainmentResult, solve_goal_attainment
 from .problem import DesignProblem, DesignSpace
 
-__all__ = ["FixedVariables", "solve_goal_attainment_mixed", "SCREEN_SIZE"]
+__all__ = ["FixedVariables", "solve_goal_attainment_mixed", "SCREEN_SIZE", "screened_seeds"]
 
 #: Designs drawn (seeded, uniform in the unit cube) to rank the catalogue combinations.
 SCREEN_SIZE = 2048
@@ -49,6 +49,37 @@ class FixedVariables:
     def fingerprint(self) -> dict[str, Any]:
         fp = self.inner.fingerprint() if hasattr(self.inner, "fingerprint") else repr(self.inner)
         return {"inner": fp, "fixed": dict(self.fixed)}
+
+
+def screened_seeds(problem: DesignProblem, n_seeds: int = 8, seed: int = 0,
+                   size: int = SCREEN_SIZE) -> np.ndarray:
+    """Unit-cube designs to seed a population with: of ``size`` seeded uniform draws, the
+    feasible ones (the least infeasible when none is), one per catalogue combination first
+    (lowest violation, then lowest summed normalised objectives), at most ``n_seeds``.  A
+    narrow feasible region of a catalogue space is then in the first population."""
+    U = np.random.default_rng(seed).random((size, problem.space.n))
+    FG = problem.evaluate_unit(U)
+    n_obj = len(problem.objective_names)
+    viol = (np.max(np.maximum(FG[:, n_obj:], 0.0), axis=1) if FG.shape[1] > n_obj
+            else np.zeros(size))
+    F = FG[:, :n_obj]
+    score = np.sum(F / np.maximum(np.median(np.abs(F), axis=0), 1e-300), axis=1)
+    order = np.lexsort((score, viol))
+    if viol[order[0]] > 0:  # none feasible: the least infeasible
+        return U[order[:n_seeds]]
+    order = order[viol[order] <= 0]
+    ints = [k for k in range(problem.space.n) if problem.space.integer
+            and problem.space.integer[k]]
+    phys = problem.space.from_unit(U[order])
+    combo = [tuple(float(phys[problem.space.names[k]][j]) for k in ints)
+             for j in range(len(order))]
+    first, seen = [], set()
+    for j, c in enumerate(combo):
+        if c not in seen:
+            seen.add(c)
+            first.append(j)
+    rest = [j for j in range(len(order)) if j not in set(first)]
+    return U[order[(first + rest)[:n_seeds]]]
 
 
 def _sub_space(space: DesignSpace) -> DesignSpace:

@@ -94,6 +94,10 @@ def _selection_problem(cfg: DesignConfig, mapper: Any, frictions: Sequence[Any]
                              (("n_freq", cfg.n_freq),))
     problem = DesignProblem(cfg.design_space, ev)
     problem.mapper, problem.config = mapper, cfg
+    # the feasible region of a catalogue space is narrow: the first population holds the
+    # feasible designs of a seeded screening (one per motor/screw combination first)
+    from .mixed_goal import screened_seeds
+    problem.initial = screened_seeds(problem)
     return problem
 
 
@@ -255,7 +259,8 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *,
     ev = problem.evaluator
     # goals: the prototype's own objectives (its own motor), whatever motor is designed
     if cfg.motor_model == "select":
-        goals, weights, proto = goals_and_weights(cfg, prototype_problem(cfg))
+        goals, weights, proto = goals_and_weights(
+            cfg, extended_like(prototype_problem(cfg), problem))
     else:
         goals, weights, proto = goals_and_weights(
             cfg, problem if motor is None else extended_like(

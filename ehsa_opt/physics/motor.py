@@ -16,13 +16,17 @@ Models (all map a voltage constant K_e to R_i, L_i and rated limits):
 :class:`FixedWindingMotor`
     The paper's assumption: R_i, L_i fixed whatever K_e (labelled as the paper's).
 :class:`CatalogueMotor`
-    A real generator with datasheet values (K_e, R_i, L_i, J_m, ratings, mass, source);
-    its K_e is fixed, so with a catalogue the design runs once per motor.
+    A real generator with datasheet values (K_e, R_i, L_i, J_m, continuous and short-term
+    current, nominal and maximum voltage, maximum speed, power, mass, source); a series
+    with a winding range (``speed_constant_range_rpm_per_V``) is one frame rewound over
+    that range, else its K_e is fixed.  Catalogue motors are designed one run per motor
+    (``model = "catalogue"``) or chosen by the optimiser (``model = "select"``,
+    :mod:`ehsa_opt.design.selection`).
 
-Rated limits are checked on the road response (``ehsa_opt.design``): rms current
-≤ rated continuous current (a thermal limit, an rms quantity), peak voltage ≤ rated
-voltage, mean electrical power (load + winding) ≤ rated power; the stroke limit is
-the vehicle's.
+Limits are checked per sample on the road response (:mod:`ehsa_opt.design.limits`): rms
+current ≤ rated continuous current (thermal), the fraction of time beyond the short-term
+current and the maximum speed, the road's peak voltage (an extreme-value statistic) ≤ the
+maximum voltage, mean electrical power ≤ rated power; the stroke limit is the vehicle's.
 """
 
 from __future__ import annotations
