@@ -213,6 +213,9 @@ class SelectionObjectives:
         q = st.peak_quantile
         v_peak = rice_peak_quantile(sv, re * m["current_rate_rms_A_per_s"], self.duration_s, q)
         out: dict[str, np.ndarray] = {"motor_speed_rms_rpm": rpm, "peak_voltage_V": v_peak}
+        for key, p in (("peak_voltage_low_V", 0.025), ("peak_voltage_high_V", 0.975)):
+            out[key] = rice_peak_quantile(sv, re * m["current_rate_rms_A_per_s"],
+                                          self.duration_s, p)   # its 95 % interval
         out.update(limit_entry("rated_current", si, hw["rated_current_A"],
                                gaussian_fraction_beyond(hw["rated_current_A"], si)))
         out.update(limit_entry("peak_current", z2 * si, hw["peak_current_A"],
@@ -236,17 +239,6 @@ class SelectionObjectives:
                                np.zeros(shape)))
         return {k: np.broadcast_to(v, shape) if np.ndim(v) < len(shape) else v
                 for k, v in out.items()}
-
-    def peak_voltage_interval(self, design: Mapping[str, Any]) -> np.ndarray:
-        """95 % interval of the road's peak |V| (Rice), shape (..., 2), V."""
-        from ..vehicle.frequency_path import linear_metrics
-        mapping = self.design_mapping(design)
-        m = linear_metrics(self.vehicle, self.road, mapping, **dict(self.metric_options))
-        re = np.asarray(mapping["load_ohm"], float)
-        return np.stack([rice_peak_quantile(m["voltage_rms_V"],
-                                            re * m["current_rate_rms_A_per_s"],
-                                            self.duration_s, p) for p in (0.025, 0.975)],
-                        axis=-1)
 
     def describe(self, design: Mapping[str, Any], index: int = 0) -> dict[str, Any]:
         """The motor (with its winding) and screw of one design, for reports."""

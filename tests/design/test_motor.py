@@ -223,6 +223,7 @@ def test_catalogue_nsga2_front_keeps_feasible_points_only(tmp_path):
                  "--out", str(tmp_path / "o")]) == 0
     res = json.loads((tmp_path / "o" / "result.json").read_text())
     infeasible = {r["motor"] for r in res["catalogue"] if not r["feasible"]}
-    assert infeasible and any(name.startswith("Faulhaber") for name in infeasible)
+    assert infeasible and any(name.startswith("maxon RE 30") for name in infeasible)
+    assert all(r["violations"] for r in res["catalogue"] if not r["feasible"])
     rows = (tmp_path / "o" / "pareto.csv").read_text().splitlines()[1:]
     assert rows and all(not any(name in r for name in infeasible) for r in rows)
