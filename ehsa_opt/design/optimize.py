@@ -128,7 +128,12 @@ def objectives_at(problem: DesignProblem, design: Mapping[str, float]) -> dict[s
 def goals_and_weights(cfg: DesignConfig, problem: DesignProblem
                       ) -> tuple[np.ndarray, np.ndarray | None, dict[str, float]]:
     """Goals (explicit, else relative_to_prototype × prototype objectives), weights
-    (explicit, else None = |goal|) and the prototype's outputs."""
+    (explicit, else None = |goal|) and the prototype's outputs (of a selection problem:
+    the prototype with its own motor, :func:`prototype_problem`)."""
+    if getattr(getattr(problem, "evaluator", None), "kind", None) == "select" or getattr(
+            getattr(getattr(problem, "evaluator", None), "inner", None), "kind", None) \
+            == "select":
+        problem = extended_like(prototype_problem(cfg), problem)
     proto = objectives_at(problem, cfg.prototype_design)
     explicit = dict(cfg.goals.goals)
     goals = np.array([explicit.get(k, cfg.goals.relative_to_prototype * proto[k])
@@ -259,8 +264,7 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *,
     ev = problem.evaluator
     # goals: the prototype's own objectives (its own motor), whatever motor is designed
     if cfg.motor_model == "select":
-        goals, weights, proto = goals_and_weights(
-            cfg, extended_like(prototype_problem(cfg), problem))
+        goals, weights, proto = goals_and_weights(cfg, problem)
     else:
         goals, weights, proto = goals_and_weights(
             cfg, problem if motor is None else extended_like(
