@@ -40,10 +40,12 @@ def catalogue_study(cfg: DesignConfig, method: str | None, kw: dict[str, Any],
         if res.front is not None:
             files[f"motor_{k}/front.csv"] = table_to_csv(res.front)
     table = [{"motor": m.name, "source": m.source, "success": bool(r.record["success"]),
-              "feasible": bool(r.record.get("feasible", False)),
+              # no limits evaluated: nothing makes the motor infeasible
+              "feasible": bool(r.record.get("feasible", not r.record.get("constraints"))),
               "gamma": r.record.get("gamma"), "design": r.design, "objectives": r.objectives,
               "metrics": r.metrics,
               "active_constraints": r.record.get("active_constraints", []),
+              "violations": r.record.get("violations", []),
               "constraints": r.record.get("constraints", {})} for m, r in results]
     feasible = [i for i, row in enumerate(table) if row["feasible"]]
     method = check_method(method or cfg.method)

@@ -64,7 +64,7 @@ METHODS: tuple[str, ...] = ("goal-attainment", "nsga2")
 #: Physical tables, parsed by :func:`ehsa_opt.datasets.problem_file.problem_from_mapping`.
 _PHYSICAL = ("preset", "vehicle", "harvester", "friction", "road", "simulation")
 _TOP = _PHYSICAL + ("design", "goals", "goal_attainment", "nsga2", "sweep", "title",
-                    "description", "motor")
+                    "description", "motor", "screw", "limits")
 
 
 def _check_keys(table: Mapping[str, Any], valid: tuple[str, ...], where: str) -> None:
@@ -171,43 +171,62 @@ class DesignConfig:
     raw: Mapping[str, Any] = field(default_factory=dict)
     n_freq: int = 1024
     physical: Any = None  #: the :class:`ehsa_opt.datasets.problem_file.QuarterCarProblem` of the file
-    #: generator model of the design space: "scaling" (default: the [harvester]'s frame
-    #: rewound, R_i, L_i ∝ K_e², with rated limits), "paper" (R_i, L_i fixed, no limits:
-    #: the paper's assumption) or "catalogue" (one run per motor of ``catalogue``)
-    motor_model: str = "scaling"
+    #: generator model of the design space: "select" (motor, winding and screw chosen from
+    #: catalogues, every hardware limit a constraint), "scaling" (the [harvester]'s frame
+    #: rewound, R_i, L_i ∝ K_e², with the ratings [motor] gives), "catalogue" (one run per
+    #: motor of ``catalogue``) or "paper" (R_i, L_i fixed, no limits: the paper's
+    #: assumption; the default without a [motor] table)
+    motor_model: str = "paper"
     motor_rating: Any = None  #: RatedLimits of the scaling frame (None: the default)
     catalogue: str | None = None
+    #: screw catalogue of a "select" model (None: the lead stays a continuous variable)
+    screw_catalogue: str | None = None
+    #: tolerances of the hardware limits (``[limits]``)
+    limits: Any = None
+
+    @property
+    def limit_settings(self) -> Any:
+        """The :class:`~.limits.LimitSettings` of ``[limits]`` (defaults when absent)."""
+        from .limits import LimitSettings
+        return self.limits if self.limits is not None else LimitSettings()
+
+    @property
+    def design_space(self) -> DesignSpace:
+        """The box the optimiser searches: the file's box, or for a "select" model that box
+        without k_n (and the lead, with screws) plus the catalogue variables ``motor``,
+        ``winding`` and ``screw`` (:func:`~.selection.selection_space`)."""
+        if self.motor_model != "select":
+            return self.space
+        from .selection import selection_space
+        motors = self.catalogue_motors()
+        screws = self.screws()
+        return selection_space(self.space, len(motors), len(screws),
+                               any(m.rewindable for m in motors))
+
+    def screws(self) -> list:
+        """The screws of the screw catalogue (empty without one)."""
+        if self.screw_catalogue is None:
+            return []
+        from ..physics.ball_screw import load_screws
+        return load_screws(self.screw_catalogue)
 
     def motor(self) -> Any:
-        """The motor model object at the current [harvester] (None for a catalogue:
-        see :meth:`catalogue_motors`)."""
+        """The motor model object at the current [harvester] (None for a catalogue or a
+        selection: see :meth:`catalogue_motors`).  The scaling frame's ratings come from
+        ``[motor]`` (the motor's data), never from the prototype's demand."""
         from ..physics.motor import FixedWindingMotor, ScalingMotor
         if self.motor_model == "scaling":
-            return ScalingMotor(self.harvester, self.motor_rating or self.prototype_rating())
+            if self.motor_rating is None or self.motor_rating.current_A is None \
+                    or self.motor_rating.voltage_V is None:
+                raise ParameterError(
+                    f"{self.path} [motor]: model 'scaling' rewinds one frame and needs that "
+                    "frame's ratings from its datasheet: give rated_current_A (continuous) "
+                    "and rated_voltage_V (largest terminal voltage), or use model 'select' "
+                    "(motors from a catalogue) or 'paper' (the paper's space, no limits)")
+            return ScalingMotor(self.harvester, self.motor_rating)
         if self.motor_model == "paper":
             return FixedWindingMotor(self.harvester)
         return None
-
-    def prototype_rating(self) -> Any:
-        """Ratings of the scaling frame when ``[motor]`` gives none **(assumption)**: what
-        the prototype itself asks of its motor on the design road (rms current, peak
-        voltage as 3.5 × rms), so no design may ask more of the user's motor than the
-        prototype does (the prototype is feasible).  No power rating: without friction
-        the mean electrical power (load + winding) is the road's dissipation bound for
-        every design, so a power limit at the prototype's value would pin every design
-        to it."""
-        import numpy as np
-
-        from ..physics.motor import RatedLimits, ScalingMotor
-        from ..vehicle.validity import GAUSSIAN_PEAK_FACTOR
-        from .problem import QuarterCarObjectives
-        ev = QuarterCarObjectives(self.vehicle, self.road, self.harvester,
-                                  (("n_freq", self.n_freq),),
-                                  ScalingMotor(self.harvester, RatedLimits()))
-        m = ev({k: np.array([v]) for k, v in self.prototype_design.items()})
-        slack = 1.0 + 1e-6  # the prototype inside its own limits despite round-off
-        return RatedLimits(slack * GAUSSIAN_PEAK_FACTOR * float(m["voltage_rms_V"][0]),
-                           slack * float(m["current_rms_A"][0]), None)
 
     def catalogue_motors(self) -> list:
         from ..physics.motor import load_catalogue
@@ -289,11 +308,53 @@ def parse_design_config(doc: Mapping[str, Any], path: str = "problem") -> Design
                                                    for v in pw),
         hv_reference=_float(nt.get("hv_reference", 2.0), f"{path} [nsga2] hv_reference"))
     model, rating, catalogue = _parse_motor(doc.get("motor", {}), path, space)
+    screws = _parse_screw(doc.get("screw"), path, model)
     return DesignConfig(path=path, vehicle=vehicle, vehicle_name=vname, road=road,
                         harvester=harvester, space=space, method=method,
                         goals=GoalSpec(rel, goals, weights), goal_attainment=gas, nsga2=ns,
                         raw=doc, n_freq=n_freq, physical=phys, motor_model=model,
-                        motor_rating=rating, catalogue=catalogue)
+                        motor_rating=rating, catalogue=catalogue, screw_catalogue=screws,
+                        limits=_parse_limits(doc.get("limits", {}), path))
+
+
+def _parse_limits(lt: Mapping[str, Any], path: str) -> Any:
+    """The ``[limits]`` table: the tolerances of the hardware limits."""
+    from .limits import LimitSettings
+    where = f"{path} [limits]"
+    keys = ("time_fraction", "peak_quantile", "tyre_lift_fraction")
+    _check_keys(lt, keys, where)
+    try:
+        return LimitSettings(**{k: _float(lt[k], f"{where} {k}") for k in keys if k in lt})
+    except ParameterError as exc:
+        raise ParameterError(f"{path} {exc}") from None
+
+
+def _parse_screw(st: Any, path: str, model: str) -> str | None:
+    """The ``[screw]`` table (``catalogue = "ball_screws"`` or a path): the screws a
+    "select" model chooses from; absent, the lead stays a continuous variable."""
+    if st is None:
+        return None
+    where = f"{path} [screw]"
+    if not isinstance(st, Mapping):
+        raise ParameterError(f"{where}: must be a table with catalogue = \"ball_screws\"")
+    _check_keys(st, ("catalogue",), where)
+    if model != "select":
+        raise ParameterError(f"{where}: a screw catalogue needs [motor] model = 'select' (the "
+                             f"optimiser chooses motor and screw); remove [screw] for '{model}'")
+    name = st.get("catalogue", "ball_screws")
+    if not isinstance(name, str):
+        raise ParameterError(f"{where} catalogue: give 'ball_screws' or a path as text")
+    from ..physics.ball_screw import load_screws, screw_catalogue_path
+    base = Path(path).parent if path else Path(".")
+    if name.endswith(".toml") or len(Path(name).parts) > 1:
+        from ..datasets.friction_source import resolve_reference
+        resolve_reference(name, base, f"{where} catalogue")
+    try:
+        p = str(screw_catalogue_path(name, base))
+        load_screws(p)
+    except ParameterError as exc:
+        raise ParameterError(f"{where} {exc}") from None
+    return p
 
 
 def _parse_motor(mt: Mapping[str, Any], path: str, space: DesignSpace
@@ -303,7 +364,10 @@ def _parse_motor(mt: Mapping[str, Any], path: str, space: DesignSpace
     where = f"{path} [motor]"
     _check_keys(mt, ("model", "catalogue", "rated_voltage_V", "rated_current_A",
                      "rated_power_W"), where)
-    model = str(mt.get("model", "catalogue" if "catalogue" in mt else "scaling"))
+    # default: a catalogue when one is named, the scaling frame when its ratings are given,
+    # else the paper's space (no hardware data, no limits: labelled as the paper's)
+    model = str(mt.get("model", "catalogue" if "catalogue" in mt else "scaling" if any(
+        k.startswith("rated_") for k in mt) else "paper"))
     if model not in MOTOR_MODELS:
         near = nearest_name(model, MOTOR_MODELS)
         raise ParameterError(f"{where} model: unknown '{model}'"
@@ -317,7 +381,7 @@ def _parse_motor(mt: Mapping[str, Any], path: str, space: DesignSpace
     rating = RatedLimits(ratings.get("rated_voltage_V"), ratings.get("rated_current_A"),
                          ratings.get("rated_power_W")) if ratings else None
     catalogue = None
-    if model == "catalogue":
+    if model in ("catalogue", "select"):
         name = mt.get("catalogue", "dc_generators")
         if not isinstance(name, str):
             raise ParameterError(f"{where} catalogue: give the path of a catalogue file "
@@ -332,12 +396,12 @@ def _parse_motor(mt: Mapping[str, Any], path: str, space: DesignSpace
             raise ParameterError(f"{where} {exc}") from None
         from ..physics.motor import load_catalogue
         load_catalogue(catalogue)  # refused now, before any work, naming the file and key
-        if "speed_constant_rpm_per_V" in space.names:
+        if "speed_constant_rpm_per_V" in space.names and model == "catalogue":
             raise ParameterError(f"{path} [design.bounds]: a catalogue motor fixes k_n; remove "
                                  "speed_constant_rpm_per_V from the box with [motor] model = "
                                  "'catalogue'")
     elif "catalogue" in mt:
-        raise ParameterError(f"{where}: 'catalogue' needs model = 'catalogue'")
+        raise ParameterError(f"{where}: 'catalogue' needs model = 'catalogue' or 'select'")
     return model, rating, catalogue
 
 

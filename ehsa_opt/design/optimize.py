@@ -32,6 +32,7 @@ from .goal import solve_goal_attainment
 from .nsga2 import run_nsga2
 from .outcome import OptimizeOutcome, motor_summary, time_domain_summary
 from .problem import OBJECTIVE_NAMES, DesignProblem, QuarterCarObjectives
+from .time_check import front_check, harvesters_of
 
 __all__ = ["build_problem", "extended_like", "config_frictions", "front_check", "goals_and_weights", "optimize",
            "OptimizeOutcome", "objectives_at", "design_record", "constraint_record",
@@ -53,26 +54,61 @@ def build_problem(cfg: DesignConfig, mapper: Any = None,
     ``motor``: the generator model (default the config's, :meth:`DesignConfig.motor`;
     a catalogue motor for one run of a catalogue study)."""
     frictions = tuple(config_frictions(cfg) if frictions is None else frictions)
+    if cfg.motor_model == "select":
+        return _selection_problem(cfg, mapper, frictions)
     if frictions:
         from .robust import FrictionObjectives
         mode = friction_mode or ("at" if len(frictions) == 1 else "worst")
         ev: Any = FrictionObjectives(cfg.vehicle, cfg.road, cfg.harvester,
                                      (("n_freq", cfg.n_freq),), motor if motor is not None
-                                     else cfg.motor(), None, frictions=frictions,
-                                     mode=mode)
+                                     else cfg.motor(), cfg.stroke_limit_m,
+                                     cfg.limit_settings, frictions=frictions, mode=mode)
     else:
         if friction_mode not in (None, "at"):
             raise ParameterError(f"--friction-mode {friction_mode} needs friction sets: give "
                                  "--friction FILE:CASE (repeatable) or a [friction] table")
         ev = QuarterCarObjectives(cfg.vehicle, cfg.road, cfg.harvester,
                                   (("n_freq", cfg.n_freq),), motor if motor is not None
-                                  else cfg.motor(), cfg.stroke_limit_m)
+                                  else cfg.motor(), cfg.stroke_limit_m, cfg.limit_settings)
     problem = DesignProblem(cfg.space, ev)
     problem.mapper, problem.config = mapper, cfg
     if problem.constraint_names and motor is None:
-        # the prototype meets the limits made of its own demands: a feasible seed
+        # the prototype as a seed: feasible or not, pymoo ranks it by its violation
         problem.initial = cfg.space.to_unit(cfg.prototype_design)[None, :]
     return problem
+
+
+def _selection_problem(cfg: DesignConfig, mapper: Any, frictions: Sequence[Any]
+                       ) -> DesignProblem:
+    """The design problem of a ``select`` model: motor, winding and screw chosen from the
+    catalogues, every hardware limit a constraint (:mod:`.selection`)."""
+    from .selection import SelectionObjectives
+    if frictions:
+        raise ParameterError(f"{cfg.path}: [motor] model = 'select' is frictionless (the "
+                             "friction-aware fast path does not take catalogue variables "
+                             "yet); remove the friction sets, or use model 'catalogue' (one "
+                             "run per motor)")
+    ev = SelectionObjectives(cfg.vehicle, cfg.road, cfg.harvester,
+                             tuple(cfg.catalogue_motors()), tuple(cfg.screws()),
+                             cfg.limit_settings, cfg.vehicle.stroke_limit_m,
+                             (("n_freq", cfg.n_freq),))
+    problem = DesignProblem(cfg.design_space, ev)
+    problem.mapper, problem.config = mapper, cfg
+    # the feasible region of a catalogue space is narrow: the first population holds the
+    # feasible designs of a seeded screening (one per motor/screw combination first)
+    from .mixed_goal import screened_seeds
+    problem.initial = screened_seeds(problem)
+    return problem
+
+
+def prototype_problem(cfg: DesignConfig) -> DesignProblem:
+    """The problem the prototype's own objectives (the goals' reference) come from: the
+    config's, or for a ``select`` model the paper's space (the prototype's own motor,
+    whose ratings are unknown, is in no catalogue)."""
+    import dataclasses
+    if cfg.motor_model == "select":
+        return build_problem(dataclasses.replace(cfg, motor_model="paper"), None, ())
+    return build_problem(cfg)
 
 
 def extended_like(problem: DesignProblem, model: DesignProblem | None) -> DesignProblem:
@@ -92,7 +128,12 @@ def objectives_at(problem: DesignProblem, design: Mapping[str, float]) -> dict[s
 def goals_and_weights(cfg: DesignConfig, problem: DesignProblem
                       ) -> tuple[np.ndarray, np.ndarray | None, dict[str, float]]:
     """Goals (explicit, else relative_to_prototype × prototype objectives), weights
-    (explicit, else None = |goal|) and the prototype's outputs."""
+    (explicit, else None = |goal|) and the prototype's outputs (of a selection problem:
+    the prototype with its own motor, :func:`prototype_problem`)."""
+    if getattr(getattr(problem, "evaluator", None), "kind", None) == "select" or getattr(
+            getattr(getattr(problem, "evaluator", None), "inner", None), "kind", None) \
+            == "select":
+        problem = extended_like(prototype_problem(cfg), problem)
     proto = objectives_at(problem, cfg.prototype_design)
     explicit = dict(cfg.goals.goals)
     goals = np.array([explicit.get(k, cfg.goals.relative_to_prototype * proto[k])
@@ -222,16 +263,19 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *,
                              f"(or any pymoo algorithm)")
     ev = problem.evaluator
     # goals: the prototype's own objectives (its own motor), whatever motor is designed
-    goals, weights, proto = goals_and_weights(
-        cfg, problem if motor is None else extended_like(
-            build_problem(cfg, None, frictions, friction_mode), problem))
+    if cfg.motor_model == "select":
+        goals, weights, proto = goals_and_weights(cfg, problem)
+    else:
+        goals, weights, proto = goals_and_weights(
+            cfg, problem if motor is None else extended_like(
+                build_problem(cfg, None, frictions, friction_mode), problem))
     rec: dict[str, Any] = {}
     files: dict[str, str] = {}
     front: dict[str, Any] = {}
     rec.update({"problem_file": cfg.path, "method": method,
                 "vehicle": cfg.vehicle_name, "road": {"iso_class": cfg.road.iso_class,
                                                       "speed_km_per_h": cfg.road.speed_km_per_h},
-                "box": cfg.space.as_dict(),
+                "box": problem.space.as_dict(),
                 "friction": _friction_block(ev, friction_labels),
                 "motor": _motor_block(ev, cfg),
                 "prototype": design_record(cfg.prototype_design, proto,
@@ -239,9 +283,18 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *,
     ga = None
     if method == "goal-attainment" or (with_goal_attainment and own):
         ga_settings = cfg.goal_attainment
-        ga = solve_goal_attainment(problem, goals, weights, cfg.prototype_design,
-                                   n_starts=ga_settings.n_starts, seed=ga_settings.seed,
-                                   max_iter=ga_settings.max_iter, where=f"{cfg.path} [goals]")
+        if any(problem.space.integer):
+            from .mixed_goal import solve_goal_attainment_mixed
+            ga = solve_goal_attainment_mixed(problem, goals, weights,
+                                             n_starts=ga_settings.n_starts,
+                                             seed=ga_settings.seed,
+                                             max_iter=ga_settings.max_iter,
+                                             where=f"{cfg.path} [goals]")
+        else:
+            ga = solve_goal_attainment(problem, goals, weights, cfg.prototype_design,
+                                       n_starts=ga_settings.n_starts, seed=ga_settings.seed,
+                                       max_iter=ga_settings.max_iter,
+                                       where=f"{cfg.path} [goals]")
         ga_block = {**design_record(ga.design, ga.objectives), "gamma": ga.gamma,
                     "goals": dict(zip(OBJECTIVE_NAMES, ga.goals.tolist())),
                     "weights": dict(zip(OBJECTIVE_NAMES, ga.weights.tolist())),
@@ -273,11 +326,43 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *,
         check, csv_text = front_check(cfg, ev, designs)
         rec["time_domain_check"] = check
         files["front_check.csv"] = csv_text
+    _explain(cfg, problem, rec, method, proto, front)
     if problem.units:
         rec["units"] = dict(problem.units)
     if problem.constraint_names:
         rec["constraint_names"] = list(problem.constraint_names)
     return OptimizeOutcome(rec, result, ga, files, front or None)
+
+
+def _explain(cfg: DesignConfig, problem: DesignProblem, rec: dict[str, Any], method: str,
+             proto: Mapping[str, float], front: dict[str, Any]) -> None:
+    """What makes the result what it is: the variables at a bound of the box, the motor and
+    screw chosen (a selection), and the front's hypervolume over the held-out roads."""
+    from .limits import active_bounds
+    ev = problem.evaluator
+    rec["active_bounds"] = active_bounds(problem.space, rec["design"])
+    if getattr(ev, "kind", None) != "select":
+        return
+    rec["hardware"] = ev.describe({k: np.array([v]) for k, v in rec["design"].items()})
+    if method == "nsga2" and front:
+        from .selection import motor_names
+        designs = {k: np.asarray(front[k], float) for k in problem.space.names}
+        front["motor_name"] = np.array(motor_names(ev, designs), dtype=object)
+        rec["front_motors"] = sorted(set(front["motor_name"][np.asarray(front["feasible"],
+                                                                        bool)]))
+        if ev.screws:
+            idx = np.ravel(ev.hardware(designs)["screw_index"])
+            front["screw_name"] = np.array([ev.screws[int(i)].name for i in idx],
+                                           dtype=object)
+        roads = rec.get("time_domain_check", {}).get("held_out_roads", {})
+        if roads.get("objectives"):
+            from .limit_check import hypervolume_interval
+            names = problem.objective_names
+            F = np.stack([np.array(roads["objectives"][k]) for k in names], axis=-1)
+            ok = np.asarray(front["feasible"], bool)
+            scale = np.array([proto[k] for k in names])
+            ref = np.full(len(names), cfg.nsga2.hv_reference)
+            rec["hypervolume"]["held_out_roads"] = hypervolume_interval(F[:, ok], scale, ref)
 
 
 def _front_study(cfg: DesignConfig, problem: DesignProblem, proto: Mapping[str, float],
@@ -372,72 +457,6 @@ def _friction_block(ev: Any, labels: Sequence[str]) -> dict[str, Any] | None:
             "method": "stochastic equivalent linearisation (ehsa_opt.vehicle.fast_path.linearisation)"}
 
 
-def front_check(cfg: DesignConfig, ev: Any, designs: Mapping[str, np.ndarray]
-                ) -> tuple[dict[str, Any], str]:
-    """Re-simulate designs in the time domain with the evaluator's friction and mode;
-    relative errors of the fast path's objectives.  Returns the summary and a CSV."""
-    from .robust import time_domain_objectives
-
-    sim = getattr(cfg.physical, "simulation", None)
-    kw = {}
-    if sim is not None:
-        kw = {k: getattr(sim, k) for k in ("settle_s", "sample_rate_hz") if hasattr(sim, k)}
-    fast = ev(designs)
-    hs = harvesters_of(ev, designs)
-    frictions = getattr(ev, "frictions", (None,))
-    td = time_domain_objectives(cfg.vehicle, cfg.road, hs, frictions,
-                                getattr(ev, "mode", "at"), **kw)
-    err = {k: np.asarray(fast[k], float) / np.asarray(td[k], float) - 1.0
-           for k in OBJECTIVE_NAMES}
-    limits = _time_domain_limits(cfg, ev, hs, fast, **kw) if ev.constraint_names else {}
-    worst = {k: float(np.max(np.abs(v))) for k, v in err.items()}
-    names = list(designs)
-    lines = [",".join(names + [f"{k}_fast" for k in OBJECTIVE_NAMES]
-                      + [f"{k}_time_domain" for k in OBJECTIVE_NAMES]
-                      + [f"{k}_rel_error" for k in OBJECTIVE_NAMES])]
-    n = len(next(iter(designs.values())))
-    for i in range(n):
-        vals = ([float(designs[k][i]) for k in names]
-                + [float(np.ravel(fast[k])[i]) for k in OBJECTIVE_NAMES]
-                + [float(np.ravel(td[k])[i]) for k in OBJECTIVE_NAMES]
-                + [float(err[k][i]) for k in OBJECTIVE_NAMES])
-        lines.append(",".join(f"{v:.10g}" for v in vals))
-    summary = {"n_designs": n, "road": {"iso_class": cfg.road.iso_class,
-                                        "speed_km_per_h": cfg.road.speed_km_per_h,
-                                        "length_m": cfg.road.length_m, "seed": cfg.road.seed},
-               "worst_abs_rel_error": worst,
-               "median_abs_rel_error": {k: float(np.median(np.abs(v))) for k, v in err.items()},
-               "within_5pct": bool(max(worst.values()) <= 0.05)}
-    if limits:
-        summary["rated_limits"] = limits
-        summary["within_5pct"] = bool(summary["within_5pct"] and limits["within_5pct"])
-    return summary, "\n".join(lines) + "\n"
-
-
-def harvesters_of(ev: Any, designs: Mapping[str, np.ndarray]) -> list[Any]:
-    """One :class:`~ehsa_opt.physics.params.HarvesterParams` per design, with the
-    evaluator's motor model (the winding R_i, L_i at the design's K_e; a catalogue
-    motor's constants and rotor inertia)."""
-    from .sweep import harvesters_from
-    hs = harvesters_from(ev.base, designs)
-    motor = getattr(ev, "motor", None)
-    if motor is None:
-        return hs
-    n = len(hs)
-    mapping = ev.design_mapping(designs)
-    ri = np.broadcast_to(np.asarray(mapping["internal_resistance_ohm"], float), (n,))
-    li = np.broadcast_to(np.asarray(mapping["inductance_H"], float), (n,))
-    out = []
-    for k, h in enumerate(hs):
-        h = h.replace(internal_resistance_ohm=float(ri[k]), inductance_H=float(li[k]))
-        if getattr(motor, "kind", None) == "catalogue":
-            jt = h.total_inertia_gcm2
-            h = motor.harvester(h).replace(
-                screw_inertia_gcm2=max(jt - motor.motor_inertia_gcm2, 0.0))
-        out.append(h)
-    return out
-
-
 def constraint_record(problem: DesignProblem, outputs: Mapping[str, float],
                       active_tol: float = 1e-3) -> dict[str, Any]:
     """Constraint values (value / limit − 1, ≤ 0 feasible) at a design, which are active
@@ -445,13 +464,29 @@ def constraint_record(problem: DesignProblem, outputs: Mapping[str, float],
     names = problem.constraint_names
     if not names:
         return {}
+    from .limits import explain_violations
     vals = {c: float(outputs[f"constraint_{c}"]) for c in names}
-    return {"constraints": vals,
-            "active_constraints": [c for c, v in vals.items() if v > -active_tol],
-            "feasible": bool(all(v <= 1e-6 for v in vals.values()))}
+    rec: dict[str, Any] = {
+        "constraints": vals,
+        "active_constraints": [c for c, v in vals.items() if v > -active_tol],
+        "feasible": bool(all(v <= 1e-6 for v in vals.values())),
+        "violations": explain_violations(outputs, names)}
+    detail = {c: {k: float(outputs[f"{k}_{c}"]) for k in ("value", "limit", "fraction")
+                  if f"{k}_{c}" in outputs} for c in names}
+    if any(detail.values()):
+        rec["limits"] = detail
+    return rec
 
 
 def _motor_block(ev: Any, cfg: DesignConfig) -> dict[str, Any] | None:
+    if getattr(ev, "kind", None) == "select":
+        return {"model": "select", "catalogue": cfg.catalogue,
+                "motors": [m.name for m in ev.motors],
+                "screw_catalogue": cfg.screw_catalogue,
+                "screws": [s.as_dict() for s in ev.screws],
+                "limit_settings": ev.limits.as_dict(),
+                "stroke_limit_m": ev.stroke_limit_m,
+                "constraints": list(ev.constraint_names)}
     motor = getattr(ev, "motor", None)
     if motor is None:
         return None
@@ -462,51 +497,6 @@ def _motor_block(ev: Any, cfg: DesignConfig) -> dict[str, Any] | None:
     if motor.kind == "catalogue":
         block.update({"name": motor.name, "source": motor.source,
                       "speed_constant_rpm_per_V": motor.speed_constant_rpm_per_V})
-    elif motor.kind == "scaling" and cfg.motor_rating is None:
-        block["rating_source"] = ("assumption: the prototype's own demand on the design road "
-                                  "(no [motor] ratings given)")
     return block
 
 
-def _time_domain_limits(cfg: DesignConfig, ev: Any, hs: Sequence[Any],
-                        fast: Mapping[str, np.ndarray], *, settle_s: float = 2.0,
-                        sample_rate_hz: float = 1000.0) -> dict[str, Any]:
-    """The rated-limit constraints re-evaluated from a frictionless time-domain simulation
-    of the same designs (rms current, 3.5 × rms voltage and stroke, as in the design), and
-    the measured peaks.  ``within_5pct``: every constraint holds in the time domain within
-    5 % of its limit and its value agrees with the frequency path's within 5 % of the
-    limit."""
-    import warnings
-
-    from ..vehicle.simulate import RoadHoldingWarning, simulate_quarter_car
-    from ..vehicle.validity import GAUSSIAN_PEAK_FACTOR
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RoadHoldingWarning)
-        sim = simulate_quarter_car(cfg.vehicle, list(hs), None, cfg.road, settle_s=settle_s,
-                                   sample_rate_hz=sample_rate_hz, keep_series=False)
-    m = sim.metrics
-    ri = np.array([h.internal_resistance_ohm for h in hs])
-    td = {}
-    for c in ev.constraint_names:
-        if c == "rated_current":
-            td[c] = m["current_rms_A"] / np.asarray(fast["rated_current_A"], float) - 1.0
-        elif c == "rated_voltage":
-            td[c] = (GAUSSIAN_PEAK_FACTOR * m["voltage_rms_V"]
-                     / np.asarray(fast["rated_voltage_V"], float) - 1.0)
-        elif c == "rated_power":
-            td[c] = ((m["power_W"] + ri * m["current_rms_A"] ** 2)
-                     / np.asarray(fast["rated_power_W"], float) - 1.0)
-        elif c == "stroke":
-            td[c] = GAUSSIAN_PEAK_FACTOR * m["stroke_rms_m"] / ev.stroke_limit_m - 1.0
-        else:  # geometric (motor inertia): no dynamics
-            td[c] = np.asarray(fast[f"constraint_{c}"], float)
-    worst_td = {c: float(np.max(v)) for c, v in td.items()}
-    diff = {c: float(np.max(np.abs(v - np.asarray(fast[f"constraint_{c}"], float))))
-            for c, v in td.items()}
-    return {"time_domain_worst_constraint": worst_td,
-            "frequency_vs_time_worst_difference": diff,
-            "measured_peak_voltage_V": float(np.max(m["peak_voltage_V"])),
-            "measured_peak_current_A": float(np.max(m["peak_current_A"])),
-            "measured_peak_stroke_m": float(np.max(m["peak_stroke_m"])),
-            "within_5pct": bool(all(v <= 0.05 for v in worst_td.values())
-                                and all(v <= 0.05 for v in diff.values()))}

@@ -252,7 +252,8 @@ class DesignResult:
             ga_rec = self.record.get("goal_attainment")
             ga_pt = ga_rec["objectives"] if ga_rec else None
             figs["pareto"] = pd.pareto_projections(
-                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"))
+                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"),
+                self._front_marks(res))
             figs["parallel"] = pd.parallel_coordinates(
                 res, None if ga_rec is None else {**ga_rec["design"], **ga_pt})
             figs["hypervolume"] = pd.hypervolume_history({front_label: res.history},
@@ -297,6 +298,27 @@ class DesignResult:
                 plt.close(f)
         return figs[key]
 
+    def _front_marks(self, res: Any) -> dict[str, Any]:
+        """What the front figure marks: feasibility, the motor per point, the motor model
+        and the pick's active bounds."""
+        import numpy as np
+        r, front = self.record, self.front or {}
+        n = res.F.shape[0]
+        marks: dict[str, Any] = {"active_bounds": r.get("active_bounds") or []}
+        if r.get("feasible_front") is not None and len(r["feasible_front"]) == n:
+            marks["feasible"] = np.asarray(r["feasible_front"], bool)
+        for key in ("motor_name", "motor"):  # a selection's names; a catalogue's column
+            col = front.get(key)
+            if col is not None and len(col) == n and not np.issubdtype(
+                    np.asarray(col).dtype, np.number):
+                marks["motor"] = [str(m) for m in col]
+                break
+        mb = r.get("motor") or {}
+        marks["motor_label"] = mb.get("chosen") or mb.get("label") or (
+            "selected from " + ", ".join(r["front_motors"]) if r.get("front_motors") else
+            mb.get("model"))
+        return marks
+
     def write_figures(self, fig_dir: str | Path, names: Mapping[str, str] | None = None,
                       front_label: str = "NSGA-II") -> list[Path]:
         """Write the figures (PNG, atomically) into ``fig_dir``; ``names`` maps a figure key
@@ -323,7 +345,8 @@ class DesignResult:
 
 
 def motor_summary(outcome: Mapping[str, Any]) -> list[str]:
-    """Lines on the motor model, constraint values and active constraints (CLI)."""
+    """Lines on the motor model, constraint values, active constraints, each violated limit
+    with its value and margin, and the variables at a bound of the box (CLI)."""
     lines = []
     if outcome.get("motor"):
         mb = outcome["motor"]
@@ -332,10 +355,29 @@ def motor_summary(outcome: Mapping[str, Any]) -> list[str]:
                          f"{k} {v:+.3f}" for k, v in outcome["constraints"].items())
                         + f" (active: {', '.join(outcome['active_constraints']) or 'none'})"
                         if outcome.get("constraints") else ""))
+    hw = outcome.get("hardware")
+    if hw:
+        lines.append(f"hardware: {hw['motor']} at k_n {hw['speed_constant_rpm_per_V']:.4g} rpm/V "
+                     f"(R_i {hw['internal_resistance_ohm']:.3g} ohm"
+                     + (", rewound within its series" if hw.get("rewound") else "") + ")"
+                     + (f", screw {hw['screw']} (lead {hw['lead_mm_per_rev']:g} mm)"
+                        if "screw" in hw else ""))
+    if outcome.get("front_motors"):
+        lines.append(f"front motors: {', '.join(outcome['front_motors'])}")
+    if outcome.get("constraints") and not outcome.get("feasible", True):
+        lines.append("INFEASIBLE: " + ("; ".join(outcome.get("violations") or [])
+                                       or "a limit is exceeded"))
+    elif "constraints" in outcome and not outcome.get("constraints"):
+        lines.append("limits: none checked (no rated limits in this motor model)")
+    if outcome.get("active_bounds"):
+        lines.append("at a bound of the box: " + ", ".join(outcome["active_bounds"]))
     for row in outcome.get("catalogue", []):
-        lines.append(f"  {row['motor']}: {'feasible' if row['feasible'] else 'INFEASIBLE'}"
+        state = ("feasible" if row["feasible"] else
+                 "INFEASIBLE" if row.get("constraints") else "limits not checked")
+        lines.append(f"  {row['motor']}: {state}"
                      + (f", gamma {row['gamma']:+.4f}" if row.get("gamma") is not None else "")
-                     + (f", at or beyond the limit: {', '.join(row['active_constraints'])}"
+                     + (f": {'; '.join(row['violations'])}" if row.get("violations") else
+                        f", at or beyond the limit: {', '.join(row['active_constraints'])}"
                         if row["active_constraints"] else ""))
     return lines
 
@@ -352,7 +394,26 @@ def time_domain_summary(outcome: Mapping[str, Any]) -> str:
             + ("" if not lim else "; rated limits in the time domain, worst value/limit - 1: "
                + ", ".join(f"{k} {v:+.4f}" for k, v in
                            lim["time_domain_worst_constraint"].items()))
-            + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %")
+            + f" -> {'within' if chk['within_5pct'] else 'NOT within'} 5 %"
+            + _roads_summary(chk.get("held_out_roads"), outcome))
+
+
+def _roads_summary(roads: Mapping[str, Any] | None, outcome: Mapping[str, Any]) -> str:
+    """The held-out roads' part of the time-domain line."""
+    if not roads:
+        return ""
+    hv = (outcome.get("hypervolume") or {}).get("held_out_roads")
+    st = roads["settings"]
+    return (f"\nheld-out roads (seeds {', '.join(map(str, roads['seeds']))}): "
+            f"{roads['n_within']} of {roads['n_designs']} designs within every limit at the "
+            f"stated tolerances (time {st['time_fraction']:g}, tyre lift "
+            f"{st['tyre_lift_fraction']:g}, peak voltage {st['peak_quantile']:g}); worst "
+            "fraction of time beyond: " + ", ".join(
+                f"{k} {100 * v:.3g} %" for k, v in roads["worst_fraction"].items())
+            + f"; worst rms current / rating {roads['worst_current_over_rating']:.3f}"
+            + ("" if not hv else f"; hypervolume of the feasible front {hv['mean']:.5g} "
+               f"[{hv['interval'][0]:.5g}, {hv['interval'][1]:.5g}] (95 %, "
+               f"{hv['n_roads']} roads)"))
 
 
 #: The former name of :class:`DesignResult`.

@@ -85,9 +85,14 @@ class DesignSpace:
     upper: tuple[float, ...]
     log: tuple[bool, ...]
     where: str = "design space"
+    #: integer variables (a catalogue index): value lo + ⌊u (hi − lo + 1)⌋ of the unit
+    #: coordinate u, the rounding pymoo applies to integer variables of a real-coded genome
+    integer: tuple[bool, ...] = ()
 
     def __post_init__(self) -> None:
         n = len(self.names)
+        if self.integer and len(self.integer) != n:
+            raise ParameterError(f"{self.where}: integer flags differ in length from names")
         if n == 0:
             raise ParameterError(f"{self.where}: no design variables; give at least one bound")
         if not (len(self.lower) == len(self.upper) == len(self.log) == n):
@@ -148,22 +153,31 @@ class DesignSpace:
         for k, (name, lo, hi, lg) in enumerate(zip(self.names, self.lower, self.upper,
                                                    self.log)):
             u = U[..., k]
-            out[name] = lo * (hi / lo) ** u if lg else lo + (hi - lo) * u
+            if self.integer and self.integer[k]:
+                out[name] = lo + np.minimum(np.floor(u * (hi - lo + 1.0)), hi - lo)
+            else:
+                out[name] = lo * (hi / lo) ** u if lg else lo + (hi - lo) * u
         return out
 
     def to_unit(self, design: Mapping[str, Any]) -> np.ndarray:
         """Unit-cube coordinates of a physical design (dict of scalars/arrays)."""
         cols = []
-        for name, lo, hi, lg in zip(self.names, self.lower, self.upper, self.log):
+        for k, (name, lo, hi, lg) in enumerate(zip(self.names, self.lower, self.upper,
+                                                   self.log)):
             if name not in design:
                 raise ParameterError(f"{self.where}: design lacks '{name}'")
             v = np.asarray(design[name], dtype=float)
-            cols.append(np.log(v / lo) / np.log(hi / lo) if lg else (v - lo) / (hi - lo))
+            if self.integer and self.integer[k]:  # the middle of the value's interval
+                cols.append((np.round(v) - lo + 0.5) / (hi - lo + 1.0))
+            else:
+                cols.append(np.log(v / lo) / np.log(hi / lo) if lg else (v - lo) / (hi - lo))
         return np.stack(cols, axis=-1)
 
     def as_dict(self) -> dict[str, Any]:
-        return {n: {"lower": lo, "upper": hi, "log": lg}
-                for n, lo, hi, lg in zip(self.names, self.lower, self.upper, self.log)}
+        integer = self.integer or (False,) * self.n
+        return {n: {"lower": lo, "upper": hi, "log": lg, **({"integer": True} if it else {})}
+                for n, lo, hi, lg, it in zip(self.names, self.lower, self.upper, self.log,
+                                             integer)}
 
 
 #: Paper Table 3 (R_e lower bound 1 Ω is our assumption).
@@ -196,21 +210,29 @@ class QuarterCarObjectives:
     metric_options: tuple[tuple[str, Any], ...] = ()
     motor: Any = None
     stroke_limit_m: float | None = None
+    #: tolerances of the limits (:class:`~.limits.LimitSettings`; None: the defaults)
+    limits: Any = None
 
     objective_names = OBJECTIVE_NAMES
 
     @property
     def constraint_names(self) -> tuple[str, ...]:
         """Inequality constraints (value ≤ 0 feasible, each normalised by its limit):
-        the motor's rated limits that it states, the stroke, and a catalogue motor's
-        rotor inertia within J_t."""
+        the motor's rated limits that it states (rms current, short-term current, peak
+        voltage, power, speed), the stroke, and a catalogue motor's rotor inertia within
+        J_t (:mod:`.limits`)."""
         out = []
         rating = getattr(self.motor, "rating", None)
         if rating is not None:
-            for name, key in (("rated_current", "current_A"), ("rated_voltage", "voltage_V"),
-                              ("rated_power", "power_W")):
-                if getattr(rating, key) is not None:
+            for name, key in (("rated_current", "current_A"), ("peak_current", None),
+                              ("rated_voltage", "voltage_V"), ("rated_power", "power_W")):
+                if key is None:
+                    if getattr(self.motor, "peak_current_A", None) is not None:
+                        out.append(name)
+                elif getattr(rating, key) is not None:
                     out.append(name)
+        if getattr(self.motor, "max_speed_rpm", None) is not None:
+            out.append("motor_speed")
         if self.stroke_limit_m is not None:
             out.append("stroke")
         if getattr(self.motor, "kind", None) == "catalogue":
@@ -269,38 +291,68 @@ class QuarterCarObjectives:
 
     def constraints(self, mapping: Mapping[str, Any], m: Mapping[str, np.ndarray]
                     ) -> dict[str, np.ndarray]:
-        """``constraint_<name>`` = value / limit − 1 (≤ 0 feasible) and the winding used."""
-        from ..vehicle.validity import GAUSSIAN_PEAK_FACTOR
+        """Every limit as value, limit, fraction of time beyond and ``constraint_<name>`` =
+        value / limit − 1 (≤ 0 feasible; :mod:`.limits`), and the winding used."""
+        from .limits import LimitSettings, gaussian_fraction_beyond, limit_entry, \
+            rice_peak_quantile
         names = self.constraint_names
         if not names and self.motor is None:
             return {}
+        st = self.limits or LimitSettings()
+        z2 = st.z_two_sided
         shape = np.shape(m["comfort"])
         ri = np.broadcast_to(np.asarray(mapping["internal_resistance_ohm"], float), shape)
         out = {"internal_resistance_ohm": ri}
         w = self.motor.winding(self._voltage_constant(mapping)) if self.motor is not None \
             else {}
         lim = {k: np.broadcast_to(np.asarray(v, float), shape) for k, v in w.items()
-               if k.startswith("rated_")}
+               if k.startswith(("rated_", "peak_", "max_"))}
+        si = m["current_rms_A"]
         if "rated_current" in names:
-            out["constraint_rated_current"] = m["current_rms_A"] / lim["rated_current_A"] - 1.0
+            out.update(limit_entry("rated_current", si, lim["rated_current_A"],
+                                   gaussian_fraction_beyond(lim["rated_current_A"], si)))
+        if "peak_current" in names:
+            out.update(limit_entry("peak_current", z2 * si, lim["peak_current_A"],
+                                   gaussian_fraction_beyond(lim["peak_current_A"], si)))
         if "rated_voltage" in names:
-            out["constraint_rated_voltage"] = (GAUSSIAN_PEAK_FACTOR * m["voltage_rms_V"]
-                                               / lim["rated_voltage_V"] - 1.0)
+            v_lim = lim.get("max_voltage_V", lim["rated_voltage_V"])
+            re = np.broadcast_to(np.asarray(mapping.get("load_ohm", self.base.load_ohm),
+                                            float), shape)
+            rate = m.get("current_rate_rms_A_per_s")
+            v_peak = (rice_peak_quantile(m["voltage_rms_V"], re * rate,
+                                         self.road.length_m / self.road.speed_m_per_s,
+                                         st.peak_quantile)
+                      if rate is not None else z2 * m["voltage_rms_V"])
+            out["peak_voltage_V"] = v_peak
+            if rate is not None:  # the 95 % interval of the road's peak (2.5 %, 97.5 %)
+                for key, q in (("peak_voltage_low_V", 0.025), ("peak_voltage_high_V", 0.975)):
+                    out[key] = rice_peak_quantile(m["voltage_rms_V"], re * rate,
+                                                  self.road.length_m / self.road.speed_m_per_s,
+                                                  q)
+            out.update(limit_entry("rated_voltage", v_peak, v_lim,
+                                   gaussian_fraction_beyond(v_lim, m["voltage_rms_V"])))
         if "rated_power" in names:
-            p_el = m["power_W"] + ri * m["current_rms_A"] ** 2
-            out["constraint_rated_power"] = p_el / lim["rated_power_W"] - 1.0
+            p_el = m["power_W"] + ri * si ** 2
+            out.update(limit_entry("rated_power", p_el, lim["rated_power_W"], np.nan))
+        if "motor_speed" in names:
+            lead = np.asarray(mapping.get("lead_mm_per_rev", self.base.lead_mm_per_rev), float)
+            rpm = m["stroke_velocity_rms_m_s"] / (lead * 1e-3) * 60.0
+            out.update(limit_entry("motor_speed", z2 * rpm, lim["max_speed_rpm"],
+                                   gaussian_fraction_beyond(lim["max_speed_rpm"], rpm)))
         if "stroke" in names:
-            out["constraint_stroke"] = (GAUSSIAN_PEAK_FACTOR * m["stroke_rms_m"]
-                                        / self.stroke_limit_m - 1.0)
+            out.update(limit_entry("stroke", z2 * m["stroke_rms_m"], self.stroke_limit_m,
+                                   gaussian_fraction_beyond(self.stroke_limit_m,
+                                                            m["stroke_rms_m"])))
         if "motor_inertia" in names:
             jt = np.broadcast_to(np.asarray(mapping.get("total_inertia_gcm2",
                                                         self.base.total_inertia_gcm2), float),
                                  shape)
-            out["constraint_motor_inertia"] = self.motor.motor_inertia_gcm2 / jt - 1.0
+            out.update(limit_entry("motor_inertia", self.motor.motor_inertia_gcm2, jt,
+                                   np.zeros(shape)))
         for k in ("rated_current_A", "rated_voltage_V", "rated_power_W"):
             if k in lim:
                 out[k] = lim[k]
-        return out
+        return {k: np.broadcast_to(v, shape) for k, v in out.items()}
 
     def fingerprint(self) -> dict[str, Any]:
         from dataclasses import asdict

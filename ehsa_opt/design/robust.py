@@ -66,8 +66,10 @@ def combine(per_set: Sequence[Mapping[str, np.ndarray]], mode: str) -> dict[str,
         return dict(per_set[0])
     keys = [k for k in per_set[0] if all(k in p for p in per_set)]
     stack = {k: np.stack([np.asarray(p[k], float) for p in per_set]) for k in keys}
+    worst = ("constraint_", "value_", "fraction_")  # limits: the worst set, in any mode
     if mode == "mean":
-        return {k: v.mean(axis=0) for k, v in stack.items()}
+        return {k: v.max(axis=0) if k.startswith(worst) else v.mean(axis=0)
+                for k, v in stack.items()}
     out = {k: stack[k].max(axis=0) for k in OBJECTIVE_NAMES}
     follow = {"power_W": "inverse_power", "power_dimensionless": "inverse_power",
               "efficiency": "inverse_efficiency", "comfort_weighted_rms_m_s2": "comfort"}
@@ -112,20 +114,25 @@ class FrictionObjectives(QuarterCarObjectives):
             raise ParameterError(f"--friction-mode at needs exactly one friction set, got "
                                  f"{len(self.frictions)}; use worst or mean for several")
 
-    @property
-    def constraint_names(self) -> tuple[str, ...]:
-        """No rated-limit constraints on the friction-aware path (its rms currents and
-        voltages are not evaluated); the motor model still sets the winding."""
-        return ()
-
     def per_set(self, design: Mapping[str, Any]) -> list[dict[str, np.ndarray]]:
-        """Objectives and extras at each friction set."""
+        """Objectives and extras at each friction set; with constraints, the limits from
+        the linear path with the friction's equivalent damping c_f (its rms current,
+        voltage, stroke and their rates)."""
         from ..vehicle.fast_path import friction_metrics
+        from ..vehicle.frequency_path import linear_metrics
         mapping = self.design_mapping(design)
         opts = dict(self.metric_options)
-        return [objectives_from_metrics(friction_metrics(self.vehicle, self.road, mapping, f,
-                                                         **opts))
-                for f in self.frictions]
+        out = []
+        for f in self.frictions:
+            fm = friction_metrics(self.vehicle, self.road, mapping, f, **opts)
+            o = objectives_from_metrics(fm)
+            if self.constraint_names:
+                lm = linear_metrics(self.vehicle, self.road, mapping,
+                                    friction_damping_Ns_per_m=fm["friction_damping_Ns_per_m"],
+                                    **{k: v for k, v in opts.items() if k == "n_freq"})
+                o.update(self.constraints(mapping, lm))
+            out.append(o)
+        return out
 
     def __call__(self, design: Mapping[str, Any]) -> dict[str, np.ndarray]:
         return combine(self.per_set(design), self.mode)

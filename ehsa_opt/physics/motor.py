@@ -16,13 +16,17 @@ Models (all map a voltage constant K_e to R_i, L_i and rated limits):
 :class:`FixedWindingMotor`
     The paper's assumption: R_i, L_i fixed whatever K_e (labelled as the paper's).
 :class:`CatalogueMotor`
-    A real generator with datasheet values (K_e, R_i, L_i, J_m, ratings, mass, source);
-    its K_e is fixed, so with a catalogue the design runs once per motor.
+    A real generator with datasheet values (K_e, R_i, L_i, J_m, continuous and short-term
+    current, nominal and maximum voltage, maximum speed, power, mass, source); a series
+    with a winding range (``speed_constant_range_rpm_per_V``) is one frame rewound over
+    that range, else its K_e is fixed.  Catalogue motors are designed one run per motor
+    (``model = "catalogue"``) or chosen by the optimiser (``model = "select"``,
+    :mod:`ehsa_opt.design.selection`).
 
-Rated limits are checked on the road response (``ehsa_opt.design``): rms current
-≤ rated continuous current (a thermal limit, an rms quantity), peak voltage ≤ rated
-voltage, mean electrical power (load + winding) ≤ rated power; the stroke limit is
-the vehicle's.
+Limits are checked per sample on the road response (:mod:`ehsa_opt.design.limits`): rms
+current ≤ rated continuous current (thermal), the fraction of time beyond the short-term
+current and the maximum speed, the road's peak voltage (an extreme-value statistic) ≤ the
+maximum voltage, mean electrical power ≤ rated power; the stroke limit is the vehicle's.
 """
 
 from __future__ import annotations
@@ -147,6 +151,18 @@ class CatalogueMotor:
     rating: RatedLimits
     mass_kg: float | None = None
     source: str = ""
+    #: largest permissible speed (bearings, commutator), rpm; None = not limited
+    max_speed_rpm: float | None = None
+    #: short-term (peak) current, A, at this winding; None = not limited
+    peak_current_A: float | None = None
+    #: speed constants (rpm/V) of the windings the series offers, (lowest, highest); None:
+    #: only this winding
+    speed_constant_range_rpm_per_V: tuple[float, float] | None = None
+    #: largest terminal voltage, V, at this winding; None: the back-EMF at the maximum
+    #: speed K_e ω_max (a generator's voltage is its back-EMF less the winding drop, and
+    #: the nominal voltage is the one the ratings are stated at, not a maximum), else the
+    #: nominal voltage
+    max_voltage_V: float | None = None
 
     kind = "catalogue"
 
@@ -154,14 +170,47 @@ class CatalogueMotor:
     def label(self) -> str:
         return f"catalogue: {self.name}"
 
+    @property
+    def rewindable(self) -> bool:
+        """The series offers other windings (a winding range is given)."""
+        r = self.speed_constant_range_rpm_per_V
+        return r is not None and r[1] > r[0]
+
+    def speed_constant_at(self, u: Any) -> np.ndarray:
+        """k_n (rpm/V) at a unit winding coordinate ``u`` (0: lowest k_n of the range,
+        1: highest; logarithmic); this winding's k_n without a range."""
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        if not self.rewindable:
+            return np.full(u.shape, self.speed_constant_rpm_per_V)
+        lo, hi = self.speed_constant_range_rpm_per_V  # type: ignore[misc]
+        return lo * (hi / lo) ** u
+
     def winding(self, ke: Any = None) -> dict[str, np.ndarray]:
+        """R_i, L_i and the limits at voltage constants ``ke`` (V s/rad): this winding's
+        values, or (a series with a winding range) the frame rewound from it, s = K_e/K_e0:
+        R_i, L_i ∝ s², currents ∝ 1/s, voltage ∝ s, speed and power fixed."""
         shape = np.shape(ke) if ke is not None else ()
+        s = (np.ones(shape) if ke is None or not self.rewindable
+             else np.asarray(ke, dtype=float) / self.voltage_constant_Vs_per_rad)
         r = self.rating
-        full = lambda v: np.full(shape, np.nan if v is None else float(v))  # noqa: E731
-        return {"internal_resistance_ohm": full(self.internal_resistance_ohm),
-                "inductance_H": full(self.inductance_H),
-                "rated_current_A": full(r.current_A), "rated_voltage_V": full(r.voltage_V),
-                "rated_power_W": full(r.power_W)}
+
+        def full(v: float | None, power: int = 0) -> np.ndarray:
+            return np.full(shape, np.nan) if v is None else float(v) * s ** power
+        return {"internal_resistance_ohm": full(self.internal_resistance_ohm, 2),
+                "inductance_H": full(self.inductance_H, 2),
+                "rated_current_A": full(r.current_A, -1), "rated_voltage_V": full(r.voltage_V, 1),
+                "rated_power_W": full(r.power_W), "peak_current_A": full(self.peak_current_A, -1),
+                "max_speed_rpm": full(self.max_speed_rpm),
+                "max_voltage_V": full(self.voltage_limit_V, 1)}
+
+    @property
+    def voltage_limit_V(self) -> float | None:
+        """Largest terminal voltage at this winding (see :attr:`max_voltage_V`), V."""
+        if self.max_voltage_V is not None:
+            return self.max_voltage_V
+        if self.max_speed_rpm is not None:
+            return self.voltage_constant_Vs_per_rad * self.max_speed_rpm * math.pi / 30.0
+        return self.rating.voltage_V
 
     @property
     def speed_constant_rpm_per_V(self) -> float:
@@ -182,12 +231,32 @@ class CatalogueMotor:
         return d
 
 
-MOTOR_MODELS: tuple[str, ...] = ("scaling", "paper", "catalogue")
+MOTOR_MODELS: tuple[str, ...] = ("scaling", "paper", "catalogue", "select")
 
 _MOTOR_KEYS = ("name", "speed_constant_rpm_per_V", "voltage_constant_Vs_per_rad",
                "internal_resistance_ohm", "inductance_H", "motor_inertia_gcm2",
                "rated_voltage_V", "rated_current_A", "rated_power_W", "mass_kg", "source",
-               "notes")
+               "notes", "peak_current_A", "max_speed_rpm", "speed_constant_range_rpm_per_V",
+               "max_voltage_V")
+
+
+def _winding_range(m: dict, where: str, ke: float) -> tuple[float, float] | None:
+    """``speed_constant_range_rpm_per_V = [lo, hi]``: two positive numbers holding the
+    motor's own k_n (the winding the datasheet values belong to)."""
+    if "speed_constant_range_rpm_per_V" not in m:
+        return None
+    v = m["speed_constant_range_rpm_per_V"]
+    if (not isinstance(v, list) or len(v) != 2
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                       and math.isfinite(x) and x > 0 for x in v) or v[0] > v[1]):
+        raise ParameterError(f"{where}: 'speed_constant_range_rpm_per_V' = {v!r} must be "
+                             "[lowest, highest] k_n of the series' windings (rpm/V, > 0)")
+    kn = 60.0 / (2.0 * math.pi * ke)
+    if not v[0] * (1 - 1e-3) <= kn <= v[1] * (1 + 1e-3):
+        raise ParameterError(f"{where}: the winding range {v} rpm/V does not hold the motor's "
+                             f"own k_n = {kn:.4g} rpm/V; the datasheet values are those of one "
+                             "winding of the range")
+    return (float(v[0]), float(v[1]))
 
 
 def catalogue_path(name: str | Path = "dc_generators", base_dir: str | Path | None = None
@@ -277,7 +346,11 @@ def load_catalogue(path: str | Path = "dc_generators", base_dir: str | Path | No
             motor_inertia_gcm2=float(num("motor_inertia_gcm2")),
             rating=RatedLimits(num("rated_voltage_V", False), num("rated_current_A", False),
                                num("rated_power_W", False)),
-            mass_kg=num("mass_kg", False), source=m["source"].strip()))
+            mass_kg=num("mass_kg", False), source=m["source"].strip(),
+            max_speed_rpm=num("max_speed_rpm", False),
+            peak_current_A=num("peak_current_A", False),
+            max_voltage_V=num("max_voltage_V", False),
+            speed_constant_range_rpm_per_V=_winding_range(m, where, ke)))
         try:  # the ranges every harvester obeys (units: a slip of 1000 is refused here)
             out[-1].harvester(HarvesterParams())
         except ParameterError as exc:

@@ -47,8 +47,9 @@ def _design_steps() -> list[Step]:
     return [
         Step("design", "Optimal design by goal attainment (paper §4.2, Figs 17–19)",
              step_goal_attainment, design_inputs),
-        Step("design_motor", "Design with real motors: the scaling law, rated limits and a "
-             "catalogue, against the paper's fixed winding", step_motor_design, design_inputs),
+        Step("design_motor", "Design with real hardware: motor, winding and screw from "
+             "catalogues with their limits, against the paper's fixed winding",
+             step_motor_design, design_inputs),
         Step("design_pareto", "Pareto front of the design problem (NSGA-II)", step_pareto,
              design_inputs, depends=("design",)),
         Step("paper_invariants", "The paper's numbers through the invariants (P/η, P ∝ V, "

@@ -5,7 +5,7 @@ optimum (paper Fig 20) and sweeps."""
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -97,16 +97,32 @@ def goal_attainment_history(res: GoalAttainmentResult, which: str = "design",
 
 
 def pareto_projections(pr: ParetoResult, ga: Mapping[str, float] | None = None,
-                       prototype: Mapping[str, float] | None = None) -> Figure:
+                       prototype: Mapping[str, float] | None = None,
+                       marks: Mapping[str, Any] | None = None) -> Figure:
     """All 2-D projections of the front, with the pick, the goal-attainment point
-    and the prototype."""
+    and the prototype.  ``marks`` (optional): ``feasible`` (bool per front point: the
+    infeasible ones are drawn as red crosses), ``motor`` (a label per point: one colour per
+    motor), ``motor_label`` (the motor model, in the title) and ``active_bounds`` (the
+    chosen design's variables at a bound of the box, in the title)."""
+    marks = marks or {}
     names = list(pr.objective_names)
     pairs = [(i, j) for i in range(len(names)) for j in range(i + 1, len(names))]
     cols = 3 if len(pairs) > 2 else len(pairs)
     rows = math.ceil(len(pairs) / cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.3 * rows), squeeze=False)
+    n = pr.F.shape[0]
+    feas = np.asarray(marks.get("feasible", np.ones(n, bool)), bool)
+    motor = marks.get("motor")
+    groups = ([(str(m), (np.asarray(motor) == m) & feas) for m in sorted(set(map(str, motor)))]
+              if motor is not None and len(motor) == n else [("NSGA-II front", feas)])
     for ax, (i, j) in zip(axes.ravel(), pairs):
-        ax.scatter(pr.F[:, i], pr.F[:, j], s=12, c="0.5", label="NSGA-II front")
+        for g, (label, sel) in enumerate(groups):
+            if np.any(sel):
+                ax.scatter(pr.F[sel, i], pr.F[sel, j], s=12,
+                           c="0.5" if len(groups) == 1 else f"C{(g + 4) % 10}", label=label)
+        if np.any(~feas):
+            ax.scatter(pr.F[~feas, i], pr.F[~feas, j], s=22, marker="x", c="red",
+                       label="infeasible (a limit exceeded)")
         k = pr.preferred
         ax.scatter(pr.F[k, i], pr.F[k, j], s=60, marker="D", c="C2", label=f"{pr.pick} pick")
         if ga is not None:
@@ -131,8 +147,16 @@ def pareto_projections(pr: ParetoResult, ga: Mapping[str, float] | None = None,
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=8, ncol=len(labels), loc="lower center",
                frameon=False, bbox_to_anchor=(0.5, -0.01))
+    extra = []
+    if marks.get("motor_label"):
+        extra.append(f"motor: {marks['motor_label']}")
+    if np.any(~feas):
+        extra.append(f"{int(np.sum(~feas))} of {n} points infeasible")
+    if marks.get("active_bounds"):
+        extra.append("pick at a bound: " + ", ".join(marks["active_bounds"]))
     fig.suptitle("Pareto front, 2-D projections (all objectives minimised; log axes where "
-                 "the front spans more than a factor 3)", fontsize=10)
+                 "the front spans more than a factor 3)"
+                 + ("\n" + "; ".join(extra) if extra else ""), fontsize=10)
     fig.tight_layout(rect=(0, 0.05, 1, 1))
     return fig
 

@@ -299,7 +299,10 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
         ``efficiency`` (η_g, –), ``dissipated_power_W`` (mean power absorbed
         by the damper, inertial part excluded), ``dissipation_bound_W``,
         ``stroke_velocity_rms_m_s`` (σ_v), ``current_rms_A``, ``voltage_rms_V`` (R_e × rms
-        current; 0 in open circuit) and ``stroke_rms_m`` (rms of x2 − x1).
+        current; 0 in open circuit), ``stroke_rms_m`` (rms of x2 − x1), and the rms of the
+        derivatives ``current_rate_rms_A_per_s`` (di/dt) and
+        ``stroke_acceleration_rms_m_s2`` (dv/dt), which set the rates of level crossings
+        (the peak statistics of :mod:`ehsa_opt.design.limits`).
     """
     if road.profile_csv is not None:
         raise ValueError("linear_metrics needs an ISO 8608 road (a PSD); a measured profile "
@@ -328,7 +331,7 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
     phi_v = road_velocity_psd(road)
     base_grid = np.logspace(math.log10(f_lo), math.log10(f_hi), int(n_freq))
     out = {k: np.empty(n) for k in ("var_acc_w", "var_tyre", "p_load", "p_diss", "var_v",
-                                    "c_f", "var_i", "var_stroke")}
+                                    "c_f", "var_i", "var_stroke", "var_di", "var_dv")}
     for lo in range(0, n, _CHUNK):
         sl = slice(lo, min(lo + _CHUNK, n))
         J, r, ke, kt = flat["J_kgm2"][sl], flat["r_m_per_rad"][sl], flat["Ke"][sl], flat["Kt"][sl]
@@ -389,6 +392,8 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
         out["var_v"][sl] = integ(vrel2)
         out["var_i"][sl] = integ(cur2)
         out["var_stroke"][sl] = integ(vrel2 / w2)
+        out["var_di"][sl] = integ(w2 * cur2)
+        out["var_dv"][sl] = integ(w2 * vrel2)
     acc_rms = np.sqrt(out["var_acc_w"])
     power = out["p_load"]
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -409,5 +414,7 @@ def linear_metrics(vehicle: VehicleParams, road: RoadParams,
                                   np.where(np.isinf(flat["Re_ohm"]), 0.0, flat["Re_ohm"])
                                   * np.sqrt(out["var_i"])),
         "stroke_rms_m": np.sqrt(out["var_stroke"]),
+        "current_rate_rms_A_per_s": np.sqrt(out["var_di"]),
+        "stroke_acceleration_rms_m_s2": np.sqrt(out["var_dv"]),
     }
     return {k: a.reshape(shape) for k, a in res.items()}

@@ -14,7 +14,7 @@ from ehsa_opt.design.config import load_design_config
 from ehsa_opt.design.optimize import build_problem, goals_and_weights
 from ehsa_opt.physics.params import ParameterError
 from ehsa_opt.design.sweep import SweepSpec, parse_sweep, run_sweep, rows_to_csv
-from tests.paths import PAPER_DESIGN
+from tests.paths import PAPER_DESIGN, paper_model_design
 
 PAPER = PAPER_DESIGN
 DESIGN_KEYS = ["total_inertia_gcm2", "lead_mm_per_rev", "speed_constant_rpm_per_V", "load_ohm"]
@@ -46,8 +46,8 @@ def test_goal_attainment_lands_on_lower_bounds(paper):
 
 
 def test_cli_nsga2_front_vs_goal_attainment_and_resume(tmp_path):
-    args = ["optimize", str(PAPER), "--method", "nsga2", "--pop", "16", "--gens", "6",
-            "--seed", "2"]
+    args = ["optimize", str(paper_model_design(tmp_path)), "--method", "nsga2", "--pop", "16",
+            "--gens", "6", "--seed", "2"]
     assert main(args + ["--out", str(tmp_path / "straight")]) == 0
     res = json.loads((tmp_path / "straight" / "result.json").read_text())
     assert list(res["design"]) == DESIGN_KEYS

@@ -18,6 +18,20 @@ from tests.paths import ROOT
 
 PAPER = ROOT / "problems" / "paper_design.toml"
 ROAD = RoadParams(iso_class="C", speed_km_per_h=70.0)
+#: a frame's datasheet ratings for the scaling model (rms current, peak voltage), loose
+#: enough that the prototype (1.35 A rms, 64 V rms) is within them
+FRAME = RatedLimits(400.0, 2.0, None)
+
+
+def _paper_text() -> str:
+    """paper_design.toml without its hardware tables ([motor], [screw], [limits])."""
+    out, skip = [], False
+    for line in PAPER.read_text().splitlines():
+        if line.startswith("["):
+            skip = line.split("]")[0].strip("[ ") in ("motor", "screw", "limits")
+        if not skip:
+            out.append(line)
+    return "\n".join(out) + "\n"
 
 
 def _ev(motor, stroke=None):
@@ -52,7 +66,8 @@ def test_scaling_law_winding_and_the_redundancy_it_implies():
 def test_goal_attainment_and_nsga2_respect_the_rated_limits():
     from ehsa_opt.design import solve_goal_attainment
     from ehsa_opt.design.nsga2 import run_nsga2
-    cfg = load_design_config(PAPER)
+    cfg = dataclasses.replace(load_design_config(PAPER), motor_model="scaling",
+                              motor_rating=FRAME)
     paper = dataclasses.replace(cfg, motor_model="paper")
     pp = build_problem(paper)
     goals, weights, _ = goals_and_weights(paper, pp)
@@ -82,9 +97,16 @@ def test_goal_attainment_and_nsga2_respect_the_rated_limits():
 def test_catalogue_file_is_read_and_bad_entries_are_refused(tmp_path):
     motors = load_catalogue()
     assert len(motors) >= 2 and all(m.source for m in motors)
-    maxon = next(m for m in motors if m.name.startswith("maxon"))
+    maxon = next(m for m in motors if m.name.startswith("maxon RE 65 353297"))
     assert maxon.speed_constant_rpm_per_V == pytest.approx(77.8)
     assert maxon.rating.current_A == 6.8
+    # the 50–1000 W class, each with its limits; a series' winding range rewinds the frame
+    assert len(motors) >= 10 and all(m.rating.current_A and m.max_speed_rpm for m in motors)
+    w = maxon.winding(2 * maxon.voltage_constant_Vs_per_rad)  # k_n 38.9: the 70 V winding
+    assert w["internal_resistance_ohm"] == pytest.approx(4 * 0.365)
+    assert w["rated_current_A"] == pytest.approx(3.4) and w["max_speed_rpm"] == 5500.0
+    re65_70 = next(m for m in motors if m.name == "maxon RE 65 (70 V)")
+    assert re65_70.internal_resistance_ohm == pytest.approx(1.41)  # the real 70 V winding
     bad = tmp_path / "c.toml"
     bad.write_text('[[motor]]\nname = "x"\nspeed_constant_rpm_per_V = 100.0\n'
                    'internal_resistance_ohm = 1.0\ninductance_H = 1e-4\n'
@@ -102,11 +124,17 @@ def test_catalogue_file_is_read_and_bad_entries_are_refused(tmp_path):
 
 
 def test_problem_file_motor_table_is_validated(tmp_path):
-    text = PAPER.read_text()
+    text = _paper_text()
     p = tmp_path / "p.toml"
-    p.write_text(text + '\n[motor]\nmodel = "scaling"\nrated_current_A = 2.0\n')
+    p.write_text(text + '\n[motor]\nmodel = "scaling"\nrated_current_A = 2.0\n'
+                 'rated_voltage_V = 300.0\n')
     cfg = load_design_config(p)
-    assert cfg.motor().rating.current_A == 2.0 and cfg.motor().rating.voltage_V is None
+    assert cfg.motor().rating.current_A == 2.0 and cfg.motor().rating.voltage_V == 300.0
+    # a frame's ratings come from its data, never from the prototype's demand
+    p.write_text(text + '\n[motor]\nmodel = "scaling"\nrated_current_A = 2.0\n')
+    with pytest.raises(ParameterError, match="needs that frame's ratings.*rated_voltage_V"):
+        load_design_config(p).motor()
+    assert load_design_config_text(tmp_path, text).motor_model == "paper"  # no [motor]
     p.write_text(text + '\n[motor]\nmodel = "scalin"\n')
     with pytest.raises(ParameterError, match="did you mean 'scaling'"):
         load_design_config(p)
@@ -118,10 +146,16 @@ def test_problem_file_motor_table_is_validated(tmp_path):
         load_design_config(p)
 
 
+def load_design_config_text(tmp_path, text):
+    p = tmp_path / "plain.toml"
+    p.write_text(text)
+    return load_design_config(p)
+
+
 def test_cli_catalogue_run_checks_limits_in_the_time_domain(tmp_path, capsys):
     from ehsa_opt.cli import main
     cat = tmp_path / "motors.toml"
-    maxon = next(m for m in load_catalogue() if m.name.startswith("maxon"))
+    maxon = next(m for m in load_catalogue() if m.name.startswith("maxon RE 65 353297"))
     cat.write_text(
         f'[[motor]]\nname = "{maxon.name}"\nvoltage_constant_Vs_per_rad = '
         f'{maxon.voltage_constant_Vs_per_rad!r}\ninternal_resistance_ohm = '
@@ -168,7 +202,7 @@ def test_reproduce_data_designs_from_the_users_harvester(tmp_path):
                                                       seed=3, harvester=user))
     ctx = Context(tmp_path / "out", True, 1, data_dir=d)
     for model in ("paper", "scaling"):
-        cfg = _cfg(ctx, model)
+        cfg = dataclasses.replace(_cfg(ctx, model), motor_rating=FRAME)
         h = cfg.harvester
         assert (h.internal_resistance_ohm, h.inductance_H, h.motor_inertia_gcm2) == (
             2.4, 0.9e-3, 90.0)
@@ -189,6 +223,7 @@ def test_catalogue_nsga2_front_keeps_feasible_points_only(tmp_path):
                  "--out", str(tmp_path / "o")]) == 0
     res = json.loads((tmp_path / "o" / "result.json").read_text())
     infeasible = {r["motor"] for r in res["catalogue"] if not r["feasible"]}
-    assert infeasible and any(name.startswith("Faulhaber") for name in infeasible)
+    assert infeasible and any(name.startswith("maxon RE 30") for name in infeasible)
+    assert all(r["violations"] for r in res["catalogue"] if not r["feasible"])
     rows = (tmp_path / "o" / "pareto.csv").read_text().splitlines()[1:]
     assert rows and all(not any(name in r for name in infeasible) for r in rows)

@@ -18,7 +18,7 @@ from ehsa_opt.vehicle.fast_path.linearisation import (
     law_equivalent_damping,
 )
 from ehsa_opt.vehicle.frequency_path import METRIC_KEYS, linear_metrics
-from tests.paths import PAPER_DESIGN
+from tests.paths import PAPER_DESIGN, paper_model_design
 
 VEHICLE = VehicleParams()
 DESIGNS = {"load_ohm": np.array([3.0, 47.0, 900.0]), "lead_mm_per_rev": np.array([5.0, 12.0,
@@ -161,8 +161,9 @@ def test_robust_optimum_no_worse_with_friction_in_time_domain(tmp_path):
     from ehsa_opt.design.sweep import harvesters_from
 
     cfg = load_design_config(PAPER_DESIGN)
+    # the paper's space: the catalogue-variable model takes no friction sets
     cfg = dataclasses.replace(cfg, goal_attainment=GoalAttainmentSettings(n_starts=2),
-                              n_freq=256)
+                              n_freq=256, motor_model="paper")
     fr = _truth(2.0)
     robust = build_problem(cfg, frictions=(fr,))
     plain = build_problem(cfg)
@@ -215,7 +216,7 @@ def test_cli_optimize_with_friction_checks_time_domain(tmp_path, capsys):
     from ehsa_opt.cli import main
     ident = _identification(tmp_path)
     problem = tmp_path / "p.toml"
-    text = PAPER_DESIGN.read_text()
+    text = paper_model_design(tmp_path).read_text()
     problem.write_text(text.replace("length_m = 1000.0", "length_m = 300.0")
                        .replace("n_starts = 6", "n_starts = 1"))
     rc = main(["optimize", str(problem), "--method", "goal-attainment", "--friction",

@@ -1,0 +1,158 @@
+"""Designs re-simulated on roads they were not optimised on: every hardware limit counted
+per sample in the time domain, with the spread over the road realisations, and the
+hypervolume of a front with its 95 % interval over those roads.
+
+The optimiser sees the design road through the exact frequency path (a power spectrum:
+no realisation).  A check draws ``n_roads`` new realisations of the same ISO 8608 class
+and speed (seeds ``seed + 1 …``, never the design road's ``seed``) and simulates every
+design on each.  Per design and road it counts
+the fraction of samples beyond each hard limit, the rms current against the thermal rating
+and the largest |V| against the voltage limit.  A finite road estimates these with an
+error, so a design on its limit is beyond it on about half the roads; a design is
+*within* a limit unless the roads show it beyond at 95 % (one-sided): the mean over the
+roads less its Student-t half-width is above the tolerance (``time_fraction``,
+``tyre_lift_fraction``) or the rating (rms current), or the voltage's peak is above the
+limit on more roads than a binomial share 1 − ``peak_quantile`` explains at 5 %.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+from scipy import stats
+
+from .limits import LimitSettings
+
+__all__ = ["limits_on_roads", "hypervolume_interval", "held_out_seeds", "HELD_OUT_ROADS"]
+
+#: Road realisations of a check: five give a Student-t interval with 4 degrees of freedom
+#: at a cost of five time-domain runs of the front.
+HELD_OUT_ROADS = 5
+
+_SERIES = ("stroke_velocity_m_s", "voltage_V", "current_A", "x2_m", "x1_m",
+           "tyre_deflection_m")
+
+
+def held_out_seeds(seed: int, n_roads: int) -> list[int]:
+    """Road seeds a check uses: the ``n_roads`` after the design road's ``seed``."""
+    return [int(seed) + 1 + k for k in range(int(n_roads))]
+
+
+def _simulate(vehicle: Any, road: Any, hs: Sequence[Any], settle_s: float,
+              sample_rate_hz: float) -> Any:
+    from ..vehicle.simulate import RoadHoldingWarning, simulate_quarter_car
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RoadHoldingWarning)
+        return simulate_quarter_car(vehicle, list(hs), None, road, settle_s=settle_s,
+                                    sample_rate_hz=sample_rate_hz, keep_series=_SERIES)
+
+
+def limits_on_roads(ev: Any, designs: Mapping[str, np.ndarray], seeds: Sequence[int], *,
+                    settle_s: float = 2.0, sample_rate_hz: float = 1000.0,
+                    objective_names: Sequence[str] = ()) -> dict[str, Any]:
+    """Every limit of a selection evaluator's designs on the roads ``seeds`` (see module).
+
+    Returns
+    -------
+    dict
+        ``seeds``; per limit ``fractions[name]`` (roads × designs), ``current_rms_A`` and
+        ``peak_voltage_V`` (roads × designs); ``within`` per design; the worst fraction of
+        each limit; with ``objective_names`` the time-domain objectives per road
+        (``objectives``: name → roads × designs).
+    """
+    st: LimitSettings = ev.limits
+    hw = ev.hardware(designs)
+    hs = ev.harvesters(designs)
+    n = len(hs)
+    flat = {k: np.ravel(np.broadcast_to(np.asarray(v, float), (n,))) for k, v in hw.items()}
+    r = np.array([h.lead_m_per_rad for h in hs])
+    veh = ev.vehicle
+    static = veh.total_mass_kg * 9.81
+    fr: dict[str, list] = {k: [] for k in ev.constraint_names if k != "motor_inertia"}
+    cur, vpk, objs = [], [], {k: [] for k in objective_names}
+    for sd in seeds:
+        sim = _simulate(veh, dataclasses.replace(ev.road, seed=int(sd)), hs, settle_s,
+                        sample_rate_hz)
+        s = sim.series
+        rpm = np.abs(s["stroke_velocity_m_s"]) / r[:, None] * 30.0 / math.pi
+        sig = {"peak_current": (np.abs(s["current_A"]), flat["peak_current_A"]),
+               "rated_voltage": (np.abs(s["voltage_V"]), flat["max_voltage_V"]),
+               "motor_speed": (rpm, flat["max_speed_rpm"]),
+               "stroke": (np.abs(s["x2_m"] - s["x1_m"]),
+                          np.full(n, ev.stroke_limit_m or np.inf)),
+               "tyre_lift": (veh.tyre_stiffness_N_per_m * s["tyre_deflection_m"] / static,
+                             np.ones(n))}
+        if "screw_speed" in fr:
+            sig["screw_speed"] = (rpm, flat["screw_max_speed_rpm"])
+        for k, (x, lim) in sig.items():
+            if k in fr:
+                fr[k].append(np.mean(x > lim[:, None], axis=1))
+        rms = np.sqrt(np.mean(s["current_A"] ** 2, axis=1))
+        fr["rated_current"].append((rms > flat["rated_current_A"]).astype(float))
+        cur.append(rms)
+        vpk.append(np.max(np.abs(s["voltage_V"]), axis=1))
+        for k in objective_names:
+            objs[k].append(_objective(sim.metrics, k))
+    F = {k: np.array(v) for k, v in fr.items()}
+    cur_a, vpk_a = np.array(cur), np.array(vpk)
+    k_roads = len(seeds)
+    tq = float(stats.t.ppf(0.95, k_roads - 1)) if k_roads > 1 else 0.0
+
+    def lower(x: np.ndarray) -> np.ndarray:  # one-sided 95 % lower bound over the roads
+        sd = np.std(x, axis=0, ddof=1) if k_roads > 1 else np.zeros(x.shape[1])
+        return np.mean(x, axis=0) - tq * sd / math.sqrt(k_roads)
+    # most roads with a peak above the limit a share 1 − q explains (binomial, 5 %)
+    n_peak = int(stats.binom.ppf(0.95, k_roads, 1.0 - st.peak_quantile))
+    ok = np.ones(n, bool)
+    for k, v in F.items():
+        if k == "rated_current":
+            ok &= lower(cur_a) <= flat["rated_current_A"]
+        elif k == "rated_voltage":
+            ok &= np.sum(vpk_a > flat["max_voltage_V"][None, :], axis=0) <= n_peak
+        elif k == "tyre_lift":
+            ok &= lower(v) <= st.tyre_lift_fraction
+        else:
+            ok &= lower(v) <= st.time_fraction
+    out = {"seeds": [int(x) for x in seeds], "fractions": {k: v.tolist() for k, v in F.items()},
+           "worst_fraction": {k: float(np.max(v)) for k, v in F.items()
+                              if k not in ("rated_current", "rated_voltage")},
+           "current_rms_A": cur_a.tolist(), "peak_voltage_V": vpk_a.tolist(),
+           "worst_current_over_rating": float(np.max(cur_a / flat["rated_current_A"])),
+           "peak_voltage_share_over_limit": float(np.max(np.mean(
+               vpk_a > flat["max_voltage_V"][None, :], axis=0))),
+           "mean_fraction": {k: np.mean(v, axis=0).max().item() for k, v in F.items()
+                             if k not in ("rated_current", "rated_voltage")},
+           "within": ok.tolist(), "n_within": int(np.sum(ok)), "n_designs": n,
+           "peak_roads_allowed": n_peak,
+           "settings": st.as_dict()}
+    if objective_names:
+        out["objectives"] = {k: np.array(v).tolist() for k, v in objs.items()}
+    return out
+
+
+def _objective(m: Mapping[str, np.ndarray], name: str) -> np.ndarray:
+    if name == "inverse_power":
+        return 1.0 / m["power_dimensionless"]
+    if name == "inverse_efficiency":
+        return 1.0 / m["efficiency"]
+    return np.asarray(m[name], float)
+
+
+def hypervolume_interval(F_per_road: np.ndarray, scale: np.ndarray, reference: np.ndarray,
+                         level: float = 0.95) -> dict[str, Any]:
+    """Hypervolume of a front evaluated on each road (``F_per_road``: roads × designs ×
+    objectives, normalised by ``scale``, reference point ``reference``), its mean and
+    Student-t ``level`` interval over the roads."""
+    from pymoo.indicators.hv import HV
+    hv = HV(ref_point=np.asarray(reference, float))
+    vals = np.array([float(hv(np.asarray(F, float) / scale)) for F in F_per_road])
+    k = vals.size
+    mean = float(np.mean(vals))
+    half = (float(stats.t.ppf(0.5 + level / 2, k - 1) * np.std(vals, ddof=1) / math.sqrt(k))
+            if k > 1 else float("nan"))
+    return {"per_road": vals.tolist(), "mean": mean, "interval": [mean - half, mean + half],
+            "level": level, "n_roads": k}
