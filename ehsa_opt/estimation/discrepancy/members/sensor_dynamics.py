@@ -9,7 +9,10 @@ the filter's held-out ΔBIC is lower by the criterion's ``nested_evidence``
 member fitted on the record as it is accounts for the force better (a mount spring with
 the reflected mass is a second-order low-pass too, but it also delays the rotor and thus
 the voltage).  ``voltage_sensor`` is the rival of ``voltage_skew`` on the voltage record
-and is judged on the voltage channel's SSE, the force kept (:func:`~..judge.earns`)."""
+and is judged on the voltage channel's SSE, the force kept (:func:`~..judge.earns`); it
+too is not adopted when a catalogue member accounts for the record better (a mount
+spring delays the rotor, and so the voltage: on a campaign with a mount compliance and
+a load cell the voltage's "filter" had been named before the compliance was tried)."""
 
 from __future__ import annotations
 
@@ -66,6 +69,3 @@ class VoltageSensorMember(ForceSensorMember):
         if not ctx.tests.rig.has_generator:
             return "-"
         return Member.applicable(self, ctx)
-
-    def confirm(self, attempt: Attempt, ctx: Context) -> bool:
-        return True
