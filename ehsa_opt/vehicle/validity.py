@@ -43,7 +43,8 @@ import numpy as np
 
 __all__ = ["GAUSSIAN_PEAK_FACTOR", "FAST_PATH_MAX_CORRECTION", "FAST_PATH_REGION",
            "TYRE_LIFT_FRACTION_LIMIT", "EXCEEDANCE_FRACTION_LIMIT", "SampleLimits",
-           "PROTOTYPE_SAMPLE_LIMITS", "exceedance_fractions",
+           "PROTOTYPE_SAMPLE_LIMITS", "HARDWARE_CODES", "study_sample_limits",
+           "exceedance_fractions",
            "ValidityFlag", "Validity", "VALIDITY_CHECKS",
            "register_check", "check_validity"]
 
@@ -118,6 +119,24 @@ class SampleLimits:
 PROTOTYPE_SAMPLE_LIMITS = SampleLimits(
     6250.0, 48.0, None, "assumed: screw DN 100 000 mm rpm on a 16 mm screw; generator "
     "voltage 48 V, the nominal voltage of a motor of this class (maxon 353297)")
+
+#: Speed constant of the motor the voltage limit is taken from (maxon 353297), rpm/V.
+_REFERENCE_SPEED_CONSTANT_RPM_PER_V = 77.8
+
+#: Codes of the hardware limits: a row beyond them is computed correctly by the model for
+#: a damper that could run there, but that damper is not realisable as specified.
+HARDWARE_CODES = frozenset({"screw_speed", "voltage", "current"})
+
+
+def study_sample_limits(voltage_constant_Vs_per_rad: float) -> SampleLimits:
+    """:data:`PROTOTYPE_SAMPLE_LIMITS` for a winding of voltage constant K_e: the same
+    screw speed, and the voltage of the same frame rewound for the same top speed,
+    48 V × K_e / K_e,ref (K_e,ref of maxon 353297, 77.8 rpm/V)."""
+    ke_ref = 60.0 / (2.0 * math.pi * _REFERENCE_SPEED_CONSTANT_RPM_PER_V)
+    lim = PROTOTYPE_SAMPLE_LIMITS
+    return SampleLimits(lim.screw_speed_rpm,
+                        float(lim.voltage_V * voltage_constant_Vs_per_rad / ke_ref), None,
+                        lim.source + ", rewound for this winding at the same top speed")
 
 
 def exceedance_fractions(stroke_m: np.ndarray, tyre_deflection_m: np.ndarray,
@@ -200,11 +219,22 @@ class Validity:
     def all_valid(self) -> bool:
         return bool(np.all(self.valid))
 
+    @property
+    def model_valid(self) -> np.ndarray:
+        """True where the *model* is inside its domain (no flag but hardware limits):
+        its numbers hold for a damper that could run there."""
+        return np.array([all(f.code in HARDWARE_CODES for f in fl) for fl in self.flags],
+                        dtype=bool)
+
     def cell(self, k: int) -> str:
-        """Table cell of result ``k``: ``valid`` or the reasons in bold."""
+        """Table cell of result ``k``: ``valid``, or the reasons in bold — INVALID when
+        the model is outside its domain, NOT REALISABLE when only hardware limits are
+        exceeded."""
         if not self.flags[k]:
             return "valid"
-        return "**INVALID: " + "; ".join(f.message for f in self.flags[k]) + "**"
+        head = ("NOT REALISABLE" if all(f.code in HARDWARE_CODES for f in self.flags[k])
+                else "INVALID")
+        return f"**{head}: " + "; ".join(f.message for f in self.flags[k]) + "**"
 
     def codes(self, k: int) -> list[str]:
         return [f.code for f in self.flags[k]]
@@ -250,7 +280,7 @@ def _hardware(metrics: Mapping[str, np.ndarray], ctx: Mapping[str, Any],
     limit = getattr(lim, {"screw_speed": "screw_speed_rpm", "voltage": "voltage_V",
                           "current": "current_A"}[key], None) if lim is not None else None
     unit = {"screw_speed": "rpm", "voltage": "V", "current": "A"}[key]
-    beyond = f" {limit:g} {unit}" if limit is not None else " its limit"
+    beyond = f" {limit:.4g} {unit}" if limit is not None else " its limit"
     return [f"{what} beyond{beyond} {_percent(f)} of the time (limit "
             f"{_percent(EXCEEDANCE_FRACTION_LIMIT)})"
             if np.isfinite(f) and f > EXCEEDANCE_FRACTION_LIMIT else None for f in frac]
