@@ -97,14 +97,22 @@ def step_quarter_car_paths(ctx: Context) -> StepOutput:
         "**ISO 2631-1 W_k** (exact product of the four filters) against the standard's "
         f"table: max deviation {dev:.2f} % over 0.5–80 Hz.\n\n" + "\n".join(rows) + "\n\n"
         "Low-order state-space fits of |W_k| for time-domain filtering (stable, minimum-phase; "
-        "metrics use the exact W_k):\n\n" + "\n".join(fit_rows) + f"\n\n![W_k]({rel_wk})\n\n"
+        "metrics use the exact W_k):\n\n" + "\n".join(fit_rows) + f"\n\n![W_k]({rel_wk})\n"
+        + caption("W_k", f"|W_k| of ISO 2631-1: the exact product of its four filters, a "
+                  f"6-state fit (max error {100 * wk_fit_error(6)['max_rel_error']:.2f} % over "
+                  f"0.5–80 Hz) and the standard's table (max deviation {dev:.2f} %)") + "\n"
         f"**Two evaluation paths**, frictionless passenger car, Table 1 prototype, class C, "
         f"100 km/h, {length:g} m road (time domain: compiled batch; frequency domain: exact "
         f"Eqs 2–3 with the full electrical impedance on the ISO 8608 PSD). Largest relative "
         f"difference: **{100 * worst:.2f} %**. Dissipation bound π² k1 G_d(n0) n0² V = "
         f"{float(freq['dissipation_bound_W'][0]):.1f} W (expected ≈ "
         f"{EXPECTED_DISSIPATION_BOUND_W:g} W for this road and speed).\n\n"
-        + "\n".join(cmp_rows) + f"\n\n![overview]({rel_sim})\n")
+        + "\n".join(cmp_rows) + f"\n\n![overview]({rel_sim})\n"
+        + caption("Overview", f"The frictionless prototype at R_e = {loads[1]:g} Ω on the "
+                  f"{length:g} m class C road at 100 km/h: road and sprung displacement, load "
+                  f"power (mean {float(sim.metrics['power_W'][1]):.1f} W on this road), sprung "
+                  f"acceleration and damper force against stroke velocity (no friction: "
+                  f"the road study below shades the friction's identified range)"))
     return StepOutput(md, [rel_wk, rel_sim],
                       {"wk_max_dev_percent": dev, "paths_max_rel_diff": worst,
                        "comfort_default": float(freq["comfort_weighted_rms_m_s2"][1])})
@@ -273,7 +281,13 @@ def step_fig14(ctx: Context) -> StepOutput:
           "\n\nShort circuit adds the electrical damping K_t K_e/(r² R_i) ≈ "
           f"{ctx.harvester().equivalent_damping_Ns_per_m(0.0, 0.0):.0f} N s/m to the friction. "
           + _compare_ranges(res) + "\n\n"
-          f"![Fig 14]({rel})\n")
+          f"![Fig 14]({rel})\n"
+          + caption("Fig 14", f"Force against velocity over one steady cycle of a "
+                    f"{1e3 * study.amplitude_m:g} mm, {study.frequency_hz:g} Hz sine stroke, "
+                    f"open circuit (c_eq {res['open circuit'][0]:.0f}–"
+                    f"{res['open circuit'][1]:.0f} N s/m, min–max friction) and short "
+                    f"circuit ({res['short circuit'][0]:.0f}–{res['short circuit'][1]:.0f} "
+                    f"N s/m); velocities beyond the identified ±{v_id:.2f} m/s shaded"))
     res["out_of_range"] = {f"{c} / {k}": list(x) for (c, k), x in study.out_of_range.items()}
     return StepOutput(md, [rel], res)
 

@@ -21,6 +21,7 @@ __all__ = [
     "fig14_force_velocity",
     "fig15_road_study",
     "fig21_power_history",
+    "short_source",
     "simulation_overview",
     "wk_figure",
 ]
@@ -48,8 +49,10 @@ def _shade_identified(ax: Axes, v_id: float | None, v: np.ndarray) -> None:
                        label=(f"beyond the identified ±{v_id:.2f} m/s" if sgn > 0 else None))
 
 
-def simulation_overview(sim: QuarterCarSimulation, k: int = 0) -> Figure:
-    """Road, sprung displacement, load power and force–velocity of design ``k``."""
+def simulation_overview(sim: QuarterCarSimulation, k: int = 0,
+                        identified_range_m_per_s: float | None = None) -> Figure:
+    """Road, sprung displacement, load power and force–velocity of design ``k`` (stroke
+    velocities beyond the friction's identified range shaded when given)."""
     s = sim.series
     fig, ax = plt.subplots(2, 2, figsize=(10, 6))
     t = sim.time_s
@@ -63,7 +66,10 @@ def simulation_overview(sim: QuarterCarSimulation, k: int = 0) -> Figure:
     ax[1, 0].set_ylabel("sprung acceleration (m/s²)")
     for a in (ax[0, 0], ax[0, 1], ax[1, 0]):
         a.set_xlabel("time (s)")
+    _shade_identified(ax[1, 1], identified_range_m_per_s, np.asarray(s["stroke_velocity_m_s"][k]))
     ax[1, 1].plot(s["stroke_velocity_m_s"][k], s["damper_force_N"][k], ".", ms=1, color="C3")
+    if identified_range_m_per_s is not None:
+        ax[1, 1].legend(fontsize=7, loc="upper left")
     ax[1, 1].set_xlabel("stroke velocity (m/s)")
     ax[1, 1].set_ylabel("damper force w/o inertia (N)")
     fig.suptitle(f"{sim.road_source}: design {k}")

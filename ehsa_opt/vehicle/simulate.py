@@ -316,16 +316,18 @@ class QuarterCarSimulation:
             out[key] = None if math.isnan(val) else val
         return out
 
-    def plot(self, ax: Any = None, k: int = 0) -> Any:
+    def plot(self, ax: Any = None, k: int = 0,
+             identified_range_m_per_s: float | None = None) -> Any:
         """Road, sprung displacement, power and force–velocity of design ``k`` (four
-        panels; ``ax`` not used); writes nothing."""
+        panels; ``ax`` not used; velocities beyond ``identified_range_m_per_s`` shaded);
+        writes nothing."""
         missing = [n for n in ("x2_m", "load_power_W", "sprung_acc_m_s2",
                                "stroke_velocity_m_s", "damper_force_N") if n not in self.series]
         if missing:
             raise ValueError(f"plot needs the series {missing}: simulate with "
                              f"keep_series=True")
         from ..plots.quarter_car import simulation_overview
-        return simulation_overview(self, k)
+        return simulation_overview(self, k, identified_range_m_per_s)
 
 
 def _as_list(obj: Any, cls: type, n: int | None) -> list:

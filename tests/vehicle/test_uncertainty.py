@@ -112,3 +112,26 @@ def test_tyre_lift_and_limit_shares_on_constructed_signals():
     # the frequency path (rms only): the Gaussian share Q(1/η_rh) against the same limit
     g = check_validity({"road_holding": [0.30, 0.36]})
     assert g.valid.tolist() == [True, False] and "if Gaussian" in g.cell(1)
+
+
+def test_fig13_flags_strokes_beyond_the_limit_and_road_psds_state_their_segments():
+    """At 109 Ω the body mode needs a stroke of ~102 mm on the Fig 13 road (constant
+    velocity amplitude 62.8 mm/s): beyond the ±100 mm limit, flagged; the exact linear
+    stroke amplitude is the check."""
+    from ehsa_opt.vehicle.frequency_path import linear_frequency_response
+    from ehsa_opt.vehicle.studies import (WELCH_SEGMENTS, FrictionCases, road_study,
+                                          stepped_sine_response)
+    vehicle, h = VehicleParams(), HarvesterParams(load_ohm=109.0)
+    none = FrictionCases({"none": None}, "frictionless")
+    v_road = 2 * np.pi * 0.01
+    f = np.array([1.1, 5.0])
+    study = stepped_sine_response(vehicle, h, none, [109.0], f,
+                                  velocity_amplitude_m_per_s=v_road, max_time_s=4.0)
+    lin = linear_frequency_response(vehicle, h, f)
+    exact = np.abs(lin["x2"] - lin["x1"]) * v_road / (2 * np.pi * f)
+    assert study.peak_stroke_m[0, 0] == pytest.approx(exact, rel=0.01)
+    assert exact[0] > 0.1 > exact[1]
+    assert study.beyond_stroke_limit()[0, 0].tolist() == [True, False]
+    road = road_study(vehicle, h, none, RoadParams(length_m=200.0), retune=False)
+    assert road.road_psd["segments"] == WELCH_SEGMENTS
+    assert road.stroke_velocity_psd["segments"] == WELCH_SEGMENTS
