@@ -78,7 +78,8 @@ def _goal_attainment_rows(cfg: Any, ga: Any, out: dict, at_lower: dict, pd_out: 
         f"| W_k rms acceleration (m/s²) | {pm['comfort_weighted_rms_m_s2']:.3f} | "
         f"{om['comfort_weighted_rms_m_s2']:.3f} | {pd_out['comfort_weighted_rms_m_s2']:.3f} | – |",
         f"| attainment factor γ | 0 (goals) | **{ga.gamma:+.4f}** | {gamma_paper:+.4f} | – |",
-        "| validity (tyre on the ground, 3.5 × rms stroke within the limit) | "
+        "| validity (tyre lift: Gaussian share of the time Q(1/η_rh); 3.5 × rms stroke "
+        "within the limit) | "
         + " | ".join(_validity_cell(cfg, o) for o in
                      ({**proto, **pm}, {**out["objectives"], **om}, pd_out)) + " | – |",
     ]
@@ -305,7 +306,8 @@ def _table4_lines(rows: list[dict]) -> list[str]:
                           ("road_holding_change_pct", "road holding change (%)", "+.2f")):
         lines.append(f"| {lab} | " + " | ".join(cell(c, key, j, fmt) for j, c in
                                                enumerate(("none", "min", "max"))) + " |")
-    lines.append("| validity (tyre on the ground, stroke within the limit) | " + " | ".join(
+    lines.append("| validity (shares of the time the tyre lifts and the stroke exceeds its "
+                 "limit, on the design road) | " + " | ".join(
         ("valid" if not at100.get(c, {}).get("validity") else
          "**INVALID: " + "; ".join(at100[c]["validity"]) + "**")
         for c in ("none", "min", "max")) + " |")
@@ -336,8 +338,16 @@ def _friction_explanation(cfg: Any, ga: dict, rows: list[dict], pp: dict,
                  f"{none100['linear_comfort']:.4f}; energy balance closes to "
                  f"{max(abs(r['energy_residual']) for r in rows):.1e} (relative) in every run.\n\n")
     if invalid_runs:
-        check += ("**Invalid runs** (left out of the comparison below): "
-                  + ", ".join(invalid_runs) + ".\n\n")
+        opt_invalid = any(r.get("validity") for r in at100.values())
+        check += ("**Invalid runs**: " + ", ".join(invalid_runs) + "."
+                  + (" The optimum's rows at 100 km/h are among them: the sentences on the "
+                     "optimum below describe the model outside its domain (the tyre lifts "
+                     "more often than the stated share), not a valid result"
+                     + ("; the paper's design (second table, valid on the design road) is the "
+                        "comparison that stands." if not any(r.get("validity")
+                                                             for r in pp.values()) else ".")
+                     if opt_invalid else " They are left out of the comparison below.")
+                  + "\n\n")
     return check + (
         f"**Against the paper.** Friction costs power and efficiency as in the paper "
         f"(efficiency falls from R_e/(R_e+R_i) = {none100.get('efficiency_pct', float('nan')):.1f} % "

@@ -114,7 +114,7 @@ def fig13_frequency_response(study: FrequencyResponseStudy) -> Figure:
         a.grid(True, which="both", alpha=0.3)
     handles, labels = ax[1].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=7, ncol=len(study.cases), loc="lower center",
-               frameon=False, bbox_to_anchor=(0.5, -0.01))
+               frameon=False, bbox_to_anchor=(0.5, 0.035))
     va = getattr(study, "velocity_amplitude_m_per_s", None)
     road = (f"road sine of constant velocity amplitude {1e3 * va:.1f} mm/s (displacement "
             f"{1e3 * study.amplitude_m:.3g} mm at 1 Hz, falling as 1/f)" if va else
@@ -133,7 +133,7 @@ def fig13_frequency_response(study: FrequencyResponseStudy) -> Figure:
                  f"{short_source(study.friction_source)}", fontsize=9)
     if marks:
         fig.text(0.5, 0.005, "   ".join(marks), ha="center", va="bottom", fontsize=7)
-    fig.tight_layout(rect=(0, 0.13 if len(labels) > 6 else 0.09, 1, 0.97))
+    fig.tight_layout(rect=(0, 0.17 if len(labels) > 6 else 0.12, 1, 0.97))
     return fig
 
 
