@@ -287,7 +287,7 @@ def step_fig14(ctx: Context) -> StepOutput:
                     f"open circuit (c_eq {res['open circuit'][0]:.0f}–"
                     f"{res['open circuit'][1]:.0f} N s/m, min–max friction) and short "
                     f"circuit ({res['short circuit'][0]:.0f}–{res['short circuit'][1]:.0f} "
-                    f"N s/m); velocities beyond the identified ±{v_id:.2f} m/s shaded"))
+                    f"N s/m); velocities beyond the identified ±{v_ident:.2f} m/s shaded"))
     res["out_of_range"] = {f"{c} / {k}": list(x) for (c, k), x in study.out_of_range.items()}
     return StepOutput(md, [rel], res)
 
