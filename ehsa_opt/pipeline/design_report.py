@@ -153,7 +153,12 @@ def _goal_attainment_markdown(cfg: Any, ga: Any, out: dict, at_lower: dict, pd_o
         f"{P['lead_mm_per_rev']:g} mm/rev with R_e = {P['load_ohm']:g} Ω (the paper's design, "
         f"column 4) " + paper_design_sentence + " Vehicle, road seed and R_e of the prototype are "
         "our assumptions (the paper does not give them), so absolute values differ from the paper's.\n\n"
-        + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
+        + "".join(f"![{Path(f).stem}]({f})\n" for f in figs)
+        + caption("Figs 17–19", f"Goal attainment from the prototype: design variables, "
+                  f"equivalent mass and objectives over the iterations of the best of "
+                  f"{ga.stats['n_starts']} starts, ending at γ = {ga.gamma:+.4f} with R_e = "
+                  f"{d['load_ohm']:.1f} Ω, power {om['power_W']:.1f} W and efficiency "
+                  f"{100 * om['efficiency']:.1f} % (frequency path, exact)"))
 
 
 def step_goal_attainment(ctx: Context) -> StepOutput:
