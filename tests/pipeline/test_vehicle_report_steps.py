@@ -31,10 +31,15 @@ def test_fig21_gives_intervals_judges_the_paper_on_them_and_flags_the_hardware(c
     assert (ctx.out_dir / "figures" / "fig21_power_history.png").is_file()
 
 
-def test_fig14_and_the_road_study_carry_captions_limits_and_paired_changes(ctx):
+def test_fig14_carries_a_caption_from_its_numbers(ctx):
     from ehsa_opt.pipeline.quarter_car_report import step_fig14
-    md14 = step_fig14(ctx).markdown
-    assert "*Fig 14. Force against velocity" in md14 and "shaded" in md14
+    out = step_fig14(ctx)
+    lo, hi = out.results["open circuit"]
+    assert "*Fig 14. Force against velocity" in out.markdown and "shaded" in out.markdown
+    assert f"open circuit (c_eq {lo:.0f}–{hi:.0f} N s/m" in out.markdown
+
+
+def test_the_road_study_carries_paired_changes_limits_and_a_caption(ctx):
     from ehsa_opt.pipeline.quarter_car_report import step_fig15_16
     out = step_fig15_16(ctx)
     car, seater = out.markdown.split("### Fig 16")
