@@ -45,11 +45,25 @@ class RigLimits:
     loads_ohm : tuple of float
         Load resistors available.
     sample_rate_hz, cycles : float
-        Recording of a planned test.
+        Recording of a planned test: its sample rate and its fewest cycles.
     reversal_s : float
-        Time a triangle stroke takes to reverse (its acceleration is v / reversal_s).
+        Time a triangle stroke takes to reverse from +v to −v (its acceleration is
+        2 v / reversal_s, the protocol's corners of reversal_s / 2).
     min_frequency_hz, max_frequency_hz : float
         Sine frequencies the controller runs.
+    stroke_margin_m : float
+        Travel kept free at each end of the stroke (controller overshoot, end stops): a
+        test's peak |x| is at most stroke_m / 2 − stroke_margin_m.  Default 5 mm (5 % of
+        the default stroke; an assumption the operator sets for the rig).
+    min_plateau_s : float
+        Least time of usable friction samples per test: a triangle's constant-velocity
+        plateaus (its reversals are left out of the fit), a sine's whole record; a test
+        runs ``cycles`` or as many more as this needs.  Default 2 s: 2000 samples at
+        1 kHz, about a record of the embedded bench campaign (21 tests, 1480 samples each).
+    max_screw_speed_rpm, max_generator_voltage_V, max_generator_current_A : float or None
+        The damper's own limits (screw critical speed or DN limit, the generator's rated
+        voltage and peak current); None: not checked (every proposed test still states
+        its peak screw speed, voltage and current).
     """
 
     stroke_m: float = 0.1
@@ -62,16 +76,35 @@ class RigLimits:
     reversal_s: float = 0.05
     min_frequency_hz: float = 0.1
     max_frequency_hz: float = 20.0
+    stroke_margin_m: float = 0.005
+    min_plateau_s: float = 2.0
+    max_screw_speed_rpm: float | None = None
+    max_generator_voltage_V: float | None = None
+    max_generator_current_A: float | None = None
+
+    @property
+    def usable_amplitude_m(self) -> float:
+        """Largest peak |x| a test may reach: stroke_m / 2 − stroke_margin_m."""
+        return 0.5 * self.stroke_m - self.stroke_margin_m
 
     def __post_init__(self) -> None:
         for name in ("stroke_m", "peak_velocity_m_per_s", "force_N", "actuator_power_W",
                      "sample_rate_hz", "cycles", "reversal_s", "min_frequency_hz",
-                     "max_frequency_hz"):
+                     "max_frequency_hz", "min_plateau_s", "max_screw_speed_rpm",
+                     "max_generator_voltage_V", "max_generator_current_A"):
             v = getattr(self, name)
+            if v is None and name.startswith("max_") and name != "max_frequency_hz":
+                continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (
                     math.isfinite(v) and v > 0):
                 raise ParameterError(f"[rig] {name} = {v!r}: give a positive number (e.g. "
                                      f"{getattr(RigLimits, name)!r})")
+        m = self.stroke_margin_m
+        if isinstance(m, bool) or not isinstance(m, (int, float)) or not (
+                math.isfinite(m) and 0.0 <= m < 0.5 * self.stroke_m):
+            raise ParameterError(f"[rig] stroke_margin_m = {m!r}: give the travel kept free "
+                                 f"at each end, >= 0 and below stroke_m / 2 = "
+                                 f"{0.5 * self.stroke_m:g} m (e.g. 0.005)")
         if self.stroke_m > 2.0:
             raise ParameterError(f"[rig] stroke_m = {self.stroke_m:g} m: strokes are metres "
                                  f"(e.g. 0.1 for ±50 mm); did you give millimetres?")
@@ -102,7 +135,8 @@ def planned_samples(rig: RigLimits) -> float:
     stroke (4 A / v plus two reversals per cycle)."""
     sine_s = 1.0 / rig.min_frequency_hz
     tri_s = 2.0 * rig.stroke_m / SLOWEST_TRIANGLE_M_PER_S + 2.0 * rig.reversal_s
-    return rig.cycles * rig.sample_rate_hz * max(sine_s, tri_s)
+    return rig.sample_rate_hz * max(rig.cycles * max(sine_s, tri_s),
+                                    rig.min_plateau_s + sine_s)
 
 
 def load_rig(path: str | Path) -> RigLimits:

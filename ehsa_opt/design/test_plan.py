@@ -33,6 +33,7 @@ model is the friction regression and the report is the predicted band.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import asdict, dataclass, field, fields
@@ -45,6 +46,7 @@ from ..estimation.rod_law import Z95, RodLawFit, rod_gradient
 from ..physics.harvester import equivalent_damping_Ns_per_m, equivalent_mass_kg
 from ..physics.params import HarvesterParams, ParameterError
 from .rig import SLOWEST_TRIANGLE_M_PER_S, RigLimits, load_rig
+from .test_loads import damper_loads, sine_peak_force_power, triangle_peak_force_N
 
 __all__ = ["RigLimits", "load_rig", "Candidate", "candidate_tests", "TestPlan", "plan_tests",
            "road_velocity_sigma", "plan_from_files", "triangle_resolved_velocity",
@@ -68,6 +70,10 @@ class Candidate:
     peak_force_N: float = 0.0
     peak_power_W: float = 0.0
     peak_acceleration_m_per_s2: float = 0.0
+    cycles: float = 2.0
+    peak_screw_speed_rpm: float = 0.0
+    peak_voltage_V: float = 0.0
+    peak_current_A: float = 0.0
 
     @property
     def file(self) -> str:
@@ -90,10 +96,11 @@ class Candidate:
         (:func:`triangle_resolved_velocity`)."""
         fs = rig.sample_rate_hz
         if self.kind == "sine":
-            n = max(int(round(rig.cycles * fs / self.frequency_hz)), 8)
+            n = max(int(round(self.cycles * fs / self.frequency_hz)), 8)
             t = np.arange(n) / fs
             return self.peak_velocity_m_per_s * np.cos(2 * math.pi * self.frequency_hz * t)
-        return triangle_resolved_velocity(self.velocity_m_per_s, self.amplitude_m, rig)
+        return triangle_resolved_velocity(self.velocity_m_per_s, self.amplitude_m, rig,
+                                          self.cycles)
 
     def acceleration_m_per_s2(self, rig: RigLimits) -> float:
         """Peak stroke acceleration at the samples that give friction samples (m/s²): ω²A
@@ -103,8 +110,8 @@ class Candidate:
         return 0.0
 
 
-def triangle_resolved_velocity(velocity_m_per_s: float, amplitude_m: float, rig: RigLimits
-                               ) -> np.ndarray:
+def triangle_resolved_velocity(velocity_m_per_s: float, amplitude_m: float, rig: RigLimits,
+                               cycles: float | None = None) -> np.ndarray:
     """Stroke velocity (m/s) at the resolved samples of a constant-velocity triangle
     stroke over ±``amplitude_m`` recorded on ``rig``: the stroke (reversal ``reversal_s``,
     :class:`~ehsa_opt.datasets.protocols.Protocol` with corners of half that) is sampled,
@@ -115,10 +122,9 @@ def triangle_resolved_velocity(velocity_m_per_s: float, amplitude_m: float, rig:
     from ..datasets.bench_format import BenchTest
     from ..datasets.protocols import Protocol
     from ..estimation.identify_options import IdentifyOptions, estimate_motion
-    import dataclasses
     proto = Protocol("triangle", 1.0, amplitude_m=float(amplitude_m),
                      velocity_m_per_s=float(velocity_m_per_s), corner_s=0.5 * rig.reversal_s)
-    proto = dataclasses.replace(proto, duration_s=rig.cycles * proto.cycle_s)
+    proto = dataclasses.replace(proto, duration_s=(cycles or rig.cycles) * proto.cycle_s)
     dt = 1.0 / rig.sample_rate_hz
     t = np.arange(int(round(proto.record_s / dt)) + 1) * dt
     x, v = proto.motion().evaluate(t)[:2]
@@ -133,41 +139,66 @@ def triangle_resolved_velocity(velocity_m_per_s: float, amplitude_m: float, rig:
 def candidate_tests(rig: RigLimits, harvester: HarvesterParams, law: RodLawFit,
                     kinds: Sequence[str] = _KINDS, n_freq: int = 24, n_amp: int = 6
                     ) -> list[Candidate]:
-    """Sines (log-spaced frequencies × amplitudes up to half the stroke) and triangle
-    strokes (``n_freq`` log-spaced velocities over the full stroke), at every load, that stay within
-    the rig's velocity, force and power (peak force ≈ m_eq a + c_eq(ω) v + F_rod(v),
-    each at its peak)."""
+    """Sines (log-spaced frequencies × amplitudes up to the usable stroke) and triangle
+    strokes (``n_freq`` log-spaced velocities over the usable stroke), at every load, that
+    stay within the rig's stroke (less its margin), velocity, force and power and within
+    the damper's screw speed, generator voltage and current where the rig file gives them.
+    Force and power are the exact peaks of the test's own motion
+    (:mod:`ehsa_opt.design.test_loads`); each test runs ``rig.cycles`` or as many more as
+    ``rig.min_plateau_s`` of usable samples needs."""
     for k in kinds:
         if k not in _KINDS:
             raise ParameterError(f"plan-tests: unknown test kind '{k}' (valid: "
                                  f"{', '.join(_KINDS)})")
     meq = equivalent_mass_kg(harvester)
     out = []
-    amps = np.linspace(0.1, 1.0, n_amp) * 0.5 * rig.stroke_m
+    a_max = rig.usable_amplitude_m
+    amps = np.linspace(0.1, 1.0, n_amp) * a_max
     for load in rig.loads_ohm:
         h = harvester.replace(load_ohm=float(load))
         if "sine" in kinds:
             for f in np.geomspace(rig.min_frequency_hz, rig.max_frequency_hz, n_freq):
                 w = 2 * math.pi * f
                 ceq = float(equivalent_damping_Ns_per_m(h, w))
+                cycles = max(rig.cycles, math.ceil(rig.min_plateau_s * f))
                 for a in amps:
-                    vp = w * a
-                    F = meq * w * w * a + ceq * vp + float(law.rod_N(vp))
-                    out.append(Candidate("sine", float(a), float(load), float(f), None,
-                                         float(vp), float(F), float(F * vp), float(w * w * a)))
+                    F, P = sine_peak_force_power(meq, ceq, float(a), float(f), law.rod_N)
+                    out.append(_with_loads(Candidate(
+                        "sine", float(a), float(load), float(f), None, float(w * a), F, P,
+                        float(w * w * a), float(cycles)), h))
         if "triangle" in kinds:
             ceq = float(equivalent_damping_Ns_per_m(h, 0.0))
-            a = 0.5 * rig.stroke_m
             for v in np.geomspace(SLOWEST_TRIANGLE_M_PER_S, rig.peak_velocity_m_per_s,
                                  n_freq):
-                if 2 * a / v <= 2 * rig.reversal_s:
+                plateau = 2.0 * (2.0 * a_max / v - rig.reversal_s)  # per cycle
+                if plateau <= 0.0:
                     continue
-                F = meq * v / rig.reversal_s + ceq * v + float(law.rod_N(v))
-                out.append(Candidate("triangle", float(a), float(load), None, float(v),
-                                     float(v), float(F), float(F * v),
-                                     float(2.0 * v / rig.reversal_s)))
-    return [c for c in out if c.peak_velocity_m_per_s <= rig.peak_velocity_m_per_s * (1 + 1e-9)
-            and c.peak_force_N <= rig.force_N and c.peak_power_W <= rig.actuator_power_W]
+                F = triangle_peak_force_N(meq, ceq, float(v), rig.reversal_s, law.rod_N)
+                cycles = max(rig.cycles, math.ceil(rig.min_plateau_s / plateau))
+                out.append(_with_loads(Candidate(
+                    "triangle", float(a_max), float(load), None, float(v), float(v), F,
+                    F * float(v), float(2.0 * v / rig.reversal_s), float(cycles)), h))
+    return [c for c in out if _within(c, rig)]
+
+
+def _with_loads(c: Candidate, h: HarvesterParams) -> Candidate:
+    """The candidate with the damper's peak screw speed, voltage and current."""
+    d = damper_loads(c.peak_velocity_m_per_s, h.lead_m_per_rad, h.voltage_constant_Vs_per_rad,
+                     c.load_ohm, h.internal_resistance_ohm)
+    return dataclasses.replace(c, peak_screw_speed_rpm=d["screw_speed_rpm"],
+                               peak_voltage_V=d["voltage_V"], peak_current_A=d["current_A"])
+
+
+def _within(c: Candidate, rig: RigLimits) -> bool:
+    """Whether a candidate stays within every limit of the rig and of the damper."""
+    tol = 1 + 1e-9
+    damper = ((rig.max_screw_speed_rpm, c.peak_screw_speed_rpm),
+              (rig.max_generator_voltage_V, c.peak_voltage_V),
+              (rig.max_generator_current_A, c.peak_current_A))
+    return (c.peak_velocity_m_per_s <= rig.peak_velocity_m_per_s * tol
+            and c.amplitude_m <= rig.usable_amplitude_m * tol
+            and c.peak_force_N <= rig.force_N and c.peak_power_W <= rig.actuator_power_W
+            and all(lim is None or val <= lim * tol for lim, val in damper))
 
 
 def road_velocity_sigma(problem: Any, friction: Any) -> float:
@@ -207,11 +238,22 @@ class TestPlan:
         for k, (c, st) in enumerate(zip(self.proposed, self.steps), 1):
             res = st.get("predicted_residual_rms_N")
             neff = st.get("effective_samples")
-            out.append(f"  {k}. {c.label()}: peak force {c.peak_force_N:.0f} N, power "
-                       f"{c.peak_power_W:.0f} W"
+            out.append(f"  {k}. {c.label()}, {c.cycles:g} cycles: peak force "
+                       f"{c.peak_force_N:.0f} N, power {c.peak_power_W:.0f} W; damper "
+                       f"{c.peak_screw_speed_rpm:.0f} rpm, {c.peak_voltage_V:.1f} V, "
+                       f"{c.peak_current_A:.2f} A"
                        + (f", expected residual {res:.0f} N rms" if res is not None else "")
                        + (f" on {neff:.0f} effective samples" if neff is not None else "")
                        + f" -> road-weighted band +-{st['road_band_N']:.1f} N")
+        unchecked = [n for n, v in (("screw speed", self.rig.max_screw_speed_rpm),
+                                    ("generator voltage", self.rig.max_generator_voltage_V),
+                                    ("generator current", self.rig.max_generator_current_A))
+                     if v is None]
+        out.append(f"rig: stroke +-{1e3 * self.rig.usable_amplitude_m:.3g} mm usable "
+                   f"({1e3 * self.rig.stroke_margin_m:g} mm margin at each end), at least "
+                   f"{self.rig.min_plateau_s:g} s of usable samples per test"
+                   + (f"; NOT checked (no limit in [rig]): {', '.join(unchecked)}"
+                      if unchecked else "; damper limits checked"))
         out.append("predicted 95 % band of the rod friction (+- N), before -> after:")
         for v, b, a in zip(self.velocities_m_per_s, self.band_before_N, self.band_after_N):
             out.append(f"  at {v:4.2f} m/s: {b:7.1f} -> {a:7.1f}")
@@ -234,11 +276,13 @@ class TestPlan:
             lines.append(f'file = "{c.file}"')
             if c.kind == "sine":
                 lines += [f"frequency_hz = {c.frequency_hz:.4g}",
-                          f"amplitude_m = {c.amplitude_m:.4g}"]
+                          f"amplitude_m = {c.amplitude_m:.4g}",
+                          f"# record {c.cycles:g} cycles"]
             else:
                 lines += ['excitation = "recorded"',
                           f"# constant-velocity triangle strokes: +-{c.velocity_m_per_s:.4g} "
-                          f"m/s over +-{c.amplitude_m:.4g} m, {self.rig.cycles:g} cycles"]
+                          f"m/s over +-{c.amplitude_m:.4g} m, {c.cycles:g} cycles, "
+                          f"reversal {self.rig.reversal_s:g} s"]
             lines += [f"load_ohm = {c.load_ohm:g}", ""]
         return "\n".join(lines)
 
@@ -419,8 +463,9 @@ def plan_tests(law: RodLawFit, rig: RigLimits, harvester: HarvesterParams,
         raise ParameterError(f"plan-tests: the number of tests must be >= 1, got {n_tests!r}")
     cands = candidate_tests(rig, harvester, law, kinds)
     if not cands:
-        return TestPlan(False, "no candidate test fits the rig's limits: raise "
-                        "peak_velocity_m_per_s, force_N or actuator_power_W in [rig]", [],
+        return TestPlan(False, "no candidate test fits the rig's and the damper's limits: "
+                        "raise peak_velocity_m_per_s, force_N, actuator_power_W or the "
+                        "damper's max_* limits, or lower stroke_margin_m in [rig]", [],
                         criterion, sigma_v_m_per_s, list(velocities_m_per_s), [], [],
                         math.nan, math.nan, [], 0, rig, law.velocity_range_m_per_s[1])
     names, p, lead = law.free, law.parameters, law.lead_m_per_rad

@@ -113,13 +113,15 @@ def step_bench_truth(ctx: Context) -> StepOutput:
     rel = "figures/bench_truth_fit.png"
     plots.save(fig, ctx.out_dir / rel)
     effects = ", ".join(truth.get("effects", {})) or "none"
+    cap = (f"\n*Bench fit. Test {test.label}: measured force against the rigid model with "
+           f"the true friction; rms error {err:.1f} N (hidden effects: {effects}).*\n")
     if ctx.custom_data:
         md = (f"Simulating test {test.label} with the **true** friction (truth.toml) on the "
               f"rigid model leaves an rms force error of {err:.1f} N (hidden effects in the "
-              f"data: {effects}).\n\n![bench fit]({rel})\n")
+              f"data: {effects}).\n\n![bench fit]({rel})\n" + cap)
     else:
         md = (f"Simulating test {test.label} with the **true** friction but without backlash "
               f"leaves an rms force error of {err:.1f} N, concentrated in short peaks right "
               f"after each velocity reversal: the signature the paper attributes to backlash "
-              f"(its Fig 11).\n\n![bench fit]({rel})\n")
+              f"(its Fig 11).\n\n![bench fit]({rel})\n" + cap)
     return StepOutput(md, [rel], {"rms_force_error_N": err})

@@ -24,6 +24,7 @@ from ..design import OBJECTIVE_NAMES
 from .base import Context, StepOutput
 from .design_problem import design_config, not_applicable
 from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
+from .vehicle_intervals_report import caption
 from .step_results import DesignStepResult
 
 __all__ = ["step_goal_attainment", "step_pareto", "step_friction_on_optimum"]
@@ -77,7 +78,8 @@ def _goal_attainment_rows(cfg: Any, ga: Any, out: dict, at_lower: dict, pd_out: 
         f"| W_k rms acceleration (m/s²) | {pm['comfort_weighted_rms_m_s2']:.3f} | "
         f"{om['comfort_weighted_rms_m_s2']:.3f} | {pd_out['comfort_weighted_rms_m_s2']:.3f} | – |",
         f"| attainment factor γ | 0 (goals) | **{ga.gamma:+.4f}** | {gamma_paper:+.4f} | – |",
-        "| validity (tyre on the ground, 3.5 × rms stroke within the limit) | "
+        "| validity (tyre lift: Gaussian share of the time Q(1/η_rh); 3.5 × rms stroke "
+        "within the limit) | "
         + " | ".join(_validity_cell(cfg, o) for o in
                      ({**proto, **pm}, {**out["objectives"], **om}, pd_out)) + " | – |",
     ]
@@ -151,7 +153,12 @@ def _goal_attainment_markdown(cfg: Any, ga: Any, out: dict, at_lower: dict, pd_o
         f"{P['lead_mm_per_rev']:g} mm/rev with R_e = {P['load_ohm']:g} Ω (the paper's design, "
         f"column 4) " + paper_design_sentence + " Vehicle, road seed and R_e of the prototype are "
         "our assumptions (the paper does not give them), so absolute values differ from the paper's.\n\n"
-        + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
+        + "".join(f"![{Path(f).stem}]({f})\n" for f in figs)
+        + caption("Figs 17–19", f"Goal attainment from the prototype: design variables, "
+                  f"equivalent mass and objectives over the iterations of the best of "
+                  f"{ga.stats['n_starts']} starts, ending at γ = {ga.gamma:+.4f} with R_e = "
+                  f"{d['load_ohm']:.1f} Ω, power {om['power_W']:.1f} W and efficiency "
+                  f"{100 * om['efficiency']:.1f} % (frequency path, exact)"))
 
 
 def step_goal_attainment(ctx: Context) -> StepOutput:
@@ -304,7 +311,8 @@ def _table4_lines(rows: list[dict]) -> list[str]:
                           ("road_holding_change_pct", "road holding change (%)", "+.2f")):
         lines.append(f"| {lab} | " + " | ".join(cell(c, key, j, fmt) for j, c in
                                                enumerate(("none", "min", "max"))) + " |")
-    lines.append("| validity (tyre on the ground, stroke within the limit) | " + " | ".join(
+    lines.append("| validity (shares of the time the tyre lifts and the stroke exceeds its "
+                 "limit, on the design road) | " + " | ".join(
         ("valid" if not at100.get(c, {}).get("validity") else
          "**INVALID: " + "; ".join(at100[c]["validity"]) + "**")
         for c in ("none", "min", "max")) + " |")
@@ -335,8 +343,16 @@ def _friction_explanation(cfg: Any, ga: dict, rows: list[dict], pp: dict,
                  f"{none100['linear_comfort']:.4f}; energy balance closes to "
                  f"{max(abs(r['energy_residual']) for r in rows):.1e} (relative) in every run.\n\n")
     if invalid_runs:
-        check += ("**Invalid runs** (left out of the comparison below): "
-                  + ", ".join(invalid_runs) + ".\n\n")
+        opt_invalid = any(r.get("validity") for r in at100.values())
+        check += ("**Invalid runs**: " + ", ".join(invalid_runs) + "."
+                  + (" The optimum's rows at 100 km/h are among them: the sentences on the "
+                     "optimum below describe the model outside its domain (the tyre lifts "
+                     "more often than the stated share), not a valid result"
+                     + ("; the paper's design (second table, valid on the design road) is the "
+                        "comparison that stands." if not any(r.get("validity")
+                                                             for r in pp.values()) else ".")
+                     if opt_invalid else " They are left out of the comparison below.")
+                  + "\n\n")
     return check + (
         f"**Against the paper.** Friction costs power and efficiency as in the paper "
         f"(efficiency falls from R_e/(R_e+R_i) = {none100.get('efficiency_pct', float('nan')):.1f} % "
@@ -404,6 +420,7 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
     rows_paper = friction_on_optimum(cfg, paper_design, sets, (100.0,), road_length_m=length,
                                      jobs=1, identified_range_m_per_s=v_id)
     pp = {r["friction"]: r for r in rows_paper}
+    t4_md, t4_res = _table4_with_intervals(ctx, cfg, ga, paper_design, sets, length, v_id)
     rel = "figures/fig20_friction_on_optimum.png"
     plots.save(fig_fn(rows), ctx.out_dir / rel)
     t_all = [r.get("out_of_range_time_fraction", 0.0) for r in rows]
@@ -414,11 +431,41 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
           f"{cfg.road.iso_class}, {len(speeds)} speeds, {length:g} m roads. Friction sets: "
           f"{source}. Sign convention as the paper's: a positive change is an improvement "
           f"(lower α or η_rh than without friction).\n\n" + "\n".join(_table4_lines(rows))
-          + "\n\n" + _paper_design_lines(pp)
+          + "\n\n" + _paper_design_lines(pp) + "\n" + t4_md
           + range_flag(t_all, e_all, v_id, v_src) + " (All speeds of Fig 20: "
           + ", ".join(f"{r['speed_km_per_h']:g} km/h {r['friction']} "
                       f"{100 * r.get('out_of_range_time_fraction', 0.0):.0f} %"
                       for r in rows if r["friction"] == "max") + " of the time.)\n\n"
-          + "\n" + _friction_explanation(cfg, ga, rows, pp, source) + f"![fig20]({rel})\n")
+          + "\n" + _friction_explanation(cfg, ga, rows, pp, source) + f"![fig20]({rel})\n"
+          + caption("Fig 20", _fig20_caption(rows, length)))
     return StepOutput(md, [rel], {"rows": rows, "friction_source": source,
-                                  "paper_design_rows": rows_paper})
+                                  "paper_design_rows": rows_paper, "table4_intervals": t4_res})
+
+
+def _table4_with_intervals(ctx: Context, cfg: Any, ga: dict, paper_design: dict,
+                           sets: dict, length: float, v_id: float | None) -> tuple[str, dict]:
+    """Table 4 of the optimum and of the paper's design with 95 % intervals over road
+    realisations at 100 km/h (:func:`~ehsa_opt.pipeline.vehicle_intervals_report.table4_intervals`)."""
+    import dataclasses
+    from ..physics.params import HarvesterParams
+    from .vehicle_intervals_report import intervals_note, report_seeds, table4_intervals
+    road = dataclasses.replace(cfg.road, speed_km_per_h=100.0, length_m=length)
+    designs = {name: HarvesterParams.from_design(d["total_inertia_gcm2"], d["lead_mm_per_rev"],
+                                                 d["speed_constant_rpm_per_V"], d["load_ohm"],
+                                                 base=cfg.harvester)
+               for name, d in (("optimum", ga), ("paper's design", paper_design))}
+    md, res = table4_intervals(cfg.vehicle, road, designs, {"none": None, **sets},
+                               report_seeds(ctx), PAPER_TABLE4, v_id)
+    note = intervals_note(report_seeds(ctx), road.seed)
+    return ("**Table 4 with its uncertainty.** The same designs on road realisations; the "
+            "paper's values are judged against our intervals. " + note + "\n\n" + md), res
+
+
+def _fig20_caption(rows: list[dict], length: float) -> str:
+    """Fig 20's caption from the rows."""
+    speeds = sorted({r["speed_km_per_h"] for r in rows})
+    p = {r["friction"]: r["power_W"] for r in rows if r["speed_km_per_h"] == speeds[-1]}
+    return (f"The optimum with no/min/max friction over {len(speeds)} speeds "
+            f"({speeds[0]:g}–{speeds[-1]:g} km/h) on the {length:g} m design road: power, "
+            f"efficiency, comfort and road holding; at {speeds[-1]:g} km/h the power is "
+            + ", ".join(f"{c} {v:.0f} W" for c, v in p.items()))

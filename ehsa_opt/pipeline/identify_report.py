@@ -185,6 +185,12 @@ def step_identify_prototype(ctx):
         lines += _bounds_markdown(fb, truth)
     for f in figs:
         lines.append(f"![{Path(f).stem}]({f})")
+    lines.append(f"\n*Figs 8–12. Identification of the {len(data)}-test campaign ({len(ok)} "
+                 f"fits converged): objective and parameters over the iterations, objective "
+                 f"against the total variation, measured against simulated force, per-test "
+                 f"values with their min/max, identifiability, the joint fit on held-out tests"
+                 + (", and the friction sets min ≤ best ≤ max over stroke velocity"
+                    if fb is not None else "") + ".*")
     return StepOutput("\n".join(lines) + "\n", figs, _prototype_results(data, rep, ok, fb))
 
 
@@ -323,6 +329,10 @@ def step_identify_emps(ctx):
                  "drawn for EMPS.\n")
     for fig in figs:
         lines.append(f"![{Path(fig).stem}]({fig})")
+    lines.append(f"\n*EMPS identification: objective and parameters over the iterations, "
+                 f"measured against simulated force (relative error "
+                 f"{f.force_relative_error_percent:.2f} % on the identification record, "
+                 f"{val_err:.2f} % on the validation record) and identifiability.*")
     res = {"inertia_kg": p["inertia_kg"], "viscous_Ns_per_m": p["nut_viscous_Ns_per_m"],
            "coulomb_N": p["nut_coulomb_N"], "offset_N": p["offset_N"],
            "force_relative_error_percent": f.force_relative_error_percent,

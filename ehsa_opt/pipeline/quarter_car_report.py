@@ -19,12 +19,15 @@ from ..vehicle.iso2631 import ISO2631_WK_TABLE, wk_exact, wk_fit_error, wk_state
 from ..vehicle.simulate import simulate_quarter_car
 from ..vehicle.studies import (force_velocity_loops, friction_cases, paper_optimum_harvester,
                                road_study, stepped_sine_response)
-from ..vehicle.validity import check_validity
+from ..vehicle.validity import check_validity, study_sample_limits
 from .base import Context, StepOutput
 from .step_results import DesignStepResult
 from .coverage_report import RANGE_HEADER, identified_range, range_cell, range_flag
 from .paper_reference import (EXPECTED_DISSIPATION_BOUND_W, PAPER_FIG14_RANGES, PAPER_FIG21,
                               PAPER_OPTIMUM, PAPER_ROAD_STUDY)
+from .vehicle_intervals_report import (LIMITS_HEADER, caption, fig13_caption, fig21_caption,
+                                       intervals_note, limits_cell, limits_note, report_seeds,
+                                       road_caption, stroke_cell, versus_paper)
 
 __all__ = ["step_quarter_car_paths", "step_fig13", "step_fig14", "step_fig15_16", "step_fig21",
            "friction_inputs", "road_study_conclusions", "COMFORT_SAME_PERCENT"]
@@ -94,14 +97,22 @@ def step_quarter_car_paths(ctx: Context) -> StepOutput:
         "**ISO 2631-1 W_k** (exact product of the four filters) against the standard's "
         f"table: max deviation {dev:.2f} % over 0.5–80 Hz.\n\n" + "\n".join(rows) + "\n\n"
         "Low-order state-space fits of |W_k| for time-domain filtering (stable, minimum-phase; "
-        "metrics use the exact W_k):\n\n" + "\n".join(fit_rows) + f"\n\n![W_k]({rel_wk})\n\n"
+        "metrics use the exact W_k):\n\n" + "\n".join(fit_rows) + f"\n\n![W_k]({rel_wk})\n"
+        + caption("W_k", f"|W_k| of ISO 2631-1: the exact product of its four filters, a "
+                  f"6-state fit (max error {100 * wk_fit_error(6)['max_rel_error']:.2f} % over "
+                  f"0.5–80 Hz) and the standard's table (max deviation {dev:.2f} %)") + "\n"
         f"**Two evaluation paths**, frictionless passenger car, Table 1 prototype, class C, "
         f"100 km/h, {length:g} m road (time domain: compiled batch; frequency domain: exact "
         f"Eqs 2–3 with the full electrical impedance on the ISO 8608 PSD). Largest relative "
         f"difference: **{100 * worst:.2f} %**. Dissipation bound π² k1 G_d(n0) n0² V = "
         f"{float(freq['dissipation_bound_W'][0]):.1f} W (expected ≈ "
         f"{EXPECTED_DISSIPATION_BOUND_W:g} W for this road and speed).\n\n"
-        + "\n".join(cmp_rows) + f"\n\n![overview]({rel_sim})\n")
+        + "\n".join(cmp_rows) + f"\n\n![overview]({rel_sim})\n"
+        + caption("Overview", f"The frictionless prototype at R_e = {loads[1]:g} Ω on the "
+                  f"{length:g} m class C road at 100 km/h: road and sprung displacement, load "
+                  f"power (mean {float(sim.metrics['power_W'][1]):.1f} W on this road), sprung "
+                  f"acceleration and damper force against stroke velocity (no friction: "
+                  f"the road study below shades the friction's identified range)"))
     return StepOutput(md, [rel_wk, rel_sim],
                       {"wk_max_dev_percent": dev, "paths_max_rel_diff": worst,
                        "comfort_default": float(freq["comfort_weighted_rms_m_s2"][1])})
@@ -131,7 +142,10 @@ def step_fig13(ctx: Context) -> StepOutput:
     ratio = 100 * study.voltage_amplitude_V[i_max, 1] / study.voltage_amplitude_V[i_none, 1]
     ratio_lo, ratio_hi = float(ratio[0]), float(ratio[-1])
     rows = ["| friction | R_e (Ω) | peak x2/x0 | at (Hz) | max V_g amplitude (V) | at (Hz) | "
-            f"steady | {RANGE_HEADER} (worst frequency) |", "|---|---|---|---|---|---|---|---|"]
+            f"steady | largest stroke (mm) | {RANGE_HEADER} (worst frequency) |",
+            "|---|---|---|---|---|---|---|---|---|"]
+    beyond = study.beyond_stroke_limit()
+    lim_mm = 1e3 * study.stroke_limit_m
     oor_t, oor_e = [], []
     for i, c in enumerate(study.cases):
         for j, r in enumerate(study.loads_ohm):
@@ -152,6 +166,7 @@ def step_fig13(ctx: Context) -> StepOutput:
                             f"{study.frequencies_hz[q]:.2f} Hz (change "
                             f"{100 * study.amplitude_change[i, j, q]:.1f} %)"
                             for q in np.flatnonzero(~study.settled[i, j])))
+                        + f" | {stroke_cell(study, i, j)}"
                         + f" | {range_cell(t_ij[kw], e_cell)} (at "
                         f"{study.frequencies_hz[kw]:.2f} Hz) |")
     for j, r in enumerate(study.loads_ohm):
@@ -160,7 +175,7 @@ def step_fig13(ctx: Context) -> StepOutput:
         rows.append(f"| none, exact linear | {r:g} | {study.linear_transmissibility[j, k]:.2f} | "
                     f"{study.frequencies_hz[k]:.2f} | "
                     f"{study.linear_voltage_amplitude_V[j, kv]:.1f} | "
-                    f"{study.frequencies_hz[kv]:.2f} | exact |")
+                    f"{study.frequencies_hz[kv]:.2f} | exact | | |")
     # conclusions from the numbers: settled points only
     ok_none, ok_max = study.settled[i_none], study.settled[i_max]
     peak = lambda i, j: float(np.nanmax(np.where(study.settled[i, j],  # noqa: E731
@@ -174,6 +189,12 @@ def step_fig13(ctx: Context) -> StepOutput:
                  if flat else "changes the body-resonance peak by an amount not stated "
                  "(points near it did not settle)")
     n_bad = int(np.size(study.settled) - np.count_nonzero(study.settled))
+    n_stroke = int(np.count_nonzero(beyond.any(axis=-1)))
+    stroke_text = (f" **{n_stroke} curve(s) need a stroke beyond the ±{lim_mm:g} mm limit** at "
+                   "some frequency (bold in the table, □ in the figure): the suspension would "
+                   "hit its bump stops there, which the model does not have, so those points "
+                   "are not valid." if n_stroke else
+                   f" Every point keeps the stroke within the ±{lim_mm:g} mm limit.")
     unsettled = ("" if n_bad == 0 else
                  f" **{n_bad} points did not settle** within the time limit; they are marked "
                  "in the table and left out of the sentences below.")
@@ -193,17 +214,18 @@ def step_fig13(ctx: Context) -> StepOutput:
           f"the next (at most {20 if ctx.quick else 60} s). Check: without friction the "
           "simulation equals the exact linear response "
           f"within **{100 * study.frictionless_deviation():.2f} %** at every frequency and "
-          "load (rows 'exact linear')." + unsettled + "\n\n" + "\n".join(rows) +
+          "load (rows 'exact linear')." + unsettled + stroke_text + "\n\n" + "\n".join(rows) +
           range_flag(oor_t, oor_e, v_ident, v_source) + " In the figure, ○ marks the points "
           "above the limit." +
           "\n\nThe paper (text of its Fig 13): the generator voltage varies with the friction "
           f"magnitude and falls as the sprung-mass displacement falls. Ours: {volt_text} "
           "(friction matters most at low frequency, where the stroke velocity is small), and "
           f"the 'max' friction {flat_text}. Paper values are only graphical, so no numbers "
-          f"are compared.\n\n![Fig 13]({rel})\n")
+          f"are compared.\n\n![Fig 13]({rel})\n" + caption("Fig 13", fig13_caption(study)))
     return StepOutput(md, [rel], {"voltage_amplitude_V": study.voltage_amplitude_V.tolist(),
                                   "frequencies_hz": study.frequencies_hz.tolist(),
                                   "settled": study.settled.tolist(),
+                                  "peak_stroke_m": study.peak_stroke_m.tolist(),
                                   "frictionless_deviation": study.frictionless_deviation(),
                                   "identified_range_m_per_s": v_ident,
                                   "out_of_range_time_fraction":
@@ -259,7 +281,13 @@ def step_fig14(ctx: Context) -> StepOutput:
           "\n\nShort circuit adds the electrical damping K_t K_e/(r² R_i) ≈ "
           f"{ctx.harvester().equivalent_damping_Ns_per_m(0.0, 0.0):.0f} N s/m to the friction. "
           + _compare_ranges(res) + "\n\n"
-          f"![Fig 14]({rel})\n")
+          f"![Fig 14]({rel})\n"
+          + caption("Fig 14", f"Force against velocity over one steady cycle of a "
+                    f"{1e3 * study.amplitude_m:g} mm, {study.frequency_hz:g} Hz sine stroke, "
+                    f"open circuit (c_eq {res['open circuit'][0]:.0f}–"
+                    f"{res['open circuit'][1]:.0f} N s/m, min–max friction) and short "
+                    f"circuit ({res['short circuit'][0]:.0f}–{res['short circuit'][1]:.0f} "
+                    f"N s/m); velocities beyond the identified ±{v_ident:.2f} m/s shaded"))
     res["out_of_range"] = {f"{c} / {k}": list(x) for (c, k), x in study.out_of_range.items()}
     return StepOutput(md, [rel], res)
 
@@ -290,36 +318,46 @@ def _road_step(ctx: Context, preset: str, fig: str, load: float) -> tuple[str, l
     road = RoadParams(iso_class="C", speed_km_per_h=100.0,
                       length_m=300.0 if ctx.quick else 1000.0, seed=0)
     v_id, v_src = identified_range(ctx)
-    study = road_study(vehicle, ctx.harvester(load_ohm=load), fc, road,
-                       n_loads=12 if ctx.quick else 24, title=f"{fig}: {preset}",
-                       identified_range_m_per_s=v_id)
+    harvester = ctx.harvester(load_ohm=load)
+    limits = study_sample_limits(harvester.voltage_constant_Vs_per_rad)
+    study = road_study(vehicle, harvester, fc, road, n_loads=12 if ctx.quick else 24,
+                       title=f"{fig}: {preset}", identified_range_m_per_s=v_id,
+                       n_seeds=report_seeds(ctx), sample_limits=limits)
     rel = f"figures/{fig.lower().replace(' ', '')}_{preset}.png"
     plots.save(study.plot(), ctx.out_dir / rel)
-    m = study.sim.metrics
-    drops = study.power_drop_percent()
-    validity = check_validity(m, stroke_limit_m=vehicle.stroke_limit_m)
-    rows = ["| friction | R_e (Ω) | slope (N s/m) | power (W) | change | efficiency | "
-            f"comfort α | road holding | peak stroke (mm) | {RANGE_HEADER} | validity |",
-            "|---|---|---|---|---|---|---|---|---|---|---|"]
+    m, iv = study.sim.metrics, study.intervals
+    validity = check_validity(m, stroke_limit_m=vehicle.stroke_limit_m, sample_limits=limits)
+    i0 = study.cases.index("none")
+    rows = ["| friction | R_e (Ω) | slope (N s/m) | power (W) | change (paired) | efficiency (%) "
+            f"| comfort α | road holding | peak stroke (mm) | {LIMITS_HEADER} | {RANGE_HEADER} "
+            "| validity |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     t_out, e_out = _range_fractions(m, study.cases, fc)
     for i, c in enumerate(study.cases):
         note = "" if study.reachable[i] else " (target not reachable)"
+        change = "–" if i == i0 else iv.change("power_W", i, i0).text("%")
         rows.append(f"| {c} | {study.loads_ohm[i]:.3g}{note} | {study.slopes_Ns_per_m[i]:.0f} | "
-                    f"{m['power_W'][i]:.1f} | {drops[c]:+.1f} % | "
-                    f"{100 * m['efficiency'][i]:.1f} % | {m['comfort'][i]:.3f} | "
-                    f"{m['road_holding'][i]:.3f} | {1e3 * m['peak_stroke_m'][i]:.0f} | "
+                    f"{iv.interval('power_W', i).text()} | {change} | "
+                    f"{iv.interval('efficiency', i).scaled(100).text()} | "
+                    f"{iv.interval('comfort', i).text()} | "
+                    f"{iv.interval('road_holding', i).text()} | "
+                    f"{1e3 * m['peak_stroke_m'][i]:.0f} | {limits_cell(m, i)} | "
                     f"{range_cell(t_out[i], e_out[i])} | {validity.cell(i)} |")
     md = (f"{preset}, class C at 100 km/h, {road.length_m:g} m; the frictionless case uses "
           f"R_e = {load:g} Ω and each friction case is re-tuned (one batch of loads, "
           "interpolated) so that the three damping slopes (least squares of the non-inertial "
-          f"damper force on stroke velocity) match. Friction: {fc.source}. Validity: road "
-          f"holding ≤ 1 (tyre on the ground) and peak stroke ≤ {1e3 * vehicle.stroke_limit_m:g} "
-          "mm (the vehicle's stroke limit).\n\n" + "\n".join(rows) + "\n\n"
+          f"damper force on stroke velocity) match. Friction: {fc.source}. "
+          + intervals_note(len(iv.seeds), iv.road.seed) + "\n\n" + "\n".join(rows) + "\n\n"
+          + limits_note(limits, vehicle.stroke_limit_m) + "\n\n"
           + road_study_conclusions(study, validity)
-          + range_flag(t_out, e_out, v_id, v_src) + f"\n\n![{fig}]({rel})\n")
+          + range_flag(t_out, e_out, v_id, v_src) + f"\n\n![{fig}]({rel})\n"
+          + caption(fig, road_caption(study, preset)))
     res = {"loads_ohm": study.loads_ohm, "power_W": m["power_W"].tolist(),
-           "power_change_percent": drops, "slopes": study.slopes_Ns_per_m.tolist(),
-           "validity": validity.as_list(),
+           "power_change_percent": study.power_drop_percent(),
+           "slopes": study.slopes_Ns_per_m.tolist(), "validity": validity.as_list(),
+           "intervals": iv.as_dict(["power_W", "efficiency", "comfort", "road_holding",
+                                    "tyre_lift_fraction", "peak_power_W"]),
+           "power_change_interval": {c: iv.change("power_W", i, i0).as_dict()
+                                     for i, c in enumerate(study.cases) if i != i0},
            "out_of_range_time_fraction": list(t_out),
            "out_of_range_friction_energy_fraction": list(e_out)}
     return md, [rel], res
@@ -331,43 +369,66 @@ COMFORT_SAME_PERCENT = 5.0
 
 
 def road_study_conclusions(study: Any, validity: Any) -> str:
-    """The Figs 15/16 conclusion sentences, generated from the valid rows only."""
-    m = study.sim.metrics
-    valid = validity.valid
+    """The Figs 15/16 conclusion sentences, generated from the rows whose model is valid
+    (rows beyond hardware limits only are used and said so) and judged on the 95 %
+    intervals over road realisations when the study has them."""
     lo, hi = PAPER_ROAD_STUDY["power_loss_pct"]
     acc_paper = PAPER_ROAD_STUDY["acceleration_m_s2"]
     cases = study.cases
     i0 = cases.index("none")
-    if not valid[i0]:
+    ok_model = validity.model_valid
+    if not ok_model[i0]:
         return ("**No conclusion is drawn from this vehicle:** the frictionless reference is "
-                f"invalid ({'; '.join(f.message for f in validity.flags[i0])}), so neither the power loss nor the "
-                f"comfort at equal slopes can be compared with the paper's ({lo:g}–{hi:g} % "
-                f"loss, average acceleration {acc_paper:g} m/s² in all three cases).")
-    drops = study.power_drop_percent()
-    ok = [c for i, c in enumerate(cases) if valid[i] and c != "none"]
-    bad = [c for i, c in enumerate(cases) if not valid[i]]
+                f"invalid ({'; '.join(f.message for f in validity.flags[i0])}), so neither "
+                f"the power loss nor the comfort at equal slopes can be compared with the "
+                f"paper's ({lo:g}–{hi:g} % loss, average acceleration {acc_paper:g} m/s² in "
+                "all three cases).")
+    iv = getattr(study, "intervals", None)
+    ok = [i for i, c in enumerate(cases) if ok_model[i] and c != "none"]
+    bad = [c for i, c in enumerate(cases) if not ok_model[i]]
     out = [f"Paper: average power fell **{lo:g}–{hi:g} %** with friction at equal damping "
            "slopes."]
     if ok:
-        out.append("Ours falls " + " and ".join(f"{-drops[c]:.0f} % ({c})" for c in ok)
-                   + ": the share of the damping taken by friction sets the loss"
-                   + (", and ours is smaller than the paper's (see Fig 14)."
-                      if all(-drops[c] < lo for c in ok) else
-                      ", and ours is larger than the paper's." if all(-drops[c] > hi for c in ok)
-                      else ", within or across the paper's range."))
-    acc = {c: float(m["comfort_weighted_rms_m_s2"][cases.index(c)]) for c in ["none"] + ok}
-    spread = 100 * (max(acc.values()) / min(acc.values()) - 1)
-    vals = ", ".join(f"{v:.2f}" for v in acc.values())
-    if len(acc) > 1:
-        out.append(("As in the paper, comfort hardly changes at equal slopes"
-                    if spread < COMFORT_SAME_PERCENT else
-                    "Unlike the paper, comfort changes at equal slopes")
-                   + f" (weighted rms acceleration {vals} m/s², spread {spread:.1f} %; paper: "
-                   f"{acc_paper:g} m/s² in all three cases).")
+        if iv is not None:
+            ch = {i: iv.change("power_W", i, i0) for i in ok}
+            loss = " and ".join(f"{ch[i].scaled(-1).text('%')} ({cases[i]})" for i in ok)
+            verdict = [versus_paper(ch[i].scaled(-1), (lo, hi), " %") for i in ok]
+            out.append(f"Ours falls {loss} (95 %): the share of the damping taken by friction "
+                       f"sets the loss; ours is " + ", ".join(sorted(set(verdict))) + ".")
+        else:
+            drops = study.power_drop_percent()
+            out.append("Ours falls " + " and ".join(f"{-drops[cases[i]]:.0f} % ({cases[i]})"
+                                                  for i in ok) + ".")
+        out.append(_comfort_sentence(study, [i0] + ok, acc_paper))
+    if not validity.valid[[i0] + ok].all():
+        out.append("The damper of these rows exceeds its hardware limits (NOT REALISABLE in "
+                   "the table): the comparison holds for the model, not for a damper built "
+                   "to these limits.")
     if bad:
         out.append("Left out of these sentences (invalid, flagged in the table): "
                    + ", ".join(bad) + ".")
     return " ".join(out)
+
+
+def _comfort_sentence(study: Any, rows: list[int], acc_paper: float) -> str:
+    """Whether comfort changes at equal slopes: each friction case's paired change of the
+    weighted rms acceleration within ±COMFORT_SAME_PERCENT (the whole interval)."""
+    m, iv, cases = study.sim.metrics, getattr(study, "intervals", None), study.cases
+    i0 = rows[0]
+    if iv is None:
+        acc = [float(m["comfort_weighted_rms_m_s2"][i]) for i in rows]
+        same = 100 * (max(acc) / min(acc) - 1) < COMFORT_SAME_PERCENT
+        vals = ", ".join(f"{a:.2f}" for a in acc) + " m/s²"
+    else:
+        ch = [iv.change("comfort_weighted_rms_m_s2", i, i0) for i in rows[1:]]
+        same = all(-COMFORT_SAME_PERCENT < c.low and c.high < COMFORT_SAME_PERCENT for c in ch)
+        vals = (iv.interval("comfort_weighted_rms_m_s2", i0).text("m/s²") + " without friction, "
+                + ", ".join(f"{c.text('%')} ({cases[i]})" for c, i in zip(ch, rows[1:])))
+    return (("As in the paper, comfort hardly changes at equal slopes" if same else
+             "Unlike the paper (or not resolved by the intervals), comfort changes at equal "
+             "slopes") + f" (weighted rms acceleration {vals}; within "
+            f"±{COMFORT_SAME_PERCENT:g} % counts as unchanged; paper: {acc_paper:g} m/s² in all "
+            "three cases).")
 
 
 def _range_fractions(m: dict, cases: list, fc: Any) -> tuple[list, list]:
@@ -390,11 +451,25 @@ def step_fig15_16(ctx: Context) -> StepOutput:
     return StepOutput(md, f1 + f2, {"passenger_car": r1, "single_seater": r2})
 
 
-def fig21_ordering(metrics: Any, valid: bool) -> str:
+def fig21_ordering(metrics: Any, valid: bool, intervals: Any = None) -> str:
     """The Fig 21 sentence on the paper's ordering none > min > max friction in power and
-    efficiency, stated only when every row is valid and as the numbers say."""
+    efficiency, stated only when every row's model is valid and as the numbers say; with
+    ``intervals`` (rows none, min, max) each step of the ordering is judged on its paired
+    95 % interval: it holds when every interval is above zero."""
     if not valid:
         return "No ordering is stated: a row is invalid (flagged in the table)."
+    if intervals is not None:
+        steps = [(key, a, b, intervals.change(key, a, b, "difference"))
+                 for key in ("power_W", "efficiency") for a, b in ((0, 1), (1, 2))]
+        if all(d.low > 0 for *_, d in steps):
+            p = steps[0][3], steps[1][3]
+            return ("The paper's ordering none > min > max friction holds here in power and "
+                    f"efficiency, every step beyond its 95 % interval (power none − min "
+                    f"{p[0].text('W')}, min − max {p[1].text('W')}).")
+        if any(d.high < 0 for *_, d in steps):
+            return "The paper's ordering none > min > max friction is NOT reproduced here."
+        return ("The paper's ordering none > min > max friction is not resolved here: a "
+                "step's 95 % interval includes zero.")
     p, e = metrics["power_W"], metrics["efficiency"]
     if p[0] > p[1] > p[2] and e[0] > e[1] > e[2]:
         return ("The paper's ordering none > min > max friction holds here in power "
@@ -404,11 +479,12 @@ def fig21_ordering(metrics: Any, valid: bool) -> str:
 
 
 def render_fig21(source: str, road: RoadParams, friction_source: str, rows: list[str],
-                 bound_W: float, ordering: str, flag: str, rel: str) -> str:
-    """The Fig 21 section's Markdown from its computed parts."""
+                 bound_W: float, ordering: str, flag: str, rel: str, note: str = "") -> str:
+    """The Fig 21 section's Markdown from its computed parts (``note``: what the ± are)."""
     paper_none = PAPER_FIG21["none"][0]
     return (f"Design: {source}. Passenger car, class C at 100 km/h, {road.length_m:g} m. "
-            f"Friction: {friction_source}.\n\n" + "\n".join(rows) +
+            f"Friction: {friction_source}." + (f" {note}" if note else "") + "\n\n"
+            + "\n".join(rows) +
             "\n\nThe paper's vehicle parameters and friction values are not in its text, so "
             f"absolute powers differ (our bound at 100 km/h is {bound_W:.0f} W, "
             + (f"below the paper's {paper_none:g} W frictionless power, so its car or road must "
@@ -434,25 +510,37 @@ def step_fig21(ctx: Context) -> StepOutput:
     road = RoadParams(iso_class="C", speed_km_per_h=100.0,
                       length_m=300.0 if ctx.quick else 1000.0, seed=0)
     v_id, v_src = identified_range(ctx)
+    limits = study_sample_limits(h.voltage_constant_Vs_per_rad)
     study = road_study(ctx.vehicle()[0], h, fc, road, retune=False, title="Fig 21",
-                       identified_range_m_per_s=v_id)
+                       identified_range_m_per_s=v_id, n_seeds=report_seeds(ctx),
+                       sample_limits=limits)
     rel = "figures/fig21_power_history.png"
     plots.save(study.plot_power(), ctx.out_dir / rel)
-    m = study.sim.metrics
-    paper = PAPER_FIG21
-    validity = check_validity(m, stroke_limit_m=ctx.vehicle()[0].stroke_limit_m)
-    rows = ["| friction | power (W) ours / paper | efficiency ours / paper | peak power (W) "
-            f"ours / paper | {RANGE_HEADER} | validity |", "|---|---|---|---|---|---|"]
+    m, iv = study.sim.metrics, study.intervals
+    validity = check_validity(m, stroke_limit_m=ctx.vehicle()[0].stroke_limit_m,
+                              sample_limits=limits)
+    rows = ["| friction | power (W) ours / paper | efficiency (%) ours / paper | peak power (W) "
+            f"ours / paper | peak screw speed (rpm) | {LIMITS_HEADER} | {RANGE_HEADER} | "
+            "validity |", "|---|---|---|---|---|---|---|---|"]
     t_out, e_out = _range_fractions(m, study.cases, fc)
     for i, c in enumerate(study.cases):
-        pp, pe, pk = paper[c]
-        rows.append(f"| {c} | {m['power_W'][i]:.1f} / {pp} | {100 * m['efficiency'][i]:.1f} % / "
-                    f"{pe} % | {m['peak_power_W'][i]:.0f} / {pk if pk else '–'} | "
+        pp, pe, pk = PAPER_FIG21[c]
+        p_iv, e_iv = iv.interval("power_W", i), iv.interval("efficiency", i).scaled(100)
+        rows.append(f"| {c} | {p_iv.text()} / {pp} ({versus_paper(p_iv, pp)}) | "
+                    f"{e_iv.text()} / {pe} ({versus_paper(e_iv, pe)}) | "
+                    f"{iv.interval('peak_power_W', i).text()} / {pk if pk else '–'} | "
+                    f"{iv.interval('peak_screw_speed_rpm', i).text()} | {limits_cell(m, i)} | "
                     f"{range_cell(t_out[i], e_out[i])} | {validity.cell(i)} |")
-    md = render_fig21(src, road, fc.source, rows, float(m["dissipation_bound_W"][0]),
-                      fig21_ordering(m, validity.all_valid), range_flag(t_out, e_out, v_id, v_src),
-                      rel)
+    order = fig21_ordering(m, bool(validity.model_valid.all()), iv)
+    flag = (" " + limits_note(limits, ctx.vehicle()[0].stroke_limit_m)
+            + range_flag(t_out, e_out, v_id, v_src))
+    md = (render_fig21(src, road, fc.source, rows, float(m["dissipation_bound_W"][0]), order,
+                       flag, rel, intervals_note(len(iv.seeds), iv.road.seed))
+          + caption("Fig 21", fig21_caption(study)))
     return StepOutput(md, [rel], {"power_W": m["power_W"].tolist(),
                                   "efficiency": m["efficiency"].tolist(),
                                   "validity": validity.as_list(),
-                                  "peak_power_W": m["peak_power_W"].tolist()})
+                                  "peak_power_W": m["peak_power_W"].tolist(),
+                                  "intervals": iv.as_dict(["power_W", "efficiency",
+                                                           "peak_power_W",
+                                                           "peak_screw_speed_rpm"])})

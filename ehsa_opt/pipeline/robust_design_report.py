@@ -143,22 +143,30 @@ def _fronts(cfg: Any, plain: Any, robust: Any, ga_p: Any, ga_r: Any,
     return fronts, points
 
 
-def _price_of_friction(cfg: Any, road: Any, hs: list, sets: dict) -> tuple[dict, list[str]]:
-    """Both optima re-simulated in the time domain with each friction set: numbers and rows."""
-    from ..design.robust import time_domain_objectives
-    price_lines = ["| friction | power W: frictionless opt. / friction-aware opt. (Δ) | "
-                   "comfort α (Δ %) | road holding η_rh (Δ %) |", "|---|---|---|---|"]
+def _price_of_friction(cfg: Any, road: Any, hs: list, sets: dict, n_seeds: int
+                       ) -> tuple[dict, list[str]]:
+    """Both optima re-simulated in the time domain with each friction set on road
+    realisations: 95 % intervals, the two optima compared on paired intervals
+    (:func:`~ehsa_opt.vehicle.uncertainty.road_intervals`)."""
+    from ..vehicle.uncertainty import road_intervals
+    price_lines = ["| friction | power W: frictionless opt. / friction-aware opt. (paired Δ) | "
+                   "comfort α (paired Δ %) | road holding η_rh (paired Δ %) |",
+                   "|---|---|---|---|"]
     price = {}
     for name, fr in (("min", sets["min"]), ("max", sets["max"])):
-        td = time_domain_objectives(cfg.vehicle, road, hs, [fr], "at")
-        pw, a, rh = td["power_W"], td["comfort"], td["road_holding"]
-        price[name] = {"power_W": [float(pw[0]), float(pw[1])],
-                       "comfort": [float(a[0]), float(a[1])],
-                       "road_holding": [float(rh[0]), float(rh[1])]}
+        iv = road_intervals(cfg.vehicle, hs, [fr] * len(hs), road, n_seeds=n_seeds)
+        pw, a, rh = (iv.interval(k, 0) for k in ("power_W", "comfort", "road_holding"))
+        pw1, a1, rh1 = (iv.interval(k, 1) for k in ("power_W", "comfort", "road_holding"))
+        d_pw, d_a, d_rh = (iv.change("power_W", 1, 0, "difference"),
+                           iv.change("comfort", 1, 0), iv.change("road_holding", 1, 0))
+        price[name] = {"power_W": [pw.mean, pw1.mean], "comfort": [a.mean, a1.mean],
+                       "road_holding": [rh.mean, rh1.mean],
+                       "intervals": {"power_change_W": d_pw.as_dict(),
+                                     "comfort_change_pct": d_a.as_dict(),
+                                     "road_holding_change_pct": d_rh.as_dict()}}
         price_lines.append(
-            f"| {name} | {pw[0]:.1f} / {pw[1]:.1f} ({pw[1] - pw[0]:+.1f} W) | {a[0]:.4f} / "
-            f"{a[1]:.4f} ({100 * (a[1] / a[0] - 1):+.1f} %) | {rh[0]:.4f} / {rh[1]:.4f} "
-            f"({100 * (rh[1] / rh[0] - 1):+.1f} %) |")
+            f"| {name} | {pw.text()} / {pw1.text()} ({d_pw.text('W')}) | {a.text()} / "
+            f"{a1.text()} ({d_a.text('%')}) | {rh.text()} / {rh1.text()} ({d_rh.text('%')}) |")
     return price, price_lines
 
 
@@ -233,9 +241,14 @@ def _robust_markdown(cfg: Any, source: str, ga_p: Any, ga_r: Any, figs: list[str
         f"the prototype's objectives under the same friction.\n\n"
         f"- frictionless goal-attainment optimum: {fmt(ga_p.design)} (γ = {ga_p.gamma:+.3f})\n"
         f"- friction-aware optimum: {fmt(ga_r.design)} (γ = {ga_r.gamma:+.3f})\n\n"
-        f"![fronts]({figs[0]})\n\n"
+        f"![fronts]({figs[0]})\n"
+        f"\n*Fronts. Pareto fronts without and with friction (worst of min/max, fast path) and "
+        f"the two goal-attainment optima, γ {ga_p.gamma:+.3f} (frictionless) and "
+        f"{ga_r.gamma:+.3f} (friction-aware).*\n\n"
         f"**The price of ignoring friction** (both optima re-simulated in the time domain with "
-        f"friction, class {road.iso_class}, {road.speed_km_per_h:g} km/h, {length:g} m):\n\n"
+        f"friction, class {road.iso_class}, {road.speed_km_per_h:g} km/h, {length:g} m; ± are "
+        f"95 % intervals over Gaussian road realisations, the Δ between the optima paired on "
+        f"the same roads — `ehsa_opt.vehicle.uncertainty`):\n\n"
         + "\n".join(price_lines) + price_flag + " The worst case over min/max is a bound "
         "only because the sets are ordered at every velocity (min ≤ best ≤ max).\n\n"
         f"**Fast path against the time domain** ({fp['n_designs']} designs — prototype, paper "
@@ -251,7 +264,9 @@ def _robust_markdown(cfg: Any, source: str, ga_p: Any, ga_r: Any, figs: list[str
         + conv_table + "\n\n" + _convention_statement(cfg, best_level) + "\n\n"
         f"**Design space** — optimum lead and load (grid, J_t and k_n at the frictionless "
         f"optimum; min over the grid of the attainment factor against the prototype at the "
-        f"same friction and speed):\n\n![design space]({figs[1]})\n\n"
+        f"same friction and speed):\n\n![design space]({figs[1]})\n"
+        f"\n*Design space. Best attainment factor over the lead–load grid at each speed and "
+        f"friction set, J_t and k_n at the frictionless optimum ({fmt(ga_p.design)}).*\n\n"
         f"_(step {time.perf_counter() - t0:.1f} s)_\n")
 
 
@@ -289,7 +304,8 @@ def step_robust_design(ctx: Context) -> StepOutput:
     length = 300.0 if quick else 1000.0
     road = dataclasses.replace(cfg.road, length_m=length)
     hs = [_harvester(cfg, ga_p.design), _harvester(cfg, ga_r.design)]
-    price, price_lines = _price_of_friction(cfg, road, hs, sets)
+    from .vehicle_intervals_report import report_seeds
+    price, price_lines = _price_of_friction(cfg, road, hs, sets, report_seeds(ctx))
     price_flag = _add_price_coverage(ctx, cfg, road, robust, [ga_p.design, ga_r.design], sets,
                                      price_lines)
     fp = _fast_path_check(cfg, sets, start, hs, quick)

@@ -21,6 +21,7 @@ __all__ = [
     "fig14_force_velocity",
     "fig15_road_study",
     "fig21_power_history",
+    "short_source",
     "simulation_overview",
     "wk_figure",
 ]
@@ -28,8 +29,30 @@ __all__ = [
 _CASE_COLOURS = {"none": "C0", "min": "C2", "max": "C3"}
 
 
-def simulation_overview(sim: QuarterCarSimulation, k: int = 0) -> Figure:
-    """Road, sprung displacement, load power and force–velocity of design ``k``."""
+def short_source(source: str) -> str:
+    """A friction source as a figure shows it: the part before its explanation (the
+    report's text carries the rest)."""
+    for sep in (":", " ("):
+        if sep in source:
+            source = source.split(sep, 1)[0]
+    return source.strip()
+
+
+def _shade_identified(ax: Axes, v_id: float | None, v: np.ndarray) -> None:
+    """Shade the stroke velocities beyond the friction's identified range ±v_id."""
+    if v_id is None or v.size == 0:
+        return
+    vmax = float(np.max(np.abs(v)))
+    if vmax > v_id:
+        for sgn in (-1, 1):
+            ax.axvspan(sgn * v_id, sgn * vmax, color="0.88", zorder=0,
+                       label=(f"beyond the identified ±{v_id:.2f} m/s" if sgn > 0 else None))
+
+
+def simulation_overview(sim: QuarterCarSimulation, k: int = 0,
+                        identified_range_m_per_s: float | None = None) -> Figure:
+    """Road, sprung displacement, load power and force–velocity of design ``k`` (stroke
+    velocities beyond the friction's identified range shaded when given)."""
     s = sim.series
     fig, ax = plt.subplots(2, 2, figsize=(10, 6))
     t = sim.time_s
@@ -43,7 +66,10 @@ def simulation_overview(sim: QuarterCarSimulation, k: int = 0) -> Figure:
     ax[1, 0].set_ylabel("sprung acceleration (m/s²)")
     for a in (ax[0, 0], ax[0, 1], ax[1, 0]):
         a.set_xlabel("time (s)")
+    _shade_identified(ax[1, 1], identified_range_m_per_s, np.asarray(s["stroke_velocity_m_s"][k]))
     ax[1, 1].plot(s["stroke_velocity_m_s"][k], s["damper_force_N"][k], ".", ms=1, color="C3")
+    if identified_range_m_per_s is not None:
+        ax[1, 1].legend(fontsize=7, loc="upper left")
     ax[1, 1].set_xlabel("stroke velocity (m/s)")
     ax[1, 1].set_ylabel("damper force w/o inertia (N)")
     fig.suptitle(f"{sim.road_source}: design {k}")
@@ -68,6 +94,13 @@ def fig13_frequency_response(study: FrequencyResponseStudy) -> Figure:
                                                                    study.sprung_transmissibility)):
                     a.plot(study.frequencies_hz[bad], y[i, j][bad], "x", color=kw["color"],
                            ms=7, mew=1.5)
+            beyond = (study.beyond_stroke_limit()[i, j]
+                      if hasattr(study, "beyond_stroke_limit") else np.zeros(0, bool))
+            if beyond.any():  # the stroke would hit the bump stops: marked
+                for a, y in ((ax[0], study.voltage_amplitude_V), (ax[1],
+                                                                   study.sprung_transmissibility)):
+                    a.plot(study.frequencies_hz[beyond], y[i, j][beyond], "s", mfc="none",
+                           color=kw["color"], ms=9, mew=1.2)
             over = _over_limit(study, i, j)
             if over.any():  # friction there mostly extrapolated: marked
                 for a, y in ((ax[0], study.voltage_amplitude_V), (ax[1],
@@ -81,7 +114,7 @@ def fig13_frequency_response(study: FrequencyResponseStudy) -> Figure:
         a.grid(True, which="both", alpha=0.3)
     handles, labels = ax[1].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=7, ncol=len(study.cases), loc="lower center",
-               frameon=False, bbox_to_anchor=(0.5, -0.01))
+               frameon=False, bbox_to_anchor=(0.5, 0.035))
     va = getattr(study, "velocity_amplitude_m_per_s", None)
     road = (f"road sine of constant velocity amplitude {1e3 * va:.1f} mm/s (displacement "
             f"{1e3 * study.amplitude_m:.3g} mm at 1 Hz, falling as 1/f)" if va else
@@ -89,13 +122,18 @@ def fig13_frequency_response(study: FrequencyResponseStudy) -> Figure:
     unsettled = getattr(study, "settled", None) is not None and not np.all(study.settled)
     any_over = any(_over_limit(study, i, j).any() for i in range(len(study.cases))
                    for j in range(len(study.loads_ohm)))
-    fig.suptitle(f"Stepped sine at steady state: {road}\nfriction: {study.friction_source}"
-                 + ("\n× = not at steady state within the time limit" if unsettled else "")
-                 + (f"\n○ = over {100 * study.out_of_range_limit:g} % of the time or friction energy "
-                    f"above the identified {study.identified_range_m_per_s:.2f} m/s"
-                    if any_over else ""),
-                 fontsize=9)
-    fig.tight_layout(rect=(0, 0.1 if len(labels) > 6 else 0.06, 1, 1))
+    any_stroke = hasattr(study, "beyond_stroke_limit") and study.beyond_stroke_limit().any()
+    marks = (["× not steady"] if unsettled else []) + (
+        [f"□ stroke beyond ±{1e3 * study.stroke_limit_m:.0f} mm"] if any_stroke else []) + (
+        [f"○ friction > {100 * study.out_of_range_limit:g} % beyond the identified "
+         f"{study.identified_range_m_per_s:.2f} m/s"] if any_over else [])
+    ax[0].set_title("generator voltage", fontsize=9)
+    ax[1].set_title("sprung-mass transmissibility", fontsize=9)
+    fig.suptitle(f"Stepped sine at steady state, {road}; friction: "
+                 f"{short_source(study.friction_source)}", fontsize=9)
+    if marks:
+        fig.text(0.5, 0.005, "   ".join(marks), ha="center", va="bottom", fontsize=7)
+    fig.tight_layout(rect=(0, 0.17 if len(labels) > 6 else 0.12, 1, 0.97))
     return fig
 
 
@@ -137,7 +175,7 @@ def fig14_force_velocity(study: ForceVelocityStudy) -> Figure:
         ax[i].grid(True, alpha=0.3)
         ax[i].legend(fontsize=8)
     fig.suptitle(f"Sine stroke {1e3 * study.amplitude_m:g} mm at {study.frequency_hz:g} Hz "
-                 f"(friction: {study.friction_source})"
+                 f"(friction: {short_source(study.friction_source)})"
                  + (f"\nidentified friction range |v| <= {v_id:.2f} m/s (beyond: shaded)"
                     if v_id is not None else ""), fontsize=9)
     fig.tight_layout()
@@ -151,7 +189,8 @@ def fig15_road_study(study: RoadStudy) -> Figure:
     rp = study.road_psd
     band = (rp["n_cycles_per_m"] >= 0.01) & (rp["n_cycles_per_m"] <= 10.0)
     ax[0, 0].loglog(rp["n_cycles_per_m"][band], rp["synth_m3"][band], lw=0.8, color="0.4",
-                    label="synthesised (Welch)")
+                    label=(f"synthesised (Welch, {rp['segments']} segments)"
+                           if "segments" in rp else "synthesised (Welch)"))
     ax[0, 0].loglog(rp["n_cycles_per_m"][band], rp["target_m3"][band], lw=1.5, color="k",
                     ls="--", label="ISO 8608 target")
     ax[0, 0].set_xlabel("spatial frequency (cycles/m)")
@@ -159,6 +198,8 @@ def fig15_road_study(study: RoadStudy) -> Figure:
     ax[0, 0].legend(fontsize=8)
     t = sim.time_s
     n_show = min(t.size, int(5.0 * sim.stats["sample_rate_hz"]))
+    _shade_identified(ax[2, 0], getattr(study, "identified_range_m_per_s", None),
+                      np.asarray(sim.series["stroke_velocity_m_s"]))
     for i, case in enumerate(study.cases):
         col = _CASE_COLOURS.get(case, f"C{i}")
         lab = f"{case} (R_e = {study.loads_ohm[i]:.3g} Ω)"
@@ -187,17 +228,31 @@ def fig15_road_study(study: RoadStudy) -> Figure:
     ax[2, 0].set_xlabel("stroke velocity (m/s)")
     ax[2, 0].set_ylabel("damper force w/o inertia (N)")
     ax[2, 0].legend(fontsize=7)
-    drops = study.power_drop_percent()
-    txt = "\n".join(f"{c}: P = {sim.metrics['power_W'][i]:.1f} W ({drops[c]:+.1f} %), "
-                    f"η = {100 * sim.metrics['efficiency'][i]:.1f} %, "
-                    f"α = {sim.metrics['comfort'][i]:.3f}, η_rh = {sim.metrics['road_holding'][i]:.3f}"
-                    for i, c in enumerate(study.cases))
     ax[2, 1].axis("off")
-    ax[2, 1].text(0.0, 0.9, txt, va="top", fontsize=8, family="monospace")
-    fig.suptitle(f"{study.title} — {sim.road_source} (friction: {study.friction_source})",
-                 fontsize=9)
+    ax[2, 1].text(0.0, 0.95, _road_summary(study), va="top", fontsize=7.5, family="monospace")
+    fig.suptitle(f"{study.title} — {sim.road_source} (friction: "
+                 f"{short_source(study.friction_source)})", fontsize=9)
     fig.tight_layout()
     return fig
+
+
+def _road_summary(study: RoadStudy) -> str:
+    """The text panel of Figs 15/16: each case's metrics with their 95 % intervals over
+    road realisations when the study has them, else the design road's values."""
+    m, iv = study.sim.metrics, getattr(study, "intervals", None)
+    lines = []
+    for i, c in enumerate(study.cases):
+        if iv is None:
+            lines.append(f"{c}: P = {m['power_W'][i]:.1f} W, η = {100 * m['efficiency'][i]:.1f} %,"
+                         f" α = {m['comfort'][i]:.3f}, η_rh = {m['road_holding'][i]:.3f}")
+            continue
+        lines += [f"{c}:  P = {iv.interval('power_W', i).text('W')}",
+                  f"   η = {iv.interval('efficiency', i).scaled(100).text('%')}",
+                  f"   α = {iv.interval('comfort', i).text()}",
+                  f"   η_rh = {iv.interval('road_holding', i).text()}"]
+    if iv is not None:
+        lines.append(f"95 % intervals over {len(iv.seeds)} road realisations")
+    return "\n".join(lines)
 
 
 def fig21_power_history(study: RoadStudy, seconds: float = 10.0,
@@ -222,7 +277,8 @@ def fig21_power_history(study: RoadStudy, seconds: float = 10.0,
     ax.set_xlabel("time (s)")
     ax.set_ylabel("instantaneous power in the load R_e (W)")
     ax.legend(fontsize=8, loc="upper left", framealpha=0.9)
-    ax.set_title(f"{study.title} — {sim.road_source}", fontsize=9)
+    ax.set_title(f"{study.title} — {sim.road_source} (friction: "
+                 f"{short_source(study.friction_source)})", fontsize=9)
     fig.tight_layout()
     return fig
 

@@ -1,7 +1,7 @@
 """Vehicle room: ISO 8608 roads (:mod:`.road`), ISO 2631 W_k weighting (:mod:`.iso2631`),
 the exact frequency-domain path (:mod:`.frequency_path`), the friction-aware fast path
 (:mod:`.fast_path`), the compiled time-domain path (:mod:`.simulate`), validity flags
-(:mod:`.validity`), friction coverage (:mod:`.coverage`) and the paper's §4.1 studies
+(:mod:`.validity`), intervals over road realisations (:mod:`.uncertainty`), friction coverage (:mod:`.coverage`) and the paper's §4.1 studies
 (:mod:`.studies`). Imports physics, datasets, estimation results and utils.
 
 The names below are the room's public entry points; each is imported from its module on
@@ -24,13 +24,18 @@ _EXPORTS = {
     **dict.fromkeys(["FrictionCases", "friction_cases", "FrequencyResponseStudy",
                      "stepped_sine_response", "ForceVelocityStudy", "force_velocity_loops",
                      "RoadStudy", "road_study"], ".studies"),
-    **dict.fromkeys(["Validity", "ValidityFlag", "check_validity"], ".validity"),
+    **dict.fromkeys(["Validity", "ValidityFlag", "check_validity", "SampleLimits",
+                     "exceedance_fractions"], ".validity"),
+    **dict.fromkeys(["Interval", "RoadIntervals", "road_intervals", "seed_interval",
+                     "batch_means_interval", "format_interval"], ".uncertainty"),
     **dict.fromkeys(["design_coverage"], ".coverage"),
     **dict.fromkeys(["SimulationEstimate", "estimate_simulation"], ".resources"),
 }
 
 __all__ = ["DESIGN_KEYS", "METRIC_KEYS", "ForceVelocityStudy", "FrequencyResponseStudy",
-           "FrictionCases", "FrictionRangeWarning", "QuarterCarSimulation", "RoadHoldingWarning",
+           "FrictionCases", "FrictionRangeWarning", "Interval", "RoadIntervals",
+           "SampleLimits", "batch_means_interval", "exceedance_fractions", "format_interval",
+           "road_intervals", "seed_interval", "QuarterCarSimulation", "RoadHoldingWarning",
            "RoadProfile", "RoadStudy", "SimulationEstimate", "Validity", "ValidityFlag",
            "check_validity", "design_arrays", "design_coverage", "dissipation_bound_W",
            "estimate_simulation", "force_velocity_loops", "friction_cases", "friction_metrics",

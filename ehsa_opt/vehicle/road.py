@@ -119,12 +119,21 @@ class RoadProfile:
 
 def synthesize_road(road: RoadParams, sample_rate_hz: float = 1000.0,
                     band_cycles_per_m: tuple[float, float] = ROAD_BAND_CYCLES_PER_M,
-                    ) -> RoadProfile:
+                    amplitudes: str = "deterministic") -> RoadProfile:
     """ISO 8608 road by a sum of cosines with seeded random phases.
 
     Lines at n_k = k/L inside the band, amplitudes √(2 G_d(n_k) Δn) (one-sided
     PSD), phases uniform from ``numpy.random.default_rng(road.seed)``; evaluated
     exactly on the time grid by an inverse FFT (the profile is L-periodic).
+
+    ``amplitudes="deterministic"`` (the default) fixes every line's amplitude: the
+    mean square of a linear response over one period is then the same for every seed
+    (only the phases change), which is what makes the frictionless time domain equal
+    the frequency path.  ``amplitudes="gaussian"`` draws each line's complex
+    coefficient from a circular Gaussian of the same mean power (Rayleigh amplitude,
+    uniform phase): the profile is then a sample of a stationary Gaussian road, and a
+    metric varies between seeds as it would between stretches of a real road of that
+    length (:mod:`ehsa_opt.vehicle.uncertainty`).
 
     Parameters
     ----------
@@ -159,13 +168,20 @@ def synthesize_road(road: RoadParams, sample_rate_hz: float = 1000.0,
     amp = np.zeros(k.size)
     amp[inband] = np.sqrt(2.0 * road_psd_m3(n[inband], road.roughness_m3) * dn)
     rng = np.random.default_rng(road.seed)
-    phase = rng.uniform(0.0, 2.0 * math.pi, k.size)
-    coef = amp * np.exp(1j * phase)
+    if amplitudes == "deterministic":
+        coef = amp * np.exp(1j * rng.uniform(0.0, 2.0 * math.pi, k.size))
+    elif amplitudes == "gaussian":  # E|c|² = amp², as the deterministic lines
+        coef = amp * (rng.standard_normal(k.size) + 1j * rng.standard_normal(k.size)) \
+            / math.sqrt(2.0)
+    else:
+        raise ParameterError(f"road: amplitudes = {amplitudes!r}; use 'deterministic' or "
+                             "'gaussian'")
     # irfft(c)[j] = (1/N) Σ_k c_k e^{i2πkj/N} (with the Hermitian half): ×N/2 for k ≠ 0.
     elevation = np.fft.irfft(coef, n_samples) * n_samples / 2.0
     time = np.arange(n_samples) / fs
     return RoadProfile(time, elevation, v, fs,
-                       f"ISO 8608 class {road.iso_class}, seed {road.seed}",
+                       f"ISO 8608 class {road.iso_class}, seed {road.seed}"
+                       + (", Gaussian amplitudes" if amplitudes == "gaussian" else ""),
                        (float(n_lo), float(n_hi)))
 
 

@@ -60,6 +60,7 @@ from .frequency_path import G, dimensionless_power
 from .iso2631 import weighted_rms_fft
 from .resources import check_simulation_resources
 from .road import RoadProfile, dissipation_bound_W, road_profile
+from .validity import SampleLimits, exceedance_fractions
 
 __all__ = ["RoadHoldingWarning", "FrictionRangeWarning", "QuarterCarSimulation", "simulate_quarter_car",
            "simulate_batch", "compiled_step", "batch_graph_cache_info"]
@@ -279,7 +280,10 @@ class QuarterCarSimulation:
         The keys of :data:`~ehsa_opt.vehicle.frequency_path.METRIC_KEYS` plus ``energy_residual``
         (relative closure of the energy balance), ``peak_power_W`` and the rms and peak
         of stroke, generator voltage and current (``stroke_rms_m``, ``peak_stroke_m``,
-        ``voltage_rms_V``, ``peak_voltage_V``, ``current_rms_A``, ``peak_current_A``).
+        ``voltage_rms_V``, ``peak_voltage_V``, ``current_rms_A``, ``peak_current_A``), the
+        peak screw speed and the shares of the time beyond the per-sample limits
+        (:func:`~ehsa_opt.vehicle.validity.exceedance_fractions`: ``tyre_lift_fraction``,
+        ``stroke_beyond_limit_fraction``, ``*_beyond_limit_fraction``).
     time_s : ndarray (N,)
         Times of the kept samples (0 = start of the metric window).
     road_m : ndarray (N,)
@@ -312,16 +316,18 @@ class QuarterCarSimulation:
             out[key] = None if math.isnan(val) else val
         return out
 
-    def plot(self, ax: Any = None, k: int = 0) -> Any:
+    def plot(self, ax: Any = None, k: int = 0,
+             identified_range_m_per_s: float | None = None) -> Any:
         """Road, sprung displacement, power and force–velocity of design ``k`` (four
-        panels; ``ax`` not used); writes nothing."""
+        panels; ``ax`` not used; velocities beyond ``identified_range_m_per_s`` shaded);
+        writes nothing."""
         missing = [n for n in ("x2_m", "load_power_W", "sprung_acc_m_s2",
                                "stroke_velocity_m_s", "damper_force_N") if n not in self.series]
         if missing:
             raise ValueError(f"plot needs the series {missing}: simulate with "
                              f"keep_series=True")
         from ..plots.quarter_car import simulation_overview
-        return simulation_overview(self, k)
+        return simulation_overview(self, k, identified_range_m_per_s)
 
 
 def _as_list(obj: Any, cls: type, n: int | None) -> list:
@@ -337,10 +343,11 @@ def _as_list(obj: Any, cls: type, n: int | None) -> list:
 
 def _window_metrics(zt: np.ndarray, y: np.ndarray, params: np.ndarray, x0_keep: np.ndarray,
                     h: float, sample_rate_hz: float, vehicle: VehicleParams, speed: float,
-                    bound: float | None, v_range: float | None = None
-                    ) -> dict[str, np.ndarray]:
+                    bound: float | None, v_range: float | None = None,
+                    limits: SampleLimits | None = None) -> dict[str, np.ndarray]:
     """Metrics and energy-balance residual of a batch over the metric window (with
-    ``v_range``: the fractions of time and friction energy above it)."""
+    ``v_range``: the fractions of time and friction energy above it; the shares of the
+    time beyond the per-sample limits, :func:`~ehsa_opt.vehicle.validity.exceedance_fractions`)."""
     n_b = zt.shape[0]
     # Energy balance over the window: road work = Δ stored + R i² + friction.
     ends = [0, -1]
@@ -388,6 +395,13 @@ def _window_metrics(zt: np.ndarray, y: np.ndarray, params: np.ndarray, x0_keep: 
         "energy_residual": residual,
         **extra,
         **_rating_metrics(zt, y),
+        **exceedance_fractions(
+            zt[:, STATE_NAMES.index("x2_m"), :] - zt[:, STATE_NAMES.index("x1_m"), :], tyre,
+            y[:, col["stroke_velocity_m_s"], :], y[:, col["voltage_V"], :],
+            zt[:, STATE_NAMES.index("current_A"), :],
+            static_deflection_m=G * vehicle.total_mass_kg / k1,
+            stroke_limit_m=vehicle.stroke_limit_m,
+            lead_m_per_rad=params[PARAM_NAMES.index("lead_m_per_rad")], limits=limits),
     }
 
 
@@ -414,7 +428,8 @@ def simulate_quarter_car(vehicle: VehicleParams,
                          keep_series: bool | Sequence[str] = False,
                          jit: bool = True, warn: bool = True,
                          threads: int | None = None,
-                         identified_range_m_per_s: float | None = None
+                         identified_range_m_per_s: float | None = None,
+                         sample_limits: SampleLimits | None = None
                          ) -> QuarterCarSimulation:
     """Simulate one or many harvester/friction designs on one road (time domain).
 
@@ -448,6 +463,10 @@ def simulate_quarter_car(vehicle: VehicleParams,
         the metrics then hold ``out_of_range_time_fraction`` and
         ``out_of_range_friction_energy_fraction`` (:mod:`ehsa_opt.vehicle.coverage`), and
         (``warn``) a :class:`FrictionRangeWarning` is emitted above the limit.
+    sample_limits : SampleLimits, optional
+        Hardware limits (screw speed, voltage, current): the metrics then hold the share
+        of the time beyond each (``*_beyond_limit_fraction``; NaN without a limit).  The
+        shares of tyre lift and of the stroke beyond the vehicle's limit are always there.
 
     Returns
     -------
@@ -521,14 +540,16 @@ def simulate_quarter_car(vehicle: VehicleParams,
                 (zt, STATE_NAMES)
             arr[sl] = src[:, names.index(name), :]
         return _window_metrics(zt, y, params[:, sl], x0_keep, h, sample_rate_hz, vehicle,
-                               profile.speed_m_per_s, bound, identified_range_m_per_s)
+                               profile.speed_m_per_s, bound, identified_range_m_per_s,
+                               sample_limits)
 
     t0 = time.perf_counter()
     parts = _map_threads(work, _chunks(len(hs), x_pad.size - 1), threads)
     wall = time.perf_counter() - t0
     metrics = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     finite = all(np.all(np.isfinite(a)) for k, a in metrics.items()
-                 if k not in ("dissipation_bound_W", "out_of_range_friction_energy_fraction"))
+                 if k not in ("dissipation_bound_W", "out_of_range_friction_energy_fraction")
+                 and not k.endswith("_beyond_limit_fraction"))
     msg = "ok" if finite else "non-finite results: the step diverged (check parameters)"
     if warn:
         for b in np.flatnonzero(metrics["road_holding"] > 1.0):

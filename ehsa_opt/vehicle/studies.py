@@ -38,7 +38,7 @@ from .simulate import QuarterCarSimulation, simulate_batch, simulate_quarter_car
 __all__ = ["FrictionCases", "friction_cases", "paper_optimum_harvester",
            "FrequencyResponseStudy", "stepped_sine_response", "ForceVelocityStudy",
            "force_velocity_loops", "RoadStudy", "road_study", "equivalent_damping_slope",
-           "MIN_FRICTION_SCALE"]
+           "MIN_FRICTION_SCALE", "WELCH_SEGMENTS", "welch_segment_length"]
 
 
 #: Scale of the "min" friction when identification results are absent.
@@ -145,6 +145,9 @@ class FrequencyResponseStudy:
         Share of the last (steady) window's time, and of the friction's dissipated energy,
         at stroke velocities above the identified range (NaN energy without friction);
         None when no range was given.
+    peak_stroke_m : ndarray (C, L, F)
+        Largest stroke |x2 − x1| of the last (steady) window; checked against the
+        vehicle's ``stroke_limit_m`` by :meth:`beyond_stroke_limit`.
     """
 
     frequencies_hz: np.ndarray
@@ -166,6 +169,19 @@ class FrequencyResponseStudy:
     out_of_range_time_fraction: np.ndarray | None = None
     out_of_range_friction_energy_fraction: np.ndarray | None = None
     out_of_range_limit: float = OUT_OF_RANGE_LIMIT
+    peak_stroke_m: np.ndarray | None = None
+
+    @property
+    def stroke_limit_m(self) -> float:
+        """The vehicle's stroke limit, m."""
+        return float(self.vehicle.stroke_limit_m)
+
+    def beyond_stroke_limit(self) -> np.ndarray:
+        """(C, L, F) bool: points whose steady peak stroke |x2 − x1| exceeds the vehicle's
+        limit (the suspension would hit its bump stops, which the model does not have)."""
+        if self.peak_stroke_m is None:
+            return np.zeros(self.voltage_amplitude_V.shape, bool)
+        return self.peak_stroke_m > self.stroke_limit_m
 
     def frictionless_deviation(self) -> float:
         """Largest relative deviation of the case "none" from the exact linear response
@@ -246,6 +262,7 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
     i_x2, i_cur = STATE_NAMES.index("x2_m"), STATE_NAMES.index("current_A")
     i_v2, i_v1 = STATE_NAMES.index("v2_m_per_s"), STATE_NAMES.index("v1_m_per_s")
     oor_t, oor_e = np.full(shape, np.nan), np.full(shape, np.nan)
+    stroke = np.full((len(pairs), freqs.size), np.nan)
     pair_fr = [frictions.cases[c] for c, _ in pairs]
     lead = float(harvester.lead_m_per_rad)
     for k, f in enumerate(freqs):
@@ -274,6 +291,8 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
                 rel[active] = np.max(np.abs(cur - last[:, active])
                                      / np.maximum(np.abs(cur), 1e-300), axis=0)
             last[:, active] = cur
+            stroke[active, k] = np.max(np.abs(zt[:, i_x2] - zt[:, STATE_NAMES.index("x1_m")]),
+                                       axis=-1)
             if identified_range_m_per_s is not None:
                 _window_coverage(zt[:, i_v2] - zt[:, i_v1], [pair_fr[q] for q in active],
                                  lead, float(identified_range_m_per_s), active, oor_t[..., k],
@@ -293,7 +312,8 @@ def stepped_sine_response(vehicle: VehicleParams, harvester: HarvesterParams,
                                   velocity_amplitude_m_per_s, settled, change, lin_v, lin_x,
                                   float(tolerance), identified_range_m_per_s,
                                   None if identified_range_m_per_s is None else oor_t,
-                                  None if identified_range_m_per_s is None else oor_e)
+                                  None if identified_range_m_per_s is None else oor_e,
+                                  peak_stroke_m=stroke.reshape(shape))
 
 
 def _window_coverage(v_stroke: np.ndarray, frictions: Sequence[FrictionParams | None],
@@ -409,9 +429,16 @@ class RoadStudy:
     reachable : list of bool
         Whether the re-tuning reached the target slope.
     road_psd : dict
-        ``n_cycles_per_m``, ``synth_m3`` (Welch estimate), ``target_m3``.
+        ``n_cycles_per_m``, ``synth_m3`` (Welch estimate), ``target_m3``, ``segments``,
+        ``nperseg`` and ``resolution`` (cycles/m).
     stroke_velocity_psd : dict
-        ``f_hz`` and per-case PSD, (m/s)²/Hz.
+        ``f_hz`` and per-case PSD, (m/s)²/Hz, ``segments``, ``nperseg``,
+        ``resolution_hz``.
+    intervals : RoadIntervals or None
+        The cases' metrics on road realisations (:mod:`ehsa_opt.vehicle.uncertainty`),
+        when asked for.
+    identified_range_m_per_s : float or None
+        The friction's identified range (shaded in the force–velocity panel).
     """
 
     sim: QuarterCarSimulation
@@ -424,6 +451,9 @@ class RoadStudy:
     stroke_velocity_psd: dict
     friction_source: str
     title: str = ""
+    intervals: Any = None
+    identified_range_m_per_s: float | None = None
+    sample_limits: Any = None
 
     @property
     def average_power_W(self) -> np.ndarray:
@@ -450,10 +480,19 @@ def road_study(vehicle: VehicleParams, harvester: HarvesterParams, frictions: Fr
                road: RoadParams, *, retune: bool = True, n_loads: int = 24,
                max_load_factor: float = 200.0, settle_s: float = 2.0,
                sample_rate_hz: float = 1000.0, title: str = "",
-               identified_range_m_per_s: float | None = None) -> RoadStudy:
+               identified_range_m_per_s: float | None = None,
+               n_seeds: int | None = None, sample_limits: Any = None) -> RoadStudy:
     """Simulate each friction case on ``road``; optionally re-tune R_e per case.
     ``identified_range_m_per_s``: the final simulation's metrics then hold the fractions
     above the friction's identified range (:mod:`ehsa_opt.vehicle.coverage`).
+    ``n_seeds``: the final designs are also simulated on that many Gaussian road
+    realisations of the same length (:func:`~ehsa_opt.vehicle.uncertainty.road_intervals`),
+    the metrics' 95 % intervals.  ``sample_limits``: the hardware limits the shares of
+    time beyond them are measured against
+    (:class:`~ehsa_opt.vehicle.validity.SampleLimits`).
+
+    The PSDs are Welch estimates with :data:`WELCH_SEGMENTS` Hann segments overlapping
+    by half (the segment length follows from the record's length).
 
     Re-tuning (paper Figs 15/16): the frictionless case keeps ``harvester.load_ohm``
     and sets the target damping slope (:func:`equivalent_damping_slope`); each
@@ -499,18 +538,45 @@ def road_study(vehicle: VehicleParams, harvester: HarvesterParams, frictions: Fr
     fr = [frictions.cases[c] or FrictionParams() for c in cases]
     sim = simulate_quarter_car(vehicle, hs, fr, road, settle_s=settle_s,
                                sample_rate_hz=sample_rate_hz, warn=False, keep_series=True,
-                               identified_range_m_per_s=identified_range_m_per_s)
+                               identified_range_m_per_s=identified_range_m_per_s,
+                               sample_limits=sample_limits)
     slopes = equivalent_damping_slope(sim)
-    # PSDs: road (spatial, Welch) and stroke velocity (temporal, Welch)
-    v = road.speed_m_per_s
-    dx = v / sample_rate_hz
-    nper = min(sim.road_m.size, 8192)
+    # PSDs: road (spatial) and stroke velocity (temporal), Welch with stated segments
+    dx = road.speed_m_per_s / sample_rate_hz
+    nper = welch_segment_length(sim.road_m.size)
     n_sp, g_sp = signal.welch(sim.road_m, fs=1.0 / dx, nperseg=nper)
     sel = n_sp > 0
+    seg = (sim.road_m.size - nper) // (nper // 2) + 1  # scipy's default: 50 % overlap
     road_psd = {"n_cycles_per_m": n_sp[sel], "synth_m3": g_sp[sel],
-                "target_m3": road_psd_m3(n_sp[sel], road.iso_class)}
+                "target_m3": road_psd_m3(n_sp[sel], road.iso_class), "segments": seg,
+                "nperseg": nper, "resolution": 1.0 / (nper * dx)}
     f_v, p_v = signal.welch(sim.series["stroke_velocity_m_s"], fs=sample_rate_hz,
-                            nperseg=min(sim.road_m.size, 4096), axis=-1)
+                            nperseg=nper, axis=-1)
+    intervals = None
+    if n_seeds is not None:
+        from .uncertainty import road_intervals
+        intervals = road_intervals(vehicle, hs, fr, road, n_seeds=n_seeds, settle_s=settle_s,
+                                   sample_rate_hz=sample_rate_hz, sample_limits=sample_limits,
+                                   identified_range_m_per_s=identified_range_m_per_s)
     return RoadStudy(sim, cases, [loads[c] for c in cases], slopes, target, reachable,
-                     road_psd, {"f_hz": f_v, "psd": p_v}, frictions.source, title)
+                     road_psd, {"f_hz": f_v, "psd": p_v, "segments": seg, "nperseg": nper,
+                                "resolution_hz": sample_rate_hz / nper},
+                     frictions.source, title, intervals, identified_range_m_per_s,
+                     sample_limits)
+
+
+#: Hann segments of every Welch PSD of the road studies (50 % overlap): 8 segments give
+#: each PSD bin ≈ 15 degrees of freedom (Welch 1967, Hann windows overlapping by half: a
+#: bin's 95 % range is about 0.55–2.1 × its estimate), at a resolution 4.5 × coarser
+#: than the record's.
+WELCH_SEGMENTS = 8
+
+
+def welch_segment_length(n_samples: int, segments: int = WELCH_SEGMENTS) -> int:
+    """Segment length giving ``segments`` Hann segments overlapping by half in a record
+    of ``n_samples``: 2 N / (K + 1)."""
+    if n_samples < 4 * (segments + 1):
+        raise ParameterError(f"Welch PSD: {n_samples} samples are too few for {segments} "
+                             "segments; lengthen the road")
+    return int(2 * n_samples // (segments + 1))
 

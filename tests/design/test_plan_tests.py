@@ -225,3 +225,72 @@ def test_a_long_slow_test_is_credited_no_more_than_its_effective_samples() -> No
     assert slow.velocity_samples(rig).size == n_long
     assert np.trace(infos[0]) <= np.trace(infos[1]) * (1 + 1e-6)
     assert neffs[0] == pytest.approx(credited)
+
+
+def test_a_triangle_plans_the_exact_reversal_force_of_its_own_protocol(law) -> None:
+    """The protocol reverses at 2 v / t_rev: the planned peak force is the largest
+    m_eq a + c_eq v + F_rod(v) over the protocol's own motion, m_eq 2v/t_rev + c_eq v +
+    F_rod(v) (not m_eq v / t_rev), and the power that force times v."""
+    import dataclasses
+    from ehsa_opt.datasets.protocols import Protocol
+    from ehsa_opt.physics.harvester import equivalent_damping_Ns_per_m, equivalent_mass_kg
+    rig = RigLimits(peak_velocity_m_per_s=1.0, reversal_s=0.05)
+    h = HarvesterParams(load_ohm=47.0)
+    tri = [c for c in candidate_tests(rig, h, law, kinds=("triangle",)) if c.load_ohm == 47.0]
+    c = tri[-1]
+    meq, ceq = equivalent_mass_kg(h), float(equivalent_damping_Ns_per_m(h, 0.0))
+    v = c.velocity_m_per_s
+    exact = meq * 2 * v / rig.reversal_s + ceq * v + float(law.rod_N(v))
+    assert c.peak_force_N == pytest.approx(exact, rel=1e-12)
+    assert c.peak_power_W == pytest.approx(exact * v, rel=1e-12)
+    assert c.peak_force_N > meq * v / rig.reversal_s + ceq * v + float(law.rod_N(v)) + 100
+    # the same peak from the protocol's sampled motion (its acceleration 2 v / t_rev)
+    proto = Protocol("triangle", 47.0, amplitude_m=c.amplitude_m, velocity_m_per_s=v,
+                     corner_s=0.5 * rig.reversal_s)
+    proto = dataclasses.replace(proto, duration_s=2 * proto.cycle_s)
+    t = np.arange(0.0, proto.record_s, 1e-5)
+    x, vel, acc = proto.motion().evaluate(t)[:3]
+    force = meq * acc + ceq * vel + np.asarray(law.rod_N(vel))
+    assert np.max(np.abs(force)) == pytest.approx(exact, rel=2e-3)
+    assert np.max(np.abs(x)) <= rig.usable_amplitude_m * (1 + 1e-9)
+
+
+def test_plans_keep_a_stroke_margin_the_damper_limits_and_enough_plateau(law) -> None:
+    h = HarvesterParams(load_ohm=47.0)
+    free = RigLimits(stroke_m=0.1, stroke_margin_m=0.01, peak_velocity_m_per_s=1.0)
+    cands = candidate_tests(free, h, law)
+    assert max(c.amplitude_m for c in cands) == pytest.approx(0.04)
+    # screw speed, voltage and current stated per test (5 mm lead: 1 m/s = 12 000 rpm)
+    fast = max(cands, key=lambda c: c.peak_velocity_m_per_s)
+    assert fast.peak_screw_speed_rpm == pytest.approx(
+        60 * fast.peak_velocity_m_per_s / 5e-3, rel=1e-9)
+    emf = h.voltage_constant_Vs_per_rad * fast.peak_velocity_m_per_s / h.lead_m_per_rad
+    i = emf / (fast.load_ohm + h.internal_resistance_ohm)
+    assert fast.peak_current_A == pytest.approx(i) and fast.peak_voltage_V == pytest.approx(
+        fast.load_ohm * i)
+    # the damper's limits, when the rig file gives them, remove the tests beyond them
+    lim = dataclasses_replace(free, max_screw_speed_rpm=6000.0, max_generator_voltage_V=40.0,
+                              max_generator_current_A=0.8)
+    kept = candidate_tests(lim, h, law)
+    assert kept and len(kept) < len(cands)
+    assert all(c.peak_screw_speed_rpm <= 6000 * (1 + 1e-9) and c.peak_voltage_V <= 40.0
+               and c.peak_current_A <= 0.8 for c in kept)
+    # every triangle records at least min_plateau_s of plateau (two reversals per cycle)
+    for c in cands:
+        if c.kind == "triangle":
+            plateau = 2 * (2 * c.amplitude_m / c.velocity_m_per_s - free.reversal_s)
+            assert c.cycles * plateau >= free.min_plateau_s - 1e-9 and c.cycles >= free.cycles
+        else:
+            assert c.cycles / c.frequency_hz >= free.min_plateau_s - 1e-9
+    one = dict(loads_ohm=(47.0,))
+    plan = plan_tests(law, dataclasses_replace(lim, **one), h, 0.5, n_tests=1, kinds=("sine",))
+    assert "NOT checked" not in plan.summary() and "damper limits checked" in plan.summary()
+    assert "NOT checked (no limit in [rig]): screw speed" in plan_tests(
+        law, dataclasses_replace(free, **one), h, 0.5, n_tests=1, kinds=("sine",)).summary()
+    with pytest.raises(ParameterError, match="stroke_margin_m"):
+        RigLimits(stroke_m=0.1, stroke_margin_m=0.06)
+
+
+def dataclasses_replace(obj, **kw):
+    import dataclasses
+    return dataclasses.replace(obj, **kw)

@@ -140,28 +140,28 @@ def test_validity_stroke_limit_fast_path_region_and_joined_flags():
     from ehsa_opt.vehicle.validity import (GAUSSIAN_PEAK_FACTOR, Validity, ValidityFlag,
                                            check_validity, register_check, VALIDITY_CHECKS)
     # time domain: the peak stroke; frequency path: GAUSSIAN_PEAK_FACTOR x rms
-    v = check_validity({"road_holding": [0.5, 0.5], "peak_stroke_m": [0.09, 0.12]},
+    v = check_validity({"road_holding": [0.2, 0.2], "peak_stroke_m": [0.09, 0.12]},
                        stroke_limit_m=0.1)
     assert v.valid.tolist() == [True, False] and v.codes(1) == ["stroke_limit"]
     assert "120 mm (peak) beyond the 100 mm limit" in v.cell(1)
     rms = 0.1 / GAUSSIAN_PEAK_FACTOR
-    v = check_validity({"road_holding": [0.5, 0.5], "stroke_rms_m": [0.99 * rms, 1.01 * rms]},
+    v = check_validity({"road_holding": [0.2, 0.2], "stroke_rms_m": [0.99 * rms, 1.01 * rms]},
                        stroke_limit_m=0.1)
     assert v.valid.tolist() == [True, False]
     # fast path outside its validated region, on the design variables
-    v = check_validity({"road_holding": [0.5, 0.5]}, design={"load_ohm": [50.0, 5e3]},
+    v = check_validity({"road_holding": [0.2, 0.2]}, design={"load_ohm": [50.0, 5e3]},
                        fast_path_region={"load_ohm": (1.0, 1e3)})
     assert v.valid.tolist() == [True, False] and v.codes(1) == ["fast_path_region"]
     # another check joins the registry; flags from elsewhere join a Validity
-    register_check("test_extra", lambda m, ctx: ["extra" if x > 0.9 else None
+    register_check("test_extra", lambda m, ctx: ["extra" if x > 0.1 else None
                                                  for x in m["road_holding"]])
     try:
-        v = check_validity({"road_holding": [0.95, 1.2]})
+        v = check_validity({"road_holding": [0.2, 1.2]})
         assert v.codes(0) == ["test_extra"] and v.codes(1) == ["tyre_lift", "test_extra"]
     finally:
         del VALIDITY_CHECKS["test_extra"]
     other = Validity(((ValidityFlag("friction_range", "friction extrapolated"),), ()))
-    j = check_validity({"road_holding": [0.5, 1.5]}).join(other)
+    j = check_validity({"road_holding": [0.2, 1.5]}).join(other)
     assert j.codes(0) == ["friction_range"] and j.codes(1) == ["tyre_lift"]
     with pytest.raises(ValueError, match="road_holding"):
         check_validity({"power_W": [1.0]})
