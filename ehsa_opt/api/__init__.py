@@ -8,12 +8,53 @@ writes nothing; every result has ``summary()``, ``table()``, ``plot(ax=None)``,
 ``save(folder)`` and ``load(folder)`` (JSON and CSV).  Messages go to the ``ehsa_opt``
 logger.  This room sits above design and plots, below the pipeline and the CLI."""
 
-from .design import load_problem, optimize
-from .discrepancy import discrepancy
-from .identification import IdentificationResult, identify
-from .simulation import SimulationResult, simulate
-from .sweep import SweepResult, sweep
+import sys
+import types
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # at run time each name is imported on first use (:func:`__getattr__`)
+    from .design import load_problem, optimize
+    from .discrepancy import discrepancy
+    from .identification import IdentificationResult, identify
+    from .simulation import SimulationResult, simulate
+    from .sweep import SweepResult, sweep
 
 __all__ = ["load_problem", "optimize", "sweep", "simulate", "identify", "discrepancy",
            "SweepResult",
            "SimulationResult", "IdentificationResult"]
+
+#: The module of each entry point: ``identify`` does not load the design's pymoo nor the
+#: discrepancy engine.
+_HOMES = {"load_problem": ".design", "optimize": ".design", "discrepancy": ".discrepancy",
+          "identify": ".identification", "IdentificationResult": ".identification",
+          "simulate": ".simulation", "SimulationResult": ".simulation",
+          "sweep": ".sweep", "SweepResult": ".sweep"}
+
+
+def __getattr__(name: str):
+    """An entry point, imported from its module on first use (PEP 562)."""
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'ehsa_opt.api' has no attribute {name!r}")
+    import importlib
+    value = getattr(importlib.import_module(home, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})
+
+
+class _EntryPoints(types.ModuleType):
+    """This package: importing a submodule named like its entry point (``sweep``,
+    ``discrepancy``) binds the entry point, not the submodule, as the eager
+    ``from .sweep import sweep`` did."""
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if name in _HOMES and isinstance(value, types.ModuleType) and hasattr(value, name):
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _EntryPoints
