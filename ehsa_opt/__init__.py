@@ -37,51 +37,57 @@ Messages go to the ``ehsa_opt`` logger (``logging.getLogger("ehsa_opt")``); the
 physics (:class:`BenchModel`, :class:`HarvesterParams`, friction laws …) is below.
 """
 
-from .api import (
-                  BenchSet,
-                  DiscrepancyReport,
-                  IdentificationResult,
-                  ReproduceResult,
-                  TestPlanResult,
-                  check_bench,
-                  convert_emps,
-                  discrepancy_report,
-                  generate_bench,
-                  plan_tests,
-                  reproduce,
-                  SimulationResult,
-                  SweepResult,
-                  discrepancy,
-                  identify,
-                  load_problem,
-                  optimize,
-                  simulate,
-                  sweep,
-)
-from .datasets.bench_format import BenchData, BenchDataError, load_bench
-from .design.outcome import DesignResult
-from .estimation.discrepancy import Criterion, DiscrepancyResult, DiscrepancySettings
-from .design.problem import DesignProblem, DesignSpace
-from .datasets.synthetic import SyntheticSpec
-from .physics import COMPONENTS, BenchModel
-from .physics.bench_sim import BenchSimulation, simulate_bench
-from .physics.friction import (
-                     bearing_friction_Nm,
-                     nut_friction_N,
-                     rod_friction_N,
-                     simscape_friction,
-)
-from .physics.motion import SampledMotion, SineMotion
-from .physics.params import (
-                     FRICTION_NAMES,
-                     FRICTION_RANGES,
-                     FrictionParams,
-                     HarvesterParams,
-                     ParameterError,
-                     RoadParams,
-                     VehicleParams,
-)
+from typing import TYPE_CHECKING
+
 from .utils.version import __version__
+
+if TYPE_CHECKING:  # the names below, for static tools; at run time each is imported
+    # on first use (:func:`__getattr__`), so that a command loads only what it runs
+    from .api import (
+                      BenchSet,
+                      DiscrepancyReport,
+                      IdentificationResult,
+                      ReproduceResult,
+                      SimulationResult,
+                      SweepResult,
+                      TestPlanResult,
+                      check_bench,
+                      convert_emps,
+                      discrepancy,
+                      discrepancy_report,
+                      generate_bench,
+                      identify,
+                      load_problem,
+                      optimize,
+                      plan_tests,
+                      reproduce,
+                      simulate,
+                      sweep,
+    )
+    from .datasets.bench_format import BenchData, BenchDataError, load_bench
+    from .datasets.synthetic import SyntheticSpec
+    from .design.outcome import DesignResult
+    from .estimation.discrepancy import Criterion, DiscrepancyResult, DiscrepancySettings
+    from .design.problem import DesignProblem, DesignSpace
+    from .physics import COMPONENTS, BenchModel
+    from .physics.bench_sim import BenchSimulation, simulate_bench
+    from .physics.friction import (
+                         bearing_friction_Nm,
+                         nut_friction_N,
+                         rod_friction_N,
+                         simscape_friction,
+    )
+    from .physics.motion import SampledMotion, SineMotion
+    from .physics.params import (
+                         FRICTION_NAMES,
+                         FRICTION_RANGES,
+                         FrictionParams,
+                         HarvesterParams,
+                         ParameterError,
+                         RoadParams,
+                         VehicleParams,
+    )
+
 
 #: The scripting entry points, first in ``help(ehsa_opt)`` and in the API reference.
 ENTRY_POINTS = ("load_problem", "optimize", "sweep", "simulate", "identify", "discrepancy",
@@ -98,3 +104,39 @@ __all__ = [*ENTRY_POINTS, "DesignProblem", "DesignSpace", "DesignResult", "Sweep
            "HarvesterParams", "FrictionParams", "VehicleParams", "RoadParams",
            "FRICTION_NAMES", "FRICTION_RANGES", "simscape_friction", "nut_friction_N",
            "bearing_friction_Nm", "rod_friction_N", "__version__"]
+
+#: Where each public name lives (imported on first use: ``import ehsa_opt`` stays light,
+#: a command imports the discrepancy engine, pymoo or scipy.stats only when it runs them).
+_HOMES = {
+    **dict.fromkeys((*ENTRY_POINTS, "SweepResult", "SimulationResult", "IdentificationResult",
+                     "DiscrepancyReport", "TestPlanResult", "BenchSet", "ReproduceResult"),
+                    ".api"),
+    **dict.fromkeys(("BenchData", "BenchDataError", "load_bench"), ".datasets.bench_format"),
+    "SyntheticSpec": ".datasets.synthetic",
+    "DesignResult": ".design.outcome",
+    **dict.fromkeys(("Criterion", "DiscrepancyResult", "DiscrepancySettings"),
+                    ".estimation.discrepancy"),
+    **dict.fromkeys(("DesignProblem", "DesignSpace"), ".design.problem"),
+    **dict.fromkeys(("BenchModel", "COMPONENTS"), ".physics"),
+    **dict.fromkeys(("BenchSimulation", "simulate_bench"), ".physics.bench_sim"),
+    **dict.fromkeys(("bearing_friction_Nm", "nut_friction_N", "rod_friction_N",
+                     "simscape_friction"), ".physics.friction"),
+    **dict.fromkeys(("SampledMotion", "SineMotion"), ".physics.motion"),
+    **dict.fromkeys(("FRICTION_NAMES", "FRICTION_RANGES", "FrictionParams", "HarvesterParams",
+                     "ParameterError", "RoadParams", "VehicleParams"), ".physics.params"),
+}
+
+
+def __getattr__(name: str):
+    """A public name, imported from its module on first use (PEP 562)."""
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'ehsa_opt' has no attribute {name!r}")
+    import importlib
+    value = getattr(importlib.import_module(home, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

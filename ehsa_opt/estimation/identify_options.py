@@ -248,7 +248,9 @@ _MOTIONS: dict[tuple, MotionEstimate] = {}
 
 def _motion_key(test: BenchTest, opt: IdentifyOptions, mass_kg: float | None) -> tuple:
     """What :func:`estimate_motion` depends on: the samples (digest), the excitation,
-    the smoothing settings and the mass."""
+    the smoothing settings and, for a recorded motion, the mass (a sine test's spline
+    does not depend on it: the identification, which passes the model's mass, and the
+    friction samples, which do not, share it)."""
     import hashlib
     h = hashlib.blake2b(digest_size=16)
     arrays = [test.time_s, test.displacement_m]
@@ -259,7 +261,8 @@ def _motion_key(test: BenchTest, opt: IdentifyOptions, mass_kg: float | None) ->
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
     return (h.hexdigest(), test.excitation, opt.smoothing, opt.smoothing_cutoff_hz,
-            opt.spline_points, None if mass_kg is None else float(mass_kg))
+            opt.spline_points,
+            None if mass_kg is None or test.excitation == "sine" else float(mass_kg))
 
 
 def _estimate_motion(test: BenchTest, opt: IdentifyOptions,

@@ -21,7 +21,7 @@ from typing import Any
 from ..utils.process import die_with_parent
 from .base import Context, Step, StepOutput
 
-__all__ = ["BackgroundStep", "runs_in_background"]
+__all__ = ["BackgroundStep", "runs_in_background", "shared_jobs"]
 
 
 def runs_in_background(step: Step, steps: list[Step], ctx: Context) -> bool:
@@ -29,6 +29,17 @@ def runs_in_background(step: Step, steps: list[Step], ctx: Context) -> bool:
     step reads its results, and the run has at least two jobs."""
     return (step.background and not step.depends and ctx.jobs >= 2
             and not any(step.key in s.depends for s in steps))
+
+
+def shared_jobs(jobs: int, beside: int) -> tuple[int, int]:
+    """(jobs of each step running beside the others, jobs of the main process) when
+    ``beside`` steps run beside it on ``jobs``: an equal share each, at least one, the
+    main process what they leave — no more busy processes than jobs (a member fit made
+    ahead on a spare worker would take a core from a step that has work now)."""
+    if beside <= 0:
+        return jobs, jobs
+    each = max(1, jobs // (beside + 1))
+    return each, max(1, jobs - beside * each)
 
 
 def _child(step: Step, ctx: Context, conn: Any) -> None:

@@ -9,6 +9,7 @@ interruption skips finished steps (the log says so) and gives the same report.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 from typing import Any, Callable
@@ -16,7 +17,7 @@ from typing import Any, Callable
 from ..utils.io import atomic_write_bytes, atomic_write_text
 from ..utils.progress import progress_bar
 from ..utils.version import __version__
-from .background import BackgroundStep, runs_in_background
+from .background import BackgroundStep, runs_in_background, shared_jobs
 from .base import Context, Step, StepOutput, code_digest, data_digest, hash_json
 from .bench_report import step_bench_truth, step_data, step_harvester
 
@@ -225,14 +226,13 @@ def _reproduce(out_dir: str | Path, quick: bool, jobs: int, steps: list[Step] | 
 
     # steps nobody reads (the discrepancy workflow) start at once, beside the others
     background: dict[str, tuple[BackgroundStep, str]] = {}
-    for step in steps:
-        if runs_in_background(step, steps, ctx):
-            key = step_key(step)
-            if cache.load(step.key, key) is None:
-                background[step.key] = (BackgroundStep(step, ctx), key)
-                log(f"{step.title}: started beside the other steps")
-    if background:  # the jobs are shared: one for each step running beside the others
-        ctx.jobs = max(1, jobs - len(background))
+    pending = [(step, step_key(step)) for step in steps if runs_in_background(step, steps, ctx)]
+    pending = [(step, key) for step, key in pending if cache.load(step.key, key) is None]
+    each, main_jobs = shared_jobs(jobs, len(pending))
+    for step, key in pending:
+        background[step.key] = (BackgroundStep(step, dataclasses.replace(ctx, jobs=each)), key)
+        log(f"{step.title}: started beside the other steps ({each} job{'s' * (each > 1)})")
+    ctx.jobs = main_jobs
     bar = progress_bar(total=len(steps), desc="reproduce", unit="step")
     try:
         for n, step in enumerate(steps, start=1):

@@ -138,6 +138,41 @@ def test_sine_tests_keep_every_sample():
     assert est.resolved.all() and est.cutoff_hz == 30.0
 
 
+def test_motion_estimates_are_shared_where_the_mass_does_not_enter():
+    """A sine test's spline does not depend on the mass: asked with and without it, it is
+    built once; a recorded motion's cut-off does, so two masses are two estimates."""
+    spec = SyntheticSpec(harvester=OTHER, friction=FRICTION, frequencies_hz=(1.5,),
+                         loads_ohm=(22.0,), seed=4)
+    sine = generate_bench_tests(spec)[0]
+    with_mass = estimate_motion(sine, None, OTHER.equivalent_mass_kg())
+    assert estimate_motion(sine, None, None).motion is with_mass.motion
+    t = np.arange(0.0, 2.0, 1e-3)
+    x = 0.02 * np.sin(2 * np.pi * t) + 1e-6 * np.random.default_rng(2).normal(size=t.size)
+    F = 50.0 * np.cos(2 * np.pi * t) + np.random.default_rng(3).normal(size=t.size)
+    rec = BenchTest("r.csv", None, None, 10.0, "recorded", t, x, F, F)
+    assert estimate_motion(rec, None, 10.0).motion is not estimate_motion(rec, None, 40.0).motion
+
+
+def test_peak_velocity_of_a_record_is_computed_once(monkeypatch):
+    import ehsa_opt.physics.motion as motion
+    from ehsa_opt.estimation.test_velocity import test_peak_velocity_m_per_s as peak
+    built = []
+    real = motion.SampledMotion
+
+    def counting(*a, **k):
+        built.append(1)
+        return real(*a, **k)
+    monkeypatch.setattr(motion, "SampledMotion", counting)
+    t = np.arange(0.0, 3.0, 1e-3)
+    x = 0.01 * np.sin(2 * np.pi * 0.7 * t + 0.3)
+    rec = BenchTest("p.csv", None, None, 10.0, "recorded", t, x, x, x)
+    v = peak(rec)
+    assert v == pytest.approx(2 * np.pi * 0.7 * 0.01, rel=0.02)
+    assert peak(rec) == v and len(built) == 1  # the second call: no new spline
+    faster = BenchTest("p.csv", None, None, 10.0, "recorded", t, 2 * x, x, x)
+    assert peak(faster) == pytest.approx(2 * v, rel=1e-6) and len(built) == 2
+
+
 @pytest.fixture(scope="module")
 def recorded_campaign(tmp_path_factory):
     protos = [Protocol("triangle", 10.0, amplitude_m=0.02, velocity_m_per_s=0.06,

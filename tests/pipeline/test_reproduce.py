@@ -75,7 +75,8 @@ def _slow_side(ctx):
     """A background step: its own pid (it must not be the parent's) and some work."""
     import os
     return StepOutput(f"side markdown pid {os.getpid()}", [], {"pid": os.getpid(),
-                                                              "sum": sum(range(10 ** 6))})
+                                                              "sum": sum(range(10 ** 6)),
+                                                              "jobs": ctx.jobs})
 
 
 def _side_fails(ctx):
@@ -88,6 +89,7 @@ def test_background_step_runs_beside_keeps_its_place_and_is_cached(tmp_path):
 
     def main_step(ctx):
         seen["main_pid"] = os.getpid()
+        seen["main_jobs"] = ctx.jobs
         return StepOutput("main markdown", [], {"x": 1})
 
     steps = [Step("side", "Side step", _slow_side, background=True),
@@ -100,10 +102,23 @@ def test_background_step_runs_beside_keeps_its_place_and_is_cached(tmp_path):
     side_pid = int(cached["markdown"].split()[-1])
     assert side_pid != seen["main_pid"] and side_pid != os.getpid()  # really forked
     assert cached["results"]["sum"] == sum(range(10 ** 6))
+    # two jobs, one step beside: one job each, no third busy process
+    assert cached["results"]["jobs"] == 1 and seen["main_jobs"] == 1
+    assert any("started beside the other steps (1 job)" in m for m in logs)
     logs.clear()
     reproduce(tmp_path, steps=steps, jobs=2, log=logs.append)  # second run: from the cache
     assert any("Side step: cached" in m for m in logs)
     assert not any("started beside" in m for m in logs)
+
+
+def test_jobs_are_shared_among_the_processes_of_a_run():
+    from ehsa_opt.pipeline.background import shared_jobs
+    assert shared_jobs(2, 2) == (1, 1)  # reproduce --jobs 2: two discrepancy steps beside
+    assert shared_jobs(2, 1) == (1, 1)
+    assert shared_jobs(4, 2) == (1, 2)
+    assert shared_jobs(6, 2) == (2, 2)
+    assert shared_jobs(8, 1) == (4, 4)
+    assert shared_jobs(3, 0) == (3, 3)  # nothing beside: the main process has them all
 
 
 def test_background_step_inline_with_one_job_and_errors_reach_the_parent(tmp_path):
