@@ -44,6 +44,7 @@ from typing import Mapping
 
 import numpy as np
 
+from ...utils.jit_cache import compiled
 from .initial_state import STATE_WINDOW_SAMPLES, initial_state
 
 __all__ = ["open_loop_position", "open_loop_error", "validation_summary", "SKIP_SAMPLES",
@@ -115,7 +116,8 @@ _SIMULATORS: dict[int, tuple] = {}
 def simulator(steps: int) -> tuple:
     """CasADi functions (x0[3], U, R, Δt [1 × steps], p) → q [1 × (steps + 1)] and
     → ∂q/∂(p, x0) [(steps + 1) × (len(:data:`SIM_PARAMETERS`) + 3)], cached by
-    ``steps``."""
+    ``steps``; compiled to C when a compiler is available
+    (:func:`~ehsa_opt.utils.jit_cache.compiled`)."""
     if steps not in _SIMULATORS:
         import casadi as ca
         if len(_SIMULATORS) >= 8:
@@ -125,9 +127,11 @@ def simulator(steps: int) -> tuple:
         U, R, D = (ca.MX.sym(n, 1, steps) for n in ("U", "R", "D"))
         X = sim(x0, U, R, D, ca.repmat(P, 1, steps))
         q = ca.horzcat(x0[0], X[0, :])
-        _SIMULATORS[steps] = (ca.Function("q", [x0, U, R, D, P], [q]),
-                              ca.Function("dq", [x0, U, R, D, P],
-                                          [ca.jacobian(q, ca.vertcat(P, x0))]))
+        f = ca.Function("q", [x0, U, R, D, P], [q])
+        df = ca.Function("dq", [x0, U, R, D, P], [ca.jacobian(q, ca.vertcat(P, x0))])
+        # compiled to C once per machine (the interpreter spent 28 s of the quick run's
+        # EMPS step in the Jacobian; the same numbers), or interpreted without a compiler
+        _SIMULATORS[steps] = (compiled(f) or f, compiled(df) or df)
     return _SIMULATORS[steps]
 
 
