@@ -35,6 +35,7 @@ from scipy.special import erfc
 from scipy.stats import norm
 
 from ..physics.params import ParameterError
+from ..vehicle.validity import EXCEEDANCE_FRACTION_LIMIT, TYRE_LIFT_FRACTION_LIMIT
 
 __all__ = ["LimitSettings", "LIMIT_MEANINGS", "gaussian_fraction_beyond", "rice_peak_quantile",
            "limit_entry", "explain_violations", "active_bounds", "sample_fractions"]
@@ -62,25 +63,26 @@ class LimitSettings:
     Attributes
     ----------
     time_fraction : float
-        Largest fraction of time a hard limit may be exceeded.  Default 1e-3 (0.1 % of the
-        time, about 50 ms on the 1 km design road at 70 km/h) **(assumption)**: a
-        momentary excursion a motor's bearings, a screw's recirculation and a bump stop
-        tolerate; a Gaussian response then stays below 3.29 σ.
+        Largest fraction of time a hard limit may be exceeded.  Default
+        :data:`~ehsa_opt.vehicle.validity.EXCEEDANCE_FRACTION_LIMIT` (4.65e-4, the share a
+        Gaussian response spends beyond ±3.5 σ): the standard the vehicle studies' validity
+        holds every hardware limit to, so a design and a study row are judged alike.
     peak_quantile : float
         Probability with which the largest terminal voltage over the road stays below the
         motor's maximum voltage.  Default 0.95 **(assumption)**: the one-sided 95 % of a
         design check.
     tyre_lift_fraction : float
         Largest fraction of time the dynamic tyre load may exceed the static load (the
-        tyre leaves the road).  Default 0.01 **(assumption)**: the classic criterion "rms
-        dynamic load ≤ 1/3 of the static load" (lift 0.13 % of the time) is not met by the
-        prototype itself on the design road (η_rh = 0.44: lift 1.2 % of the time), so the
-        default admits the prototype's order of lift; set 0.00135 for the classic one.
+        tyre leaves the road).  Default
+        :data:`~ehsa_opt.vehicle.validity.TYRE_LIFT_FRACTION_LIMIT` (0.135 %: the classic
+        road-holding criterion, rms dynamic load ≤ 1/3 of the static load, for a Gaussian
+        wheel load), the same standard as the vehicle studies' validity.  The prototype
+        does not meet it on the design road (η_rh = 0.44: lift about 1.2 % of the time).
     """
 
-    time_fraction: float = 1e-3
+    time_fraction: float = EXCEEDANCE_FRACTION_LIMIT
     peak_quantile: float = 0.95
-    tyre_lift_fraction: float = 1e-2
+    tyre_lift_fraction: float = TYRE_LIFT_FRACTION_LIMIT
 
     def __post_init__(self) -> None:
         if not (0.0 < self.time_fraction < 0.5):
