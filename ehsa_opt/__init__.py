@@ -44,6 +44,7 @@ from .design.problem import DesignProblem, DesignSpace
 from .physics import BenchModel
 from .physics.bench_sim import BenchSimulation, simulate_bench
 from .physics.friction import (
+                     FRICTION_LAWS,
                      bearing_friction_Nm,
                      nut_friction_N,
                      rod_friction_N,
@@ -70,5 +71,5 @@ __all__ = [*ENTRY_POINTS, "DesignProblem", "DesignSpace", "DesignResult", "Sweep
            "BenchDataError", "ParameterError",
            "BenchModel", "BenchSimulation", "simulate_bench", "SineMotion", "SampledMotion",
            "HarvesterParams", "FrictionParams", "VehicleParams", "RoadParams",
-           "FRICTION_NAMES", "FRICTION_RANGES", "simscape_friction", "nut_friction_N",
+           "FRICTION_NAMES", "FRICTION_RANGES", "FRICTION_LAWS", "simscape_friction", "nut_friction_N",
            "bearing_friction_Nm", "rod_friction_N", "__version__"]

@@ -31,9 +31,21 @@ rotor speed.  With L_i = 0 the current is algebraic, i = e/R (the
 exact quasi-static limit).  The equivalent rigid-model force is
 F = m_eq a + K_t i/r + F_ns(v) + T_b(v/r)/r (paper Eq 4).
 
+Friction law (``friction_law``): ``"static"`` (default) F_ns(v) is the Simscape map;
+``"lugre"`` gives the nut–screw contact a bristle state ``bristle_deflection_m`` (z, m)
+whose steady state is that map (:mod:`~ehsa_opt.physics.friction`)::
+
+    ż = v − σ₀ z / φ(v),     F_ns = σ₀ z + σ₁ ż + f_v v
+
+with σ₀, σ₁ the parameters ``nut_presliding_stiffness_N_per_m`` and
+``nut_presliding_damping_Ns_per_m``.  The bearing friction keeps its static map: on a
+rigid bench the nut/bearing split is not identifiable, so one bristle carries the
+presliding of the rod's friction.
+
 Parameters are a flat vector ``p`` in :attr:`BenchModel.param_names` order:
 ``load_ohm``, the eight friction parameter names, then (``generator=False``
-only) ``inertia_kg`` and ``offset_N``, then each component's parameters.  States are named in :attr:`BenchModel.state_names`.
+only) ``inertia_kg`` and ``offset_N``, then (``friction_law="lugre"`` only) σ₀ and
+σ₁, then each component's parameters.  States are named in :attr:`BenchModel.state_names`.
 """
 
 from __future__ import annotations
@@ -44,10 +56,22 @@ import casadi as ca
 import numpy as np
 
 from .components import Component, ParamSpec
-from .friction import bearing_friction_Nm, nut_friction_N
+from .base_parameters import PARAMETERS
+from .friction import (
+    FRICTION_LAWS,
+    PRESLIDING_NAMES,
+    bearing_friction_Nm,
+    bristle_rate,
+    nut_friction_N,
+    nut_static_slope,
+    presliding_force,
+)
 from .params import FRICTION_NAMES, FrictionParams, HarvesterParams
 
-__all__ = ["BenchModel", "RIG_PARAM_NAMES"]
+__all__ = ["BenchModel", "RIG_PARAM_NAMES", "BRISTLE_STATE"]
+
+#: Name of the LuGre bristle deflection state (m).
+BRISTLE_STATE = "bristle_deflection_m"
 
 #: Extra parameters of a rig without generator: rod inertia M (kg) and force offset F_0 (N).
 RIG_PARAM_NAMES: tuple[str, ...] = ("inertia_kg", "offset_N")
@@ -66,6 +90,8 @@ class BenchModel:
     generator : bool
         False for a rig without generator (no winding, no voltage; adds the
         parameters ``inertia_kg`` and ``offset_N``, see the module docstring).
+    friction_law : {"static", "lugre"}
+        The nut–screw friction law (see the module docstring).
 
     Attributes
     ----------
@@ -86,7 +112,12 @@ class BenchModel:
     """
 
     def __init__(self, harvester: HarvesterParams | None = None,
-                 components: Sequence[Component] = (), generator: bool = True) -> None:
+                 components: Sequence[Component] = (), generator: bool = True,
+                 friction_law: str = "static") -> None:
+        if friction_law not in FRICTION_LAWS:
+            raise ValueError(f"BenchModel: friction_law must be one of {FRICTION_LAWS}, got "
+                             f"{friction_law!r}")
+        self.friction_law = friction_law
         self.harvester = harvester or HarvesterParams()
         self.generator = bool(generator)
         self.components = list(components)
@@ -103,7 +134,9 @@ class BenchModel:
             for q in c.parameters:
                 self.param_specs[q.name] = q
         self.rig_names = [] if self.generator else list(RIG_PARAM_NAMES)
-        self.param_names = ["load_ohm", *FRICTION_NAMES, *self.rig_names, *self.param_specs]
+        self.law_names = list(PRESLIDING_NAMES) if friction_law == "lugre" else []
+        self.param_names = ["load_ohm", *FRICTION_NAMES, *self.rig_names, *self.law_names,
+                            *self.param_specs]
         self._build()
 
     # ------------------------------------------------------------------ construction
@@ -123,7 +156,9 @@ class BenchModel:
         fr = [p[1 + k] for k in range(8)]
         nrig = len(self.rig_names)
         prig = {n: p[9 + k] for k, n in enumerate(self.rig_names)}
-        pc = {n: p[9 + nrig + k] for k, n in enumerate(self.param_specs)}
+        nlaw = len(self.law_names)
+        plaw = {n: p[9 + nrig + k] for k, n in enumerate(self.law_names)}
+        pc = {n: p[9 + nrig + nlaw + k] for k, n in enumerate(self.param_specs)}
 
         states: list[tuple[str, Any]] = []
         if self.transmission is not None:
@@ -135,6 +170,9 @@ class BenchModel:
         i_sym = ca.SX.sym("current_A") if self.has_inductance else None
         if i_sym is not None:
             states.insert(0, ("current_A", i_sym))
+        z_sym = ca.SX.sym(BRISTLE_STATE) if self.law_names else None
+        if z_sym is not None:
+            states.append((BRISTLE_STATE, z_sym))
 
         s: dict[str, Any] = {"x": xr, "v": vr, "a": ar, "theta": theta, "omega": omega,
                              "internal_resistance_ohm": Ri}
@@ -165,7 +203,13 @@ class BenchModel:
             i = i_sym if i_sym is not None else e / R
         s["i"] = i
         T_b = bearing_friction_Nm(omega, fr)
-        F_ns = nut_friction_N(vr, fr)
+        if z_sym is None:
+            F_ns, z_rate = nut_friction_N(vr, fr), None
+        else:
+            sig0 = plaw["nut_presliding_stiffness_N_per_m"]
+            z_rate = bristle_rate(z_sym, vr, nut_static_slope(vr, fr), sig0)
+            F_ns = presliding_force(z_sym, z_rate, vr, sig0,
+                                    plaw["nut_presliding_damping_Ns_per_m"], fr[3])
         tau_extra = sum((c.rotor_torque(s, pc) for c in self.components), ca.SX(0))
         f_extra = sum((c.rod_force(s, pc) for c in self.components), ca.SX(0))
         rates: dict[str, Any] = {}
@@ -177,6 +221,8 @@ class BenchModel:
             rates.update(zip(c.states, rc))
         if i_sym is not None:
             rates["current_A"] = (e - R * i_sym) / L
+        if z_rate is not None:
+            rates[BRISTLE_STATE] = z_rate
         if self.transmission is not None:
             f_t = self.transmission.coupling_force(s, pc)
             rates["rotor_angle_rad"] = omega
@@ -199,11 +245,15 @@ class BenchModel:
         comp_offset = prig["offset_N"] * vr if not self.generator else 0.0
         if i_sym is not None:
             stored += 0.5 * L * i_sym ** 2
+        friction_power = F_ns * vr + T_b * omega
+        if z_sym is not None:  # the bristle spring stores ½ σ₀ z², it does not dissipate it
+            stored += 0.5 * plaw["nut_presliding_stiffness_N_per_m"] * z_sym ** 2
+            friction_power -= plaw["nut_presliding_stiffness_N_per_m"] * z_sym * z_rate
         for c in self.components:
             stored += c.stored_energy(s, pc)
         comp_diss = sum((c.dissipated_power(s, pc) for c in self.components), ca.SX(0))
         comp_diss += tau_extra * omega + f_extra * vr + comp_offset
-        energy = ca.vertcat(force * vr, Re * i ** 2, Ri * i ** 2, F_ns * vr + T_b * omega,
+        energy = ca.vertcat(force * vr, Re * i ** 2, Ri * i ** 2, friction_power,
                             comp_diss, stored)
 
         self.state_names = [n for n, _ in states]
@@ -224,9 +274,11 @@ class BenchModel:
         """Assemble ``p``; component parameters default to their ParamSpec defaults.
 
         For ``generator=False`` ``effects`` may also set ``inertia_kg`` and
-        ``offset_N`` (defaults 0)."""
+        ``offset_N`` (defaults 0); with ``friction_law="lugre"`` σ₀ and σ₁ (defaults
+        their declared typical values)."""
         friction = friction or FrictionParams()
         values = {n: 0.0 for n in self.rig_names}
+        values.update({n: PARAMETERS[n].typical for n in self.law_names})
         values.update({q.name: q.default for q in self.param_specs.values()})
         for k, v in (effects or {}).items():
             if k not in values:
@@ -239,7 +291,7 @@ class BenchModel:
 
     def initial_state(self, u0: Sequence[float], p: Sequence[float]) -> np.ndarray:
         """A consistent initial state: rotor following the rod, current at its
-        quasi-static value e/R."""
+        quasi-static value e/R, bristle at its steady state s(v)/σ₀."""
         h = self.harvester
         r = h.lead_m_per_rad
         out = []
@@ -251,11 +303,15 @@ class BenchModel:
                 out.append(u0[0] / r)
             elif n == "rotor_speed_rad_per_s":
                 out.append(u0[1] / r)
+            elif n == BRISTLE_STATE:
+                sig0 = p[self.param_names.index("nut_presliding_stiffness_N_per_m")]
+                out.append(float(nut_static_slope(float(u0[1]), p[1:9])) * u0[1] / sig0)
             else:  # component states start at rest
                 out.append(0.0)
         return np.array(out, dtype=float)
 
     def __repr__(self) -> str:
         gen = "" if self.generator else ", generator=False"
+        gen += "" if self.friction_law == "static" else f", friction_law={self.friction_law!r}"
         return f"BenchModel(components={self.components!r}, states={self.state_names}{gen})"
 
