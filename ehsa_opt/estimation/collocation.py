@@ -25,12 +25,12 @@ from ..physics.bench_model import BRISTLE_STATE, BenchModel
 
 __all__ = ["Block", "radau_block", "theta_block", "given_block", "build_block_symbols",
            "model_key", "states_depend_on", "integrate_states", "state_map", "radau_tableau",
-           "node_indices", "reversal_indices", "PRESLIDING_SCALE_M", "PRESLIDING_WINDOW_M"]
+           "node_indices", "reversal_indices", "PRESLIDING_SCALE_N", "PRESLIDING_WINDOW_M"]
 
 
-#: Scale of the LuGre bristle deflection in the NLP, m: a presliding displacement F_C/σ₀
-#: of a ball screw (tens of N over 1e5–1e8 N/m: 0.1–500 µm), so the scaled state is O(1).
-PRESLIDING_SCALE_M = 1e-5
+#: Scale of the LuGre bristle force in the NLP, N: a ball screw's Coulomb level (tens of N),
+#: so the scaled state is O(1) whatever σ₀.
+PRESLIDING_SCALE_N = 30.0
 
 
 def model_key(model: BenchModel) -> tuple:
@@ -129,7 +129,7 @@ def state_map(model: BenchModel, u: np.ndarray, load_ohm: float) -> tuple[np.nda
     Current: its quasi-static amplitude; rotor angle and speed through the
     transmission deflection δ = x − rθ and its rate (θ = x/r − δ/r: δ is
     micrometres while θ is tens of radians, which keeps a stiff contact well
-    scaled); the bristle deflection :data:`PRESLIDING_SCALE_M`; other states 1.
+    scaled); the bristle force :data:`PRESLIDING_SCALE_N`; other states 1.
     """
     h = model.harvester
     r = h.lead_m_per_rad
@@ -145,7 +145,7 @@ def state_map(model: BenchModel, u: np.ndarray, load_ohm: float) -> tuple[np.nda
         elif n == "rotor_speed_rad_per_s":
             s[k], off[k] = -1e-2 / r, u[1] / r
         elif n == BRISTLE_STATE:
-            s[k] = PRESLIDING_SCALE_M
+            s[k] = PRESLIDING_SCALE_N
     return s, off
 
 

@@ -32,8 +32,9 @@ exact quasi-static limit).  The equivalent rigid-model force is
 F = m_eq a + K_t i/r + F_ns(v) + T_b(v/r)/r (paper Eq 4).
 
 Friction law (``friction_law``): ``"static"`` (default) F_ns(v) is the Simscape map;
-``"lugre"`` gives the nut–screw contact a bristle state ``bristle_deflection_m`` (z, m)
-whose steady state is that map (:mod:`~ehsa_opt.physics.friction`)::
+``"lugre"`` gives the nut–screw contact a bristle state whose steady state is that map
+(:mod:`~ehsa_opt.physics.friction`), carried as the bristle force ``bristle_force_N``
+(F_b = σ₀ z, N; z the bristle deflection)::
 
     ż = v − σ₀ z / φ(v),     F_ns = σ₀ z + σ₁ ż + f_v v
 
@@ -61,7 +62,7 @@ from .friction import (
     FRICTION_LAWS,
     PRESLIDING_NAMES,
     bearing_friction_Nm,
-    bristle_rate,
+    bristle_force_rate,
     nut_friction_N,
     nut_static_slope,
     presliding_force,
@@ -70,8 +71,8 @@ from .params import FRICTION_NAMES, FrictionParams, HarvesterParams
 
 __all__ = ["BenchModel", "RIG_PARAM_NAMES", "BRISTLE_STATE"]
 
-#: Name of the LuGre bristle deflection state (m).
-BRISTLE_STATE = "bristle_deflection_m"
+#: Name of the LuGre bristle state: the bristle force F_b = σ₀ z (N).
+BRISTLE_STATE = "bristle_force_N"
 
 #: Extra parameters of a rig without generator: rod inertia M (kg) and force offset F_0 (N).
 RIG_PARAM_NAMES: tuple[str, ...] = ("inertia_kg", "offset_N")
@@ -207,7 +208,7 @@ class BenchModel:
             F_ns, z_rate = nut_friction_N(vr, fr), None
         else:
             sig0 = plaw["nut_presliding_stiffness_N_per_m"]
-            z_rate = bristle_rate(z_sym, vr, nut_static_slope(vr, fr), sig0)
+            z_rate = bristle_force_rate(z_sym, vr, nut_static_slope(vr, fr), sig0)
             F_ns = presliding_force(z_sym, z_rate, vr, sig0,
                                     plaw["nut_presliding_damping_Ns_per_m"], fr[3])
         tau_extra = sum((c.rotor_torque(s, pc) for c in self.components), ca.SX(0))
@@ -246,9 +247,9 @@ class BenchModel:
         if i_sym is not None:
             stored += 0.5 * L * i_sym ** 2
         friction_power = F_ns * vr + T_b * omega
-        if z_sym is not None:  # the bristle spring stores ½ σ₀ z², it does not dissipate it
-            stored += 0.5 * plaw["nut_presliding_stiffness_N_per_m"] * z_sym ** 2
-            friction_power -= plaw["nut_presliding_stiffness_N_per_m"] * z_sym * z_rate
+        if z_sym is not None:  # the bristle spring stores ½ σ₀ z² = ½ F_b²/σ₀, not dissipated
+            stored += 0.5 * z_sym ** 2 / plaw["nut_presliding_stiffness_N_per_m"]
+            friction_power -= z_sym * z_rate / plaw["nut_presliding_stiffness_N_per_m"]
         for c in self.components:
             stored += c.stored_energy(s, pc)
         comp_diss = sum((c.dissipated_power(s, pc) for c in self.components), ca.SX(0))
@@ -291,7 +292,7 @@ class BenchModel:
 
     def initial_state(self, u0: Sequence[float], p: Sequence[float]) -> np.ndarray:
         """A consistent initial state: rotor following the rod, current at its
-        quasi-static value e/R, bristle at its steady state s(v)/σ₀."""
+        quasi-static value e/R, bristle force at its steady state s(v)."""
         h = self.harvester
         r = h.lead_m_per_rad
         out = []
@@ -304,8 +305,7 @@ class BenchModel:
             elif n == "rotor_speed_rad_per_s":
                 out.append(u0[1] / r)
             elif n == BRISTLE_STATE:
-                sig0 = p[self.param_names.index("nut_presliding_stiffness_N_per_m")]
-                out.append(float(nut_static_slope(float(u0[1]), p[1:9])) * u0[1] / sig0)
+                out.append(float(nut_static_slope(float(u0[1]), p[1:9])) * u0[1])
             else:  # component states start at rest
                 out.append(0.0)
         return np.array(out, dtype=float)

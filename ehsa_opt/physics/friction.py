@@ -19,6 +19,13 @@ Simscape curve as its steady state.  A bristle deflection z (m) carries the forc
 At steady sliding dz/dt = 0, z = s(u)/σ₀ and F = F(u): the static law is the limit
 σ₀ → ∞ of the dynamic one.  At a reversal the force follows the bristle spring σ₀
 (N/m) over the presliding displacement s/σ₀ instead of jumping.
+
+The state carried is the bristle force F_b = σ₀ z (N), not z: its size (the friction
+level) does not depend on σ₀, so one absolute tolerance (an integrator's, the
+collocation's scaling) fits every σ₀ from 1e4 to 1e10 N/m — z itself spans 1e-9 to
+1e-2 m over that range::
+
+    dF_b/dt = σ₀ (u − F_b / φ(u)),     F = F_b + (σ₁/σ₀) dF_b/dt + f_v u
 """
 
 from __future__ import annotations
@@ -32,7 +39,7 @@ import numpy as np
 from .params import FrictionParams
 
 __all__ = ["simscape_friction", "nut_friction_N", "bearing_friction_Nm", "rod_friction_N",
-           "FRICTION_LAWS", "PRESLIDING_NAMES", "static_slope", "bristle_rate",
+           "FRICTION_LAWS", "PRESLIDING_NAMES", "static_slope", "bristle_force_rate",
            "presliding_force", "nut_static_slope"]
 
 #: Friction laws of the models: ``"static"`` (the Simscape map of the velocity) and
@@ -139,23 +146,23 @@ def static_slope(u: Any, breakaway: Any, coulomb: Any, breakaway_velocity: Any) 
             + coulomb * _tanh_ratio(u / u_coul, symbolic) / u_coul)
 
 
-def bristle_rate(z: Any, u: Any, slope: Any, stiffness: Any) -> Any:
-    """dz/dt = u − σ₀ z / (φ(u) + floor) of the LuGre bristle deflection z (m/s).
+def bristle_force_rate(force: Any, u: Any, slope: Any, stiffness: Any) -> Any:
+    """dF_b/dt = σ₀ (u − F_b / (φ(u) + floor)) of the LuGre bristle force F_b = σ₀ z (N/s).
 
     Parameters
     ----------
-    z : bristle deflection, m
+    force : bristle force F_b, N
     u : sliding velocity, m/s
     slope : φ(u) from :func:`static_slope`, N s/m
     stiffness : σ₀, N/m
     """
-    return u - stiffness * z / (slope + SLOPE_FLOOR_NS_PER_M)
+    return stiffness * (u - force / (slope + SLOPE_FLOOR_NS_PER_M))
 
 
-def presliding_force(z: Any, z_rate: Any, u: Any, stiffness: Any, damping: Any,
+def presliding_force(force: Any, force_rate: Any, u: Any, stiffness: Any, damping: Any,
                      viscous: Any) -> Any:
-    """LuGre friction force σ₀ z + σ₁ dz/dt + f_v u, N."""
-    return stiffness * z + damping * z_rate + viscous * u
+    """LuGre friction force σ₀ z + σ₁ dz/dt + f_v u = F_b + (σ₁/σ₀) dF_b/dt + f_v u, N."""
+    return force + damping / stiffness * force_rate + viscous * u
 
 
 def nut_static_slope(v_m_s: Any, friction: FrictionParams | Any) -> Any:
