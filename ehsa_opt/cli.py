@@ -286,7 +286,7 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--lenient", action="store_true",
                    help="use data whose signals contradict bench.toml (warnings, not errors)")
     i.add_argument("--friction-law", choices=FRICTION_LAWS, default="static",
-                   help="nut friction law: the static Simscape map or the same map as the "
+                   help="friction law: the static Simscape map or the same map as the "
                         "steady state of a LuGre bristle (presliding) (default static)")
     i.set_defaults(func=_cmd_identify)
     _writes_folder(i, "identification.json")

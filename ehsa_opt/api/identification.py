@@ -135,7 +135,7 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
     progress : callable, optional
         Called with the number of finished per-test fits.
     friction_law : {"static", "lugre"}
-        The nut friction law: the Simscape map of the velocity, or the same map as the
+        The friction law: the Simscape map of the velocity, or the same map as the
         steady state of a LuGre bristle (presliding; σ₀ and σ₁ identified too).
 
     Returns

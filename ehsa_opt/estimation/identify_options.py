@@ -45,8 +45,8 @@ IDENTIFY_PARAMETERS: dict[str, Parameter] = override(
     "5 mm (a stroke, not presliding) and one above 1e9 N/m over less than 0.1 um (nothing a "
     "bench resolves); the bristle damping stays below 1e5 N s/m (a 1 kHz corner on a 1e9 N/m "
     "bristle)",
-    {"nut_presliding_stiffness_N_per_m": (1e4, 1e9),
-     "nut_presliding_damping_Ns_per_m": (0.0, 1e5)},
+    {"presliding_stiffness_N_per_m": (1e4, 1e9),
+     "presliding_damping_Ns_per_m": (0.0, 1e5)},
     base=override(
         "identification",
         "without bounds the unmodelled backlash of the embedded data drives Stribeck bumps to "

@@ -73,7 +73,7 @@ class IdentificationReport:
     starts : int
         Multistart points per test.
     friction_law : str
-        The nut friction law of the fits (``"static"`` or ``"lugre"``).
+        The friction law of the fits (``"static"`` or ``"lugre"``).
     """
 
     data: BenchData

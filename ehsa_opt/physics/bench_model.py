@@ -32,16 +32,19 @@ exact quasi-static limit).  The equivalent rigid-model force is
 F = m_eq a + K_t i/r + F_ns(v) + T_b(v/r)/r (paper Eq 4).
 
 Friction law (``friction_law``): ``"static"`` (default) F_ns(v) is the Simscape map;
-``"lugre"`` gives the nut–screw contact a bristle state whose steady state is that map
+``"lugre"`` gives the friction a bristle state whose steady state is that map
 (:mod:`~ehsa_opt.physics.friction`), carried as the bristle force ``bristle_force_N``
 (F_b = σ₀ z, N; z the bristle deflection)::
 
-    ż = v − σ₀ z / φ(v),     F_ns = σ₀ z + σ₁ ż + f_v v
+    ż = v − σ₀ z / φ(v),     F_fr = σ₀ z + σ₁ ż + f_v v
 
-with σ₀, σ₁ the parameters ``nut_presliding_stiffness_N_per_m`` and
-``nut_presliding_damping_Ns_per_m``.  The bearing friction keeps its static map: on a
-rigid bench the nut/bearing split is not identifiable, so one bristle carries the
-presliding of the rod's friction.
+with σ₀, σ₁ the parameters ``presliding_stiffness_N_per_m`` and
+``presliding_damping_Ns_per_m``.  On a rigid transmission the bristle carries the rod's
+whole friction, F_ns(v) + T_b(v/r)/r: φ = φ_ns(v) + φ_b(v/r)/r², f_v + t_v/r² (the
+nut/bearing split is not identifiable there, and a bristle on the nut alone lets a fit
+move the friction to the bearing until the bristle's rate σ₀/φ diverges).  With a
+transmission component the bristle is the nut's and the bearing keeps its static map on
+the rotor speed.
 
 Parameters are a flat vector ``p`` in :attr:`BenchModel.param_names` order:
 ``load_ohm``, the eight friction parameter names, then (``generator=False``
@@ -62,6 +65,7 @@ from .friction import (
     FRICTION_LAWS,
     PRESLIDING_NAMES,
     bearing_friction_Nm,
+    bearing_static_slope,
     bristle_force_rate,
     nut_friction_N,
     nut_static_slope,
@@ -207,10 +211,15 @@ class BenchModel:
         if z_sym is None:
             F_ns, z_rate = nut_friction_N(vr, fr), None
         else:
-            sig0 = plaw["nut_presliding_stiffness_N_per_m"]
-            z_rate = bristle_force_rate(z_sym, vr, nut_static_slope(vr, fr), sig0)
-            F_ns = presliding_force(z_sym, z_rate, vr, sig0,
-                                    plaw["nut_presliding_damping_Ns_per_m"], fr[3])
+            slope, viscous = nut_static_slope(vr, fr), fr[3]
+            if self.transmission is None:  # rigid: one bristle for the rod's whole friction
+                slope = slope + bearing_static_slope(omega, fr) / r ** 2
+                viscous = viscous + fr[7] / r ** 2
+                T_b = ca.SX(0)
+            sig0 = plaw["presliding_stiffness_N_per_m"]
+            z_rate = bristle_force_rate(z_sym, vr, slope, sig0)
+            F_ns = presliding_force(z_sym, z_rate, vr, sig0, plaw["presliding_damping_Ns_per_m"],
+                                    viscous)
         tau_extra = sum((c.rotor_torque(s, pc) for c in self.components), ca.SX(0))
         f_extra = sum((c.rod_force(s, pc) for c in self.components), ca.SX(0))
         rates: dict[str, Any] = {}
@@ -248,8 +257,8 @@ class BenchModel:
             stored += 0.5 * L * i_sym ** 2
         friction_power = F_ns * vr + T_b * omega
         if z_sym is not None:  # the bristle spring stores ½ σ₀ z² = ½ F_b²/σ₀, not dissipated
-            stored += 0.5 * z_sym ** 2 / plaw["nut_presliding_stiffness_N_per_m"]
-            friction_power -= z_sym * z_rate / plaw["nut_presliding_stiffness_N_per_m"]
+            stored += 0.5 * z_sym ** 2 / plaw["presliding_stiffness_N_per_m"]
+            friction_power -= z_sym * z_rate / plaw["presliding_stiffness_N_per_m"]
         for c in self.components:
             stored += c.stored_energy(s, pc)
         comp_diss = sum((c.dissipated_power(s, pc) for c in self.components), ca.SX(0))
@@ -305,7 +314,10 @@ class BenchModel:
             elif n == "rotor_speed_rad_per_s":
                 out.append(u0[1] / r)
             elif n == BRISTLE_STATE:
-                out.append(float(nut_static_slope(float(u0[1]), p[1:9])) * u0[1])
+                slope = float(nut_static_slope(float(u0[1]), p[1:9]))
+                if self.transmission is None:
+                    slope += float(bearing_static_slope(float(u0[1]) / r, p[1:9])) / r ** 2
+                out.append(slope * u0[1])
             else:  # component states start at rest
                 out.append(0.0)
         return np.array(out, dtype=float)

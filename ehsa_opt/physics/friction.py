@@ -40,16 +40,16 @@ from .params import FrictionParams
 
 __all__ = ["simscape_friction", "nut_friction_N", "bearing_friction_Nm", "rod_friction_N",
            "FRICTION_LAWS", "PRESLIDING_NAMES", "static_slope", "bristle_force_rate",
-           "presliding_force", "nut_static_slope"]
+           "presliding_force", "nut_static_slope", "bearing_static_slope"]
 
 #: Friction laws of the models: ``"static"`` (the Simscape map of the velocity) and
 #: ``"lugre"`` (the same map as the steady state of a LuGre bristle state).
 FRICTION_LAWS: tuple[str, ...] = ("static", "lugre")
-#: Parameters of the LuGre nut friction (declared in
+#: Parameters of the LuGre friction at the rod (declared in
 #: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`): bristle stiffness σ₀ (N/m) and
 #: bristle damping σ₁ (N s/m).
-PRESLIDING_NAMES: tuple[str, ...] = ("nut_presliding_stiffness_N_per_m",
-                                     "nut_presliding_damping_Ns_per_m")
+PRESLIDING_NAMES: tuple[str, ...] = ("presliding_stiffness_N_per_m",
+                                     "presliding_damping_Ns_per_m")
 #: Below this |u/u_Coul| the ratio tanh(x)/x takes its Taylor series (exact to 1e-19).
 _TAYLOR_BELOW = 1e-3
 #: Floor added to φ(u), N s/m: keeps the bristle rate finite for a frictionless law
@@ -169,3 +169,9 @@ def nut_static_slope(v_m_s: Any, friction: FrictionParams | Any) -> Any:
     """φ(v) of the nut–screw law (N s/m), see :func:`static_slope`."""
     p = friction.as_array() if isinstance(friction, FrictionParams) else friction
     return static_slope(v_m_s, p[0], p[1], p[2])
+
+
+def bearing_static_slope(omega_rad_s: Any, friction: FrictionParams | Any) -> Any:
+    """φ(ω) of the bearing law (N m s/rad), see :func:`static_slope`."""
+    p = friction.as_array() if isinstance(friction, FrictionParams) else friction
+    return static_slope(omega_rad_s, p[4], p[5], p[6])
