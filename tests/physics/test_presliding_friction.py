@@ -30,8 +30,8 @@ def _rod_model() -> BenchModel:
 
 
 def _p(model: BenchModel, sigma0: float, sigma1: float = 500.0) -> np.ndarray:
-    return model.param_vector(1.0, FR, {"nut_presliding_stiffness_N_per_m": sigma0,
-                                        "nut_presliding_damping_Ns_per_m": sigma1})
+    return model.param_vector(1.0, FR, {"presliding_stiffness_N_per_m": sigma0,
+                                        "presliding_damping_Ns_per_m": sigma1})
 
 
 def test_static_slope_is_the_static_law_over_velocity_and_finite_at_rest() -> None:
