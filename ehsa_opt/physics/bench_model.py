@@ -207,19 +207,7 @@ class BenchModel:
         else:
             i = i_sym if i_sym is not None else e / R
         s["i"] = i
-        T_b = bearing_friction_Nm(omega, fr)
-        if z_sym is None:
-            F_ns, z_rate = nut_friction_N(vr, fr), None
-        else:
-            slope, viscous = nut_static_slope(vr, fr), fr[3]
-            if self.transmission is None:  # rigid: one bristle for the rod's whole friction
-                slope = slope + bearing_static_slope(omega, fr) / r ** 2
-                viscous = viscous + fr[7] / r ** 2
-                T_b = ca.SX(0)
-            sig0 = plaw["presliding_stiffness_N_per_m"]
-            z_rate = bristle_force_rate(z_sym, vr, slope, sig0)
-            F_ns = presliding_force(z_sym, z_rate, vr, sig0, plaw["presliding_damping_Ns_per_m"],
-                                    viscous)
+        F_ns, T_b, z_rate = self._friction(vr, omega, fr, plaw, z_sym)
         tau_extra = sum((c.rotor_torque(s, pc) for c in self.components), ca.SX(0))
         f_extra = sum((c.rod_force(s, pc) for c in self.components), ca.SX(0))
         rates: dict[str, Any] = {}
@@ -273,6 +261,26 @@ class BenchModel:
         self.ode = ca.Function("bench_ode", args, [xdot], names, ["xdot"])
         self.outputs = ca.Function("bench_out", args, [ca.vertcat(force, volt)], names, ["y"])
         self.energy = ca.Function("bench_energy", args, [energy], names, ["e"])
+
+    def _friction(self, vr: Any, omega: Any, fr: list, plaw: dict,
+                  z_sym: Any) -> tuple[Any, Any, Any]:
+        """Nut force F_ns (N), bearing torque T_b (N m) and the bristle-force rate (N/s,
+        None under the static law).  On a rigid transmission the bristle carries the
+        rod's whole friction and T_b is 0."""
+        T_b = bearing_friction_Nm(omega, fr)
+        if z_sym is None:
+            return nut_friction_N(vr, fr), T_b, None
+        r = self.harvester.lead_m_per_rad
+        slope, viscous = nut_static_slope(vr, fr), fr[3]
+        if self.transmission is None:
+            slope = slope + bearing_static_slope(omega, fr) / r ** 2
+            viscous = viscous + fr[7] / r ** 2
+            T_b = ca.SX(0)
+        sig0 = plaw["presliding_stiffness_N_per_m"]
+        z_rate = bristle_force_rate(z_sym, vr, slope, sig0)
+        F_ns = presliding_force(z_sym, z_rate, vr, sig0, plaw["presliding_damping_Ns_per_m"],
+                                viscous)
+        return F_ns, T_b, z_rate
 
     # ------------------------------------------------------------------ helpers
     @property
