@@ -72,6 +72,7 @@ if TYPE_CHECKING:  # the names below, for static tools; at run time each is impo
     from .physics import COMPONENTS, BenchModel
     from .physics.bench_sim import BenchSimulation, simulate_bench
     from .physics.friction import (
+                         FRICTION_LAWS,
                          bearing_friction_Nm,
                          nut_friction_N,
                          rod_friction_N,
@@ -102,7 +103,7 @@ __all__ = [*ENTRY_POINTS, "DesignProblem", "DesignSpace", "DesignResult", "Sweep
            "BenchDataError", "ParameterError",
            "BenchModel", "BenchSimulation", "simulate_bench", "SineMotion", "SampledMotion",
            "HarvesterParams", "FrictionParams", "VehicleParams", "RoadParams",
-           "FRICTION_NAMES", "FRICTION_RANGES", "simscape_friction", "nut_friction_N",
+           "FRICTION_NAMES", "FRICTION_RANGES", "FRICTION_LAWS", "simscape_friction", "nut_friction_N",
            "bearing_friction_Nm", "rod_friction_N", "__version__"]
 
 #: Where each public name lives (imported on first use: ``import ehsa_opt`` stays light,
@@ -119,8 +120,8 @@ _HOMES = {
     **dict.fromkeys(("DesignProblem", "DesignSpace"), ".design.problem"),
     **dict.fromkeys(("BenchModel", "COMPONENTS"), ".physics"),
     **dict.fromkeys(("BenchSimulation", "simulate_bench"), ".physics.bench_sim"),
-    **dict.fromkeys(("bearing_friction_Nm", "nut_friction_N", "rod_friction_N",
-                     "simscape_friction"), ".physics.friction"),
+    **dict.fromkeys(("FRICTION_LAWS", "bearing_friction_Nm", "nut_friction_N",
+                     "rod_friction_N", "simscape_friction"), ".physics.friction"),
     **dict.fromkeys(("SampledMotion", "SineMotion"), ".physics.motion"),
     **dict.fromkeys(("FRICTION_NAMES", "FRICTION_RANGES", "FrictionParams", "HarvesterParams",
                      "ParameterError", "RoadParams", "VehicleParams"), ".physics.params"),

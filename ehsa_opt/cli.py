@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 from typing import Callable, Sequence
 
-from . import BenchDataError, ParameterError
+from . import FRICTION_LAWS, BenchDataError, ParameterError
 from .utils.cli_args import (  # argument types and up-front checks
     NON_NEGATIVE as _NON_NEGATIVE,
     POSITIVE as _POSITIVE,
@@ -130,7 +130,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     data = load_bench(args.data_dir, lenient=args.lenient)  # refuses bad data before solving
     with progress_bar(total=len(data.tests), desc="identify", unit="test") as bar:
         result = identify(data, starts=args.starts, jobs=args.jobs, seed=args.seed,
-                          progress=lambda k: bar.update(1))
+                          progress=lambda k: bar.update(1), friction_law=args.friction_law)
     out = Path(args.out)
     result.save(out)
     print(result.summary(out / "identification.json"))
@@ -292,6 +292,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seed of the start draws (default 0)")
     i.add_argument("--lenient", action="store_true",
                    help="use data whose signals contradict bench.toml (warnings, not errors)")
+    i.add_argument("--friction-law", choices=FRICTION_LAWS, default="static",
+                   help="friction law: the static Simscape map or the same map as the "
+                        "steady state of a LuGre bristle (presliding) (default static)")
     i.set_defaults(func=_cmd_identify)
     _writes_folder(i, "identification.json")
     pt = sub.add_parser("plan-tests", help="propose bench tests where the road puts the strokes")

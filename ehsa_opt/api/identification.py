@@ -115,7 +115,8 @@ class IdentificationResult:
 @one_blas_thread
 def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, seed: int = 0,
              lenient: bool = False,
-             progress: Callable[[int], None] | None = None) -> IdentificationResult:
+             progress: Callable[[int], None] | None = None,
+             friction_law: str = "static") -> IdentificationResult:
     """Identify the friction of every test of a bench data set; nothing written.
 
     Parameters
@@ -133,6 +134,9 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
         Accept data whose signals contradict ``bench.toml`` (warnings, not errors).
     progress : callable, optional
         Called with the number of finished per-test fits.
+    friction_law : {"static", "lugre"}
+        The friction law: the Simscape map of the velocity, or the same map as the
+        steady state of a LuGre bristle (presliding; σ₀ and σ₁ identified too).
 
     Returns
     -------
@@ -141,7 +145,8 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
     if not isinstance(data, BenchData):
         data = load_bench(data, lenient=lenient)
     logger.info("identify: %d tests, %d starts each", len(data.tests), starts)
-    rep = _identify(data, starts=starts, jobs=jobs, seed=seed, progress=progress)
+    rep = _identify(data, starts=starts, jobs=jobs, seed=seed, progress=progress,
+                    friction_law=friction_law)
     result = IdentificationResult(identification_dict(rep), rep)
     if not result.success:
         logger.warning("warning: identify: no test converged; see the per-test messages")

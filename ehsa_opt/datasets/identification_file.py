@@ -33,6 +33,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..physics.base_parameters import PARAMETERS
+from ..physics.friction import FRICTION_LAWS
 from ..physics.friction import rod_friction_N
 from ..physics.params import (
     FRICTION_NAMES,
@@ -488,6 +489,10 @@ def _check_report_tables(doc: Mapping[str, Any], where: str) -> None:
         _table(doc["identifiable"], f"{where} identifiable")
     for key in ("seconds", "starts_per_test"):
         _number(doc.get(key), f"{where} {key}", lo=0.0, none=True)
+    law = doc.get("friction_law")
+    if law is not None and law not in FRICTION_LAWS:
+        raise _fail(f"{where} friction_law", f"{_shown(law)} is not a friction law (one of "
+                    f"{', '.join(FRICTION_LAWS)})")
 
 
 def _check_fit_fields(t: Mapping[str, Any], w: str, names: tuple[str, ...]) -> None:

@@ -19,6 +19,7 @@ import tomli_w
 
 from ..physics import BenchModel, make_component
 from ..physics.bench_sim import simulate_bench
+from ..physics.friction import PRESLIDING_NAMES
 from ..physics.motion import SineMotion
 from ..physics.params import FrictionParams, HarvesterParams
 from .bench_format import BenchTest, write_bench
@@ -56,6 +57,12 @@ class SyntheticSpec:
     effects : mapping
         Hidden effects: component name → {parameter name: value} (missing
         parameters take the component's defaults).
+    presliding : mapping
+        Empty: the static friction law.  Otherwise the LuGre law
+        (``friction_law="lugre"`` of :class:`~ehsa_opt.physics.bench_model.BenchModel`)
+        with these values of ``presliding_stiffness_N_per_m`` (σ₀, N/m) and
+        ``presliding_damping_Ns_per_m`` (σ₁, N s/m); one left out takes its declared
+        typical value.
     frequencies_hz, loads_ohm : sequences
         The test matrix (all combinations).
     amplitude_m : float
@@ -77,6 +84,7 @@ class SyntheticSpec:
     harvester: HarvesterParams = field(default_factory=HarvesterParams)
     friction: FrictionParams = PROTOTYPE_FRICTION
     effects: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    presliding: Mapping[str, float] = field(default_factory=dict)
     frequencies_hz: Sequence[float] = TEST_FREQUENCIES_HZ
     loads_ohm: Sequence[float] = TEST_LOADS_OHM
     amplitude_m: float = TEST_AMPLITUDE_M
@@ -108,6 +116,10 @@ class SyntheticSpec:
             raise ValueError("SyntheticSpec: protocols must be Protocol objects")
         if self.frequencies_hz and (not self.loads_ohm or any(r <= 0 for r in self.loads_ohm)):
             raise ValueError("SyntheticSpec: loads_ohm must be positive")
+        bad = [k for k in self.presliding if k not in PRESLIDING_NAMES]
+        if bad:
+            raise ValueError(f"SyntheticSpec: presliding has unknown parameter(s) "
+                             f"{', '.join(bad)} (known: {', '.join(PRESLIDING_NAMES)})")
 
     @property
     def sine_amplitudes_m(self) -> tuple[float, ...]:
@@ -120,7 +132,8 @@ class SyntheticSpec:
 
     def model(self) -> BenchModel:
         comps = [make_component(name) for name in self.effects]
-        return BenchModel(self.harvester, comps)
+        return BenchModel(self.harvester, comps,
+                          friction_law="lugre" if self.presliding else "static")
 
 
 def generate_bench_tests(spec: SyntheticSpec, progress: Any = None) -> list[BenchTest]:
@@ -134,6 +147,7 @@ def generate_bench_tests(spec: SyntheticSpec, progress: Any = None) -> list[Benc
     """
     model = spec.model()
     effect_values = {k: v for params in spec.effects.values() for k, v in params.items()}
+    effect_values.update(spec.presliding)
     rng = np.random.default_rng(spec.seed)
     dt = 1.0 / spec.sample_rate_hz
     tests = []
@@ -191,10 +205,14 @@ def _truth_toml(spec: SyntheticSpec, command: str) -> str:
                       "sample_rate_hz": spec.sample_rate_hz, "warm_up_cycles": 1},
         "friction": spec.friction.as_dict(),
         "effects": effects,
+        "friction_law": model.friction_law,
         "noise": {"force_N": spec.noise_force_N, "voltage_V": spec.noise_voltage_V,
                   "displacement_m": spec.noise_displacement_m},
         "model": {"states": model.state_names},
     }
+    if spec.presliding:
+        p = model.param_vector(1.0, spec.friction, spec.presliding)
+        doc["presliding"] = {n: float(p[model.param_names.index(n)]) for n in model.law_names}
     if spec.amplitudes_m:
         doc["generator"]["sine_amplitudes_m"] = list(spec.sine_amplitudes_m)
     if spec.protocols:

@@ -21,18 +21,23 @@ from typing import Any, Callable, Sequence
 import casadi as ca
 import numpy as np
 
-from ..physics.bench_model import BenchModel
+from ..physics.bench_model import BRISTLE_STATE, BenchModel
 
 __all__ = ["Block", "radau_block", "theta_block", "given_block", "build_block_symbols",
            "model_key", "states_depend_on", "integrate_states", "state_map", "radau_tableau",
-           "node_indices"]
+           "node_indices", "reversal_indices", "PRESLIDING_SCALE_N", "PRESLIDING_WINDOW_M"]
+
+
+#: Scale of the LuGre bristle force in the NLP, N: a ball screw's Coulomb level (tens of N),
+#: so the scaled state is O(1) whatever σ₀.
+PRESLIDING_SCALE_N = 30.0
 
 
 def model_key(model: BenchModel) -> tuple:
     """Hashable identity of a bench model by value (harvester, components, rig kind)."""
     comps = tuple((type(c).__name__, tuple(sorted((k, repr(v)) for k, v in vars(c).items())))
                   for c in model.components)
-    return (model.generator, model.harvester, comps)
+    return (model.generator, model.harvester, comps, model.friction_law)
 
 
 def states_depend_on(model: BenchModel, names: Sequence[str]) -> bool:
@@ -47,6 +52,42 @@ def states_depend_on(model: BenchModel, names: Sequence[str]) -> bool:
     f = model.ode(x, u, p)
     idx = [model.param_names.index(n) for n in names]
     return any(ca.depends_on(f, p[i]) for i in idx)
+
+
+#: Rod travel on each side of a velocity reversal (m) over which a model with a bristle
+#: state gets a collocation node (and an observation) at every sample: three presliding
+#: lengths F_C/σ₀ of a 100 N contact at 1e6 N/m.  Between reversals the bristle sits on
+#: its slow manifold z = s(v)/σ₀, which the L-stable Radau polynomials follow on the
+#: coarse grid; the fast transient after a reversal needs the samples themselves.
+PRESLIDING_WINDOW_M = 3e-4
+
+
+def reversal_indices(x: np.ndarray, v: np.ndarray, window_m: float, at_most: int) -> np.ndarray:
+    """Sample indices within ``window_m`` of rod travel of a velocity reversal (before or
+    after it), at most ``at_most`` of them (uniformly thinned beyond).
+
+    Parameters
+    ----------
+    x, v : ndarray
+        Rod displacement (m) and velocity (m/s) on the samples.
+    window_m : float
+        Travel on each side of a reversal, m.
+    at_most : int
+        Largest number of indices returned.
+    """
+    x, v = np.asarray(x, float), np.asarray(v, float)
+    rev = np.flatnonzero(np.signbit(v[1:]) != np.signbit(v[:-1])) + 1
+    if rev.size == 0 or at_most < 1:
+        return np.zeros(0, dtype=int)
+    k = np.arange(x.size)
+    after = np.searchsorted(rev, k, side="right") - 1     # last reversal at or before k
+    before = np.minimum(after + 1, rev.size - 1)          # next reversal after k
+    d_prev = np.where(after >= 0, np.abs(x - x[rev[np.maximum(after, 0)]]), np.inf)
+    d_next = np.where(rev[before] > k, np.abs(x - x[rev[before]]), np.inf)
+    idx = np.flatnonzero(np.minimum(d_prev, d_next) < window_m)
+    if idx.size > at_most:
+        idx = idx[np.unique(np.round(np.linspace(0, idx.size - 1, at_most)).astype(int))]
+    return idx
 
 
 def node_indices(n: int, max_intervals: int) -> np.ndarray:
@@ -88,7 +129,7 @@ def state_map(model: BenchModel, u: np.ndarray, load_ohm: float) -> tuple[np.nda
     Current: its quasi-static amplitude; rotor angle and speed through the
     transmission deflection δ = x − rθ and its rate (θ = x/r − δ/r: δ is
     micrometres while θ is tens of radians, which keeps a stiff contact well
-    scaled); other states 1.
+    scaled); the bristle force :data:`PRESLIDING_SCALE_N`; other states 1.
     """
     h = model.harvester
     r = h.lead_m_per_rad
@@ -103,6 +144,8 @@ def state_map(model: BenchModel, u: np.ndarray, load_ohm: float) -> tuple[np.nda
             s[k], off[k] = -1e-4 / r, u[0] / r
         elif n == "rotor_speed_rad_per_s":
             s[k], off[k] = -1e-2 / r, u[1] / r
+        elif n == BRISTLE_STATE:
+            s[k] = PRESLIDING_SCALE_N
     return s, off
 
 

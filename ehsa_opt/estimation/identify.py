@@ -61,6 +61,7 @@ import numpy as np
 from ..datasets.bench_format import BenchData, BenchTest, load_bench
 from ..physics.bench_model import BenchModel
 from ..physics.components import Component
+from ..physics.friction import FRICTION_LAWS
 from ..physics.motion import SampledMotion
 from ..physics.params import (
     FRICTION_NAMES,
@@ -68,7 +69,9 @@ from ..physics.params import (
 )
 from . import core
 from .collocation import (
+    PRESLIDING_WINDOW_M,
     given_block,
+    reversal_indices,
     integrate_states,
     node_indices,
     radau_block,
@@ -116,7 +119,7 @@ def _bounds(model: BenchModel, name: str) -> tuple[float, float, float]:
 # ====================================================================== fit
 def _default_free(model: BenchModel, has_generator: bool, fixed: Mapping[str, Any]) -> list[str]:
     names = [n for n in model.param_names if n != "load_ohm"]
-    if not has_generator:  # friction reported under the nut_* names; no bearings
+    if not has_generator or model.friction_law != "static":  # rod friction: the nut_* names
         names = [n for n in names if n not in _BEARING]
     return [n for n in names if n not in fixed]
 
@@ -173,7 +176,15 @@ def _setup(tests: list[BenchTest], model: BenchModel, has_generator: bool, free_
         obs = np.arange(ntrim, test.n_samples - ntrim)
         obs = obs[est.resolved[obs]]  # corners the spline cannot follow stay out
         resolved.append(est.resolved)
+        nodes = node_indices(test.n_samples, opt.max_intervals)
         obs = obs[node_indices(obs.size, opt.max_samples - 1)]
+        if model.friction_law != "static":  # the bristle's fast transients at reversals
+            xv = motion.evaluate(test.time_s)
+            near = reversal_indices(xv[0], xv[1], PRESLIDING_WINDOW_M, opt.max_intervals)
+            nodes = np.union1d(nodes, near)
+            keep = np.zeros(test.n_samples, bool)
+            keep[ntrim:test.n_samples - ntrim] = True
+            obs = np.union1d(obs, near[keep[near] & est.resolved[near]])
         sig = [test.force_N] + ([test.voltage_V] if (test.voltage_V is not None
                                                      and has_generator) else [])
         ym = np.array([s[obs] for s in sig])
@@ -183,9 +194,7 @@ def _setup(tests: list[BenchTest], model: BenchModel, has_generator: bool, free_
             blk = given_block(model, X[:, obs], motion.evaluate(test.time_s[obs]), ym, wy, pb)
             full.append(X)
         else:
-            blk = radau_block(model, test.time_s, motion,
-                              node_indices(test.n_samples, opt.max_intervals), obs, ym, wy, pb,
-                              opt.degree)
+            blk = radau_block(model, test.time_s, motion, nodes, obs, ym, wy, pb, opt.degree)
             full.append(None)
         motions.append(motion)
         blocks.append(blk)
@@ -252,8 +261,8 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
               has_generator: bool = True, components: Sequence[Component] = (),
               free: Sequence[str] | None = None, fixed: Mapping[str, Any] | None = None,
               starts: Starts = 4, seed: int = 0, jobs: int = 1,
-              options: IdentifyOptions | None = None, identifiability: bool = True
-              ) -> FitResult:
+              options: IdentifyOptions | None = None, identifiability: bool = True,
+              friction_law: str = "static") -> FitResult:
     """Identify ONE parameter set for all the given tests (per-test fit: one test).
 
     Parameters
@@ -281,6 +290,11 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
         ``options.path`` picks the rigid or collocation path (default automatic).
     identifiability : bool
         Compute the Fisher-information analysis at the optimum.
+    friction_law : {"static", "lugre"}
+        The friction law (:class:`~ehsa_opt.physics.bench_model.BenchModel`); with
+        ``"lugre"`` the bristle stiffness σ₀ and damping σ₁ are fitted too, the bristle
+        deflection is a collocation state, and the collocation nodes sit on every sample
+        near the velocity reversals (:data:`~.collocation.PRESLIDING_WINDOW_M`).
 
     Returns
     -------
@@ -298,7 +312,8 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
                          f"has_generator=False for a rig without generator")
     options = options or IdentifyOptions()
     fixed = dict(fixed or {})
-    model = BenchModel(harvester, components, generator=has_generator)
+    model = BenchModel(harvester, components, generator=has_generator,
+                       friction_law=friction_law)
     known = [n for n in model.param_names if n != "load_ohm"]
     for n, v in fixed.items():
         if n not in known:
@@ -306,7 +321,11 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
                              f"{', '.join(known)})")
         if isinstance(v, str) and v not in known:
             raise ValueError(f"fit_tests: '{n}' tied to unknown parameter '{v}'")
-    if not has_generator:
+    if not has_generator or friction_law != "static":
+        # without generator there are no bearings; under a bristle law one Simscape curve
+        # (the nut's names) carries the rod's friction: the nut/bearing split is not
+        # identifiable on a rigid bench, and with both free a fit moves the friction
+        # between them until the bristle's rate σ₀/φ(v) diverges
         for n in _BEARING:
             fixed.setdefault(n, 1.0 if "velocity" in n else 0.0)
     free_names = list(free) if free is not None else _default_free(model, has_generator, fixed)
@@ -357,7 +376,7 @@ def _predictions(su: _Setup, params: Mapping[str, float]) -> list[Prediction]:
             model, list(su.space.free) + [o for _, o in su.space.ties]):
         return simulate_tests(su.tests, model.harvester, params,
                               has_generator=model.generator, components=model.components,
-                              motions=su.motions)
+                              motions=su.motions, friction_law=model.friction_law)
     out = []
     for test, motion, pb, X in zip(su.tests, su.motions, su.pbases, su.full_states):
         p = np.array([pb[0]] + [params[n] for n in model.param_names[1:]])
@@ -409,10 +428,11 @@ MAX_FORCE_ERROR_PERCENT = 90.0
 
 
 def _fit_one(args: tuple) -> FitResult:
-    test, harvester, has_gen, components, starts, seed, options, fixed = args
+    test, harvester, has_gen, components, starts, seed, options, fixed, law = args
     stroke = float(np.ptp(test.displacement_m))
     fit = fit_tests([test], harvester, has_generator=has_gen, components=components,
-                    starts=starts, seed=seed, jobs=1, options=options, fixed=fixed)
+                    starts=starts, seed=seed, jobs=1, options=options, fixed=fixed,
+                    friction_law=law)
     # IPOPT may converge on data that carry no information; such a fit is a failure
     # (and so stays out of the bounds and friction sets), --lenient or not
     err = fit.force_relative_error_percent
@@ -440,7 +460,7 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
              components: Sequence[Component] = (), holdout: Sequence[str] | None = None,
              progress: Callable[[int], None] | None = None,
              options: IdentifyOptions | None = None, fixed: Mapping[str, Any] | None = None,
-             joint: bool = True) -> IdentificationReport:
+             joint: bool = True, friction_law: str = "static") -> IdentificationReport:
     """The paper's identification procedure on a data directory.
 
     Per test: multistart collocation/IPOPT fit (the paper's steps 1–8); per
@@ -470,6 +490,8 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
     joint : bool
         Run the joint fit (one parameter set, at most 300 objective samples and
         100 intervals per training test, ``min(starts, 2)`` starts).
+    friction_law : {"static", "lugre"}
+        The friction law of every fit (see :func:`fit_tests`).
     """
     if not isinstance(data, BenchData):
         data = load_bench(data)
@@ -477,13 +499,16 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
         raise ValueError(f"identify: starts must be an integer >= 1, got {starts!r}")
     if not (isinstance(jobs, int) and jobs >= 1):
         raise ValueError(f"identify: jobs must be an integer >= 1, got {jobs!r}")
+    if friction_law not in FRICTION_LAWS:
+        raise ValueError(f"identify: friction_law must be one of {', '.join(FRICTION_LAWS)}, "
+                         f"got {friction_law!r}")
     options = options or IdentifyOptions.for_rig(data.has_generator)
     if fixed is None:
         fixed = {} if data.has_generator else {"nut_breakaway_N": "nut_coulomb_N",
                                                "nut_breakaway_velocity_m_per_s": 1e-3}
     t0 = time.perf_counter()
     args = [(t, data.harvester, data.has_generator, list(components), starts, seed + k,
-             options, dict(fixed)) for k, t in enumerate(data.tests)]
+             options, dict(fixed), friction_law) for k, t in enumerate(data.tests)]
     fits: list[FitResult] = []
     if jobs == 1 or len(args) == 1:
         for a in args:
@@ -519,14 +544,15 @@ def identify(data: BenchData | str | Path, *, starts: int = 4, jobs: int = 1, se
                                        max_intervals=min(options.max_intervals, 100))
             jres = fit_tests(train, data.harvester, has_generator=data.has_generator,
                              components=components, starts=max(1, min(starts, 2)), seed=seed,
-                             jobs=jobs, options=jopt, fixed=fixed, identifiability=False)
+                             jobs=jobs, options=jopt, fixed=fixed, identifiability=False,
+                             friction_law=friction_law)
             if jres.success and held:
                 preds = simulate_tests(held, data.harvester, jres.parameters,
                                        has_generator=data.has_generator, components=components,
-                                       options=options)
+                                       options=options, friction_law=friction_law)
                 mass = data.harvester.equivalent_mass_kg() if data.has_generator else None
                 hold_err = test_errors(held, preds, [estimate_motion(t, options, mass).resolved
                                                      for t in held])
     return IdentificationReport(data, fits, bounds, jres, hold_files, hold_err, ident,
-                                time.perf_counter() - t0, starts)
+                                time.perf_counter() - t0, starts, friction_law)
 

@@ -41,11 +41,19 @@ DWELL_THRESHOLD_SIGMA: float = 3.0
 #: friction" stays admissible; the distributor ranges for breakaway velocities).
 IDENTIFY_PARAMETERS: dict[str, Parameter] = override(
     "identification",
-    "without bounds the unmodelled backlash of the embedded data drives Stribeck bumps to "
-    "1000 N at 0.2 m/s, far outside any ball screw: the friction stays inside the "
-    "distributor ranges' upper ends",
-    {n: ((PARAMETERS[n].start[0] if PARAMETERS[n].lower_open else PARAMETERS[n].lower),
-         PARAMETERS[n].start[1]) for n in FRICTION_NAMES})
+    "a presliding stiffness below 1e4 N/m would spread a 50 N contact's transition over "
+    "5 mm (a stroke, not presliding) and one above 1e9 N/m over less than 0.1 um (nothing a "
+    "bench resolves); the bristle damping stays below 1e5 N s/m (a 1 kHz corner on a 1e9 N/m "
+    "bristle)",
+    {"presliding_stiffness_N_per_m": (1e4, 1e9),
+     "presliding_damping_Ns_per_m": (0.0, 1e5)},
+    base=override(
+        "identification",
+        "without bounds the unmodelled backlash of the embedded data drives Stribeck bumps to "
+        "1000 N at 0.2 m/s, far outside any ball screw: the friction stays inside the "
+        "distributor ranges' upper ends",
+        {n: ((PARAMETERS[n].start[0] if PARAMETERS[n].lower_open else PARAMETERS[n].lower),
+             PARAMETERS[n].start[1]) for n in FRICTION_NAMES}))
 
 #: Admissible bounds (lower, upper, scale) of the parameters during identification
 #: (from :data:`IDENTIFY_PARAMETERS`).

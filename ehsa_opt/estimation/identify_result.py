@@ -70,6 +70,10 @@ class IdentificationReport:
     identifiable : dict
         Summary of the identifiability analysis (see :meth:`to_json`).
     seconds : float
+    starts : int
+        Multistart points per test.
+    friction_law : str
+        The friction law of the fits (``"static"`` or ``"lugre"``).
     """
 
     data: BenchData
@@ -81,6 +85,7 @@ class IdentificationReport:
     identifiable: dict
     seconds: float = 0.0
     starts: int = 0
+    friction_law: str = "static"
 
     @property
     def success(self) -> bool:
@@ -116,7 +121,8 @@ class IdentificationReport:
         return json_safe({"data_dir": data_dir, "rig": self.data.rig_name,
                           "has_generator": gen, "tests": tests, "bounds": self.bounds,
                           "identifiable": self.identifiable, "joint_fit": joint,
-                          "seconds": self.seconds, "starts_per_test": self.starts})
+                          "seconds": self.seconds, "starts_per_test": self.starts,
+                          "friction_law": self.friction_law})
 
     def to_json(self) -> str:
         """:meth:`to_dict` as JSON text (reloaded by :meth:`from_json`)."""
@@ -166,7 +172,8 @@ class IdentificationReport:
         return cls(data, fits, {k: [float(x) for x in v] for k, v in doc["bounds"].items()},
                    joint, list(j.get("holdout_files", [r.get("file") for r in held]))
                    if j is not None else [], held, dict(doc["identifiable"]),
-                   float(doc.get("seconds") or 0.0), int(doc.get("starts_per_test") or 0))
+                   float(doc.get("seconds") or 0.0), int(doc.get("starts_per_test") or 0),
+                   str(doc.get("friction_law") or "static"))
 
     @classmethod
     def from_json(cls, text: str | bytes, data: BenchData | None = None,
@@ -205,7 +212,7 @@ class IdentificationReport:
         if not good:
             return {}
         k = good[len(good) // 2]  # representative test: the middle one of the matrix
-        sim = {"has_generator": self.data.has_generator}
+        sim = {"has_generator": self.data.has_generator, "friction_law": self.friction_law}
         pred = simulate_tests([self.data.tests[k]], self.data.harvester,
                               self.fits[k].parameters, **sim)[0]
         held = None

@@ -17,6 +17,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..datasets.bench_format import BenchTest
+from ..physics.base_parameters import PARAMETERS
 from ..physics.bench_model import BenchModel
 from ..physics.bench_sim import simulate_bench
 from ..physics.components import Component
@@ -40,10 +41,12 @@ class Prediction:
 
 def model_defaults(model: BenchModel) -> dict[str, float]:
     """Every parameter of ``model`` at its default: frictionless, the components'
-    defaults, and M = F_0 = 0 on a rig without generator."""
+    defaults, M = F_0 = 0 on a rig without generator, σ₀ and σ₁ of a LuGre law at their
+    declared typical values."""
     d = FrictionParams().as_dict()
     if not model.generator:
         d.update({"inertia_kg": 0.0, "offset_N": 0.0})
+    d.update({n: PARAMETERS[n].typical for n in model.law_names})
     d.update({q.name: q.default for q in model.param_specs.values()})
     return d
 
@@ -58,16 +61,19 @@ def simulate_tests(tests: Sequence[BenchTest], harvester: HarvesterParams,
                    parameters: Mapping[str, float], *, has_generator: bool = True,
                    components: Sequence[Component] = (),
                    options: IdentifyOptions | None = None,
-                   motions: Sequence[SampledMotion] | None = None) -> list[Prediction]:
+                   motions: Sequence[SampledMotion] | None = None,
+                   friction_law: str = "static") -> list[Prediction]:
     """Simulate each test with given parameters on its own time grid.
 
     The rod motion is the smoothing spline of the measured displacement
     (:func:`test_motion`, or ``motions`` when given); missing parameters take
     their defaults (frictionless, component defaults, M = F_0 = 0).  Without
     components the current is integrated by the compiled Radau IIA stepper
-    (:func:`~.collocation.integrate_states`), with components by CVODES.
+    (:func:`~.collocation.integrate_states`), with components or a bristle state
+    (``friction_law="lugre"``, stiff: σ₀/φ(v) up to 1e5–1e7 /s) by CVODES (BDF).
     """
-    model = BenchModel(harvester, components, generator=has_generator)
+    model = BenchModel(harvester, components, generator=has_generator,
+                       friction_law=friction_law)
     base = model_defaults(model)
     unknown = [k for k in parameters if k not in base and k != "load_ohm"]
     if unknown:
@@ -84,7 +90,7 @@ def simulate_tests(tests: Sequence[BenchTest], harvester: HarvesterParams,
             uu = motion.evaluate(test.time_s)
             y = np.array(model.outputs.map(test.n_samples)(np.zeros((0, test.n_samples)), uu, p))
             F, V = y[0], y[1]
-        elif not components:
+        elif not components and model.friction_law == "static":
             # rigid bench: only the winding current, a smooth state — the compiled
             # fixed-step Radau IIA of the fit's rigid path (within 2e-5 of the peak of
             # CVODES at rtol 1e-7 on the embedded tests, 30x faster: a spline motion

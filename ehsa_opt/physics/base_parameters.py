@@ -3,7 +3,8 @@
 A :class:`Parameter` carries its unit, its physical bounds (what any value must satisfy:
 :class:`~ehsa_opt.physics.params.FrictionParams` validates against them), the range
 multistarts draw from, the scale decision variables are divided by and a typical value.
-:data:`PARAMETERS` declares the eight friction parameters and the two rig terms of a rig
+:data:`PARAMETERS` declares the eight friction parameters, the two of the LuGre (presliding)
+nut friction (used by models with ``friction_law="lugre"``) and the two rig terms of a rig
 without generator (moving mass, force offset).
 
 A procedure that needs narrower (or other) limits does not keep a table of its own: it
@@ -120,6 +121,11 @@ PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
        (0.0, 1e4), (0.1, 5.0), 1.0, 1.0, lower_open=True),
     _p("bearing_viscous_Nms_per_rad", "N m s/rad", "bearing viscous coefficient t_v",
        (0.0, 10.0), (1e-6, 1e-4), 1e-5, 3e-5),
+    _p("presliding_stiffness_N_per_m", "N/m", "bristle stiffness sigma_0 of the LuGre friction",
+       (0.0, 1e10), (3e5, 1e7), 1e6, 1e6, lower_open=True,
+       hint="a ball screw's presliding stiffness is 1e5-1e8 N/m"),
+    _p("presliding_damping_Ns_per_m", "N s/m", "bristle damping sigma_1 of the LuGre friction",
+       (0.0, 1e6), (0.0, 3000.0), 1000.0, 500.0),
     _p("inertia_kg", "kg", "moving mass M", (0.0, 1e4), (10.0, 200.0), 100.0, 50.0),
     _p("offset_N", "N", "force offset", (-1e4, 1e4), (-20.0, 20.0), 10.0, 0.0),
 )}

@@ -31,9 +31,25 @@ rotor speed.  With L_i = 0 the current is algebraic, i = e/R (the
 exact quasi-static limit).  The equivalent rigid-model force is
 F = m_eq a + K_t i/r + F_ns(v) + T_b(v/r)/r (paper Eq 4).
 
+Friction law (``friction_law``): ``"static"`` (default) F_ns(v) is the Simscape map;
+``"lugre"`` gives the friction a bristle state whose steady state is that map
+(:mod:`~ehsa_opt.physics.friction`), carried as the bristle force ``bristle_force_N``
+(F_b = σ₀ z, N; z the bristle deflection)::
+
+    ż = v − σ₀ z / φ(v),     F_fr = σ₀ z + σ₁ ż + f_v v
+
+with σ₀, σ₁ the parameters ``presliding_stiffness_N_per_m`` and
+``presliding_damping_Ns_per_m``.  On a rigid transmission the bristle carries the rod's
+whole friction, F_ns(v) + T_b(v/r)/r: φ = φ_ns(v) + φ_b(v/r)/r², f_v + t_v/r² (the
+nut/bearing split is not identifiable there, and a bristle on the nut alone lets a fit
+move the friction to the bearing until the bristle's rate σ₀/φ diverges).  With a
+transmission component the bristle is the nut's and the bearing keeps its static map on
+the rotor speed.
+
 Parameters are a flat vector ``p`` in :attr:`BenchModel.param_names` order:
 ``load_ohm``, the eight friction parameter names, then (``generator=False``
-only) ``inertia_kg`` and ``offset_N``, then each component's parameters.  States are named in :attr:`BenchModel.state_names`.
+only) ``inertia_kg`` and ``offset_N``, then (``friction_law="lugre"`` only) σ₀ and
+σ₁, then each component's parameters.  States are named in :attr:`BenchModel.state_names`.
 """
 
 from __future__ import annotations
@@ -44,10 +60,23 @@ import casadi as ca
 import numpy as np
 
 from .components import Component, ParamSpec
-from .friction import bearing_friction_Nm, nut_friction_N
+from .base_parameters import PARAMETERS
+from .friction import (
+    FRICTION_LAWS,
+    PRESLIDING_NAMES,
+    bearing_friction_Nm,
+    bearing_static_slope,
+    bristle_force_rate,
+    nut_friction_N,
+    nut_static_slope,
+    presliding_force,
+)
 from .params import FRICTION_NAMES, FrictionParams, HarvesterParams
 
-__all__ = ["BenchModel", "RIG_PARAM_NAMES"]
+__all__ = ["BenchModel", "RIG_PARAM_NAMES", "BRISTLE_STATE"]
+
+#: Name of the LuGre bristle state: the bristle force F_b = σ₀ z (N).
+BRISTLE_STATE = "bristle_force_N"
 
 #: Extra parameters of a rig without generator: rod inertia M (kg) and force offset F_0 (N).
 RIG_PARAM_NAMES: tuple[str, ...] = ("inertia_kg", "offset_N")
@@ -66,6 +95,8 @@ class BenchModel:
     generator : bool
         False for a rig without generator (no winding, no voltage; adds the
         parameters ``inertia_kg`` and ``offset_N``, see the module docstring).
+    friction_law : {"static", "lugre"}
+        The nut–screw friction law (see the module docstring).
 
     Attributes
     ----------
@@ -86,7 +117,12 @@ class BenchModel:
     """
 
     def __init__(self, harvester: HarvesterParams | None = None,
-                 components: Sequence[Component] = (), generator: bool = True) -> None:
+                 components: Sequence[Component] = (), generator: bool = True,
+                 friction_law: str = "static") -> None:
+        if friction_law not in FRICTION_LAWS:
+            raise ValueError(f"BenchModel: friction_law must be one of {FRICTION_LAWS}, got "
+                             f"{friction_law!r}")
+        self.friction_law = friction_law
         self.harvester = harvester or HarvesterParams()
         self.generator = bool(generator)
         self.components = list(components)
@@ -103,7 +139,9 @@ class BenchModel:
             for q in c.parameters:
                 self.param_specs[q.name] = q
         self.rig_names = [] if self.generator else list(RIG_PARAM_NAMES)
-        self.param_names = ["load_ohm", *FRICTION_NAMES, *self.rig_names, *self.param_specs]
+        self.law_names = list(PRESLIDING_NAMES) if friction_law == "lugre" else []
+        self.param_names = ["load_ohm", *FRICTION_NAMES, *self.rig_names, *self.law_names,
+                            *self.param_specs]
         self._build()
 
     # ------------------------------------------------------------------ construction
@@ -123,7 +161,9 @@ class BenchModel:
         fr = [p[1 + k] for k in range(8)]
         nrig = len(self.rig_names)
         prig = {n: p[9 + k] for k, n in enumerate(self.rig_names)}
-        pc = {n: p[9 + nrig + k] for k, n in enumerate(self.param_specs)}
+        nlaw = len(self.law_names)
+        plaw = {n: p[9 + nrig + k] for k, n in enumerate(self.law_names)}
+        pc = {n: p[9 + nrig + nlaw + k] for k, n in enumerate(self.param_specs)}
 
         states: list[tuple[str, Any]] = []
         if self.transmission is not None:
@@ -135,6 +175,9 @@ class BenchModel:
         i_sym = ca.SX.sym("current_A") if self.has_inductance else None
         if i_sym is not None:
             states.insert(0, ("current_A", i_sym))
+        z_sym = ca.SX.sym(BRISTLE_STATE) if self.law_names else None
+        if z_sym is not None:
+            states.append((BRISTLE_STATE, z_sym))
 
         s: dict[str, Any] = {"x": xr, "v": vr, "a": ar, "theta": theta, "omega": omega,
                              "internal_resistance_ohm": Ri}
@@ -164,8 +207,7 @@ class BenchModel:
         else:
             i = i_sym if i_sym is not None else e / R
         s["i"] = i
-        T_b = bearing_friction_Nm(omega, fr)
-        F_ns = nut_friction_N(vr, fr)
+        F_ns, T_b, z_rate = self._friction(vr, omega, fr, plaw, z_sym)
         tau_extra = sum((c.rotor_torque(s, pc) for c in self.components), ca.SX(0))
         f_extra = sum((c.rod_force(s, pc) for c in self.components), ca.SX(0))
         rates: dict[str, Any] = {}
@@ -177,6 +219,8 @@ class BenchModel:
             rates.update(zip(c.states, rc))
         if i_sym is not None:
             rates["current_A"] = (e - R * i_sym) / L
+        if z_rate is not None:
+            rates[BRISTLE_STATE] = z_rate
         if self.transmission is not None:
             f_t = self.transmission.coupling_force(s, pc)
             rates["rotor_angle_rad"] = omega
@@ -199,11 +243,15 @@ class BenchModel:
         comp_offset = prig["offset_N"] * vr if not self.generator else 0.0
         if i_sym is not None:
             stored += 0.5 * L * i_sym ** 2
+        friction_power = F_ns * vr + T_b * omega
+        if z_sym is not None:  # the bristle spring stores ½ σ₀ z² = ½ F_b²/σ₀, not dissipated
+            stored += 0.5 * z_sym ** 2 / plaw["presliding_stiffness_N_per_m"]
+            friction_power -= z_sym * z_rate / plaw["presliding_stiffness_N_per_m"]
         for c in self.components:
             stored += c.stored_energy(s, pc)
         comp_diss = sum((c.dissipated_power(s, pc) for c in self.components), ca.SX(0))
         comp_diss += tau_extra * omega + f_extra * vr + comp_offset
-        energy = ca.vertcat(force * vr, Re * i ** 2, Ri * i ** 2, F_ns * vr + T_b * omega,
+        energy = ca.vertcat(force * vr, Re * i ** 2, Ri * i ** 2, friction_power,
                             comp_diss, stored)
 
         self.state_names = [n for n, _ in states]
@@ -213,6 +261,26 @@ class BenchModel:
         self.ode = ca.Function("bench_ode", args, [xdot], names, ["xdot"])
         self.outputs = ca.Function("bench_out", args, [ca.vertcat(force, volt)], names, ["y"])
         self.energy = ca.Function("bench_energy", args, [energy], names, ["e"])
+
+    def _friction(self, vr: Any, omega: Any, fr: list, plaw: dict,
+                  z_sym: Any) -> tuple[Any, Any, Any]:
+        """Nut force F_ns (N), bearing torque T_b (N m) and the bristle-force rate (N/s,
+        None under the static law).  On a rigid transmission the bristle carries the
+        rod's whole friction and T_b is 0."""
+        T_b = bearing_friction_Nm(omega, fr)
+        if z_sym is None:
+            return nut_friction_N(vr, fr), T_b, None
+        r = self.harvester.lead_m_per_rad
+        slope, viscous = nut_static_slope(vr, fr), fr[3]
+        if self.transmission is None:
+            slope = slope + bearing_static_slope(omega, fr) / r ** 2
+            viscous = viscous + fr[7] / r ** 2
+            T_b = ca.SX(0)
+        sig0 = plaw["presliding_stiffness_N_per_m"]
+        z_rate = bristle_force_rate(z_sym, vr, slope, sig0)
+        F_ns = presliding_force(z_sym, z_rate, vr, sig0, plaw["presliding_damping_Ns_per_m"],
+                                viscous)
+        return F_ns, T_b, z_rate
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -224,9 +292,11 @@ class BenchModel:
         """Assemble ``p``; component parameters default to their ParamSpec defaults.
 
         For ``generator=False`` ``effects`` may also set ``inertia_kg`` and
-        ``offset_N`` (defaults 0)."""
+        ``offset_N`` (defaults 0); with ``friction_law="lugre"`` σ₀ and σ₁ (defaults
+        their declared typical values)."""
         friction = friction or FrictionParams()
         values = {n: 0.0 for n in self.rig_names}
+        values.update({n: PARAMETERS[n].typical for n in self.law_names})
         values.update({q.name: q.default for q in self.param_specs.values()})
         for k, v in (effects or {}).items():
             if k not in values:
@@ -239,7 +309,7 @@ class BenchModel:
 
     def initial_state(self, u0: Sequence[float], p: Sequence[float]) -> np.ndarray:
         """A consistent initial state: rotor following the rod, current at its
-        quasi-static value e/R."""
+        quasi-static value e/R, bristle force at its steady state s(v)."""
         h = self.harvester
         r = h.lead_m_per_rad
         out = []
@@ -251,11 +321,17 @@ class BenchModel:
                 out.append(u0[0] / r)
             elif n == "rotor_speed_rad_per_s":
                 out.append(u0[1] / r)
+            elif n == BRISTLE_STATE:
+                slope = float(nut_static_slope(float(u0[1]), p[1:9]))
+                if self.transmission is None:
+                    slope += float(bearing_static_slope(float(u0[1]) / r, p[1:9])) / r ** 2
+                out.append(slope * u0[1])
             else:  # component states start at rest
                 out.append(0.0)
         return np.array(out, dtype=float)
 
     def __repr__(self) -> str:
         gen = "" if self.generator else ", generator=False"
+        gen += "" if self.friction_law == "static" else f", friction_law={self.friction_law!r}"
         return f"BenchModel(components={self.components!r}, states={self.state_names}{gen})"
 

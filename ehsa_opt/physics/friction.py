@@ -7,6 +7,25 @@ For a velocity u::
 
 The law is smooth, so it enters IPOPT as it is.  Every argument may be a float,
 a numpy array or a CasADi SX/MX/DM expression (parameters can be symbolic too).
+
+Dynamic (presliding) friction: the LuGre law (Canudas de Wit et al. 1995) with the
+Simscape curve as its steady state.  A bristle deflection z (m) carries the force::
+
+    s(u)  = F(u) − f_v u                      (the static law without its viscous part)
+    φ(u)  = s(u) / u  > 0                     (N s/m; finite at u = 0)
+    dz/dt = u − σ₀ z / φ(u)                   (= u − σ₀ |u| z / |s(u)|, LuGre's g = |s|)
+    F     = σ₀ z + σ₁ dz/dt + f_v u
+
+At steady sliding dz/dt = 0, z = s(u)/σ₀ and F = F(u): the static law is the limit
+σ₀ → ∞ of the dynamic one.  At a reversal the force follows the bristle spring σ₀
+(N/m) over the presliding displacement s/σ₀ instead of jumping.
+
+The state carried is the bristle force F_b = σ₀ z (N), not z: its size (the friction
+level) does not depend on σ₀, so one absolute tolerance (an integrator's, the
+collocation's scaling) fits every σ₀ from 1e4 to 1e10 N/m — z itself spans 1e-9 to
+1e-2 m over that range::
+
+    dF_b/dt = σ₀ (u − F_b / φ(u)),     F = F_b + (σ₁/σ₀) dF_b/dt + f_v u
 """
 
 from __future__ import annotations
@@ -19,7 +38,23 @@ import numpy as np
 
 from .params import FrictionParams
 
-__all__ = ["simscape_friction", "nut_friction_N", "bearing_friction_Nm", "rod_friction_N"]
+__all__ = ["simscape_friction", "nut_friction_N", "bearing_friction_Nm", "rod_friction_N",
+           "FRICTION_LAWS", "PRESLIDING_NAMES", "static_slope", "bristle_force_rate",
+           "presliding_force", "nut_static_slope", "bearing_static_slope"]
+
+#: Friction laws of the models: ``"static"`` (the Simscape map of the velocity) and
+#: ``"lugre"`` (the same map as the steady state of a LuGre bristle state).
+FRICTION_LAWS: tuple[str, ...] = ("static", "lugre")
+#: Parameters of the LuGre friction at the rod (declared in
+#: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`): bristle stiffness σ₀ (N/m) and
+#: bristle damping σ₁ (N s/m).
+PRESLIDING_NAMES: tuple[str, ...] = ("presliding_stiffness_N_per_m",
+                                     "presliding_damping_Ns_per_m")
+#: Below this |u/u_Coul| the ratio tanh(x)/x takes its Taylor series (exact to 1e-19).
+_TAYLOR_BELOW = 1e-3
+#: Floor added to φ(u), N s/m: keeps the bristle rate finite for a frictionless law
+#: (adds a viscous 1e-9 N s/m to the steady state, far below any identified f_v).
+SLOPE_FLOOR_NS_PER_M = 1e-9
 
 _SQRT_2E = math.sqrt(2.0 * math.e)
 _CASADI_TYPES = (ca.SX, ca.MX, ca.DM)
@@ -83,3 +118,60 @@ def rod_friction_N(v_m_s: Any, friction: FrictionParams | Any, lead_m_per_rad: f
     """
     r = lead_m_per_rad
     return nut_friction_N(v_m_s, friction) + bearing_friction_Nm(v_m_s / r, friction) / r
+
+
+def _tanh_ratio(x: Any, symbolic: bool) -> Any:
+    """tanh(x)/x, smooth and finite at x = 0 (both branches finite everywhere)."""
+    if symbolic:
+        small = x * x < _TAYLOR_BELOW ** 2
+        xs = ca.if_else(small, 1.0, x)
+        return ca.if_else(small, 1.0 - x * x / 3.0 + 2.0 * x ** 4 / 15.0, ca.tanh(xs) / xs)
+    x = np.asarray(x, dtype=float)
+    small = x * x < _TAYLOR_BELOW ** 2
+    xs = np.where(small, 1.0, x)
+    return np.where(small, 1.0 - x * x / 3.0 + 2.0 * x ** 4 / 15.0, np.tanh(xs) / xs)
+
+
+def static_slope(u: Any, breakaway: Any, coulomb: Any, breakaway_velocity: Any) -> Any:
+    """φ(u) = (F(u) − f_v u)/u of the Simscape law (N s/m or N m s/rad), finite at u = 0.
+
+    Positive for breakaway ≥ 0, Coulomb ≥ 0: the LuGre relaxation rate is σ₀/φ(u).
+    """
+    symbolic = _is_casadi(u, breakaway, coulomb, breakaway_velocity)
+    exp = ca.exp if symbolic else np.exp
+    u_st = math.sqrt(2.0) * breakaway_velocity
+    u_coul = breakaway_velocity / 10.0
+    z = u / u_st
+    return (_SQRT_2E * (breakaway - coulomb) * exp(-z * z) / u_st
+            + coulomb * _tanh_ratio(u / u_coul, symbolic) / u_coul)
+
+
+def bristle_force_rate(force: Any, u: Any, slope: Any, stiffness: Any) -> Any:
+    """dF_b/dt = σ₀ (u − F_b / (φ(u) + floor)) of the LuGre bristle force F_b = σ₀ z (N/s).
+
+    Parameters
+    ----------
+    force : bristle force F_b, N
+    u : sliding velocity, m/s
+    slope : φ(u) from :func:`static_slope`, N s/m
+    stiffness : σ₀, N/m
+    """
+    return stiffness * (u - force / (slope + SLOPE_FLOOR_NS_PER_M))
+
+
+def presliding_force(force: Any, force_rate: Any, u: Any, stiffness: Any, damping: Any,
+                     viscous: Any) -> Any:
+    """LuGre friction force σ₀ z + σ₁ dz/dt + f_v u = F_b + (σ₁/σ₀) dF_b/dt + f_v u, N."""
+    return force + damping / stiffness * force_rate + viscous * u
+
+
+def nut_static_slope(v_m_s: Any, friction: FrictionParams | Any) -> Any:
+    """φ(v) of the nut–screw law (N s/m), see :func:`static_slope`."""
+    p = friction.as_array() if isinstance(friction, FrictionParams) else friction
+    return static_slope(v_m_s, p[0], p[1], p[2])
+
+
+def bearing_static_slope(omega_rad_s: Any, friction: FrictionParams | Any) -> Any:
+    """φ(ω) of the bearing law (N m s/rad), see :func:`static_slope`."""
+    p = friction.as_array() if isinstance(friction, FrictionParams) else friction
+    return static_slope(omega_rad_s, p[4], p[5], p[6])
