@@ -37,7 +37,7 @@ __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
            "refuted_by_channel", "acts_on_generator", "floor_noise_std",
            "force_noise_floor_percent", "force_resolution", "channel_sse", "significant",
            "ljung_box", "residual_is_white", "disturbance_masks", "block_excess_reductions",
-           "MASK_BEFORE_S", "MASK_AFTER_S"]
+           "MASK_BEFORE_S", "MASK_AFTER_S", "change_evidence"]
 
 
 # ------------------------------------------------------------------ residual size
@@ -63,6 +63,29 @@ def delta_bic(sse_new: float, sse_old: float, k: int, n_eff: float) -> float:
     """ΔBIC = N_eff ln(SSE_new/SSE_old) + k ln N_eff of ``k`` added parameters (< 0: the
     larger model is preferred)."""
     return n_eff * math.log(max(sse_new, 1e-300) / sse_old) + k * math.log(max(n_eff, 2.0))
+
+
+def change_evidence(fit_pts, fit_before, fit_after, held_pts, held_before, held_after,
+                    k: int, n_eff_fit: float, n_eff_held: float) -> tuple:
+    """The evidence of a model change on the record, ``k`` parameters charged: the
+    evaluation tests (the held-out ones; the fit tests when none is held out), the
+    relative force error (%) before and after on them, and ΔBIC on the fit and
+    evaluation tests.
+
+    Returns
+    -------
+    tuple
+        (evaluation tests, their predictions after, before, error before, error after,
+        ΔBIC fit, ΔBIC evaluation).
+    """
+    ev, pe, pe0 = ((held_pts, held_after, held_before) if held_pts else
+                   (fit_pts, fit_after, fit_before))
+    e0, e1 = force_error_percent(ev, pe0), force_error_percent(ev, pe)
+    d_fit = delta_bic(normalised_sse(fit_pts, fit_after), normalised_sse(fit_pts, fit_before),
+                      k, n_eff_fit)
+    d_held = delta_bic(normalised_sse(ev, pe), normalised_sse(ev, pe0), k,
+                       n_eff_held if held_pts else n_eff_fit)
+    return ev, pe, pe0, e0, e1, d_fit, d_held
 
 
 # ------------------------------------------------------------------ noise

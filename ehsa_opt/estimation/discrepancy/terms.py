@@ -69,12 +69,15 @@ from .prepared import PreparedTest
 from .presliding import travel_since_reversal_m
 from .campaign_travel import campaign_travel_m, run_order_known, travel_coordinates
 from .record_shift import LAG_GRID_S, per_test_delays, shift_lag, shift_sse_curves, shifted_force
-from .sensor_filter import filtered_force, fit_sensor, sample_step_s
+from .sensor_filter import filtered_force, sample_step_s
+from .sensor_term import (per_test_delays_left, per_test_sensor, refined_sensor, sensor_of,
+                          with_sensor_term)
 
 __all__ = ["TermProposal", "shifted_force", "names_an_effect", "travel_since_reversal_m",
            "FRICTION_LAW_GROUPS",
            "PRESLIDING_LENGTHS_M", "feature_library", "discover_term", "propose_term", "shift_lag",
-           "shift_sse_curves", "per_test_delays", "per_test_sensor", "GROUPS", "LAG_GRID_S",
+           "shift_sse_curves", "per_test_delays", "per_test_sensor", "per_test_delays_left",
+           "GROUPS", "LAG_GRID_S",
            "SENSOR_GRID"]
 
 #: Feature groups of the library, in the order they are described.
@@ -298,7 +301,7 @@ def _describe(group: str, sel: dict[str, float], centres: np.ndarray, width: flo
     if group == "sensor":
         (name, c) = max(((n, c) for n, c in sel.items() if n.startswith("H(")),
                         key=lambda t: abs(t[1]))
-        f_c, zeta = _sensor_of(name)
+        f_c, zeta = sensor_of(name)
         return (f"the force record low-passed by a sensor (a lag that depends on the "
                 f"frequency: the force sensor's own dynamics), a second-order low-pass of "
                 f"≈ {f_c:.0f} Hz, damping {zeta:.2f}",
@@ -391,9 +394,9 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     term_fit = X[:, support] @ b
     sel = {names[k]: float(coef[k]) for k in support}
     if group == "sensor":  # the grid's nearest sensor refined: one low-pass, weight 1
-        sel = _refined_sensor(fit_pts, fit_preds, next(iter(sel)))
+        sel = refined_sensor(fit_pts, fit_preds, next(iter(sel)))
         term_fit = np.concatenate([(q[0] - yp[0]) * pt.wnorm[0] for pt, yp, q in zip(
-            fit_pts, fit_preds, _with_sensor_term(fit_pts, fit_preds, sel))])
+            fit_pts, fit_preds, with_sensor_term(fit_pts, fit_preds, sel))])
     desc, qty = _describe(group, sel, centres, width, coef, names)
     lag = None if "lag" in exclude else shift_lag(fit_pts, fit_preds)
     if lag is not None and (n_eff * math.log(max(lag[1], 1e-300)) + pen < best[0]):
@@ -405,7 +408,7 @@ def discover_term(fit_pts: Sequence[PreparedTest], fit_preds: Sequence[np.ndarra
     pb, pa, ym = [], [], []
     for pt, yp in zip(eval_pts, eval_preds):
         if group == "sensor":
-            corr = _with_sensor_term([pt], [yp], sel)[0][0] - yp[0]
+            corr = with_sensor_term([pt], [yp], sel)[0][0] - yp[0]
         else:
             Xe, _, _ = feature_library(pt, yp, lead_m_per_rad=lead_m_per_rad,
                                        centres=centres, width_m=width, travel=travel)
@@ -463,55 +466,6 @@ def _lag_proposal(lag, eval_pts, eval_preds, shares, sse_fit0) -> TermProposal:
 
 
 
-def _sensor_of(name: str) -> tuple[float, float]:
-    """(f_c Hz, ζ) of a sensor column's name ``H(f Hz, ζ)[F]-F``."""
-    return float(name[2:].split(" Hz")[0]), float(name.split(", ")[1].split(")")[0])
-
-
-def _refined_sensor(pts, preds, name: str) -> dict[str, float]:
-    """The sensor of the grid column ``name`` refined by least squares of the fit tests'
-    force against the model's force through it (:func:`~.sensor_filter.fit_sensor`,
-    bandwidth and damping free, weight 1: a sensor passes the force it measures)."""
-    est = fit_sensor(pts, preds, 0, start=_sensor_of(name))
-    return {f"H({est['f_c_hz']:.1f} Hz, {est['zeta']:.2f})[F]-F": 1.0}
-
-
-def _with_sensor_term(pts, preds, columns: dict) -> list[np.ndarray]:
-    """``preds`` with the term's sensor column(s) c (H[F̂] − F̂) added to the force."""
-    out = []
-    for pt, yp in zip(pts, preds):
-        q = np.array(yp, float, copy=True)
-        for name, c in columns.items():
-            if name.startswith("H("):
-                f_c, zeta = _sensor_of(name)
-                q[0] = q[0] + c * (filtered_force(pt, yp[0], f_c, zeta) - yp[0])
-        out.append(q)
-    return out
-
-
-def per_test_sensor(pts, preds, columns: dict, n_eff: float) -> float:
-    """ΔBIC of one weight per test of the term's sensor column against one weight for
-    all (< 0: the tests want different low-passes).  One sensor filters every test
-    alike; a transition that depends on the motion (presliding after a reversal, whose
-    duration in time follows each test's reversal) asks for a different weight on each
-    test."""
-    sse_each = 0.0
-    xs, rs = [], []
-    for pt, yp, yq in zip(pts, preds, _with_sensor_term(pts, preds, columns)):
-        col = (yq[0] - yp[0]) * pt.wnorm[0]
-        r = (pt.y[0] - yp[0]) * pt.wnorm[0]
-        den = float(col @ col)
-        c = float(col @ r) / den if den > 0 else 0.0
-        sse_each += float((r - c * col) @ (r - c * col))
-        xs.append(col)
-        rs.append(r)
-    x, r = np.concatenate(xs), np.concatenate(rs)
-    den = float(x @ x)
-    c = float(x @ r) / den if den > 0 else 0.0
-    sse_one = float((r - c * x) @ (r - c * x))
-    return delta_bic(sse_each, sse_one, len(pts) - 1, n_eff)
-
-
 def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_eff,
                  criterion: Criterion = DEFAULT_CRITERION) -> TermProposal:
     """The data-driven term of the current residual, judged like a catalogue effect.
@@ -526,8 +480,11 @@ def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_ef
       term is sought again without the lag features.
     * A term of the ``sensor`` group (the force through a low-pass) is a sensor only when
       it is one sensor for every test: the lag it leaves is one delay for every test, and
-      its weight is one for every test (:func:`per_test_sensor`; the same ΔBIC threshold
-      as the delays').  A transition that depends on the motion (presliding after a
+      its weight is one for every test (:func:`~.sensor_term.per_test_sensor`,
+      :func:`~.sensor_term.per_test_delays_left`:
+      per-test values refuse it when their ΔBIC is below the delays' threshold *and* they
+      remove the criterion's ``min_excess_reduction`` of the excess left — with little
+      noise a sensor's discretisation alone is significant, not practical).  A transition that depends on the motion (presliding after a
       reversal) asks for different delays or weights per test; the term is then refused
       and sought again without the lag and sensor features.
     * The term earns by :func:`~.judge.earns` with ``criterion``: its share of the
@@ -551,15 +508,20 @@ def propose_term(fit_pts, fit_pred, eval_pts, eval_pred, lead, seed, floor, n_ef
             term = discover_term(fit_pts, fit_pred, eval_pts, eval_pred, lead_m_per_rad=lead,
                                  seed=seed, exclude=("lag",))
     if term.group == "sensor" and len(fit_pts) > 1:
-        spread = per_test_delays(fit_pts, _with_sensor_term(fit_pts, fit_pred, term.columns),
-                                 n_eff_fit)
-        weights = per_test_sensor(fit_pts, fit_pred, term.columns, n_eff_fit)
+        # refused when per-test values are both significant and of a practical size (they
+        # remove the share of the remaining excess a member must remove to earn)
+        (d_delay, s_delay) = per_test_delays_left(
+            fit_pts, with_sensor_term(fit_pts, fit_pred, term.columns), n_eff_fit)
+        (d_weight, s_weight) = per_test_sensor(fit_pts, fit_pred, term.columns, n_eff_fit)
+        lim, size = criterion.delay_spread_bic, criterion.min_excess_reduction
         why = (f"the best delay left after the low-pass still differs from test to test "
-               f"(per-test delays against one: ΔBIC {spread:.3g} < "
-               f"{criterion.delay_spread_bic:g})" if spread < criterion.delay_spread_bic else
+               f"(per-test delays against one: ΔBIC {d_delay:.3g} < {lim:g}, removing "
+               f"{100 * s_delay:.0f} % of the excess left)"
+               if d_delay < lim and s_delay >= size else
                f"the low-pass's weight differs from test to test (per-test weights against "
-               f"one: ΔBIC {weights:.3g} < {criterion.delay_spread_bic:g}), which one "
-               f"sensor's is not" if weights < criterion.delay_spread_bic else "")
+               f"one: ΔBIC {d_weight:.3g} < {lim:g}, removing {100 * s_weight:.0f} % of the "
+               f"excess left), which one sensor's is not"
+               if d_weight < lim and s_weight >= size else "")
         if why:
             refused = ((refused + "; ") if refused else "") + (
                 f"{term.description}: refused — not a sensor's lag, {why}")

@@ -39,7 +39,8 @@ from scipy.optimize import minimize, minimize_scalar
 from scipy.signal import bilinear, lfilter, lfilter_zi
 
 from ...covariance import hac_covariance
-from ..evidence import delta_bic, force_error_percent, force_noise_floor_percent, normalised_sse
+from ..evidence import (change_evidence, force_error_percent, force_noise_floor_percent,
+                        normalised_sse)
 from ..judge import excess_reduction
 from ..fit import fit_group
 from ..prepared import PreparedTest, prepare_tests
@@ -401,12 +402,8 @@ def try_drive_lag(fit_pts, held_pts, rig, base, fit_pred, held_pred, floor, n_ef
     # judged on the recorded force: the model's force through the inverse operator
     mf = _recorded(fit_pts, pf, tau, delay)
     mh = _recorded(held_pts, ph, tau, delay) if held_pts else []
-    ev, pe, pe0 = (held_pts, mh, held_pred) if held_pts else (fit_pts, mf, fit_pred)
-    e_before, e_after = force_error_percent(ev, pe0), force_error_percent(ev, pe)
-    d_fit = delta_bic(normalised_sse(fit_pts, mf), normalised_sse(fit_pts, fit_pred), 1,
-                      n_eff_fit)
-    d_held = delta_bic(normalised_sse(ev, pe), normalised_sse(ev, pe0), 1,
-                       n_eff_held if held_pts else n_eff_fit)
+    ev, pe, pe0, e_before, e_after, d_fit, d_held = change_evidence(
+        fit_pts, fit_pred, mf, held_pts, held_pred, mh, 1, n_eff_fit, n_eff_held)
     cv = blocked_cross_validation(held_pts, held_pred, rig, base.parameters, hold) \
         if held_pts else []
     # the lead δ + τ (the hold's half sample and the lag beyond it) resolved: with the

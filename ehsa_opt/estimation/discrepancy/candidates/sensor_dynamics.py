@@ -43,7 +43,7 @@ from dataclasses import replace as _replace
 
 import numpy as np
 
-from ..evidence import delta_bic, force_error_percent, normalised_sse
+from ..evidence import change_evidence, force_error_percent, normalised_sse
 from ..fit import fit_group
 from ..channels import channel_sse
 from ..judge import channel_sse_excess_reduction, excess_reduction
@@ -101,12 +101,8 @@ def try_sensor(fit_pts, held_pts, rig: Rig, base, fit_pred, held_pred, floor: fl
     pf = preds_f
     ph = predict(held_pts, rig, params) if held_pts else []
     mf, mh = _filtered(fit_pts, pf, f_c, zeta, ch), _filtered(held_pts, ph, f_c, zeta, ch)
-    ev, pe, pe0 = (held_pts, mh, held_pred) if held_pts else (fit_pts, mf, fit_pred)
-    e_before, e_after = force_error_percent(ev, pe0), force_error_percent(ev, pe)
-    d_fit = delta_bic(normalised_sse(fit_pts, mf), normalised_sse(fit_pts, fit_pred), 2,
-                      n_eff_fit)
-    d_held = delta_bic(normalised_sse(ev, pe), normalised_sse(ev, pe0), 2,
-                       n_eff_held if held_pts else n_eff_fit)
+    ev, pe, pe0, e_before, e_after, d_fit, d_held = change_evidence(
+        fit_pts, fit_pred, mf, held_pts, held_pred, mh, 2, n_eff_fit, n_eff_held)
     sse_red = None
     if ch > 0:
         s0, n = channel_sse(ev, pe0)
