@@ -19,7 +19,7 @@ Layout of a data directory::
     amplitude_m = 0.015
     load_ohm = 47.0             # required when the rig has a generator
     # excitation = "recorded"   # arbitrary motion: frequency/amplitude not required
-    # run_order = 3             # optional: the test's place in the campaign (:mod:`.run_order`)
+    # run_order = 3             # optional: the test's place in the campaign (formats page)
     # started_at = 2026-03-02T09:15:30Z   # optional: when its first sample was taken
 
 The loader is strict: every problem is a :class:`BenchDataError` that names the

@@ -151,10 +151,14 @@ def bristle_force_rate(force: Any, u: Any, slope: Any, stiffness: Any) -> Any:
 
     Parameters
     ----------
-    force : bristle force F_b, N
-    u : sliding velocity, m/s
-    slope : φ(u) from :func:`static_slope`, N s/m
-    stiffness : σ₀, N/m
+    force : float or casadi expression
+        Bristle force F_b, N.
+    u : float or casadi expression
+        Sliding velocity, m/s.
+    slope : float or casadi expression
+        φ(u) from :func:`static_slope`, N s/m.
+    stiffness : float or casadi expression
+        σ₀, N/m.
     """
     return stiffness * (u - force / (slope + SLOPE_FLOOR_NS_PER_M))
 
