@@ -39,6 +39,7 @@ physics (:class:`BenchModel`, :class:`HarvesterParams`, friction laws …) is be
 
 from typing import TYPE_CHECKING
 
+from .utils.lazy import lazy_exports
 from .utils.version import __version__
 
 if TYPE_CHECKING:  # the names below, for static tools; at run time each is imported
@@ -128,16 +129,6 @@ _HOMES = {
 }
 
 
-def __getattr__(name: str):
-    """A public name, imported from its module on first use (PEP 562)."""
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'ehsa_opt' has no attribute {name!r}")
-    import importlib
-    value = getattr(importlib.import_module(home, __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+#: ``__getattr__`` and ``__dir__`` (PEP 562): each public name imported from its module on
+#: first use (:func:`~ehsa_opt.utils.lazy.lazy_exports`).
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

@@ -15,6 +15,8 @@ import sys
 import types
 from typing import TYPE_CHECKING
 
+from ..utils.lazy import lazy_exports
+
 if TYPE_CHECKING:  # at run time each name is imported on first use (:func:`__getattr__`)
     from .bench import BenchSet, check_bench, convert_emps, generate_bench
     from .design import load_problem, optimize
@@ -45,19 +47,9 @@ _HOMES = {
 }
 
 
-def __getattr__(name: str):
-    """An entry point, imported from its module on first use (PEP 562)."""
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'ehsa_opt.api' has no attribute {name!r}")
-    import importlib
-    value = getattr(importlib.import_module(home, __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+#: ``__getattr__`` and ``__dir__`` (PEP 562): each public name imported from its module on
+#: first use (:func:`~ehsa_opt.utils.lazy.lazy_exports`).
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)
 
 
 class _EntryPoints(types.ModuleType):

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .catalogue_file import catalogue_file
 from .params import ParameterError, check_keys, load_toml, nearest_name
 
 __all__ = ["MOUNTING_FACTORS", "CRITICAL_SPEED_MARGIN", "STEEL_DENSITY_KG_M3", "BallScrew",
@@ -101,24 +102,7 @@ def screw_catalogue_path(name: str | Path = "ball_screws", base_dir: str | Path 
                          ) -> Path:
     """A screw catalogue: a shipped one by bare name (``"ball_screws"``) or a path (relative
     to ``base_dir``); a path must exist."""
-    text = str(name)
-    p = Path(text)
-    shipped_dir = Path(__file__).resolve().parents[1] / "data" / "screws"
-    if p.suffix != ".toml" and len(p.parts) == 1:
-        shipped = shipped_dir / f"{text}.toml"
-        if shipped.is_file():
-            return shipped
-        names = sorted(f.stem for f in shipped_dir.glob("*.toml"))
-        near = nearest_name(text, names)
-        raise ParameterError(f"screw catalogue '{text}': no shipped catalogue of that name"
-                             + (f"; did you mean '{near}'?" if near else "")
-                             + f" (shipped: {', '.join(names)}; or give the path of a .toml)")
-    if not p.is_absolute() and base_dir is not None:
-        p = Path(base_dir) / p
-    if not p.is_file():
-        raise ParameterError(f"screw catalogue '{text}': no such file; give its path relative "
-                             "to the problem file, or 'ball_screws' for the shipped one")
-    return p
+    return catalogue_file("screw catalogue", "screws", "ball_screws", name, base_dir)
 
 
 def load_screws(path: str | Path = "ball_screws", base_dir: str | Path | None = None

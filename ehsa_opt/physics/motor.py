@@ -38,7 +38,8 @@ from typing import Any
 
 import numpy as np
 
-from .params import HarvesterParams, ParameterError, check_keys, load_toml, nearest_name
+from .catalogue_file import catalogue_file
+from .params import HarvesterParams, ParameterError, check_keys, load_toml
 
 __all__ = ["RatedLimits", "ScalingMotor", "FixedWindingMotor", "CatalogueMotor",
            "MOTOR_MODELS", "load_catalogue", "catalogue_path"]
@@ -265,31 +266,7 @@ def catalogue_path(name: str | Path = "dc_generators", base_dir: str | Path | No
     such as ``"dc_generators"``), or a path (a ``.toml`` name or one with a folder),
     resolved against ``base_dir`` (the folder of the file naming it) when relative.  A path
     must lead to an existing file: it never falls back on a shipped catalogue."""
-    text = str(name)
-    if not text or not text.isprintable():
-        raise ParameterError(f"motor catalogue {text!r}: not a file name (empty or a control "
-                             f"character); give a .toml path or 'dc_generators'")
-    p = Path(text)
-    shipped_dir = Path(__file__).resolve().parents[1] / "data" / "motors"
-    if p.suffix != ".toml" and len(p.parts) == 1:
-        shipped = shipped_dir / f"{text}.toml"
-        if shipped.is_file():
-            return shipped
-        names = sorted(f.stem for f in shipped_dir.glob("*.toml"))
-        near = nearest_name(text, names)
-        raise ParameterError(f"motor catalogue '{text}': no shipped catalogue of that name"
-                             + (f"; did you mean '{near}'?" if near else "")
-                             + f" (shipped: {', '.join(names)}; or give the path of a .toml "
-                               f"file)")
-    if not p.is_absolute() and base_dir is not None:
-        p = Path(base_dir) / p
-    if not p.is_file():
-        where = f" (resolved against {Path(base_dir).resolve()})" if base_dir is not None \
-            and not Path(text).is_absolute() else ""
-        raise ParameterError(f"motor catalogue '{text}': no such file{where}; give the path "
-                             f"of the catalogue relative to the problem file, or "
-                             f"'dc_generators' for the shipped one")
-    return p
+    return catalogue_file("motor catalogue", "motors", "dc_generators", name, base_dir)
 
 
 def load_catalogue(path: str | Path = "dc_generators", base_dir: str | Path | None = None
