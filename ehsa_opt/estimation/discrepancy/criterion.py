@@ -133,9 +133,10 @@ class Criterion:
         "9036774 (2026-11-26): the same tenth as min_excess_reduction", 0.0, 1.0)
     inadequate_ratio: float = _f(
         3.0, "-",
-        "when no member is named and the evaluation tests' relative force error stays above "
-        "this multiple of the noise floor, the answer is that the base model is inadequate "
-        "there (with the residual's physical support), not 'none'",
+        "when no member is named, no data-driven term names what is missing and the "
+        "evaluation tests' relative force error stays above this multiple of the noise "
+        "floor, the answer is that the base model is inadequate there (with the residual's "
+        "physical support), not 'none'",
         "set on 2026-12-02 before any benchmark run of this verdict: twice the 1.5 × the "
         "floor within which a model with the rig's physics leaves a clean campaign", 1.0,
         1e3)

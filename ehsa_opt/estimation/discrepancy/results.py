@@ -238,8 +238,8 @@ class DiscrepancyResult:
     effect : str
         The named effects joined by " + ", ``"none"`` (the residual is noise),
         ``"none of the catalogue"`` (structured, explained by the proposed term),
-        :data:`BASE_INADEQUATE` (no member earns and the error stays above the
-        criterion's ``inadequate_ratio`` × the noise floor) or :data:`UNDECIDED` (cut
+        :data:`BASE_INADEQUATE` (no member earns, no term names what is missing,
+        and the error stays above the criterion's ``inadequate_ratio`` × the noise floor) or :data:`UNDECIDED` (cut
         before anything was named).
     effects : list of str
         The named effects in the order they were added.

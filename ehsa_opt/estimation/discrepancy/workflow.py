@@ -219,7 +219,9 @@ def assemble_result(data: BenchData, tests: SearchTests, base: Baseline, state: 
     else:
         skewed = skew is not None and skew.found
         effect = NONE_OF_CATALOGUE if names_an_effect(term) or skewed else "none"
-        if cur_err > criterion.inadequate_ratio * floor:
+        # "none" claims the model is adequate to the noise: not when the error stays far
+        # above it (a term that names what is missing answers "none of the catalogue")
+        if effect == "none" and cur_err > criterion.inadequate_ratio * floor:
             effect = BASE_INADEQUATE
     loc1 = localise(fit_pts + held_pts, state.fit_pred + state.held_pred,
                     lead_m_per_rad=tests.lead_m_per_rad) if effects else None

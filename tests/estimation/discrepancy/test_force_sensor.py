@@ -98,16 +98,17 @@ def test_a_pure_delay_stays_force_lag_when_the_sensor_is_offered_too(tmp_path):
 
 
 @pytest.mark.slow
-def test_an_unexplained_residual_far_above_the_floor_is_not_answered_none(tmp_path):
+def test_a_residual_no_member_explains_is_not_answered_none(tmp_path):
     """The load-cell campaign searched with a member that cannot explain it: no member
-    earns, the error stays far above the noise floor, so the answer is that the base
-    model is inadequate there, with the residual's support (the sensor) in words."""
-    from ehsa_opt.estimation.discrepancy.results import BASE_INADEQUATE
+    earns, and the answer names what is missing — the data-driven term's sensor support,
+    its bandwidth near the truth — instead of 'none'."""
+    from ehsa_opt.estimation.discrepancy.results import NONE_OF_CATALOGUE
     path = _campaign(tmp_path, "load cell",
                      lambda t: _load_cell(t.time_s, t.force_N, 60.0, 0.5))
     res = run_discrepancy(path, DiscrepancySettings(candidates=("cogging",), max_effects=1))
-    assert res.effect == BASE_INADEQUATE, res.message
-    assert "sensor" in res.message and "noise floor" in res.message
+    assert res.effect == NONE_OF_CATALOGUE and res.effects == [], res.message
+    assert res.term.group == "sensor" and res.term.earns
+    assert res.term.quantity["bandwidth_hz"] == pytest.approx(60.0, rel=0.1)
 
 
 def test_the_member_names_match_the_settings():

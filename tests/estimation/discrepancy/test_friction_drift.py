@@ -90,6 +90,9 @@ def test_the_workflow_names_the_drift_only_when_the_run_order_is_stated(tmp_path
     last = -12.0 * (1 - math.exp(-(5 / 6) / 0.3))
     assert named.steps[0]["parameters"]["drift_over_campaign_N"] == pytest.approx(last, rel=0.3)
     assert named.error_after < named.error_before
-    # without the order no member is named: the drift is not tried (the error left is
-    # what the base model cannot represent, said as such when far above the floor)
+    # without the order no member is named: the drift is not tried, no term names it and
+    # the error left (3.1 x the floor) is what the base model cannot represent
+    from ehsa_opt.estimation.discrepancy.results import BASE_INADEQUATE
     assert answers[False].effects == [], answers[False].message
+    assert answers[False].effect == BASE_INADEQUATE, answers[False].message
+    assert "noise floor" in answers[False].message
