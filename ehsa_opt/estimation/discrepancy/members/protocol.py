@@ -5,14 +5,15 @@ A *member* is anything the engine can name: an effect of the rig (a component of
 bench model: backlash, compliance, cogging …), a transform of a measurement channel
 (a delay or the dynamics of the force sensor, a skew of the voltage record, the
 drive's lag) or a variant of the friction law (a presliding transition).  Every member
-answers the same four questions:
+answers the same questions:
 
 * :meth:`Member.applicable` — can it be tried on this campaign and model (its rig has
   the channel, the setting lists it, a rival has not already taken its place)?  The
   answer is a reason when it is not, said in the report.
-* :meth:`Member.rank` — how much of the current residual its signature explains,
-  before any fit (a catalogue effect: its signature score; a channel member: the share
-  its screen removes; NaN when it has none and is always fitted).
+* rank — how much of the current residual its signature explains before any fit: the
+  catalogue effects' signature scores (:mod:`..candidates.catalogue`), which order the
+  rounds; a record or law member has no rank — it is offered in the declared order and
+  screens itself inside its fit (a delay's shift alone, a filter on the model's force).
 * :meth:`Member.fit` — its parameters, fitted on the fit tests, and its *evidence*:
   the error before and after on the evaluation tests, ΔBIC on the fit and
   evaluation tests, whether its size is resolved, its own statistics.  A member never
@@ -121,10 +122,6 @@ class Attempt:
     sse_excess_reduction: float | None = None
     n_force: int | None = None
 
-    @property
-    def sse_heldout(self) -> float:
-        return (self.fields or {}).get("sse_heldout", math.nan)
-
 
 class Member(ABC):
     """A member of the discrepancy engine (see the module docstring).
@@ -160,10 +157,6 @@ class Member(ABC):
         if self.setting is not None and self.setting not in ctx.settings.candidates:
             return "-"
         return ""
-
-    def rank(self, ctx: Context) -> float:
-        """The share of the residual the member's screen explains (NaN: none)."""
-        return math.nan
 
     @abstractmethod
     def fit(self, ctx: Context) -> Attempt | None:
