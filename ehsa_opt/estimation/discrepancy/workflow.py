@@ -109,8 +109,9 @@ def run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings 
     # process-level parallelism only (see the utility); the budget is counted in member
     # fits, the wall time a safety cap (:mod:`.budget`)
     settings = settings or DiscrepancySettings()
-    with single_threaded_blas(), budget_set(settings.max_member_fits, settings.wall_cap_s), \
-            cluster_set(settings.scheduler):
+    with (single_threaded_blas(),
+          budget_set(settings.max_member_fits, settings.wall_cap_s),
+          cluster_set(settings.scheduler)):
         return _run_discrepancy(data, settings, log)
 
 
