@@ -29,9 +29,10 @@ from typing import Sequence
 import numpy as np
 
 from .candidates import CANDIDATES, absorbed_columns, signature_scores
-from .criterion import DEFAULT_POLICY
+from .criterion import DEFAULT_CRITERION, DEFAULT_POLICY
 from .executor import fit_on_cluster, remote
 from .budget import note_cut, past_deadline, recording_cuts, time_left_s
+from .candidate_evidence import measure_candidate
 from .evidence import normalised_sse
 from .judge import judge_candidate, withdraw
 from ..fit_result import FitResult
@@ -161,11 +162,16 @@ def not_fitted(res: FitResult | None) -> str:
 
 
 def judge_fit(c, out: tuple, **judge) -> None:
-    """:func:`~.judge.judge_candidate` of the member fit ``out`` (:func:`fit_member`)
-    into the candidate result ``c``, then the deadline's verdict: a fit :func:`not_fitted`
+    """The evidence on the member fit ``out`` (:func:`fit_member`,
+    :func:`~.candidate_evidence.measure_candidate`) into the candidate result ``c`` and its
+    verdict (:func:`~.judge.judge_candidate`; ``judge``: the current model's measures,
+    :func:`~.search.judge_context`), then the deadline's verdict: a fit :func:`not_fitted`
     (cut at its start point) keeps its measures for the report but does not earn
     (``c.cut_at_deadline`` says why; the search counts it as work left at the budget)."""
-    judge_candidate(c, out, **judge)
+    ev = measure_candidate(c, out, **judge)
+    if ev is not None:
+        judge_candidate(c, ev, cur_err=judge["cur_err"], floor=judge["floor"],
+                        say=judge["say"], criterion=judge.get("criterion", DEFAULT_CRITERION))
     why = not_fitted(out[1])
     if why:
         c.cut_at_deadline = why

@@ -24,13 +24,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..identify_result import force_relative_error_percent
-from .bounds import at_bound_names, unconstrained_step
-from .channels import channel_delta_bic, channel_effective_samples, channel_sse, refuted_by_channel
+from .channels import refuted_by_channel
 from .criterion import DEFAULT_CRITERION, Criterion
-from .evidence import (acts_on_generator, block_excess_reductions, delta_bic,
-                       force_error_percent, force_resolution, normalised_sse, significant)
-from .impact_verdict import impact_record, impact_verdict_record
+from .evidence import force_resolution
 
 __all__ = ["excess_reduction", "earns", "earns_on_own_channel", "can_earn",
            "channel_sse_excess_reduction", "sse_can_earn", "own_channel_dbic", "choose_winner",
@@ -160,7 +156,7 @@ def earns_on_own_channel(own_reduction: float | None, dbic_fit: float, dbic_held
     :func:`channel_sse_excess_reduction` on those channels; None when no own channel
     has an excess, and then it does not earn here), ΔBIC < 0 on the fit tests and on
     the held-out tests (the held-out one with a variance per channel,
-    :func:`channel_delta_bic`), and the force is kept (``force_kept``: its held-out
+    :func:`~.channels.channel_delta_bic`), and the force is kept (``force_kept``: its held-out
     error grows by no more than :func:`force_resolution`, or its SSE by no more than
     the member's parameters are charged, :func:`refuted_by_channel`).
 
@@ -202,7 +198,7 @@ def channel_sse_excess_reduction(sse_before: np.ndarray, sse_after: np.ndarray,
     ----------
     sse_before, sse_after : ndarray, shape (ny,)
         Per-channel noise-normalised SSE (dimensionless) of the current model and of
-        the candidate on the same tests (:func:`channel_sse`).
+        the candidate on the same tests (:func:`~.channels.channel_sse`).
     n : ndarray, shape (ny,)
         Samples per channel.
     """
@@ -286,119 +282,85 @@ def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff:
     return refuted_by_channel(sse_before, sse_after, k, n_eff)
 
 
-def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse_fit,
-                    sse_held,
-                    n_eff_fit, n_eff_held, cur_err, floor, ch_sse0, ch_n, say,
-                    cur_ev_pred=None, masks=None, laws=None,
+def judge_candidate(c: Any, ev: Any, *, cur_err: float, floor: float, say,
                     criterion: Criterion = DEFAULT_CRITERION) -> None:
-    """Fill the :class:`~.results.CandidateResult` ``c`` from one re-identification
-    ``out`` (``(name, FitResult, fit outputs, held-out outputs, rig)``,
-    :func:`~.candidate_fit.fit_member`) and judge it by :func:`earns` (force error,
-    ΔBIC on the fit and held-out tests, SSE alternative per channel,
-    :func:`channel_sse_excess_reduction`) or by its own evidence per block.
-    ``member`` is the catalogue entry (:class:`~.candidates.Candidate`: the channels
-    a rigid-rig effect can change, its amplitudes).  ``laws``: the friction-law terms
-    every model carries (:meth:`~.search.SearchTests.correct`: a presliding transition,
-    the campaign's drift); the candidate's predictions get their own terms before
-    anything here measures them
-    (the current model's measures were taken on its corrected predictions).  Every
-    threshold is ``criterion``'s."""
-    name, res, pf, ph, crig = out
-    c.fitted, c.fit, c.rig = True, res, crig
-    if not pf:
-        say(f"{name}: re-identification failed ({res.message})")
-        return
-    if laws is not None:
-        pf, ph = laws.correct(fit_pts, pf, held_pts, ph)
-    comp_params = [q.name for q in comps[name].parameters]
-    k = len(comp_params)
-    c.parameters = {n: res.parameters[n] for n in comp_params}
-    c.intervals = {n: res.interval(n) for n in c.parameters}
-    c.delta_bic_fit = delta_bic(normalised_sse(fit_pts, pf), sse_fit, k, n_eff_fit)
-    ev_pts, ev_pred = (held_pts, ph) if held_pts else (fit_pts, pf)
-    c.sse_heldout = normalised_sse(ev_pts, ev_pred)
-    c.delta_bic_heldout = (delta_bic(c.sse_heldout, sse_held, k, n_eff_held) if held_pts
-                           else c.delta_bic_fit)
-    c.error_after = force_error_percent(ev_pts, ev_pred)
+    """The verdict of one re-identified catalogue member ``c`` (a
+    :class:`~.results.CandidateResult`) from its evidence ``ev``
+    (:func:`~.candidate_evidence.measure_candidate`, which filled the statistics of
+    ``c``), against the current model's held-out force error ``cur_err`` and the noise
+    ``floor`` (%).  It earns, its size resolved, by one of three routes:
+
+    * *total excess*: :func:`earns` on the force error and ΔBIC, with the SSE of the
+      member's channels as the alternative where the force has no excess left or another
+      channel's excess exceeds the force's (:func:`channel_sse_excess_reduction`);
+    * *own channel*: a generator member on its own channel (:func:`earns_on_own_channel`);
+    * *own evidence*: the median per-block excess reduction (:func:`own_evidence`) with
+      ΔBIC below the criterion's and the force error not grown.
+
+    A transmission member refuted by the rotor's channel (:func:`refuted_by_rotor_channel`)
+    is withdrawn; an impact-fitted contact is judged on its transient energies instead
+    (:func:`judge_on_impacts`); a fit at an active bound does not earn
+    (:func:`refuse_at_bound`).  Every threshold is ``criterion``'s."""
     c.excess_reduction = excess_reduction(cur_err, c.error_after, floor, criterion)
-    ch = member.rigid_channels if member is not None else None
-    if ch is None or any(q.transmission for q in crig.components):
-        ch = tuple(range(len(ch_n)))
-    ch = [k for k in ch if k < len(ch_n)]
-    ch_sse1 = channel_sse(ev_pts, ev_pred)[0]
-    c.sse_reduction = channel_sse_excess_reduction(ch_sse0[ch], ch_sse1[ch], ch_n[ch], criterion)
-    c.resolved = significant(c.intervals, member.amplitudes)
-    c.channel_dbic = [delta_bic(s1, s0, k, n_eff_held if held_pts else n_eff_fit)
-                      for s0, s1 in zip(ch_sse0, ch_sse1)]
+    ch = ev.channels
+    c.sse_reduction = channel_sse_excess_reduction(ev.sse_before[ch], ev.sse_after[ch],
+                                                   ev.n[ch], criterion)
     # the SSE (other-channel) route is for effects seen mainly in another channel: it is
     # offered where the force error has no excess beyond noise left, or where another
     # channel's excess over its noise expectation (SSE/N − 1) exceeds the force's;
     # where the force's excess dominates (a gap at 11 %), the force decides
-    exc = [s0 / n0 - 1.0 if n0 > 0 else -math.inf for s0, n0 in zip(ch_sse0, ch_n)]
+    exc = [s0 / n0 - 1.0 if n0 > 0 else -math.inf for s0, n0 in zip(ev.sse_before, ev.n)]
     c.sse_route = (not can_earn(cur_err, floor, 0.0, 1.0, criterion)
                    or (len(exc) > 1 and max(exc[1:]) > exc[0]))
-    n_force = sum(pt.y.shape[1] for pt in ev_pts)
-    by_total = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, c.delta_bic_heldout,
-                          c.sse_reduction if c.sse_route else None, n_force=n_force,
+    dbic_held = ev.delta_bic_heldout
+    by_total = bool(earns(cur_err, c.error_after, floor, c.delta_bic_fit, dbic_held,
+                          c.sse_reduction if c.sse_route else None, n_force=ev.n_force,
                           criterion=criterion))
     # a generator effect earns on its own channel (the voltage) whatever the force's
     # excess: the held-out ΔBIC with a variance per channel, the force kept
     by_channel, own_txt = False, ""
-    own_ch = [q for q in (getattr(member, "own_channels", None) or ()) if q < len(ch_n)]
-    if own_ch and len(ch_n) > 1 and not by_total and not any(
-            acts_on_generator(q) for q in list(getattr(crig, "components", ()))[:-1]):
-        neff = channel_effective_samples(
-            ev_pts, cur_ev_pred if cur_ev_pred is not None else ev_pred)
-        own_red = channel_sse_excess_reduction(ch_sse0[own_ch], ch_sse1[own_ch], ch_n[own_ch],
-                                               criterion)
-        dbic_ch = channel_delta_bic(ch_sse0, ch_sse1, neff, k)
-        force_kept = (c.error_after <= cur_err + force_resolution(floor, n_force)
-                      or not refuted_by_channel(ch_sse0[0], ch_sse1[0], k, neff[0]))
-        by_channel = earns_on_own_channel(own_red, c.delta_bic_fit, dbic_ch, force_kept,
+    own = ev.own_channels
+    if own and not by_total:
+        own_red = channel_sse_excess_reduction(ev.sse_before[own], ev.sse_after[own],
+                                               ev.n[own], criterion)
+        force_kept = (c.error_after <= cur_err + force_resolution(floor, ev.n_force)
+                      or not refuted_by_channel(ev.sse_before[0], ev.sse_after[0], ev.k,
+                                                ev.force_n_eff))
+        by_channel = earns_on_own_channel(own_red, c.delta_bic_fit, ev.own_dbic, force_kept,
                                           criterion)
-        own_txt = (f", own channel{'s' if len(own_ch) > 1 else ''} "
-                   f"{','.join(map(str, own_ch))}: SSE excess reduced "
+        own_txt = (f", own channel{'s' if len(own) > 1 else ''} "
+                   f"{','.join(map(str, own))}: SSE excess reduced "
                    + (f"{100 * own_red:.0f} %" if own_red is not None else "n/a")
-                   + f", held-out dBIC per channel {dbic_ch:.1f}, force "
+                   + f", held-out dBIC per channel {ev.own_dbic:.1f}, force "
                    + ("kept" if force_kept else "refuted"))
     # the effect's own evidence: the same likelihood evidence, and its practical size
     # judged per block of the held-out records (documented disturbances masked), so
     # that an effect another one dominates in a few blocks is not vetoed
     by_own = False
-    if cur_ev_pred is not None:
-        red = block_excess_reductions(ev_pts, cur_ev_pred, ev_pred,
-                                      masks if held_pts else None, criterion.blocks_per_test,
-                                      criterion.min_excess_over_floor ** 2)
+    if ev.block_reductions is not None:
         by_own, c.block_reduction, c.blocks_judged = own_evidence(
-            red, criterion.min_excess_reduction)
+            ev.block_reductions, criterion.min_excess_reduction)
         by_own = (by_own and c.delta_bic_fit < criterion.dbic_max
-                  and c.delta_bic_heldout < criterion.dbic_max and c.error_after <= cur_err)
+                  and dbic_held < criterion.dbic_max and c.error_after <= cur_err)
     record_verdict(c, (by_total or by_channel or by_own) and c.resolved,
                    "total excess" if by_total else "own channel" if by_channel
                    else "own evidence")
-    if (c.earns and impact_record(res) is None and comps[name].transmission
-            and len(ch_n) > 1 and refuted_by_rotor_channel(
-                ch_sse0[1], ch_sse1[1], k, n_eff_held if held_pts else n_eff_fit)):
-        withdraw(c, f"{name}: refuted by the voltage (the rotor's speed): its held-out voltage "
-                    f"SSE grows {ch_sse0[1] / ch_n[1]:.3g} -> {ch_sse1[1] / ch_n[1]:.3g} per "
-                    f"sample", say)
-    if impact_record(res) is not None and cur_ev_pred is not None:
-        judge_on_impacts(c, res, ev_pts, cur_ev_pred, ev_pred, crig, say, criterion)
-        c.channel_dbic = []  # judged on impacts: its sample-wise channels are not evidence
-    # a bound counts where it is active: the unconstrained step from the fit crosses it
-    step = (None if impact_record(res) is not None or not hasattr(crig, "model") else
-            (lambda: unconstrained_step(fit_pts, crig, res.parameters, comp_params)))
-    refuse_at_bound(c, comps[name].parameters, member, say, step, criterion)
-    c.predictions = pf + ph
-    c.per_test_after = [force_relative_error_percent(y[0][pt.weight > 0], pt.y[0][pt.weight > 0])
-                        for y, pt in zip(c.predictions, fit_pts + held_pts)]
+    if (c.earns and ev.impact is None and ev.transmission and len(ev.n) > 1
+            and refuted_by_rotor_channel(ev.sse_before[1], ev.sse_after[1], ev.k, ev.n_eff)):
+        withdraw(c, f"{c.effect}: refuted by the voltage (the rotor's speed): its held-out "
+                    f"voltage SSE grows {ev.sse_before[1] / ev.n[1]:.3g} -> "
+                    f"{ev.sse_after[1] / ev.n[1]:.3g} per sample", say)
+    if ev.impact is not None:
+        judge_on_impacts(c, ev.impact, say, criterion)
+    refuse_at_bound(c, say)
+    res = c.fit
     pars = ", ".join(f"{n} {v:.3g}" + (f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv else "")
                      for (n, v), iv in zip(c.parameters.items(), c.intervals.values()))
     sse_txt = f", SSE excess reduced {100 * c.sse_reduction:.0f} %" \
         if c.sse_reduction is not None else ""
     blk = (f", median block excess reduced {100 * c.block_reduction:.0f} % over "
            f"{c.blocks_judged} blocks" if math.isfinite(c.block_reduction) else "")
-    say(f"{name}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
+    say(f"{c.effect}: {res.message}, dBIC fit {c.delta_bic_fit:.1f}, held-out "
         f"{c.delta_bic_heldout:.1f}, error {c.error_before:.3f} -> {c.error_after:.3f} % "
         f"(excess reduced {100 * c.excess_reduction:.0f} %{sse_txt}{blk}{own_txt}; "
         f"{res.seconds:.1f} s)"
@@ -406,14 +368,12 @@ def judge_candidate(c: Any, out: tuple, *, member, comps, fit_pts, held_pts, sse
         f"{' AT BOUND' if c.at_bound else ''}; {pars}")
 
 
-def judge_on_impacts(c: Any, res: Any, ev_pts, cur_pred, cand_pred, crig: Any, say,
-                     criterion: Criterion = DEFAULT_CRITERION) -> None:
-    """The verdict of the impact-fitted contact ``c`` (its fit ``res`` from the
-    impact-aware search): judged on the evaluation tests' transient energies and
-    kinematic gaps (:func:`~.impact_verdict.impact_verdict_record`): earns when its
-    held-out feature objective is at most ``criterion.impact_earn_objective`` and at most
+def judge_on_impacts(c: Any, rec: dict, say, criterion: Criterion = DEFAULT_CRITERION) -> None:
+    """The verdict of the impact-fitted contact ``c`` from its transient-energy record
+    ``rec`` (:func:`~.impact_verdict.impact_verdict_record`: the evaluation tests'
+    transient energies and kinematic gaps): earns when its held-out feature objective
+    is at most ``criterion.impact_earn_objective`` and at most
     ``criterion.impact_earn_share`` of the current model's, and its size is resolved."""
-    rec = impact_verdict_record(c, res, ev_pts, cur_pred, cand_pred, crig, say)
     before, after = rec["heldout_objective_before"], rec["heldout_objective_after"]
     ok = impact_earns(before, after, criterion)
     rec["earns"] = ok
@@ -435,13 +395,12 @@ def impact_earns(before: float, after: float, criterion: Criterion = DEFAULT_CRI
                 and after <= criterion.impact_earn_share * before)
 
 
-def refuse_at_bound(c: Any, specs: Sequence[Any], member: Any, say: Any = None, step: Any = None,
-                    criterion: Criterion = DEFAULT_CRITERION) -> bool:
-    """Set ``c.at_bound`` (:func:`~.bounds.at_bound_names`, within
-    ``criterion.at_bound_rel`` of a bound that the unconstrained ``step`` says is active)
-    and withdraw its verdict when it is not empty: an unphysical fit does not earn.
-    Returns whether it was at a bound."""
-    names = at_bound_names(c, specs, member, say, step, criterion.at_bound_rel)
+def refuse_at_bound(c: Any, say: Any = None) -> bool:
+    """Withdraw the verdict of ``c`` when it is at an active bound (``c.at_bound``, set
+    by :func:`~.bounds.at_bound_names` within ``criterion.at_bound_rel`` of a bound the
+    unconstrained step says is active): an unphysical fit does not earn.  Returns
+    whether it was at a bound."""
+    names = list(getattr(c, "at_bound", ()))
     if names and c.earns:
         withdraw(c, f"{c.effect}: at bound ({', '.join(names)} on the edge of its physical "
                     f"range): an unphysical fit, not earned", say)

@@ -8,7 +8,7 @@ import pytest
 
 from ehsa_opt.datasets.synthetic import PROTOTYPE_FRICTION, SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.discrepancy import Rig
-from ehsa_opt.estimation.discrepancy.bounds import at_bound, unconstrained_step
+from ehsa_opt.estimation.discrepancy.bounds import at_bound, at_bound_names, unconstrained_step
 from ehsa_opt.estimation.discrepancy.judge import refuse_at_bound
 from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
 from ehsa_opt.physics import make_component
@@ -54,6 +54,12 @@ def test_an_undetermined_parameter_near_its_edge_stays_at_bound():
     assert at_bound(p, COMP.parameters, step=st) == NAMES
 
 
+def _refused(c, specs, member, say=None, step=None):
+    """The bound check as the search makes it: measured, then judged."""
+    at_bound_names(c, specs, member, say, step)
+    return refuse_at_bound(c, say)
+
+
 class _C:
     def __init__(self, parameters):
         self.parameters, self.earns, self.earns_by, self.effect = parameters, True, "x", "w"
@@ -67,11 +73,11 @@ def test_refuse_at_bound_asks_for_the_step_only_near_an_edge():
         return {"winding_heating_K_per_J": -2.0, "winding_cooling_time_s": 0.0}
 
     c = _C({"winding_heating_K_per_J": 3.0, "winding_cooling_time_s": 5.0})
-    assert not refuse_at_bound(c, COMP.parameters, None, step=step) and not calls
+    assert not _refused(c, COMP.parameters, None, step=step) and not calls
     c = _C({"winding_heating_K_per_J": 9.8, "winding_cooling_time_s": 5.0})
     said = []
-    assert not refuse_at_bound(c, COMP.parameters, None, said.append, step) and c.earns
+    assert not _refused(c, COMP.parameters, None, said.append, step) and c.earns
     assert calls and "not active" in said[0]
     c = _C({"winding_heating_K_per_J": 9.8, "winding_cooling_time_s": 5.0})
-    assert refuse_at_bound(c, COMP.parameters, None, step=lambda: {
+    assert _refused(c, COMP.parameters, None, step=lambda: {
         "winding_heating_K_per_J": 0.5}) and not c.earns

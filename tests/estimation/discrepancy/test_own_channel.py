@@ -16,6 +16,7 @@ from ehsa_opt.estimation.discrepancy.channels import (
     refuted_by_channel,
 )
 from ehsa_opt.estimation.discrepancy.evidence import channel_sse, delta_bic, effective_samples, force_error_percent, force_noise_floor_percent, normalised_sse
+from ehsa_opt.estimation.discrepancy.candidate_evidence import measure_candidate
 from ehsa_opt.estimation.discrepancy.judge import earns_on_own_channel, judge_candidate
 from ehsa_opt.estimation.discrepancy.prepared import PreparedTest
 from ehsa_opt.estimation.discrepancy.results import CandidateResult
@@ -107,14 +108,16 @@ def _judge(member, force_change=0.05, already=()):
                         error_before=cur_err)
     said = []
     crig = SimpleNamespace(components=[make_component(n) for n in already] + [comp])
-    judge_candidate(c, ("winding_heating", res, pf, ph, crig),
+    ev_floor = force_noise_floor_percent(held_pts)
+    ev = measure_candidate(c, ("winding_heating", res, pf, ph, crig),
                     member=member, comps={"winding_heating": comp}, fit_pts=fit_pts,
                     held_pts=held_pts, sse_fit=normalised_sse(fit_pts, cf),
                     sse_held=normalised_sse(held_pts, ch),
                     n_eff_fit=effective_samples(fit_pts, cf),
                     n_eff_held=effective_samples(held_pts, ch), cur_err=cur_err,
-                    floor=force_noise_floor_percent(held_pts), ch_sse0=ch_sse0, ch_n=ch_n,
+                    floor=ev_floor, ch_sse0=ch_sse0, ch_n=ch_n,
                     say=said.append, cur_ev_pred=ch)
+    judge_candidate(c, ev, cur_err=cur_err, floor=ev_floor, say=said.append)
     return c, said
 
 

@@ -11,6 +11,7 @@ import pytest
 from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
 from ehsa_opt.estimation.discrepancy.evidence import channel_sse, effective_samples, force_error_percent, force_noise_floor_percent, normalised_sse
 from ehsa_opt.estimation.discrepancy.judge import judge_candidate
+from ehsa_opt.estimation.discrepancy.candidate_evidence import measure_candidate
 from ehsa_opt.estimation.discrepancy.presliding import (
     PRESLIDING_LENGTHS_M,
     adopt_presliding,
@@ -104,13 +105,15 @@ def _judge(fp, fpr, hp, hpr, cand_f, cand_h, presliding):
     cur_err = force_error_percent(hp, hpr)
     c = CandidateResult("compliance", True, 0.5, 0.5, 1, error_before=cur_err)
     said = []
-    judge_candidate(c, ("compliance", res, cand_f, cand_h, SimpleNamespace(components=[comp])),
+    ev_floor = force_noise_floor_percent(hp)
+    ev = measure_candidate(c, ("compliance", res, cand_f, cand_h, SimpleNamespace(components=[comp])),
                     member=CANDIDATES["compliance"], comps={"compliance": comp}, fit_pts=fp,
                     held_pts=hp, sse_fit=normalised_sse(fp, fpr),
                     sse_held=normalised_sse(hp, hpr), n_eff_fit=effective_samples(fp, fpr),
                     n_eff_held=effective_samples(hp, hpr), cur_err=cur_err,
-                    floor=force_noise_floor_percent(hp), ch_sse0=ch_sse0, ch_n=ch_n,
+                    floor=ev_floor, ch_sse0=ch_sse0, ch_n=ch_n,
                     say=said.append, cur_ev_pred=hpr, laws=presliding)
+    judge_candidate(c, ev, cur_err=cur_err, floor=ev_floor, say=said.append)
     return c, said
 
 

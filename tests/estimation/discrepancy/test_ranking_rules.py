@@ -57,18 +57,21 @@ def test_zero_bounds_and_declared_limits_are_physical():
 
 
 def test_a_member_at_its_bound_does_not_earn():
+    from ehsa_opt.estimation.discrepancy.bounds import at_bound_names
     from ehsa_opt.estimation.discrepancy.judge import refuse_at_bound
     from ehsa_opt.estimation.discrepancy.results import CandidateResult
     said = []
     c = CandidateResult("compliance", True, 0.4, 10.0)
     c.earns, c.earns_by = True, "total excess"
     c.parameters = {"compliance_stiffness_N_per_m": 1e4, "compliance_damping_Ns_per_m": 2e3}
-    assert refuse_at_bound(c, _specs("compliance"), CANDIDATES["compliance"], said.append)
+    at_bound_names(c, _specs("compliance"), CANDIDATES["compliance"], said.append)
+    assert refuse_at_bound(c, said.append)
     assert not c.earns and c.earns_by == "" and c.at_bound == ["compliance_stiffness_N_per_m"]
     assert "at bound" in said[0] and c.as_dict()["at_bound"] == c.at_bound
     # inside its range it keeps what it earned
     c.earns, c.parameters["compliance_stiffness_N_per_m"] = True, 5e5
-    assert not refuse_at_bound(c, _specs("compliance"), CANDIDATES["compliance"])
+    at_bound_names(c, _specs("compliance"), CANDIDATES["compliance"])
+    assert not refuse_at_bound(c)
     assert c.earns and c.at_bound == []
 
 
