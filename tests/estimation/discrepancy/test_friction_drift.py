@@ -96,3 +96,91 @@ def test_the_workflow_names_the_drift_only_when_the_run_order_is_stated(tmp_path
     assert answers[False].effects == [], answers[False].message
     assert answers[False].effect == BASE_INADEQUATE, answers[False].message
     assert "noise floor" in answers[False].message
+
+
+def _thermal_campaign(drop_N: float, tau_s: float, pauses_s, stamped: bool = True):
+    """Six tests run in ``RUN_ORDER`` with ``pauses_s`` between them (one long pause: the
+    grease cools back), each generated with the Coulomb level of a first-order thermal
+    mass heated by |v|, at its mean over the test: F_C = 40 N + drop·h̄/max h̄, h integrated
+    here by explicit steps (an implementation apart from the product's)."""
+    import datetime as dt
+    spec = SyntheticSpec(effects={}, frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(22.0, 100.0),
+                         cycles=2.0, seed=5)
+    grid = generate_bench_tests(spec)
+    order = sorted(range(len(grid)), key=lambda k: RUN_ORDER[k])
+    h, clock, h_start, start_s = 0.0, 0.0, {}, {}
+    for n, k in enumerate(order):
+        if n:
+            h *= math.exp(-pauses_s[n - 1] / tau_s)
+            clock += pauses_s[n - 1]
+        start_s[k] = clock
+        t, x = grid[k].time_s, grid[k].displacement_m
+        v = np.abs(np.gradient(x, t))
+        hs = []
+        for j in range(1, t.size):
+            d = t[j] - t[j - 1]
+            h += d * (v[j] - h / tau_s)
+            hs.append(h)
+        h_start[k] = float(np.mean(hs))  # the test's mean heating: one level per test
+        clock += float(t[-1])
+    top = max(h_start.values())
+    t0 = dt.datetime(2026, 3, 2, 9, 0, tzinfo=dt.timezone.utc)
+    tests = []
+    for k, t in enumerate(grid):
+        d = drop_N * h_start[k] / top
+        fr = replace(PROTOTYPE_FRICTION, nut_coulomb_N=40.0 + d, nut_breakaway_N=60.0 + d)
+        one = generate_bench_tests(replace(spec, friction=fr, frequencies_hz=(t.frequency_hz,),
+                                           loads_ohm=(t.load_ohm,)))[0]
+        tests.append(replace(one, run_order=RUN_ORDER[k],
+                             started_at=t0 + dt.timedelta(seconds=start_s[k]) if stamped
+                             else None))
+    return tests, {k: drop_N * h_start[k] / top for k in range(len(grid))}
+
+
+def test_heating_coordinates_cool_over_the_pauses():
+    """A long pause cools the heating coordinate back towards zero; without stamps the
+    tests are back to back and it only grows."""
+    from ehsa_opt.estimation.discrepancy.campaign_travel import heating_coordinates
+    tests, _ = _thermal_campaign(0.0, 2.0, (0.2, 0.2, 30.0, 0.2, 0.2))
+    pts = prepare_tests(tests, True)
+    h = heating_coordinates(pts, 2.0)
+    by_order = sorted(pts, key=lambda pt: pt.test.run_order)
+    ends = [h[pt.test.file][1][-1] for pt in by_order]
+    starts = [h[pt.test.file][1][0] for pt in by_order]
+    assert starts[3] < 0.01 * ends[2]  # 30 s = 15 τ of cooling
+    flat = heating_coordinates(prepare_tests(_thermal_campaign(0.0, 2.0, (0.2,) * 5,
+                                                               stamped=False)[0], True), 2.0)
+    assert all(v[1][0] > 0.5 * max(w[1][-1] for w in flat.values()) for f, v in flat.items()
+               if next(pt for pt in pts if pt.test.file == f).test.run_order == 4)
+
+
+def test_a_thermal_drift_with_cooling_is_told_from_a_run_in():
+    """Friction falling as the grease warms and recovering over a long pause: the drift
+    is fitted as ``thermal`` (a run-in cannot rise again), its amplitude negative,
+    resolved and within 30 % of the span of the tests' levels, a time constant shorter
+    than the pause, and a lower error on the tests held out (the first after the pause
+    and the hottest)."""
+    tests, truth = _thermal_campaign(-12.0, 2.0, (0.5, 0.5, 30.0, 0.5, 0.5))
+    pts = prepare_tests(tests, True)
+    base = prepare_tests(_thermal_campaign(0.0, 2.0, (0.5, 0.5, 30.0, 0.5, 0.5))[0], True)
+    mean_shift = float(np.mean(list(truth.values())))
+    preds = []
+    for pt, b in zip(pts, base):
+        p = np.array(b.y, copy=True)
+        p[0] = p[0] + mean_shift * np.tanh(b.u[1] / 1e-3)
+        preds.append(p)
+    # held out: the first test after the long pause (cooled) and the last (hottest)
+    held = [k for k, pt in enumerate(pts) if pt.test.run_order in (4, 6)]
+    fit = [k for k in range(len(pts)) if k not in held]
+    fit_pts, fit_pred = [pts[k] for k in fit], [preds[k] for k in fit]
+    held_pts, held_pred = [pts[k] for k in held], [preds[k] for k in held]
+    law = FrictionDrift.fit(fit_pts, fit_pred, held_pts, held_pred, 2000.0, 1000.0)
+    assert law.law == "thermal" and law.pauses_known, law
+    assert law.amplitude_N < 0 and law.resolved
+    assert law.error_after < law.error_before
+    # the truth is one level per test, so what the tests determine is the span of the
+    # levels (hottest − coolest test) and that the grease cooled within the long pause;
+    # τ itself trades with the within-test heating the stepwise truth lacks
+    span = max(truth.values()) - min(truth.values())
+    assert abs(law.amplitude_N) == pytest.approx(span, rel=0.3)
+    assert law.time_constant_s < 30.0

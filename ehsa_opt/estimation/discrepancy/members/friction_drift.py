@@ -1,8 +1,9 @@
 """Member ``friction_drift``: the friction level drifting over the campaign as the rig
-runs in (:mod:`..candidates.friction_drift`: a first-order run-in over the cumulative
-sliding distance, in the tests' run order).  A law member: once it earns, every model
-the search judges carries its own drift term.  Tried only on a campaign whose tests
-state their run order (``run_order`` in ``bench.toml``)."""
+runs in or warms (:mod:`..candidates.friction_drift`: a first-order run-in over the
+cumulative sliding distance, or a first-order thermal mass heated by the friction and
+cooling in the pauses, in the tests' run order).  A law member: once it earns, every
+model the search judges carries its own drift term.  Tried only on a campaign whose tests
+state their run order (``run_order`` or ``started_at`` in ``bench.toml``)."""
 
 from __future__ import annotations
 
@@ -41,13 +42,20 @@ class FrictionDriftMember(Member):
         law = FrictionDrift.fit(t.fit_pts, s.fit_pred, t.held_pts, s.held_pred, s.n_eff_fit,
                                 s.n_eff_held)
         lo, hi = law.interval_N
+        how = (f"over a run-in of {law.run_in_m:.3g} m of sliding (the campaign slides "
+               f"{law.total_travel_m:.3g} m" if law.law == "run_in" else
+               f"at the campaign's hottest point, a thermal mass heated by the friction with "
+               f"a time constant of {law.time_constant_s:.3g} s (pauses between tests "
+               + ("from their started_at stamps" if law.pauses_known else
+                  "unknown: tests taken back to back"))
         msg = (f"friction_drift: the Coulomb level changes by {law.amplitude_N:+.3g} N "
-               f"[{lo:+.3g}, {hi:+.3g}] over a run-in of {law.run_in_m:.3g} m of sliding "
-               f"(the campaign slides {law.total_travel_m:.3g} m, tests in run order: "
+               f"[{lo:+.3g}, {hi:+.3g}] {how}, tests in run order: "
                f"{law.change_over_campaign_N:+.3g} N from its first to its last sample); "
                f"error {law.error_before:.3f} -> {law.error_after:.3f} %, ΔBIC fit "
                f"{law.delta_bic_fit:.1f}, held-out {law.delta_bic_heldout:.1f}")
-        params = {"drift_amplitude_N": law.amplitude_N, "drift_run_in_m": law.run_in_m,
+        params = {"drift_amplitude_N": law.amplitude_N,
+                  **({"drift_run_in_m": law.run_in_m} if law.law == "run_in" else
+                     {"drift_time_constant_s": law.time_constant_s}),
                   "drift_over_campaign_N": law.change_over_campaign_N}
         fields = dict(effect=self.name, applicable=True, score=math.nan, chi2=math.nan,
                       round=1, fitted=True, fit=ctx.base.fit, error_before=law.error_before,
