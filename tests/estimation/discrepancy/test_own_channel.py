@@ -153,3 +153,26 @@ def test_the_own_channel_route_is_for_the_first_generator_effect():
     # the same fit on top of a voltage drop already in the model: the force decides
     c, _ = _judge(CANDIDATES["winding_heating"], already=("voltage_drop",))
     assert not c.earns
+
+
+def test_a_record_members_rival_is_compared_on_the_members_channel():
+    """The voltage share a catalogue rival removes (:func:`channel_excess_reduction`):
+    the whole excess for a candidate with the voltage right, none for one that only
+    changes the force — whatever it does to the force error, which a voltage member
+    leaves as it is."""
+    from types import SimpleNamespace
+    from ehsa_opt.estimation.discrepancy.lag_rival import channel_excess_reduction
+    fit_pts, held_pts, cf, ch, pf, ph = _campaign(3, 0.0)
+    tests = SimpleNamespace(fit_pts=fit_pts, held_pts=held_pts, eval_pts=held_pts)
+    state = SimpleNamespace(eval_pred=lambda: ch)
+    voltage_right = CandidateResult("winding_heating", True, 0.5, 0.5, 1)
+    voltage_right.predictions = pf + ph
+    assert channel_excess_reduction(tests, state, voltage_right, 1) == pytest.approx(1.0,
+                                                                                     abs=0.05)
+    # a force-only change (the force's misfit removed, the voltage as before)
+    force_only = CandidateResult("backlash", True, 0.5, 0.5, 1)
+    force_only.predictions = [np.vstack([pt.y[0], c[1]]) for pt, c in
+                              zip(fit_pts + held_pts, cf + ch)]
+    assert channel_excess_reduction(tests, state, force_only, 1) == pytest.approx(0.0,
+                                                                                  abs=1e-9)
+    assert channel_excess_reduction(tests, state, force_only, 0) > 0.9

@@ -12,7 +12,7 @@ from __future__ import annotations
 from ..baseline import baseline_decimation
 from ..candidates.force_lag import try_lag
 from ..judge import withdraw
-from ..lag_rival import lag_rival
+from ..lag_rival import channel_excess_reduction, lag_rival
 from ..results import CandidateResult
 from .protocol import Attempt, Context, Member
 from .record_change import adopt_record_change, attempt_from_change
@@ -56,21 +56,36 @@ class ForceLagMember(Member):
         adopt_record_change(attempt, ctx)
 
 
-def confirm_record_member(name: str, attempt: Attempt, ctx: Context) -> bool:
+def confirm_record_member(name: str, attempt: Attempt, ctx: Context, ch: int = 0) -> bool:
     """Not adopted when a catalogue member the first round would add, fitted on the
-    record as it is, earns and leaves a lower error (:func:`~..lag_rival.lag_rival`);
-    the withdrawn attempt is kept in the results with the reason noted."""
-    rival = lag_rival(ctx.tests, ctx.state, ctx.settings, attempt.change.error, ctx.say,
-                      ctx.notes)
+    record as it is, earns and accounts for the member's channel ``ch`` better
+    (:func:`~..lag_rival.lag_rival`: on the force a lower held-out force error, on the
+    voltage at least the member's share of the voltage's SSE excess removed); the
+    withdrawn attempt is kept in the results with the reason noted."""
+    if ch == 0:
+        def beats(c) -> bool:
+            return c.error_after < attempt.change.error
+    else:
+        own = attempt.sse_excess_reduction if attempt.sse_excess_reduction is not None else 0.0
+
+        def beats(c) -> bool:
+            return channel_excess_reduction(ctx.tests, ctx.state, c, ch) >= own
+    rival = lag_rival(ctx.tests, ctx.state, ctx.settings, beats, ctx.say, ctx.notes, name)
     if rival is None:
         return True
     cand = CandidateResult(**attempt.fields)
     withdraw(cand, "")
     ctx.results.append(cand)
-    note = (f"{name}: not named — {rival.effect}, fitted on the record as it is, "
-            f"earns and leaves {rival.error_after:.3f} % against {name}'s "
-            f"{attempt.change.error:.3f} %: the member's physics accounts for the force "
-            f"without changing the record")
+    if ch == 0:
+        how = (f"earns and leaves {rival.error_after:.3f} % against {name}'s "
+               f"{attempt.change.error:.3f} %: the member's physics accounts for the force "
+               f"without changing the record")
+    else:
+        how = (f"earns and removes {100 * channel_excess_reduction(ctx.tests, ctx.state, rival, ch):.0f} % "
+               f"of the voltage's SSE excess against {name}'s "
+               f"{100 * (attempt.sse_excess_reduction or 0.0):.0f} %: the member's physics "
+               f"accounts for the voltage without changing the record")
+    note = f"{name}: not named — {rival.effect}, fitted on the record as it is, {how}"
     ctx.say(note)
     ctx.notes.append(note)
     return False

@@ -10,7 +10,8 @@ member fitted on the record as it is accounts for the force better (a mount spri
 the reflected mass is a second-order low-pass too, but it also delays the rotor and thus
 the voltage).  ``voltage_sensor`` is the rival of ``voltage_skew`` on the voltage record
 and is judged on the voltage channel's SSE, the force kept (:func:`~..judge.earns`); it
-too is not adopted when a catalogue member accounts for the record better (a mount
+too is not adopted when a catalogue member accounts for the voltage record better —
+removes at least the share of the voltage's SSE excess the filter removes (a mount
 spring delays the rotor, and so the voltage: on a campaign with a mount compliance and
 a load cell the voltage's "filter" had been named before the compliance was tried)."""
 
@@ -51,7 +52,7 @@ class ForceSensorMember(Member):
         return att
 
     def confirm(self, attempt: Attempt, ctx: Context) -> bool:
-        return confirm_record_member(self.name, attempt, ctx)
+        return confirm_record_member(self.name, attempt, ctx, self.ch)
 
     def adopt(self, attempt: Attempt, ctx: Context) -> None:
         adopt_record_change(attempt, ctx)
