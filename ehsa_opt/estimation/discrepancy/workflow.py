@@ -132,6 +132,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     run_members(RECORD_MEMBERS, ctx)
     skew, law = ctx.skew, ctx.law
     state = run_rounds(tests, state, settings, say, notes, all_cands)
+    state = _late_laws(ctx, state)
     term = None
     if settings.discover:
         term = propose_term(tests.fit_pts, state.fit_pred, tests.eval_pts, state.eval_pred(),
@@ -151,6 +152,19 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
         res.message += (f"; the base model's friction has a presliding transition "
                         f"({tests.evaluation} error without it {law.error_before:.3f} %)")
     return res
+
+
+def _late_laws(ctx: Context, state):
+    """The law members not adopted before the rounds, offered once more on the model the
+    rounds reached: a drift of the friction level hidden under an effect's larger misfit
+    (a cogging's ripple) is judged on the residual that effect leaves.  The model they
+    adopt is the search's last step."""
+    late = [m for m in RECORD_MEMBERS if m.kind == "law" and m.name not in state.effects]
+    if not late or not state.effects:
+        return state
+    ctx.state = state
+    run_members(late, ctx)
+    return ctx.state
 
 
 def load_data(data: BenchData | str | Path, say, notes: list[str]) -> BenchData:
