@@ -16,12 +16,13 @@ from ehsa_opt.estimation.discrepancy.prepared import prepare_tests
 RUN_ORDER = (4, 1, 6, 2, 5, 3)
 
 
-def _campaign(drop_N: float, run_in_share: float, with_order: bool = True):
+def _campaign(drop_N: float, run_in_share: float, with_order: bool = True,
+              effects: dict | None = None):
     """Six tests, each generated with the nut's Coulomb and breakaway levels of the
     moment it was run: F_C = 40 N + drop·(1 − exp(−s/s₀)) at the test's start, s the
     sliding distance of the tests run before (s₀ = share × the campaign's travel)."""
-    spec = SyntheticSpec(effects={}, frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(22.0, 100.0),
-                         cycles=2.0, seed=5)
+    spec = SyntheticSpec(effects=effects or {}, frequencies_hz=(1.0, 2.0, 3.0),
+                         loads_ohm=(22.0, 100.0), cycles=2.0, seed=5)
     grid = generate_bench_tests(spec)
     travel = [float(np.sum(np.abs(np.diff(t.displacement_m)))) for t in grid]
     total = sum(travel)
@@ -184,3 +185,21 @@ def test_a_thermal_drift_with_cooling_is_told_from_a_run_in():
     span = max(truth.values()) - min(truth.values())
     assert abs(law.amplitude_N) == pytest.approx(span, rel=0.3)
     assert law.time_constant_s < 30.0
+
+
+@pytest.mark.slow
+def test_a_drift_hidden_under_a_cogging_is_named_after_it(tmp_path):
+    """A cogging ripple larger than the drift hides it before the rounds; once the
+    cogging is in the model the law member is offered again and the drift is named
+    after it."""
+    from ehsa_opt.datasets.bench_format import write_bench
+    from ehsa_opt.estimation.discrepancy import DiscrepancySettings, run_discrepancy
+    tests, _ = _campaign(-40.0, 0.3, effects={"cogging": {"cogging_sin_Nm": 0.04}})
+    d = tmp_path / "drift_cogging"
+    write_bench(d, tests, harvester=SyntheticSpec().harvester,
+                rig={"name": "run-in", "has_generator": True})
+    said = []
+    res = run_discrepancy(d, DiscrepancySettings(max_effects=2), log=said.append)
+    assert [s["effect"] for s in res.steps] == ["cogging", "friction_drift"], res.message
+    first = next(m for m in said if m.startswith("friction_drift:"))
+    assert "(does not earn)" in first  # hidden before the rounds
