@@ -36,7 +36,9 @@ from ..physics.base_parameters import PARAMETERS
 from ..physics.friction import FRICTION_LAWS
 from ..physics.friction import rod_friction_N
 from ..physics.params import (
+    FRICTION_LAW_NAMES,
     FRICTION_NAMES,
+    PRESLIDING_PARAMETER_NAMES,
     FrictionParams,
     ParameterError,
     check_keys,
@@ -112,11 +114,11 @@ class FrictionSets:
     def to_dict(self) -> dict:
         """The ``friction_sets`` table of identification.json (``min``, ``best``, ``max``,
         ``method``), plus ``paper_min`` / ``paper_max`` when present."""
-        out: dict[str, Any] = {c: getattr(self, c).as_dict() for c in FRICTION_CASES}
+        out: dict[str, Any] = {c: _set_table(getattr(self, c)) for c in FRICTION_CASES}
         out["method"] = self.method
         for c in ("paper_min", "paper_max"):
             if getattr(self, c) is not None:
-                out[c] = getattr(self, c).as_dict()
+                out[c] = _set_table(getattr(self, c))
         return out
 
     @classmethod
@@ -134,14 +136,45 @@ class FrictionSets:
             sets[case] = friction_set(table[case], f"{where}.{case}")
         paper = {c: friction_set(table[c], f"{where}.{c}")
                  for c in ("paper_min", "paper_max") if isinstance(table.get(c), Mapping)}
+        laws = {c: f.friction_law for c, f in sets.items()}
+        if len(set(laws.values())) > 1:
+            raise ParameterError(f"{where}: the cases name different friction laws ("
+                                 + ", ".join(f"{c} {law}" for c, law in laws.items())
+                                 + "); the three cases share one law — re-run `ehsa-opt "
+                                 "identify` or give every case the same friction_law")
         return cls(**sets, method=str(table.get("method", "")), **paper)
+
+    @property
+    def friction_law(self) -> str:
+        """The law the three cases share (``"static"`` or ``"lugre"``)."""
+        return self.best.friction_law
+
+
+def _set_table(fr: FrictionParams) -> dict[str, Any]:
+    """One set as written: the eight parameters of the map, then (LuGre) the law and its
+    parameters; a static set is written as before the law was stored."""
+    return {**fr.as_dict(), **fr.law_dict()}
 
 
 def friction_set(values: Mapping[str, Any], where: str) -> FrictionParams:
     """A received friction set, validated as data: every parameter by name (no default
     fills a missing one, a misspelled name is refused with the nearest valid one), finite
-    numbers, physical (breakaway >= Coulomb >= 0, velocities > 0, viscous >= 0)."""
-    check_keys(values, FRICTION_NAMES, where)
+    numbers, physical (breakaway >= Coulomb >= 0, velocities > 0, viscous >= 0).
+
+    A set without ``friction_law`` is the static law (files written before the law was
+    stored); ``friction_law = "lugre"`` needs both presliding parameters
+    (:data:`~ehsa_opt.physics.params.FRICTION_LAW_NAMES`), ``"static"`` refuses them."""
+    check_keys(values, FRICTION_NAMES + FRICTION_LAW_NAMES, where)
+    law = values.get("friction_law", "static")
+    if law not in FRICTION_LAWS:
+        raise ParameterError(f"{where}: friction_law = {_shown(law)} is not a friction law; "
+                             f"use one of {', '.join(repr(x) for x in FRICTION_LAWS)}")
+    for n in PRESLIDING_PARAMETER_NAMES:
+        v = values.get(n)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))
+                              or not math.isfinite(v)):
+            raise ParameterError(f"{where}: {n} = {_shown(v)} is not a finite number; re-run "
+                                 f"`ehsa-opt identify` or give a number")
     missing = [n for n in FRICTION_NAMES if n not in values]
     if missing:
         raise ParameterError(f"{where}: missing {', '.join(missing)}; a friction set needs all "
