@@ -205,11 +205,17 @@ class QuarterCarModel:
         return (a2, a1), fd_ni, ff, dfb
 
     # ------------------------------------------------------------------ stepping
-    def step_function(self, h: float, opts: dict | None = None) -> ca.Function:
+    def step_function(self, h: float, opts: dict | None = None,
+                      law: str = "static") -> ca.Function:
         """One time step of length ``h`` (s): (z_k, x0_k, x0_k1, p) → (z_k1, y_k1).
 
-        ``y`` holds :data:`STEP_OUTPUT_NAMES`.
+        ``y`` holds :data:`STEP_OUTPUT_NAMES`.  ``law`` is the friction law the graph is
+        built for (``"static"``: the bristle force stays 0; ``"lugre"``); the parameter
+        ``friction_law_lugre`` of each design must say the same (one graph per law keeps
+        the static step as cheap as it was).
         """
+        if law not in ("static", "lugre"):
+            raise ValueError(f"step_function: law must be 'static' or 'lugre', got {law!r}")
         z = ca.SX.sym("z", self.n_states)
         x0a, x0b = ca.SX.sym("x0_k"), ca.SX.sym("x0_k1")
         p = ca.SX.sym("p", self.n_params)
@@ -221,22 +227,23 @@ class QuarterCarModel:
         R, L = q["total_resistance_ohm"], q["inductance_H"]
         x2, x1, v2, v1, i0, fb0 = z[0], z[1], z[2], z[3], z[4], z[5]
         v0 = v2 - v1
-        lugre = q["friction_law_lugre"] > 0.5
+        lugre = law == "lugre"
         sig0, sig1 = q["presliding_stiffness_N_per_m"], q["presliding_damping_Ns_per_m"]
 
         def friction_at(v_new: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
             """(F_f, F_b, dF_b/dt) at the end of the step for stroke velocity v_new."""
+            if not lugre:
+                return _rod_friction(v_new, q), ca.SX(0.0), ca.SX(0.0)
             fb1 = _bristle_step(fb0, v_new, h, q)
             f_lu, rate = _lugre_friction(fb1, v_new, q)
-            return (ca.if_else(lugre, f_lu, _rod_friction(v_new, q)),
-                    ca.if_else(lugre, fb1, 0.0), ca.if_else(lugre, rate, 0.0))
+            return f_lu, fb1, rate
         # electrical: i1 = e i0 + g (a v0 + b v1n)
         lam = h * R / L
         e = ca.exp(-lam)
         phi = (1.0 - e) / lam
         ca_, cb_ = phi - e, 1.0 - phi
         g = ke / (r * R)
-        ff0 = ca.if_else(lugre, _lugre_friction(fb0, v0, q)[0], _rod_friction(v0, q))
+        ff0 = _lugre_friction(fb0, v0, q)[0] if lugre else _rod_friction(v0, q)
         fd0 = kt * i0 / r + ff0
         # forces at k (without the tyre's road term handled separately)
         f2k = -k2 * (x2 - x1) - fd0
@@ -266,9 +273,9 @@ class QuarterCarModel:
         # |F_f − viscous part| is below the static bound B; under LuGre below
         # max(B, |F_b,k|) plus the damping term σ₁ (s(v) − F_b,k)/(φ + h σ₀)
         fbound = _friction_bound(q)
-        lu_bound = (ca.fmax(fbound, ca.fabs(fb0))
-                    + sig1 * (fbound + ca.fabs(fb0)) / (h * sig0))
-        bound = beta * ca.if_else(lugre, lu_bound, fbound) / slope
+        if lugre:
+            fbound = ca.fmax(fbound, ca.fabs(fb0)) + sig1 * (fbound + ca.fabs(fb0)) / (h * sig0)
+        bound = beta * fbound / slope
         lo, hi = rhs / slope - bound - 1e-12, rhs / slope + bound + 1e-12
         vs = ca.SX.sym("vs")
         gfun = vs - rhs + beta * (c1 * vs + friction_at(vs)[0])
@@ -296,7 +303,7 @@ class QuarterCarModel:
         work = 0.5 * (k1 * (x0a - x1) + k1 * (x0b - x1n)) * (x0b - x0a)
         vrel = v2n - v1n
         # dissipated by the friction: F_f v less the bristle spring's storage rate
-        diss = ff1 * vrel - fb1 * rate1 / sig0
+        diss = ff1 * vrel - fb1 * rate1 / sig0 if lugre else ff1 * vrel
         y = ca.vertcat(a2n, x1n - x0b, q["load_ohm"] * i1 ** 2, (kt * i1 / r + ff1) * vrel,
                        diss, vrel, fd1, q["load_ohm"] * i1, work)
         return ca.Function("quarter_car_step", [z, x0a, x0b, p],

@@ -99,3 +99,18 @@ def test_lugre_step_agrees_with_an_accurate_reference_integrator():
     fb_ref = sol.y[5][1:]
     fb = sim.series["bristle_force_N"][0]
     assert np.sqrt(np.mean((fb - fb_ref) ** 2)) < 0.05 * np.sqrt(np.mean(fb_ref ** 2))
+
+
+def test_a_batch_mixing_the_laws_gives_each_design_its_own_result():
+    """Static and LuGre designs run on their own graphs (the static step as cheap as
+    before); in one batch each gets what it gets alone (to round-off: the metrics'
+    reductions run over arrays of another layout)."""
+    road = RoadParams(iso_class="C", speed_km_per_h=100, length_m=120.0, seed=6)
+    frs = [lugre(1e6, 300.0), TRUE_FRICTION, lugre(3e5, 0.0), FrictionParams()]
+    hs = [HarvesterParams(load_ohm=r) for r in (15.0, 47.0, 109.0, 47.0)]
+    both = simulate_quarter_car(VehicleParams(), hs, frs, road, warn=False)
+    for b, (h, f) in enumerate(zip(hs, frs)):
+        alone = simulate_quarter_car(VehicleParams(), h, f, road, warn=False)
+        for key in ("power_W", "comfort", "road_holding", "energy_residual"):
+            assert alone.metrics[key][0] == pytest.approx(both.metrics[key][b], rel=1e-12,
+                                                          abs=1e-15), (key, b)
