@@ -32,8 +32,8 @@ class SimulationResult:
     ----------
     record : mapping
         The metrics (``comfort``, ``comfort_weighted_rms_m_s2``, ``road_holding``,
-        ``power_W``, ``efficiency``, ``peak_current_A`` …), ``road``, ``frictionless``
-        and ``wall_s``: the object ``ehsa-opt simulate --json`` prints.
+        ``power_W``, ``efficiency``, ``peak_current_A`` …), ``road``, ``frictionless``,
+        ``friction_law`` and ``wall_s``: the object ``ehsa-opt simulate --json`` prints.
     run : ProblemSimulation or None
         The simulation itself (series when kept, the problem); None when loaded.
     """
@@ -45,7 +45,7 @@ class SimulationResult:
     def metrics(self) -> dict[str, Any]:
         """The metrics alone."""
         return {k: v for k, v in self.record.items()
-                if k not in ("road", "frictionless", "wall_s")}
+                if k not in ("road", "frictionless", "friction_law", "wall_s")}
 
     @property
     def warnings(self) -> list[str]:

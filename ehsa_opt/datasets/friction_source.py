@@ -3,7 +3,8 @@ everywhere (``simulate``, ``sweep``, ``optimize``, ``reproduce``).
 
 An ``identification.json`` written by ``ehsa-opt identify`` carries a table
 ``friction_sets`` with one :class:`~ehsa_opt.physics.params.FrictionParams` per case
-(the friction parameters' field names)::
+(the friction parameters' field names, and under the LuGre law ``friction_law`` with
+the presliding parameters)::
 
     "friction_sets": {"min": {"nut_coulomb_N": ..., ...}, "best": {...}, "max": {...},
                       "method": "..."}
@@ -11,8 +12,8 @@ An ``identification.json`` written by ``ehsa-opt identify`` carries a table
 A problem file refers to it with ``[friction] from = "out/identification.json"`` and
 ``case = "min" | "best" | "max"`` (path relative to the problem file); the CLI with
 ``--friction FILE[:CASE]`` (case ``best`` by default).  The file is read and validated by
-:mod:`ehsa_opt.datasets.identification_file` (where :class:`FrictionSets` and
-:func:`friction_set` live; re-exported here).
+:mod:`ehsa_opt.datasets.identification_file`; :class:`FrictionSets` and
+:func:`friction_set` live in :mod:`ehsa_opt.datasets.friction_sets` (re-exported here).
 """
 
 from __future__ import annotations
@@ -21,13 +22,8 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..physics.params import FrictionParams, ParameterError, from_mapping
-from .identification_file import (
-    FRICTION_CASES,
-    FrictionSets,
-    campaign_range_m_per_s,
-    friction_set,
-    read_identification,
-)
+from .friction_sets import FRICTION_CASES, FrictionSets, friction_set
+from .identification_file import campaign_range_m_per_s, read_identification
 
 __all__ = ["FRICTION_CASES", "FrictionSets", "parse_friction_spec", "load_friction_sets", "load_friction",
            "friction_from_table", "load_velocity_range", "identified_range_for",

@@ -26,7 +26,6 @@ What is checked (each table when present; files of earlier versions lack some):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -37,12 +36,12 @@ from ..physics.friction import FRICTION_LAWS
 from ..physics.friction import rod_friction_N
 from ..physics.params import (
     FRICTION_NAMES,
-    FrictionParams,
     ParameterError,
     check_keys,
     from_mapping,
     nearest_name,
 )
+from .friction_sets import FRICTION_CASES, FrictionSets, friction_set
 from ..utils.limits import parse_json, read_input_text
 
 __all__ = ["read_identification", "check_identification", "check_law", "check_velocity_range",
@@ -50,8 +49,6 @@ __all__ = ["read_identification", "check_identification", "check_law", "check_ve
            "ORDER_TOLERANCE_N", "PSD_TOLERANCE", "RERUN", "identified_lead_m_per_rad",
            "bench_harvester", "FRICTION_CASES", "FrictionSets", "friction_set"]
 
-#: The friction cases an identification result provides.
-FRICTION_CASES: tuple[str, ...] = ("min", "best", "max")
 
 #: Largest stroke velocity a bench test or an identified range may state, m/s: the fastest
 #: servo-hydraulic damper rigs reach about 5 m/s; twice that is no measurement.
@@ -67,92 +64,6 @@ ORDER_TOLERANCE_N = 1e-6
 PSD_TOLERANCE = 1e-8
 #: The fix for a damaged result.
 RERUN = "re-run `ehsa-opt identify` (or restore the file it wrote)"
-
-
-@dataclass(frozen=True)
-class FrictionSets:
-    """The identified friction cases, with the one meaning they have everywhere.
-
-    ``min`` ≤ ``best`` ≤ ``max`` in rod friction at every velocity when ``method`` is the
-    data-supported one of :mod:`ehsa_opt.estimation.bounds` (the envelope of the tests
-    and, beyond them, the best law's band); ``best`` is the law the data support best.
-    The paper's per-parameter minimum and maximum over the tests, which over-state the
-    spread, are kept apart as ``paper_min`` / ``paper_max``.
-
-    Attributes
-    ----------
-    min, best, max : FrictionParams
-        The three cases (N, m/s, N s/m at the nut; N m, rad/s, N m s/rad at the bearings).
-    method : str
-        How they were built (identification.json ``friction_sets.method``).
-    paper_min, paper_max : FrictionParams or None
-        The paper's per-parameter sets, when the identification made them.
-    """
-
-    min: FrictionParams
-    best: FrictionParams
-    max: FrictionParams
-    method: str = ""
-    paper_min: FrictionParams | None = None
-    paper_max: FrictionParams | None = None
-
-    def bounds(self, method: str = "data") -> tuple[FrictionParams, FrictionParams]:
-        """(min, max) of ``method``: ``"data"`` the data-supported sets, ``"paper"`` the
-        paper's per-parameter ones (ValueError when they were not made)."""
-        if method == "data":
-            return self.min, self.max
-        if method != "paper":
-            raise ValueError(f"FrictionSets.bounds: method must be 'data' or 'paper', got "
-                             f"{method!r}")
-        if self.paper_min is None or self.paper_max is None:
-            raise ValueError("FrictionSets.bounds: no paper's per-parameter sets (the "
-                             "identification had fewer than two converged tests)")
-        return self.paper_min, self.paper_max
-
-    def to_dict(self) -> dict:
-        """The ``friction_sets`` table of identification.json (``min``, ``best``, ``max``,
-        ``method``), plus ``paper_min`` / ``paper_max`` when present."""
-        out: dict[str, Any] = {c: getattr(self, c).as_dict() for c in FRICTION_CASES}
-        out["method"] = self.method
-        for c in ("paper_min", "paper_max"):
-            if getattr(self, c) is not None:
-                out[c] = getattr(self, c).as_dict()
-        return out
-
-    @classmethod
-    def from_dict(cls, table: Mapping[str, Any], where: str = "friction_sets"
-                  ) -> "FrictionSets":
-        """Inverse of :meth:`to_dict`; every set validated as received data
-        (:func:`friction_set`), a missing case refused with the fix."""
-        if not isinstance(table, Mapping):
-            raise ParameterError(f"{where}: must be a table of the cases "
-                                 f"{', '.join(FRICTION_CASES)}; re-run `ehsa-opt identify`")
-        sets = {}
-        for case in FRICTION_CASES:
-            if not isinstance(table.get(case), Mapping):
-                raise ParameterError(f"{where}: no '{case}' case; re-run `ehsa-opt identify`")
-            sets[case] = friction_set(table[case], f"{where}.{case}")
-        paper = {c: friction_set(table[c], f"{where}.{c}")
-                 for c in ("paper_min", "paper_max") if isinstance(table.get(c), Mapping)}
-        return cls(**sets, method=str(table.get("method", "")), **paper)
-
-
-def friction_set(values: Mapping[str, Any], where: str) -> FrictionParams:
-    """A received friction set, validated as data: every parameter by name (no default
-    fills a missing one, a misspelled name is refused with the nearest valid one), finite
-    numbers, physical (breakaway >= Coulomb >= 0, velocities > 0, viscous >= 0)."""
-    check_keys(values, FRICTION_NAMES, where)
-    missing = [n for n in FRICTION_NAMES if n not in values]
-    if missing:
-        raise ParameterError(f"{where}: missing {', '.join(missing)}; a friction set needs all "
-                             f"{len(FRICTION_NAMES)} parameters ({', '.join(FRICTION_NAMES)}) — "
-                             f"re-run `ehsa-opt identify` or complete the set")
-    for n in FRICTION_NAMES:
-        v = values[n]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ParameterError(f"{where}: {n} = {v!r} is not a finite number; re-run "
-                                 f"`ehsa-opt identify` or give a number")
-    return from_mapping(FrictionParams, values, where)
 
 
 def _fail(where: str, what: str) -> ParameterError:

@@ -451,9 +451,8 @@ def _out_of_range(cfg: DesignConfig, ev: Any, design: Mapping[str, float],
 def _friction_block(ev: Any, labels: Sequence[str]) -> dict[str, Any] | None:
     if not hasattr(ev, "frictions"):
         return None
-    from dataclasses import asdict
     return {"mode": ev.mode, "labels": list(labels),
-            "sets": [asdict(f) for f in ev.frictions],
+            "sets": [{**f.as_dict(), **f.law_dict()} for f in ev.frictions],
             "method": "stochastic equivalent linearisation (ehsa_opt.vehicle.fast_path.linearisation)"}
 
 

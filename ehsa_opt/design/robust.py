@@ -21,7 +21,7 @@ same friction and mode (the reference check of every optimum).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -140,7 +140,7 @@ class FrictionObjectives(QuarterCarObjectives):
     def fingerprint(self) -> dict[str, Any]:
         fp = super().fingerprint()
         fp.update({"kind": "quarter_car_friction_equivalent", "mode": self.mode,
-                   "frictions": [asdict(f) for f in self.frictions]})
+                   "frictions": [{**f.as_dict(), **f.law_dict()} for f in self.frictions]})
         return fp
 
 

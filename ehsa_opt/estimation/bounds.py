@@ -59,7 +59,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from scipy import stats
 
-from ..physics.params import FRICTION_NAMES, FrictionParams, ParameterError
+from ..physics.params import (FRICTION_LAW_NAMES, FRICTION_NAMES, PRESLIDING_PARAMETER_NAMES,
+                              FrictionParams, ParameterError)
 from ..utils.io import json_safe
 from .ordered_sets import ENVELOPE_PARAMETERS, fit_envelope, friction_set, ordered_set, rod_curve_N
 from .test_velocity import test_peak_velocity_m_per_s, test_velocity_range_m_per_s
@@ -196,7 +197,7 @@ class FrictionBounds:
         identification.json (standard-JSON types; :meth:`from_dict` reloads them)."""
         def arr(a: np.ndarray) -> list:
             return [None if not np.isfinite(x) else float(x) for x in np.asarray(a).ravel()]
-        sets = {c: fr.as_dict() for c, fr in self.sets.items()}
+        sets = {c: {**fr.as_dict(), **fr.law_dict()} for c, fr in self.sets.items()}
         sets["method"] = self.method
         env = {"velocity_m_per_s": arr(self.velocity_m_per_s), "lower_N": arr(self.lower_N),
                "upper_N": arr(self.upper_N), "mean_N": arr(self.mean_N),
@@ -269,7 +270,8 @@ class FrictionBounds:
             return None if lo is None or hi is None else np.vstack([arr(lo), arr(hi)])
 
         def params(d: Mapping[str, Any]) -> FrictionParams:
-            return FrictionParams(**{n: float(d[n]) for n in FRICTION_NAMES})
+            law = {n: d[n] for n in FRICTION_LAW_NAMES if n in d}
+            return FrictionParams(**{n: float(d[n]) for n in FRICTION_NAMES}, **law)
 
         cases = [c for c in sets if c != "method"]
         per = env.get("per_test_N") or {}
@@ -374,6 +376,9 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
     lo_m, hi_m = _set_margins(v, env, v_data, rod_best, stat)
     sets = {"min": ordered_set(best, v, lo_m, lead, "below", gen), "best": best,
             "max": ordered_set(best, v, hi_m, lead, "above", gen)}
+    bristle = presliding_law(report, good)
+    if bristle:  # the sets bound the steady state; the bristle is the identified one
+        sets = {c: fr.with_law("lugre", **bristle) for c, fr in sets.items()}
     paper = (paper_friction_sets(report.bounds, gen, fill=good[0][1].parameters)
              if report.bounds else {})
     return FrictionBounds(v, env.per_test, env.lower, env.upper, env.mean, env.ci, sets,
@@ -385,6 +390,21 @@ def friction_bounds(report: Any, n_grid: int = 48, v_max_m_per_s: float = V_MAX_
                           np.vstack([rod_best - lo_m, rod_best + hi_m]),
                           (v_lo, v_data), dict(zip([t.file for t, _ in good], vpeak.tolist())),
                           law.to_dict(), level)
+
+
+def presliding_law(report: Any, good: Sequence[tuple[Any, Any]]) -> dict[str, float]:
+    """The presliding parameters the friction sets carry under the LuGre law (``{}`` under
+    the static law): the joint fit's when it converged, else the median over the
+    successful per-test fits (N/m, N s/m).  The three sets share them: the sets bound the
+    steady-state friction, the bristle is the identified one."""
+    if getattr(report, "friction_law", "static") != "lugre":
+        return {}
+    joint = getattr(report, "joint", None)
+    if joint is not None and joint.success and all(
+            joint.parameters.get(n) is not None for n in PRESLIDING_PARAMETER_NAMES):
+        return {n: float(joint.parameters[n]) for n in PRESLIDING_PARAMETER_NAMES}
+    return {n: float(np.median([f.parameters[n] for _, f in good]))
+            for n in PRESLIDING_PARAMETER_NAMES}
 
 
 def _usable_fits(report: Any) -> tuple[list, np.ndarray]:

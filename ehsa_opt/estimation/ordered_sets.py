@@ -122,22 +122,28 @@ def ordered_set(best: FrictionParams, v: np.ndarray, margin_N: np.ndarray, lead:
     ok = np.isfinite(margin) & (v > 0)
     v, margin = v[ok], np.maximum(margin[ok], 0.0)
     names, Phi, have = _basis(v, best, lead, has_generator)
-    # a Coulomb level or a Stribeck hump (peak = its amount) never larger than the
-    # largest margin: without it a tall narrow hump below the grid's first velocity would
-    # meet a low-velocity margin "cheaply" (its tail) with an absurd breakaway force
-    cap = float(np.max(margin)) if margin.size else 0.0
-    ub = np.array([np.inf if "viscous" in n else cap * (lead if n.startswith("bearing") else 1.0)
-                   for n in names])
     if side == "below":
+        # take away at most what the best set has (zero friction is the floor); all of it
+        # meets every margin, since the margin is clipped to the best set's friction
         margin = np.minimum(margin, np.asarray(rod_friction_N(v, best, lead), dtype=float))
-        ub = np.minimum(ub, np.maximum(have, 0.0))
+        ub = np.maximum(have, 0.0)
+    else:
+        # an added Coulomb level or Stribeck hump (peak = its amount) never larger than
+        # the largest margin: without it a tall narrow hump below the grid's first
+        # velocity would meet a low-velocity margin "cheaply" (its tail) with an absurd
+        # breakaway force.  (Not on the side below: there the clipped margin can be the
+        # whole of the best set's friction at a velocity where a shape is far from its
+        # peak, which only the whole amount it has meets.)
+        cap = float(np.max(margin)) if margin.size else 0.0
+        ub = np.array([np.inf if "viscous" in n else
+                       cap * (lead if n.startswith("bearing") else 1.0) for n in names])
     # columns scaled to unit maximum on the grid (conditioning)
     colmax = np.maximum(Phi.max(axis=0), 1e-300)
     A = Phi / colmax
     w = np.full(v.size, 1.0 / v.size)
     res = optimize.linprog(c=w @ A, A_ub=-A, b_ub=-margin,
                            bounds=list(zip(np.zeros(have.size), ub * colmax)), method="highs")
-    if not res.success:   # cannot happen for "below" (all of it) nor "above" (viscous grows)
+    if not res.success:   # cannot happen: "below" is met by all of it, "above" by viscous
         raise RuntimeError(f"ordered_set ({side}): linear programme failed: {res.message}")
     delta = res.x / colmax
     return _shifted(best, names, delta, -1.0 if side == "below" else 1.0)

@@ -38,6 +38,8 @@ __all__ = [
     "RoadParams",
     "VEHICLE_PRESETS",
     "FRICTION_NAMES",
+    "FRICTION_LAW_NAMES",
+    "PRESLIDING_PARAMETER_NAMES",
     "FRICTION_RANGES",
     "ISO_CLASSES",
     "ISO_CLASS_LEVELS",
@@ -255,6 +257,16 @@ FRICTION_NAMES: tuple[str, ...] = (
     "bearing_viscous_Nms_per_rad",
 )
 
+#: Friction laws a friction set may name (the models' list is
+#: :data:`~ehsa_opt.physics.friction.FRICTION_LAWS`; the same two).
+_FRICTION_LAWS: tuple[str, ...] = ("static", "lugre")
+#: Parameters of the LuGre law in a friction set (declared in
+#: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`).
+PRESLIDING_PARAMETER_NAMES: tuple[str, ...] = ("presliding_stiffness_N_per_m",
+                                               "presliding_damping_Ns_per_m")
+#: Every key of a friction set: the eight of the map, the law and its parameters.
+FRICTION_LAW_NAMES: tuple[str, ...] = ("friction_law", *PRESLIDING_PARAMETER_NAMES)
+
 #: Distributor ranges for random initial points (an assumption): the start ranges of
 #: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`.
 FRICTION_RANGES: dict[str, tuple[float, float]] = {n: PARAMETERS[n].start for n in FRICTION_NAMES}
@@ -279,6 +291,14 @@ class FrictionParams:
     Constraints: breakaway ≥ Coulomb ≥ 0, breakaway velocities > 0, viscous ≥ 0.
     The defaults are the frictionless case.  Units, physical bounds and start ranges are
     those of :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`.
+
+    Friction law (:data:`FRICTION_LAW_NAMES`): ``friction_law = "static"`` (the default)
+    is the map above; ``"lugre"`` makes that map the steady state of a LuGre bristle of
+    stiffness ``presliding_stiffness_N_per_m`` (σ₀, N/m) and damping
+    ``presliding_damping_Ns_per_m`` (σ₁, N s/m) carrying the rod's whole friction
+    (:mod:`~ehsa_opt.physics.friction`); both are required with ``"lugre"`` and refused
+    with ``"static"``.  The static law is the limit σ₀ → ∞.  :meth:`as_array` and
+    :meth:`as_dict` hold the eight parameters of the map only; :meth:`law_dict` the law.
     """
 
     nut_breakaway_N: float = _declared("nut_breakaway_N", 0.0)
@@ -290,9 +310,25 @@ class FrictionParams:
     bearing_breakaway_velocity_rad_per_s: float = _declared("bearing_breakaway_velocity_rad_per_s",
                                                             1.0)
     bearing_viscous_Nms_per_rad: float = _declared("bearing_viscous_Nms_per_rad", 0.0)
+    friction_law: str = "static"
+    presliding_stiffness_N_per_m: float | None = _declared("presliding_stiffness_N_per_m", None)
+    presliding_damping_Ns_per_m: float | None = _declared("presliding_damping_Ns_per_m", None)
 
     def __post_init__(self) -> None:
         _validate_numbers(self, "friction")
+        law = self.friction_law
+        if law not in _FRICTION_LAWS:
+            raise ParameterError(f"friction: friction_law = {law!r} is not a friction law; use "
+                                 f"one of {', '.join(repr(x) for x in _FRICTION_LAWS)}")
+        given = [n for n in PRESLIDING_PARAMETER_NAMES if getattr(self, n) is not None]
+        if law == "static" and given:
+            raise ParameterError(f"friction: {', '.join(given)} belong(s) to the LuGre law; "
+                                 f"set friction_law = \"lugre\" or remove them")
+        if law == "lugre" and len(given) < len(PRESLIDING_PARAMETER_NAMES):
+            missing = [n for n in PRESLIDING_PARAMETER_NAMES if n not in given]
+            raise ParameterError(f"friction: friction_law = \"lugre\" needs "
+                                 f"{', '.join(missing)} (bristle stiffness sigma_0 in N/m, "
+                                 f"damping sigma_1 in N s/m)")
         if self.nut_breakaway_N < self.nut_coulomb_N:
             raise ParameterError(
                 f"friction: nut_breakaway_N ({self.nut_breakaway_N:g}) must be >= nut_coulomb_N "
@@ -312,7 +348,26 @@ class FrictionParams:
         return cls(**{n: float(v) for n, v in zip(FRICTION_NAMES, values, strict=True)})
 
     def as_dict(self) -> dict[str, float]:
+        """The eight parameters of the map by name (the law: :meth:`law_dict`)."""
         return dict(zip(FRICTION_NAMES, self.as_array()))
+
+    def law_dict(self) -> dict[str, Any]:
+        """``{}`` for the static law; else ``friction_law`` and its parameters by name."""
+        if self.friction_law == "static":
+            return {}
+        return {"friction_law": self.friction_law,
+                **{n: getattr(self, n) for n in PRESLIDING_PARAMETER_NAMES}}
+
+    def with_law(self, law: str = "static", **parameters: float) -> "FrictionParams":
+        """The same map under ``law`` with its parameters (none for ``"static"``)."""
+        keep = {n: None for n in PRESLIDING_PARAMETER_NAMES}
+        keep.update(parameters)
+        return dataclasses.replace(self, friction_law=law, **keep)
+
+    @property
+    def is_static(self) -> bool:
+        """True under the static law."""
+        return self.friction_law == "static"
 
     @property
     def is_frictionless(self) -> bool:

@@ -36,8 +36,10 @@ __all__ = ["step_quarter_car_paths", "step_fig13", "step_fig14", "step_fig15_16"
 def friction_inputs(ctx: Context) -> Any:
     """What the friction cases depend on (for the step cache)."""
     sets = ctx.friction_sets()
-    return {"quick": ctx.quick, "friction_min": sets and sets.min.as_dict(),
-            "friction_max": sets and sets.max.as_dict(), "context": ctx.inputs()}
+    return {"quick": ctx.quick,
+            "friction_min": sets and {**sets.min.as_dict(), **sets.min.law_dict()},
+            "friction_max": sets and {**sets.max.as_dict(), **sets.max.law_dict()},
+            "context": ctx.inputs()}
 
 
 def _not_applicable(ctx: Context) -> StepOutput | None:

@@ -70,6 +70,7 @@ class ProblemSimulation:
         out["road"] = self.simulation.road_source
         fr = self.problem.friction
         out["frictionless"] = fr is None or fr.is_frictionless
+        out["friction_law"] = "static" if fr is None else fr.friction_law
         out["wall_s"] = round(self.simulation.stats["wall_s"], 4)
         return json.dumps(json_safe(out), allow_nan=False)  # inf/NaN -> null
 
@@ -93,8 +94,12 @@ class ProblemSimulation:
     def summary(self) -> str:
         """The head line and the table ``ehsa-opt simulate`` prints."""
         sim = self.simulation
+        fr = self.problem.friction
+        law = ("" if fr is None or fr.is_static else
+               f" (LuGre law: sigma_0 {fr.presliding_stiffness_N_per_m:.3g} N/m, sigma_1 "
+               f"{fr.presliding_damping_Ns_per_m:.3g} N s/m)")
         lines = [f"{self.problem_path}: {sim.road_source}, "
-                 f"{'frictionless' if self.problem.friction is None else 'with friction'}, "
+                 f"{'frictionless' if fr is None else 'with friction' + law}, "
                  f"{sim.stats['steps']} steps in {sim.stats['wall_s']:.2f} s"]
         lines += [f"  {label:<40s} {'n/a' if value is None else format(value, '.4g')}"
                   for label, value in self.rows()]

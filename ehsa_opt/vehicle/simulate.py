@@ -76,8 +76,9 @@ class RoadHoldingWarning(UserWarning):
 
 
 @functools.lru_cache(maxsize=8)
-def compiled_step(h: float, jit: bool = True) -> tuple[ca.Function, bool]:
-    """The quarter-car step for step ``h`` (s), compiled when a C compiler works
+def compiled_step(h: float, jit: bool = True, law: str = "static") -> tuple[ca.Function, bool]:
+    """The quarter-car step for step ``h`` (s) under friction law ``law``, compiled when a
+    C compiler works
     (:func:`ehsa_opt.utils.jit_cache.compiled`: once per generated code, then loaded from
     the per-user cache).
 
@@ -86,7 +87,7 @@ def compiled_step(h: float, jit: bool = True) -> tuple[ca.Function, bool]:
     (casadi.Function, bool)
         The step function and whether it is compiled.
     """
-    step = QuarterCarModel().step_function(h)
+    step = QuarterCarModel().step_function(h, law=law)
     fast = compiled(step) if jit else None  # from the per-user cache after the first run
     return (step, False) if fast is None else (fast, True)
 
@@ -103,7 +104,7 @@ _CASADI_LOCK = threading.Lock()
 
 @functools.lru_cache(maxsize=32)
 def _block_function(h: float, jit: bool, n_designs: int,
-                    n_steps: int = _BLOCK_STEPS) -> ca.Function:
+                    n_steps: int = _BLOCK_STEPS, law: str = "static") -> ca.Function:
     """``n_steps`` steps of ``n_designs`` designs on one road signal, built once per
     structure and cached (:func:`batch_graph_cache_info` counts the builds).
 
@@ -111,7 +112,7 @@ def _block_function(h: float, jit: bool, n_designs: int,
     y (9, B n)); the columns are time-major (step k, design b at column k B + b), so
     consecutive blocks of a run are consecutive rows of a C-ordered (N, B, ·) array.
     """
-    step, _ = compiled_step(h, jit)
+    step, _ = compiled_step(h, jit, law)
     designs = step.map("designs", "serial", n_designs, [1, 2], [])
     roll = designs.mapaccum("roll", n_steps, [0], [0])
     z = ca.MX.sym("z", step.size1_in(0), n_designs)
@@ -142,8 +143,17 @@ def _run_designs(params: np.ndarray, x_pad: np.ndarray, z0: np.ndarray, h: float
     b = params.shape[1]
     n = x_pad.size - 1
     nb = _BLOCK_STEPS
+    lugre = params[PARAM_NAMES.index("friction_law_lugre")] > 0.5
+    if lugre.any() and not lugre.all():  # one graph per friction law
+        Z = np.empty((n, b, len(STATE_NAMES)))
+        Y = np.empty((n, b, len(STEP_OUTPUT_NAMES)))
+        for mask in (lugre, ~lugre):
+            Z[:, mask], Y[:, mask] = _run_designs(params[:, mask], x_pad,
+                                                  np.asarray(z0)[:, mask], h, jit)
+        return Z, Y
+    law = "lugre" if lugre.all() else "static"
     with _CASADI_LOCK:  # graph building, JIT and memory checkout: one thread at a time
-        buf, evaluate = _block_function(float(h), bool(jit), b, nb).buffer()
+        buf, evaluate = _block_function(float(h), bool(jit), b, nb, law).buffer()
     Z = np.empty((n, b, len(STATE_NAMES)))
     Y = np.empty((n, b, len(STEP_OUTPUT_NAMES)))
     p = np.asfortranarray(params, dtype=float).ravel(order="F")

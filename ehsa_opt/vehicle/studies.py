@@ -201,14 +201,15 @@ class FrequencyResponseStudy:
 
 def _steady_start(vehicle: VehicleParams, harvester: HarvesterParams, loads: Sequence[float],
                   f: float, amp: float) -> np.ndarray:
-    """States (5, L) at t = 0 of the exact frictionless steady state under
-    x0 = amp sin(2π f t): x = amp Im(H), ẋ = amp ω Re(H), i = amp Im(H_i)."""
+    """States (6, L) at t = 0 of the exact frictionless steady state under
+    x0 = amp sin(2π f t): x = amp Im(H), ẋ = amp ω Re(H), i = amp Im(H_i); the bristle
+    force (LuGre) at rest."""
     w = 2.0 * math.pi * f
-    z = np.empty((len(STATE_NAMES), len(loads)))
+    z = np.zeros((len(STATE_NAMES), len(loads)))
     for j, r in enumerate(loads):
         lin = linear_frequency_response(vehicle, harvester.replace(load_ohm=float(r)), [f])
         x2, x1, cur = lin["x2"][0], lin["x1"][0], lin["current"][0]
-        z[:, j] = amp * np.array([x2.imag, x1.imag, w * x2.real, w * x1.real, cur.imag])
+        z[:5, j] = amp * np.array([x2.imag, x1.imag, w * x2.real, w * x1.real, cur.imag])
     return z
 
 

@@ -203,3 +203,20 @@ def test_small_things_version_names_rated_limits(tmp_path, capsys) -> None:
     p.write_text(p.read_text().replace("rated_voltage_V = 1.0", "rated_voltage_V = -1"))
     assert main(["simulate", str(p)]) == 2
     assert "rated_voltage_V" in capsys.readouterr().err
+
+
+def test_lugre_sets_carry_the_joint_fits_bristle_else_the_median() -> None:
+    from types import SimpleNamespace as NS
+
+    from ehsa_opt.estimation.bounds import presliding_law
+    fits = [(None, NS(parameters={"presliding_stiffness_N_per_m": s,
+                                  "presliding_damping_Ns_per_m": d}))
+            for s, d in ((1e6, 100.0), (3e6, 300.0), (2e6, 900.0))]
+    joint = NS(success=True, parameters={"presliding_stiffness_N_per_m": 5e5,
+                                         "presliding_damping_Ns_per_m": 50.0})
+    assert presliding_law(NS(friction_law="static", joint=joint), fits) == {}
+    assert presliding_law(NS(friction_law="lugre", joint=joint), fits) == {
+        "presliding_stiffness_N_per_m": 5e5, "presliding_damping_Ns_per_m": 50.0}
+    failed = NS(success=False, parameters=joint.parameters)
+    assert presliding_law(NS(friction_law="lugre", joint=failed), fits) == {
+        "presliding_stiffness_N_per_m": 2e6, "presliding_damping_Ns_per_m": 300.0}

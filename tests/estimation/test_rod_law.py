@@ -113,6 +113,25 @@ def test_ordered_set_keeps_its_margin_and_its_order(side: str) -> None:
         ordered_set(TRUTH, v, margin, LEAD, "sideways")
 
 
+@pytest.mark.parametrize("gen", [False, True])
+def test_min_set_takes_away_all_of_a_coulomb_level_above_the_largest_margin(gen) -> None:
+    # A best set whose Coulomb level (40 N) exceeds the largest margin (30 N), on a grid
+    # that starts far below its Coulomb velocity: at 1e-4 m/s the best set has 8-22 N, the
+    # margin is clipped to that, and only taking away the whole level meets it (a cap at
+    # the largest margin made this linear programme infeasible).
+    best = FrictionParams(40.0, 40.0, 0.005, 100.0, *((0.012, 0.0, 0.1, 1e-5) if gen
+                                                      else (0.0, 0.0, 1.0, 0.0)))
+    v = np.concatenate([np.geomspace(1e-4, 0.01, 12), np.linspace(0.02, 1.0, 30)])
+    margin = np.full(v.size, 30.0)
+    rod = np.asarray(rod_friction_N(v, best, LEAD))
+    assert rod[0] < margin[0] and best.nut_coulomb_N > margin.max()  # the condition
+    fr = ordered_set(best, v, margin, LEAD, "below", gen)
+    got = np.asarray(rod_friction_N(v, fr, LEAD))
+    assert np.all(got <= rod - np.minimum(margin, rod) + 1e-6)
+    assert np.all(got >= -1e-9)
+    assert fr.nut_coulomb_N < best.nut_coulomb_N - 30.0  # more than the largest margin went
+
+
 def test_cluster_covariance_corrects_for_a_test_that_owns_a_direction() -> None:
     """Two parameters: a level seen by every test and a slope seen by one test only.  The
     plain cluster-robust variance of the slope uses that test's residuals, which the fit

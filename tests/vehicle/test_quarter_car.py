@@ -255,7 +255,7 @@ def test_batch_padding_and_chunks_match_one_design_at_a_time():
     t = np.arange(1301) * 1e-3  # 1300 steps: not a whole number of blocks
     x0 = 0.01 * np.sin(2 * np.pi * 2.0 * t) + 0.003 * np.sin(2 * np.pi * 13.0 * t)
     zt, y, _ = simulate_batch(params, x0, 1e-3, threads=2)
-    assert zt.shape == (3, 5, 1300) and y.shape[0] == 3 and y.shape[2] == 1300
+    assert zt.shape == (3, 6, 1300) and y.shape[0] == 3 and y.shape[2] == 1300
     for b in range(3):
         z1, y1, _ = simulate_batch(params[:, [b]], x0, 1e-3, threads=1)
         assert np.array_equal(z1[0], zt[b]) and np.array_equal(y1[0], y[b])

@@ -64,7 +64,7 @@ def scaled_friction(friction: FrictionParams | Mapping[str, float], scale: float
                     ) -> FrictionParams:
     """``friction`` with its force/torque levels and viscous terms × ``scale``
     (breakaway velocities unchanged)."""
-    values = friction.__dict__ if isinstance(friction, FrictionParams) else dict(friction)
+    values = friction.as_dict() if isinstance(friction, FrictionParams) else dict(friction)
     return FrictionParams(**{k: (v * scale if "velocity" not in k else v)
                              for k, v in values.items()})
 
