@@ -327,7 +327,8 @@ def standard_cases(data_dir: Path) -> dict[str, Case]:
             "nsga2_per_eval", lambda w: [[sys.executable, "-c", NSGA2_SNIPPET, "problem"]],
             unit="ms", reports=True,
             note="run_nsga2 in one process: (100 x 100 - 100 x 20) / 8000 evaluations, "
-                 "paper_design.toml as it is (head: scaling motor model, rated limits)"),
+                 "paper_design.toml as it is (head: motor, winding and screw chosen from "
+                 "catalogues, their limits as constraints)"),
         "nsga2_per_eval_paper_motor": Case(
             "nsga2_per_eval_paper_motor",
             lambda w: [[sys.executable, "-c", NSGA2_SNIPPET, "paper"]], unit="ms",
