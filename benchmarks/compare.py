@@ -238,6 +238,79 @@ print(json.dumps({"cpu_s": 1e3 * (fig[100][0] - fig[20][0]) / 8000,
 """
 
 
+#: A quarter-car time-domain run in one process (the API both commits have): the
+#: prototype harvester with the embedded bench's true friction on a 300 m class-C road at
+#: 100 km/h, 1 kHz: the mean of ten runs on ten roads (seeds 0-9), after a first run (seed
+#: 100) that builds or loads the compiled functions; BLAS on one thread.
+QUARTER_CAR_SNIPPET = """
+import json, time
+from threadpoolctl import threadpool_limits
+from ehsa_opt.datasets.embedded import embedded_data_dir, load_truth
+from ehsa_opt.physics.params import FrictionParams, HarvesterParams, RoadParams, VehicleParams
+from ehsa_opt.vehicle.simulate import simulate_quarter_car
+with threadpool_limits(limits=1, user_api="blas"):
+    fr = FrictionParams(**load_truth(embedded_data_dir())["friction"])
+    run = lambda seed: simulate_quarter_car(
+        VehicleParams(), HarvesterParams(), fr,
+        RoadParams(length_m=300.0, speed_km_per_h=100.0, seed=seed), warn=False)
+    run(100)
+    c, w = time.process_time(), time.perf_counter()
+    sims = [run(seed) for seed in range(10)]
+    cpu, wall = (time.process_time() - c) / 10, (time.perf_counter() - w) / 10
+assert all(sim.success for sim in sims)
+print(json.dumps({"cpu_s": cpu, "wall_s": wall}))
+"""
+
+#: One member fit of the discrepancy workflow in one process: the backlash candidate
+#: re-identified from the baseline on the embedded bench data (6 tests, as ``reproduce
+#: --quick``); the setup (split, baseline fit) is not timed.  Each commit through its own
+#: functions: the workflow's ``fit_member`` where it exists, else the ``_fit_one`` of the
+#: earlier round loop (the same call: candidate fit, then the fit and held-out
+#: predictions).
+MEMBER_FIT_SNIPPET = """
+import json, time
+from threadpoolctl import threadpool_limits
+from ehsa_opt.datasets.embedded import embedded_data_dir
+from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES, components_for
+from ehsa_opt.estimation.discrepancy.results import DiscrepancySettings
+settings = DiscrepancySettings(max_tests=6, top=1)
+quiet = lambda msg: None
+with threadpool_limits(limits=1, user_api="blas"):
+    try:
+        from ehsa_opt.estimation.discrepancy.candidate_fit import fit_member
+        from ehsa_opt.estimation.discrepancy.workflow import (fit_baseline, load_data,
+                                                              prepare_search_tests)
+        data = load_data(embedded_data_dir("bench_prototype"), quiet, [])
+        tests = prepare_search_tests(data, settings, quiet, [])
+        base = fit_baseline(tests, settings, quiet)
+        rig, sub, fit, held = tests.rig, tests.sub_pts, tests.fit_pts, tests.held_pts
+        params, fit_pred, lead = base.fit.parameters, base.fit_pred, tests.lead_m_per_rad
+    except ImportError:
+        from ehsa_opt.datasets.bench_format import load_bench
+        from ehsa_opt.estimation.discrepancy.fit import (Rig, fit_group, linear_baseline,
+                                                         predict, prepare_tests)
+        from ehsa_opt.estimation.discrepancy.refit import _crop, _load_split, _spread
+        from ehsa_opt.estimation.discrepancy.rounds import _fit_one as fit_member
+        data = load_bench(embedded_data_dir("bench_prototype"), lenient=True)
+        rig = Rig(data.harvester, data.has_generator, ())
+        fit_t, held_t, _ = _load_split(data, settings)
+        fit = prepare_tests([_crop(t, settings.max_samples) for t in fit_t], data.has_generator)
+        held = prepare_tests([_crop(t, settings.max_samples) for t in held_t],
+                             data.has_generator) if held_t else []
+        sub = _spread(fit, settings.max_fit_tests)
+        base = fit_group(fit, rig, [linear_baseline(fit, rig)], max_iter=settings.max_iter)
+        params, lead = base.parameters, data.harvester.lead_m_per_rad
+        fit_pred = predict(fit, rig, params)
+    comp = components_for(["backlash"], fit, fit_pred, lead)["backlash"]
+    a = ("backlash", comp, CANDIDATES["backlash"].starts, sub, fit, held, rig, params,
+         settings.max_iter)
+    c, w = time.process_time(), time.perf_counter()
+    name, res, pf, ph, _ = fit_member(a)
+    cpu, wall = time.process_time() - c, time.perf_counter() - w
+assert name == "backlash" and res.success and pf
+print(json.dumps({"cpu_s": cpu, "wall_s": wall}))
+"""
+
 def standard_cases(data_dir: Path) -> dict[str, Case]:
     """The cases of the comparison against the previous release (whole commands)."""
     problem = "problems/paper_design.toml"
@@ -254,12 +327,22 @@ def standard_cases(data_dir: Path) -> dict[str, Case]:
             "nsga2_per_eval", lambda w: [[sys.executable, "-c", NSGA2_SNIPPET, "problem"]],
             unit="ms", reports=True,
             note="run_nsga2 in one process: (100 x 100 - 100 x 20) / 8000 evaluations, "
-                 "paper_design.toml as it is (head: scaling motor model, rated limits)"),
+                 "paper_design.toml as it is (head: motor, winding and screw chosen from "
+                 "catalogues, their limits as constraints)"),
         "nsga2_per_eval_paper_motor": Case(
             "nsga2_per_eval_paper_motor",
             lambda w: [[sys.executable, "-c", NSGA2_SNIPPET, "paper"]], unit="ms",
             reports=True, note="as nsga2_per_eval with [motor] model = 'paper' where the "
                                "commit has motor models (the paper's fixed winding)"),
+        "quarter_car": Case(
+            "quarter_car", lambda w: [[sys.executable, "-c", QUARTER_CAR_SNIPPET]],
+            reports=True, note="simulate_quarter_car in one process: 300 m class-C road at "
+                               "100 km/h, 1 kHz, the embedded bench's true friction (mean "
+                               "of 10 roads)"),
+        "member_fit": Case(
+            "member_fit", lambda w: [[sys.executable, "-c", MEMBER_FIT_SNIPPET]],
+            reports=True, note="the backlash member re-identified from the baseline on the "
+                               "embedded bench data (6 tests), in one process"),
         "nsga2_100x20": Case("nsga2_100x20", lambda w: [nsga(20)(w)],
                              note="optimize --method nsga2 --pop 100 --gens 20 (whole command)"),
         "reproduce_quick": Case("reproduce_quick", lambda w: [_py(
@@ -303,7 +386,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--base-dir", help="an existing checkout of the base instead")
     ap.add_argument("--cases", default="identify,nsga2_per_eval,reproduce_quick",
                     help="comma-separated, from: identify, nsga2_per_eval, "
-                         "nsga2_per_eval_paper_motor, nsga2_100x20, reproduce_quick")
+                         "nsga2_per_eval_paper_motor, quarter_car, member_fit, "
+                         "nsga2_100x20, reproduce_quick")
     ap.add_argument("--pairs", type=int, default=3)
     ap.add_argument("--no-warmup", action="store_true")
     ap.add_argument("--cpu-factor", type=float, default=CPU_FACTOR)

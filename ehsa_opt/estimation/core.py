@@ -61,8 +61,10 @@ __all__ = ["ParamSpace", "Objective", "NLP", "build", "solve_starts", "BUILD_COU
            "build_count", "model_key", "states_depend_on", "SolveRecord"]
 
 #: ``theta`` NLPs get their Lagrangian Hessian assembled node by node
-#: (:func:`_theta_hessian`); False: CasADi differentiates the whole NLP graph (the
-#: reference, quadratic in the samples: kept for the build-speed benchmark).
+#: (:func:`_theta_hessian`), minimax ``given`` NLPs sample by sample
+#: (:func:`_given_hessian`); False: CasADi differentiates the whole NLP graph (the
+#: reference, quadratic in the samples: kept for the build-speed benchmark and the
+#: tests that compare the two).
 STRUCTURED_HESSIAN = True
 
 #: Number of NLPs (IPOPT solvers) built in this process, by transcription kind.
@@ -319,7 +321,8 @@ class NLP:
         self.recorder = _Recorder(self.nw, int(G.numel())) if settings.record_iterations else None
         if self.recorder is not None:
             opts["iteration_callback"] = self.recorder
-        if kind == "given" and objective.kind == "minimax" and sym is ca.SX:
+        if (kind == "given" and objective.kind == "minimax" and sym is ca.SX
+                and STRUCTURED_HESSIAN):
             opts["hess_lag"] = _given_hessian(model, space, keys, W, P, self.data_sizes,
                                               self.n_eq, int(G.numel()))
         if kind == "theta" and STRUCTURED_HESSIAN and model.n_states:

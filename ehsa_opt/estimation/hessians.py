@@ -16,6 +16,7 @@ import casadi as ca
 import numpy as np
 
 from ..physics.bench_model import BenchModel
+from ..utils.jit_cache import compiled
 
 __all__ = ["given_hessian", "theta_hessian", "node_hessian"]
 
@@ -29,13 +30,21 @@ def given_hessian(model: BenchModel, space: Any, keys: Sequence[tuple], W: Any, 
     Hessian is the sum of one small per-sample Hessian (differentiated once,
     mapped over the samples) instead of the differentiation of the whole NLP
     graph: the same values, a fraction of the build time.
+
+    The result is an MX function of its own symbols (shaped as ``W`` and ``P``, which
+    may be SX): the mapped per-sample function is called, not inlined, so the build
+    does not grow with the samples; the per-sample function is compiled to C through
+    the per-user cache (:func:`~ehsa_opt.utils.jit_cache.compiled`; CasADi's virtual
+    machine without a C compiler) — the same operations in the same order, the same
+    numbers.
     """
     nv, nx, npar = space.nv, model.n_states, len(space.names)
-    lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", ng)
+    W, P = ca.MX.sym("x", W.sparsity()), ca.MX.sym("p", P.sparsity())
+    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
     z, x, u = ca.SX.sym("z", nv), ca.SX.sym("x", nx), ca.SX.sym("u", 3)
     pb = ca.SX.sym("pb", npar)
     funs: dict[tuple[int, int], ca.Function] = {}
-    Hz = ca.SX(nv, nv)
+    Hz = ca.MX(nv, nv)
     pos, ch = nv, 0  # P = [zref, block data...]
     for key, size in zip(keys, data_sizes):
         _, n, ny = key
@@ -50,8 +59,10 @@ def given_hessian(model: BenchModel, space: Any, keys: Sequence[tuple], W: Any, 
                     g = ca.jacobian(y[k], z)
                     hy, _ = ca.hessian(y[k], z)
                     h += 2 * mu[k] * wy[k] ** 2 * (ca.mtimes(g.T, g) + (y[k] - ym[k]) * hy)
-            funs[(ny, n)] = ca.Function("h", [z, x, u, pb, ym, wy, mu], [ca.triu(h)],
-                                   {"cse": True}).map("hmap", "serial", n, [0, 3, 6], [0])
+            h_fun = ca.Function("given_hess", [z, x, u, pb, ym, wy, mu], [ca.triu(h)],
+                                {"cse": True})
+            funs[(ny, n)] = (compiled(h_fun) or h_fun).map("hmap", "serial", n, [0, 3, 6],
+                                                           [0])
         d = P[pos:pos + size]
         a = 0
         Xg = ca.reshape(d[a:a + nx * n], nx, n)
@@ -68,7 +79,7 @@ def given_hessian(model: BenchModel, space: Any, keys: Sequence[tuple], W: Any, 
         pos += size
         ch += ny
     nw = int(W.numel())
-    H = ca.diagcat(Hz, ca.SX(nw - nv, nw - nv))
+    H = ca.diagcat(Hz, ca.MX(nw - nv, nw - nv))
     return ca.Function("nlp_hess_l", [W, P, lam_f, lam_g], [H],
                        ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
 

@@ -182,3 +182,62 @@ def test_node_by_node_hessian_is_the_whole_graph_hessian(rigid_tests, objective,
     assert all(r.success for r in recs), [r.status for r in recs]
     assert np.allclose(recs[1].w[:space.nv], recs[0].w[:space.nv], rtol=1e-6, atol=1e-9)
     assert recs[1].objective == pytest.approx(recs[0].objective, rel=1e-9)
+
+
+def _given_problem(tests):
+    """The rigid model on 300 samples of each of ``tests`` (given transcription: the
+    current integrated beforehand): model, parameter space, blocks."""
+    from ehsa_opt.estimation.collocation import given_block
+    model = BenchModel(HarvesterParams())
+    free = ("nut_breakaway_N", "nut_coulomb_N", "nut_breakaway_velocity_m_per_s",
+            "nut_viscous_Ns_per_m", "bearing_coulomb_Nm", "bearing_viscous_Nms_per_rad")
+    space = core.ParamSpace(tuple(model.param_names), free, (0.0, 0.0, 1e-4, 0.0, 0.0, 0.0),
+                            (500.0, 500.0, 0.5, 5e3, 1.0, 1e-2),
+                            (50.0, 50.0, 0.01, 500.0, 0.05, 1e-4),
+                            order=(("nut_breakaway_N", "nut_coulomb_N"),))
+    blocks = []
+    for test in tests:
+        m, pb = motion_of(test), np.asarray(model.param_vector(test.load_ohm), float)
+        X = integrate_states(model, m, test.time_s, pb)
+        obs = np.arange(50, 350)
+        y = np.vstack([test.force_N[obs], test.voltage_V[obs]])
+        w = np.array([1 / np.max(np.abs(test.force_N)), 1 / np.max(np.abs(test.voltage_V))])
+        blocks.append(given_block(model, X[:, obs], m.evaluate(test.time_s[obs]), y, w, pb))
+    return model, space, blocks
+
+
+def test_sample_by_sample_hessian_is_the_whole_graph_hessian(rigid_tests, monkeypatch):
+    """The minimax given NLP's Hessian summed sample by sample (a mapped, compiled
+    per-sample function) has CasADi's whole-graph pattern and values, the same numbers
+    without a C compiler, and IPOPT ends at the same point with either."""
+    from ehsa_opt.estimation.hessians import given_hessian
+    model, space, blocks = _given_problem(rigid_tests[:3])
+    objective, settings = core.Objective("minimax"), core.SolverSettings(1e-8, 200)
+    nlps = []
+    try:
+        for flag in (False, True):
+            core.STRUCTURED_HESSIAN = flag
+            nlps.append(core.build(model, space, objective, settings, blocks))
+    finally:
+        core.STRUCTURED_HESSIAN = True
+    z0 = space.z_of({"nut_breakaway_N": 40.0, "nut_coulomb_N": 30.0,
+                     "nut_breakaway_velocity_m_per_s": 0.02, "nut_viscous_Ns_per_m": 200.0,
+                     "bearing_coulomb_Nm": 0.01, "bearing_viscous_Nms_per_rad": 1e-4})
+    p = nlps[0].data(blocks, z0)
+    rng = np.random.default_rng(5)
+    w = nlps[0].initial(z0, blocks, p) + 0.1 * rng.standard_normal(nlps[0].nw)
+    lam_g = rng.standard_normal(nlps[0].lbg.size)
+    H = [n.solver.get_function("nlp_hess_l")(w, p, 0.7, lam_g) for n in nlps]
+    assert H[0].sparsity() == H[1].sparsity()
+    a, b = np.array(H[0].nonzeros()), np.array(H[1].nonzeros())
+    assert np.max(np.abs(a)) > 0
+    assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a))
+    monkeypatch.setenv("EHSA_OPT_NO_JIT", "1")  # CasADi's virtual machine: the same numbers
+    nlp = nlps[1]
+    vm = given_hessian(model, space, nlp.keys, nlp.W, nlp.P, nlp.data_sizes, nlp.n_eq,
+                       nlp.lbg.size)(w, p, 0.7, lam_g)
+    assert np.array_equal(np.array(vm.nonzeros()), b)
+    recs = [core.solve_starts(n, blocks, [z0])[0] for n in nlps]
+    assert all(r.success for r in recs), [r.status for r in recs]
+    assert np.allclose(recs[1].w[:space.nv], recs[0].w[:space.nv], rtol=1e-6, atol=1e-9)
+    assert recs[1].objective == pytest.approx(recs[0].objective, rel=1e-9)
