@@ -6,12 +6,13 @@ The optimiser sees the design road through the exact frequency path (a power spe
 no realisation).  A check draws ``n_roads`` new realisations of the same ISO 8608 class
 and speed (seeds ``seed + 1 …``, never the design road's ``seed``) and simulates every
 design on each.  Per design and road it counts
-the fraction of samples beyond each hard limit, the rms current against the thermal rating
-and the largest |V| against the voltage limit.  A finite road estimates these with an
+the fraction of samples beyond each hard limit, the rms current against the thermal rating,
+the largest |V| against the voltage limit and the screw's cubic mean axial load (weighted
+by revolutions, summed over the samples) against the load of its required life.  A finite road estimates these with an
 error, so a design on its limit is beyond it on about half the roads; a design is
 *within* a limit unless the roads show it beyond at 95 % (one-sided): the mean over the
 roads less its Student-t half-width is above the tolerance (``time_fraction``,
-``tyre_lift_fraction``) or the rating (rms current), or the voltage's peak is above the
+``tyre_lift_fraction``) or the rating (rms current, the screw's mean load), or the voltage's peak is above the
 limit on more roads than a binomial share 1 − ``peak_quantile`` explains at 5 %.
 """
 
@@ -25,7 +26,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from scipy import stats
 
-from .limits import LimitSettings
+from ..physics.ball_screw import allowable_mean_load
+from .limits import LimitSettings, revolution_weighted_mean_load
 
 __all__ = ["limits_on_roads", "hypervolume_interval", "held_out_seeds", "HELD_OUT_ROADS"]
 
@@ -73,7 +75,9 @@ def limits_on_roads(ev: Any, designs: Mapping[str, np.ndarray], seeds: Sequence[
     veh = ev.vehicle
     static = veh.total_mass_kg * 9.81
     fr: dict[str, list] = {k: [] for k in ev.constraint_names if k != "motor_inertia"}
-    cur, vpk, objs = [], [], {k: [] for k in objective_names}
+    cur, vpk, objs, fm, allow = [], [], {k: [] for k in objective_names}, [], []
+    jt = np.array([h.total_inertia_gcm2 for h in hs]) * 1e-7
+    kt = np.array([h.torque_constant_Nm_per_A for h in hs])
     for sd in seeds:
         sim = _simulate(veh, dataclasses.replace(ev.road, seed=int(sd)), hs, settle_s,
                         sample_rate_hz)
@@ -91,6 +95,14 @@ def limits_on_roads(ev: Any, designs: Mapping[str, np.ndarray], seeds: Sequence[
         for k, (x, lim) in sig.items():
             if k in fr:
                 fr[k].append(np.mean(x > lim[:, None], axis=1))
+        if "screw_life" in fr:
+            acc = np.gradient(s["stroke_velocity_m_s"], 1.0 / sample_rate_hz, axis=1)
+            force = (jt / r ** 2)[:, None] * acc + (kt / r)[:, None] * s["current_A"]
+            fm.append(revolution_weighted_mean_load(force, rpm))
+            rev_s = np.mean(rpm, axis=1) / 60.0
+            allow.append(allowable_mean_load(flat["screw_dynamic_load_N"],
+                                             ev.life_revolutions(rev_s)))
+            fr["screw_life"].append((fm[-1] > allow[-1]).astype(float))
         rms = np.sqrt(np.mean(s["current_A"] ** 2, axis=1))
         fr["rated_current"].append((rms > flat["rated_current_A"]).astype(float))
         cur.append(rms)
@@ -111,24 +123,29 @@ def limits_on_roads(ev: Any, designs: Mapping[str, np.ndarray], seeds: Sequence[
     for k, v in F.items():
         if k == "rated_current":
             ok &= lower(cur_a) <= flat["rated_current_A"]
+        elif k == "screw_life":
+            ok &= lower(np.array(fm) / np.array(allow)) <= 1.0
         elif k == "rated_voltage":
             ok &= np.sum(vpk_a > flat["max_voltage_V"][None, :], axis=0) <= n_peak
         elif k == "tyre_lift":
             ok &= lower(v) <= st.tyre_lift_fraction
         else:
             ok &= lower(v) <= st.time_fraction
+    not_time = ("rated_current", "rated_voltage", "screw_life")
     out = {"seeds": [int(x) for x in seeds], "fractions": {k: v.tolist() for k, v in F.items()},
-           "worst_fraction": {k: float(np.max(v)) for k, v in F.items()
-                              if k not in ("rated_current", "rated_voltage")},
+           "worst_fraction": {k: float(np.max(v)) for k, v in F.items() if k not in not_time},
            "current_rms_A": cur_a.tolist(), "peak_voltage_V": vpk_a.tolist(),
            "worst_current_over_rating": float(np.max(cur_a / flat["rated_current_A"])),
            "peak_voltage_share_over_limit": float(np.max(np.mean(
                vpk_a > flat["max_voltage_V"][None, :], axis=0))),
            "mean_fraction": {k: np.mean(v, axis=0).max().item() for k, v in F.items()
-                             if k not in ("rated_current", "rated_voltage")},
+                             if k not in not_time},
            "within": ok.tolist(), "n_within": int(np.sum(ok)), "n_designs": n,
            "peak_roads_allowed": n_peak,
            "settings": st.as_dict()}
+    if fm:
+        out["screw_mean_load_N"] = np.array(fm).tolist()
+        out["worst_screw_load_over_allowed"] = float(np.max(np.array(fm) / np.array(allow)))
     if objective_names:
         out["objectives"] = {k: np.array(v).tolist() for k, v in objs.items()}
     return out

@@ -33,7 +33,9 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..physics.params import HarvesterParams, RoadParams, VehicleParams
-from .limits import LimitSettings, gaussian_fraction_beyond, limit_entry, rice_peak_quantile
+from ..physics.ball_screw import allowable_mean_load
+from .limits import (GAUSSIAN_CUBIC_MEAN_FACTOR, LimitSettings, gaussian_fraction_beyond,
+                     limit_entry, rice_peak_quantile)
 from .problem import OBJECTIVE_NAMES, DesignSpace
 
 __all__ = ["SelectionObjectives", "selection_space", "SELECTION_EXTRAS", "motor_names",
@@ -103,9 +105,22 @@ class SelectionObjectives:
         out = ["rated_current", "peak_current", "rated_voltage", "motor_speed"]
         if self.screws:
             out.append("screw_speed")
+        if self.rated_screws:
+            out.append("screw_life")
         if self.stroke_limit_m is not None:
             out.append("stroke")
         return tuple(out + ["tyre_lift", "motor_inertia"])
+
+    @property
+    def rated_screws(self) -> bool:
+        """Every screw has a dynamic load rating (its fatigue life is a limit)."""
+        return bool(self.screws) and all(s.dynamic_load_rating_N for s in self.screws)
+
+    def life_revolutions(self, mean_speed_rev_s: Any) -> np.ndarray:
+        """Revolutions a screw turning at mean |speed| ``mean_speed_rev_s`` (rev/s) runs
+        over the required distance :attr:`LimitSettings.screw_life_km` on the design road."""
+        hours_s = self.limits.screw_life_km * 1e3 / self.road.speed_m_per_s
+        return np.asarray(mean_speed_rev_s, float) * hours_s
 
     @property
     def duration_s(self) -> float:
@@ -144,6 +159,7 @@ class SelectionObjectives:
             hw["lead_mm_per_rev"] = pick(lambda s: s.lead_mm_per_rev)
             hw["screw_max_speed_rpm"] = pick(lambda s: s.max_speed_rpm)
             hw["screw_inertia_gcm2"] = pick(lambda s: s.inertia_gcm2)
+            hw["screw_dynamic_load_N"] = pick(lambda s: s.dynamic_load_rating_N or np.nan)
             hw["screw_index"] = is_
         else:
             hw["lead_mm_per_rev"] = np.broadcast_to(np.asarray(
@@ -227,6 +243,8 @@ class SelectionObjectives:
         if self.screws:
             out.update(limit_entry("screw_speed", z2 * rpm, hw["screw_max_speed_rpm"],
                                    gaussian_fraction_beyond(hw["screw_max_speed_rpm"], rpm)))
+        if self.rated_screws:
+            out.update(self._screw_life(m, mapping, hw, r))
         if self.stroke_limit_m is not None:
             out.update(limit_entry("stroke", z2 * m["stroke_rms_m"], self.stroke_limit_m,
                                    gaussian_fraction_beyond(self.stroke_limit_m,
@@ -239,6 +257,22 @@ class SelectionObjectives:
                                np.zeros(shape)))
         return {k: np.broadcast_to(v, shape) if np.ndim(v) < len(shape) else v
                 for k, v in out.items()}
+
+    def _screw_life(self, m: Mapping[str, np.ndarray], mapping: Mapping[str, Any],
+                    hw: Mapping[str, np.ndarray], r: np.ndarray) -> dict[str, np.ndarray]:
+        """The screw's fatigue limit from rms values (the Gaussian bound of
+        :mod:`.limits`): F_m ≤ 1.555 (m_eq σ_a + k_t σ_i / r) against the load of an L10
+        life of the required distance."""
+        jt = np.asarray(mapping["total_inertia_gcm2"], float) * 1e-7
+        kt = np.asarray(mapping["torque_constant_Nm_per_A"], float)
+        sigma_f = (jt / r ** 2 * m["stroke_acceleration_rms_m_s2"]
+                   + kt / r * m["current_rms_A"])
+        f_m = GAUSSIAN_CUBIC_MEAN_FACTOR * sigma_f
+        mean_rev_s = math.sqrt(2.0 / math.pi) * m["stroke_velocity_rms_m_s"] / (2 * math.pi * r)
+        allow = allowable_mean_load(hw["screw_dynamic_load_N"], self.life_revolutions(mean_rev_s))
+        out = limit_entry("screw_life", f_m, allow, np.zeros(np.shape(f_m)))
+        out["screw_mean_load_N"] = f_m
+        return out
 
     def describe(self, design: Mapping[str, Any], index: int = 0) -> dict[str, Any]:
         """The motor (with its winding) and screw of one design, for reports."""
