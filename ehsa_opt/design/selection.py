@@ -32,14 +32,14 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..physics.params import HarvesterParams, RoadParams, VehicleParams
+from ..physics.params import HarvesterParams, ParameterError, RoadParams, VehicleParams
 from ..physics.ball_screw import allowable_mean_load
 from .limits import (GAUSSIAN_CUBIC_MEAN_FACTOR, LimitSettings, gaussian_fraction_beyond,
                      limit_entry, rice_peak_quantile)
 from .problem import OBJECTIVE_NAMES, DesignSpace
 
-__all__ = ["SelectionObjectives", "selection_space", "SELECTION_EXTRAS", "motor_names",
-           "realisable_winding"]
+__all__ = ["SelectionObjectives", "FrictionSelectionObjectives", "selection_space",
+           "SELECTION_EXTRAS", "motor_names", "realisable_winding"]
 
 #: Evaluator outputs besides objectives and limits.
 SELECTION_EXTRAS = ("comfort_weighted_rms_m_s2", "power_W", "efficiency", "power_dimensionless",
@@ -207,6 +207,10 @@ class SelectionObjectives:
                "inverse_efficiency": 1.0 / m["efficiency"]}
         out.update({k: m[k] for k in SELECTION_EXTRAS if k in m})
         out.update(self.limit_outputs(m, mapping, hw))
+        return self._with_hardware(out, hw)
+
+    def _with_hardware(self, out: dict[str, np.ndarray], hw: Mapping[str, np.ndarray]
+                       ) -> dict[str, np.ndarray]:
         out.update({"speed_constant_rpm_per_V": hw["speed_constant_rpm_per_V"],
                     "lead_mm_per_rev": hw["lead_mm_per_rev"],
                     "internal_resistance_ohm": hw["internal_resistance_ohm"],
@@ -295,6 +299,63 @@ class SelectionObjectives:
                 "base": asdict(self.base), "motors": [asdict(m) for m in self.motors],
                 "screws": [asdict(s) for s in self.screws], "limits": self.limits.as_dict(),
                 "stroke_limit_m": self.stroke_limit_m, "options": dict(self.metric_options)}
+
+
+@dataclass(frozen=True)
+class FrictionSelectionObjectives(SelectionObjectives):
+    """:class:`SelectionObjectives` with the strut's friction: the objectives by the
+    friction-aware fast path (:func:`ehsa_opt.vehicle.fast_path.friction_metrics`) at each
+    friction set, every hardware limit from the linear path with the friction's equivalent
+    damping c_f (the rms current, voltage, stroke, speeds and their rates of the damped
+    car), combined over the sets by ``mode`` (:func:`ehsa_opt.design.robust.combine`: a
+    limit is always the worst set's).
+
+    Attributes
+    ----------
+    frictions : tuple of FrictionParams
+        One (mode ``at``) or several friction sets (e.g. an identification's).
+    mode : str
+        ``at``, ``worst`` or ``mean``.
+    labels : tuple of str
+        Names of the sets (reports only).
+    """
+
+    frictions: tuple = ()
+    mode: str = "at"
+    labels: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        from .robust import FRICTION_MODES
+        if not self.frictions:
+            raise ParameterError("FrictionSelectionObjectives: give at least one friction "
+                                 "set (--friction FILE[:CASE] or a [friction] table)")
+        if self.mode not in FRICTION_MODES or (self.mode == "at" and len(self.frictions) != 1):
+            raise ParameterError(f"--friction-mode {self.mode}: with {len(self.frictions)} "
+                                 f"friction set(s) use at (one set), worst or mean")
+
+    def __call__(self, design: Mapping[str, Any]) -> dict[str, np.ndarray]:
+        from ..vehicle.fast_path import friction_metrics
+        from ..vehicle.frequency_path import linear_metrics
+        from .robust import combine, objectives_from_metrics
+        hw = self.hardware(design)
+        mapping = self.design_mapping(design)
+        opts = dict(self.metric_options)
+        per = []
+        for f in self.frictions:
+            fm = friction_metrics(self.vehicle, self.road, mapping, f, **opts)
+            lm = linear_metrics(self.vehicle, self.road, mapping,
+                                friction_damping_Ns_per_m=fm["friction_damping_Ns_per_m"],
+                                **opts)
+            o = objectives_from_metrics(fm)
+            o.update({k: lm[k] for k in SELECTION_EXTRAS if k in lm and k not in o})
+            o.update(self.limit_outputs(lm, mapping, hw))
+            per.append(o)
+        return self._with_hardware(combine(per, self.mode), hw)
+
+    def fingerprint(self) -> dict[str, Any]:
+        from dataclasses import asdict
+        return {**super().fingerprint(), "kind": "select_friction_equivalent",
+                "mode": self.mode, "frictions": [asdict(f) for f in self.frictions]}
 
 
 def motor_names(ev: Any, designs: Mapping[str, Any]) -> Sequence[str]:

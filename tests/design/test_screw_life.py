@@ -131,3 +131,39 @@ def test_required_life_is_a_stated_setting(tmp_path):
     prob.write_text(text.replace("peak_quantile = 0.95", "peak_quantile = 0.95\n"
                                  "screw_life_km = 50000.0"))
     assert load_design_config(prob).limit_settings.screw_life_km == 50000.0
+
+
+def test_catalogue_selection_with_friction(tmp_path, capsys):
+    """``[motor] model = "select"`` with a friction set: the friction-aware fast path for
+    the objectives, every limit from the damped car, the held-out roads simulated with the
+    same friction."""
+    from ehsa_opt.cli import main
+    from ehsa_opt.design.optimize import build_problem
+    from ehsa_opt.design.selection import FrictionSelectionObjectives
+    from ehsa_opt.physics.params import FrictionParams
+    text = (ROOT / "problems" / "paper_design.toml").read_text()
+    prob = tmp_path / "p.toml"
+    prob.write_text(text.replace("length_m = 1000.0", "length_m = 300.0")
+                    + "\n[friction]\nnut_coulomb_N = 20.0\nnut_breakaway_N = 25.0\n")
+    cfg = load_design_config(prob)
+    ev = build_problem(cfg).evaluator
+    assert isinstance(ev, FrictionSelectionObjectives) and ev.mode == "at"
+    plain = build_problem(cfg, frictions=()).evaluator
+    design = {"total_inertia_gcm2": np.array([1500.0]), "load_ohm": np.array([2.0]),
+              "motor": np.array([6.0]), "screw": np.array([1.0]), "winding": np.array([0.5])}
+    a, b = ev(design), plain(design)
+    # friction takes part of the road's dissipation: less current, less power, the same
+    # hardware and every limit evaluated
+    assert a["current_rms_A"][0] < b["current_rms_A"][0]
+    assert a["power_W"][0] < b["power_W"][0]
+    assert a["motor_index"][0] == b["motor_index"][0]
+    assert all(np.isfinite(a[f"constraint_{c}"][0]) for c in ev.constraint_names)
+    with pytest.raises(ParameterError, match="friction-mode"):
+        dataclasses.replace(ev, frictions=(FrictionParams(),) * 2, mode="at")
+    assert main(["optimize", str(prob), "--method", "nsga2", "--pop", "12", "--gens", "2",
+                 "--out", str(tmp_path / "o")]) in (0, 1)
+    res = __import__("json").loads((tmp_path / "o" / "result.json").read_text())
+    assert res["friction"]["sets"][0]["nut_coulomb_N"] == 20.0
+    assert res["constraints"] and "screw_life" in res["constraints"]
+    roads = res["time_domain_check"]["held_out_roads"]
+    assert roads["n_designs"] >= 1 and 0 not in roads["seeds"]
