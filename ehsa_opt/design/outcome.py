@@ -251,11 +251,11 @@ class DesignResult:
         if isinstance(res, ParetoResult) and len(res.F):
             ga_rec = self.record.get("goal_attainment")
             ga_pt = ga_rec["objectives"] if ga_rec else None
+            marks = self._front_marks(res)
             figs["pareto"] = pd.pareto_projections(
-                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"),
-                self._front_marks(res))
+                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"), marks)
             figs["parallel"] = pd.parallel_coordinates(
-                res, None if ga_rec is None else {**ga_rec["design"], **ga_pt})
+                res, None if ga_rec is None else {**ga_rec["design"], **ga_pt}, marks=marks)
             figs["hypervolume"] = pd.hypervolume_history({front_label: res.history},
                                                          res.hv_reference)
         return figs

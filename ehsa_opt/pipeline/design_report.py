@@ -24,6 +24,7 @@ from ..design import OBJECTIVE_NAMES
 from .base import Context, StepOutput
 from .design_problem import design_config, not_applicable
 from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
+from .design_captions import front_caption, hypervolume_caption, parallel_caption
 from .vehicle_intervals_report import caption
 from .step_results import DesignStepResult
 
@@ -251,7 +252,11 @@ def step_pareto(ctx: Context) -> StepOutput:
                 ("goal attainment", out["goal_attainment"]["design"], ga_obj),
                 (f"NSGA-II {pr.pick}", {n: float(v[k]) for n, v in pr.designs.items()},
                  dict(zip(OBJECTIVE_NAMES, pr.F[k].tolist()))))) + "\n"
-        + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
+        + "".join(f"![{Path(f).stem}]({f})\n" + caption(label, text)
+                  for f, (label, text) in zip(figs, (
+                      ("Front", front_caption(pr, out, proto)),
+                      ("Parallel coordinates", parallel_caption(pr, out)),
+                      ("Hypervolume", hypervolume_caption(pr, out))))))
     res = {"n_front": int(pr.F.shape[0]), "n_dominating_ga_by_1pct": n_dom,
            "closest_ratio": best, "hv_history": hv, "pop": pop, "gens": gens}
     return StepOutput(md, figs, res)
