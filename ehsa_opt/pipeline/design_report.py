@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -426,6 +426,7 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
                                      jobs=1, identified_range_m_per_s=v_id)
     pp = {r["friction"]: r for r in rows_paper}
     t4_md, t4_res = _table4_with_intervals(ctx, cfg, ga, paper_design, sets, length, v_id)
+    f20_md, f20_res = _fig20_intervals(ctx, cfg, ga, sets, speeds, length, v_id)
     rel = "figures/fig20_friction_on_optimum.png"
     plots.save(fig_fn(rows), ctx.out_dir / rel)
     t_all = [r.get("out_of_range_time_fraction", 0.0) for r in rows]
@@ -441,10 +442,30 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
           + ", ".join(f"{r['speed_km_per_h']:g} km/h {r['friction']} "
                       f"{100 * r.get('out_of_range_time_fraction', 0.0):.0f} %"
                       for r in rows if r["friction"] == "max") + " of the time.)\n\n"
-          + "\n" + _friction_explanation(cfg, ga, rows, pp, source) + f"![fig20]({rel})\n"
-          + caption("Fig 20", _fig20_caption(rows, length)))
+          + "\n" + _friction_explanation(cfg, ga, rows, pp, source) + f20_md
+          + f"![fig20]({rel})\n" + caption("Fig 20", _fig20_caption(rows, length, f20_res)))
     return StepOutput(md, [rel], {"rows": rows, "friction_source": source,
-                                  "paper_design_rows": rows_paper, "table4_intervals": t4_res})
+                                  "paper_design_rows": rows_paper, "table4_intervals": t4_res,
+                                  "fig20_intervals": f20_res})
+
+
+def _fig20_intervals(ctx: Context, cfg: Any, ga: dict, sets: dict, speeds: Sequence[float],
+                     length: float, v_id: float | None) -> tuple[str, dict]:
+    """Fig 20's metrics at every speed with 95 % intervals over road realisations
+    (:func:`~ehsa_opt.pipeline.vehicle_intervals_report.speed_intervals`)."""
+    import dataclasses
+    from ..physics.params import HarvesterParams
+    from .vehicle_intervals_report import intervals_note, report_seeds, speed_intervals
+    h = HarvesterParams.from_design(ga["total_inertia_gcm2"], ga["lead_mm_per_rev"],
+                                    ga["speed_constant_rpm_per_V"], ga["load_ohm"],
+                                    base=cfg.harvester)
+    road = dataclasses.replace(cfg.road, length_m=length)
+    md, res = speed_intervals(cfg.vehicle, road, h, {"none": None, **sets}, speeds,
+                              report_seeds(ctx), v_id)
+    return ("**Fig 20 with its uncertainty.** The optimum at every speed of Fig 20 on road "
+            "realisations; changes are improvements against no friction, paired on the same "
+            "roads. " + intervals_note(report_seeds(ctx), road.seed) + "\n\n" + md
+            + "\n\n"), res
 
 
 def _table4_with_intervals(ctx: Context, cfg: Any, ga: dict, paper_design: dict,
@@ -490,11 +511,22 @@ def _table4_with_intervals(ctx: Context, cfg: Any, ga: dict, paper_design: dict,
             "paper's values are judged against our intervals. " + note + real + "\n\n" + md), res
 
 
-def _fig20_caption(rows: list[dict], length: float) -> str:
-    """Fig 20's caption from the rows."""
+def _fig20_caption(rows: list[dict], length: float, intervals: dict | None = None) -> str:
+    """Fig 20's caption from the rows (the top speed's power with its interval over road
+    realisations when given)."""
+    from ..vehicle.uncertainty import format_interval
     speeds = sorted({r["speed_km_per_h"] for r in rows})
-    p = {r["friction"]: r["power_W"] for r in rows if r["speed_km_per_h"] == speeds[-1]}
+    cases = [r["friction"] for r in rows if r["speed_km_per_h"] == speeds[-1]]
+    top = (intervals or {}).get(f"{speeds[-1]:g}")
+    if top is not None:
+        pw = top["intervals"]["power_W"]
+        power = ", ".join(f"{c} {format_interval(d['mean'], d['half_width'])} W"
+                          for c, d in zip(cases, pw) if d is not None)
+        power += f" (95 %, {len(top['seeds'])} road realisations)"
+    else:
+        power = ", ".join(f"{r['friction']} {r['power_W']:.0f} W" for r in rows
+                          if r["speed_km_per_h"] == speeds[-1])
     return (f"The optimum with no/min/max friction over {len(speeds)} speeds "
             f"({speeds[0]:g}–{speeds[-1]:g} km/h) on the {length:g} m design road: power, "
             f"efficiency, comfort and road holding; at {speeds[-1]:g} km/h the power is "
-            + ", ".join(f"{c} {v:.0f} W" for c, v in p.items()))
+            + power)

@@ -85,3 +85,29 @@ def test_front_captions_from_the_numbers():
     hv = hypervolume_caption(pr, rec)
     assert "1.5 after 20 (archive 1.6)" in hv and "1 after 10 evaluations" in hv
     assert "1.49 [1.45, 1.53]" in hv
+
+
+def test_intervals_at_every_speed_follow_their_digits():
+    """Fig 20's metrics at several speeds: each cell is the interval of the realisations'
+    values, printed with the digits the interval supports."""
+    from ehsa_opt.physics.params import FrictionParams, HarvesterParams, RoadParams, \
+        VehicleParams
+    from ehsa_opt.pipeline.vehicle_intervals_report import speed_intervals
+    from ehsa_opt.vehicle.uncertainty import format_interval, seed_interval
+    veh = VehicleParams.preset("passenger_car")
+    road = RoadParams(iso_class="C", speed_km_per_h=70.0, length_m=150.0, seed=0)
+    md, res = speed_intervals(veh, road, HarvesterParams(),
+                              {"none": None, "max": FrictionParams(nut_coulomb_N=30.0,
+                                                                   nut_breakaway_N=35.0)},
+                              (40.0, 110.0), 3)
+    rows = [r for r in md.splitlines() if r.startswith("| 40 ") or r.startswith("| 110 ")]
+    assert len(rows) == 2 and set(res) == {"40", "110"}
+    for v, row in zip(("40", "110"), rows):
+        p = res[v]["intervals"]["power_W"]
+        assert len(res[v]["seeds"]) == 3 and 0 not in res[v]["seeds"]
+        assert all(format_interval(d["mean"], d["half_width"]) in row for d in p)
+    # more power at the higher speed, as the dissipation bound (∝ speed) says
+    assert res["110"]["intervals"]["power_W"][0]["mean"] > \
+        res["40"]["intervals"]["power_W"][0]["mean"]
+    iv = seed_interval([1.0, 2.0, 3.0])
+    assert format_interval(iv.mean, iv.half_width) == iv.text()
