@@ -26,6 +26,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from ..physics.params import FrictionParams, ParameterError
+from ..utils.io import display_path
 from .checkpoint import load_state
 from .config import DesignConfig, check_method
 from .goal import solve_goal_attainment
@@ -276,7 +277,7 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *,
     rec: dict[str, Any] = {}
     files: dict[str, str] = {}
     front: dict[str, Any] = {}
-    rec.update({"problem_file": cfg.path, "method": method,
+    rec.update({"problem_file": display_path(cfg.path), "method": method,
                 "vehicle": cfg.vehicle_name, "road": {"iso_class": cfg.road.iso_class,
                                                       "speed_km_per_h": cfg.road.speed_km_per_h},
                 "box": problem.space.as_dict(),
@@ -484,9 +485,11 @@ def constraint_record(problem: DesignProblem, outputs: Mapping[str, float],
 
 def _motor_block(ev: Any, cfg: DesignConfig) -> dict[str, Any] | None:
     if getattr(ev, "kind", None) == "select":
-        return {"model": "select", "catalogue": cfg.catalogue,
+        return {"model": "select",
+                "catalogue": None if cfg.catalogue is None else display_path(cfg.catalogue),
                 "motors": [m.name for m in ev.motors],
-                "screw_catalogue": cfg.screw_catalogue,
+                "screw_catalogue": (None if cfg.screw_catalogue is None
+                                    else display_path(cfg.screw_catalogue)),
                 "screws": [s.as_dict() for s in ev.screws],
                 "limit_settings": ev.limits.as_dict(),
                 "stroke_limit_m": ev.stroke_limit_m,

@@ -14,7 +14,7 @@ from ..estimation.discrepancy import (
     DiscrepancySettings,
     run_discrepancy,
 )
-from ..utils.io import atomic_write_json, atomic_write_text
+from ..utils.io import atomic_write_json, atomic_write_text, display_path
 from .base import Context, StepOutput
 from .paper_reference import EMPS_PUBLISHED, EMPS_REFERENCE
 from .discrepancy_captions import (per_test_caption, ranking_caption, residual_caption,
@@ -293,7 +293,9 @@ def report_documents(res: DiscrepancyResult) -> tuple[dict, str]:
     floor = _floor(res)
     doc = json.loads(json.dumps({**res.as_dict(), "error_true_parameters": floor},
                                 default=_json_default))
-    return doc, (f"# Model-discrepancy report: {res.data_path}\n\n"
+    if res.data_path:
+        doc["data"] = display_path(res.data_path)
+    return doc, (f"# Model-discrepancy report: {display_path(res.data_path)}\n\n"
                  + report_markdown(res, floor=floor))
 
 
