@@ -124,12 +124,11 @@ def test_required_life_is_a_stated_setting(tmp_path):
         LimitSettings(screw_life_km=0.0)
     text = (ROOT / "problems" / "paper_design.toml").read_text()
     prob = tmp_path / "p.toml"
-    prob.write_text(text.replace("peak_quantile = 0.95", "peak_quantile = 0.95\n"
-                                 "screw_life_km = -5.0"))
+    assert "screw_life_km = 160000.0" in text
+    prob.write_text(text.replace("screw_life_km = 160000.0", "screw_life_km = -5.0"))
     with pytest.raises(ParameterError, match=r"p\.toml.*screw_life_km"):
         load_design_config(prob)
-    prob.write_text(text.replace("peak_quantile = 0.95", "peak_quantile = 0.95\n"
-                                 "screw_life_km = 50000.0"))
+    prob.write_text(text.replace("screw_life_km = 160000.0", "screw_life_km = 50000.0"))
     assert load_design_config(prob).limit_settings.screw_life_km == 50000.0
 
 
