@@ -5,8 +5,9 @@ Cases (fixed before the first run, not tuned afterwards):
   paper     problems/paper_design.toml in the paper's design space (R_i, L_i fixed,
             no constraints): the problem on which NSGA-II's population front was seen
             to lose hypervolume after ~400 evaluations.
-  default   the same file with the product's default motor model (the frame rewound,
-            rated current/voltage and the stroke as constraints; feasible designs only).
+  default   the same file with the product's default motor model ("select": motor,
+            winding and screw from the shipped catalogues, every hardware limit a
+            constraint; feasible designs only).
 
 Algorithms: NSGA-II (the design card's named baseline), NSGA-III (Das-Dennis reference
 directions, 4 objectives, 5 partitions: 56 directions), SMS-EMOA, AGE-MOEA (needs numba;
@@ -43,7 +44,8 @@ sys.path.insert(0, str(ROOT))
 
 from ehsa_opt.design import OBJECTIVE_NAMES  # noqa: E402
 from ehsa_opt.design.config import load_design_config  # noqa: E402
-from ehsa_opt.design.optimize import build_problem, objectives_at  # noqa: E402
+from ehsa_opt.design.optimize import (build_problem, objectives_at,  # noqa: E402
+                                      prototype_problem)
 from ehsa_opt.design.pareto import hypervolume, non_dominated  # noqa: E402
 
 REF = np.full(4, 2.0)
@@ -127,9 +129,13 @@ def main() -> int:
     algos = algorithms(args.pop)
     for case, cfg in cases.items():
         problem = build_problem(cfg)
-        proto = objectives_at(problem, cfg.prototype_design)
+        # the goals' reference: the prototype in its own (the paper's) space
+        proto = objectives_at(prototype_problem(cfg), cfg.prototype_design)
         scale = np.array([proto[k] for k in OBJECTIVE_NAMES])
-        start = (problem.space.to_unit(cfg.prototype_design)[None, :]
+        # the product's first population: a catalogue space's screened feasible seeds,
+        # else the prototype when the problem has constraints
+        start = (problem.initial if getattr(problem, "initial", None) is not None
+                 else problem.space.to_unit(cfg.prototype_design)[None, :]
                  if problem.constraint_names else None)
         print(f"\n=== case {case}: {len(problem.constraint_names)} constraints "
               f"({', '.join(problem.constraint_names) or 'none'}), {args.evals} evaluations, "

@@ -12,6 +12,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..physics.params import ParameterError
+from ..utils.io import display_path
 from ..utils.tables import table_to_csv
 from .config import DesignConfig, check_method
 from .outcome import DesignResult
@@ -58,7 +59,8 @@ def catalogue_study(cfg: DesignConfig, method: str | None, kw: dict[str, Any],
                    key=lambda i: results[i][1].record.get("n_feasible_front", 0))
     chosen = results[best][1]
     rec = dict(chosen.record)
-    rec.update({"motor": {"model": "catalogue", "catalogue": cfg.catalogue,
+    rec.update({"motor": {"model": "catalogue", "catalogue": (None if cfg.catalogue is None
+                                                                else display_path(cfg.catalogue)),
                           "chosen": table[best]["motor"],
                           "source": table[best]["source"]},
                 "catalogue": table,

@@ -321,7 +321,7 @@ def _parse_limits(lt: Mapping[str, Any], path: str) -> Any:
     """The ``[limits]`` table: the tolerances of the hardware limits."""
     from .limits import LimitSettings
     where = f"{path} [limits]"
-    keys = ("time_fraction", "peak_quantile", "tyre_lift_fraction")
+    keys = ("time_fraction", "peak_quantile", "tyre_lift_fraction", "screw_life_km")
     _check_keys(lt, keys, where)
     try:
         return LimitSettings(**{k: _float(lt[k], f"{where} {k}") for k in keys if k in lt})

@@ -26,6 +26,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from ..physics.params import FrictionParams, ParameterError
+from ..utils.io import display_path
 from .checkpoint import load_state
 from .config import DesignConfig, check_method
 from .goal import solve_goal_attainment
@@ -55,7 +56,7 @@ def build_problem(cfg: DesignConfig, mapper: Any = None,
     a catalogue motor for one run of a catalogue study)."""
     frictions = tuple(config_frictions(cfg) if frictions is None else frictions)
     if cfg.motor_model == "select":
-        return _selection_problem(cfg, mapper, frictions)
+        return _selection_problem(cfg, mapper, frictions, friction_mode)
     if frictions:
         from .robust import FrictionObjectives
         mode = friction_mode or ("at" if len(frictions) == 1 else "worst")
@@ -78,20 +79,24 @@ def build_problem(cfg: DesignConfig, mapper: Any = None,
     return problem
 
 
-def _selection_problem(cfg: DesignConfig, mapper: Any, frictions: Sequence[Any]
-                       ) -> DesignProblem:
+def _selection_problem(cfg: DesignConfig, mapper: Any, frictions: Sequence[Any],
+                       friction_mode: str | None = None) -> DesignProblem:
     """The design problem of a ``select`` model: motor, winding and screw chosen from the
-    catalogues, every hardware limit a constraint (:mod:`.selection`)."""
-    from .selection import SelectionObjectives
+    catalogues, every hardware limit a constraint (:mod:`.selection`); with friction sets
+    the friction-aware fast path (combined by ``friction_mode``: ``at`` for one set, else
+    ``worst`` by default)."""
+    from .selection import FrictionSelectionObjectives, SelectionObjectives
+    args = (cfg.vehicle, cfg.road, cfg.harvester, tuple(cfg.catalogue_motors()),
+            tuple(cfg.screws()), cfg.limit_settings, cfg.vehicle.stroke_limit_m,
+            (("n_freq", cfg.n_freq),))
     if frictions:
-        raise ParameterError(f"{cfg.path}: [motor] model = 'select' is frictionless (the "
-                             "friction-aware fast path does not take catalogue variables "
-                             "yet); remove the friction sets, or use model 'catalogue' (one "
-                             "run per motor)")
-    ev = SelectionObjectives(cfg.vehicle, cfg.road, cfg.harvester,
-                             tuple(cfg.catalogue_motors()), tuple(cfg.screws()),
-                             cfg.limit_settings, cfg.vehicle.stroke_limit_m,
-                             (("n_freq", cfg.n_freq),))
+        mode = friction_mode or ("at" if len(frictions) == 1 else "worst")
+        ev: Any = FrictionSelectionObjectives(*args, frictions=tuple(frictions), mode=mode)
+    else:
+        if friction_mode not in (None, "at"):
+            raise ParameterError(f"--friction-mode {friction_mode} needs friction sets: give "
+                                 "--friction FILE:CASE (repeatable) or a [friction] table")
+        ev = SelectionObjectives(*args)
     problem = DesignProblem(cfg.design_space, ev)
     problem.mapper, problem.config = mapper, cfg
     # the feasible region of a catalogue space is narrow: the first population holds the
@@ -272,7 +277,7 @@ def _optimize_one(cfg: DesignConfig, method: str | None = None, *,
     rec: dict[str, Any] = {}
     files: dict[str, str] = {}
     front: dict[str, Any] = {}
-    rec.update({"problem_file": cfg.path, "method": method,
+    rec.update({"problem_file": display_path(cfg.path), "method": method,
                 "vehicle": cfg.vehicle_name, "road": {"iso_class": cfg.road.iso_class,
                                                       "speed_km_per_h": cfg.road.speed_km_per_h},
                 "box": problem.space.as_dict(),
@@ -479,9 +484,11 @@ def constraint_record(problem: DesignProblem, outputs: Mapping[str, float],
 
 def _motor_block(ev: Any, cfg: DesignConfig) -> dict[str, Any] | None:
     if getattr(ev, "kind", None) == "select":
-        return {"model": "select", "catalogue": cfg.catalogue,
+        return {"model": "select",
+                "catalogue": None if cfg.catalogue is None else display_path(cfg.catalogue),
                 "motors": [m.name for m in ev.motors],
-                "screw_catalogue": cfg.screw_catalogue,
+                "screw_catalogue": (None if cfg.screw_catalogue is None
+                                    else display_path(cfg.screw_catalogue)),
                 "screws": [s.as_dict() for s in ev.screws],
                 "limit_settings": ev.limits.as_dict(),
                 "stroke_limit_m": ev.stroke_limit_m,

@@ -251,11 +251,11 @@ class DesignResult:
         if isinstance(res, ParetoResult) and len(res.F):
             ga_rec = self.record.get("goal_attainment")
             ga_pt = ga_rec["objectives"] if ga_rec else None
+            marks = self._front_marks(res)
             figs["pareto"] = pd.pareto_projections(
-                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"),
-                self._front_marks(res))
+                res, ga_pt, (self.record.get("prototype") or {}).get("objectives"), marks)
             figs["parallel"] = pd.parallel_coordinates(
-                res, None if ga_rec is None else {**ga_rec["design"], **ga_pt})
+                res, None if ga_rec is None else {**ga_rec["design"], **ga_pt}, marks=marks)
             figs["hypervolume"] = pd.hypervolume_history({front_label: res.history},
                                                          res.hv_reference)
         return figs
@@ -411,6 +411,9 @@ def _roads_summary(roads: Mapping[str, Any] | None, outcome: Mapping[str, Any]) 
             "fraction of time beyond: " + ", ".join(
                 f"{k} {100 * v:.3g} %" for k, v in roads["worst_fraction"].items())
             + f"; worst rms current / rating {roads['worst_current_over_rating']:.3f}"
+            + ("" if "worst_screw_load_over_allowed" not in roads else
+               "; worst screw mean load / load of its required life "
+               f"{roads['worst_screw_load_over_allowed']:.3f} ({st['screw_life_km']:g} km)")
             + ("" if not hv else f"; hypervolume of the feasible front {hv['mean']:.5g} "
                f"[{hv['interval'][0]:.5g}, {hv['interval'][1]:.5g}] (95 %, "
                f"{hv['n_roads']} roads)"))

@@ -32,12 +32,14 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..physics.params import HarvesterParams, RoadParams, VehicleParams
-from .limits import LimitSettings, gaussian_fraction_beyond, limit_entry, rice_peak_quantile
+from ..physics.params import HarvesterParams, ParameterError, RoadParams, VehicleParams
+from ..physics.ball_screw import allowable_mean_load
+from .limits import (GAUSSIAN_CUBIC_MEAN_FACTOR, LimitSettings, gaussian_fraction_beyond,
+                     limit_entry, rice_peak_quantile)
 from .problem import OBJECTIVE_NAMES, DesignSpace
 
-__all__ = ["SelectionObjectives", "selection_space", "SELECTION_EXTRAS", "motor_names",
-           "realisable_winding"]
+__all__ = ["SelectionObjectives", "FrictionSelectionObjectives", "selection_space",
+           "SELECTION_EXTRAS", "motor_names", "realisable_winding"]
 
 #: Evaluator outputs besides objectives and limits.
 SELECTION_EXTRAS = ("comfort_weighted_rms_m_s2", "power_W", "efficiency", "power_dimensionless",
@@ -103,9 +105,22 @@ class SelectionObjectives:
         out = ["rated_current", "peak_current", "rated_voltage", "motor_speed"]
         if self.screws:
             out.append("screw_speed")
+        if self.rated_screws:
+            out.append("screw_life")
         if self.stroke_limit_m is not None:
             out.append("stroke")
         return tuple(out + ["tyre_lift", "motor_inertia"])
+
+    @property
+    def rated_screws(self) -> bool:
+        """Every screw has a dynamic load rating (its fatigue life is a limit)."""
+        return bool(self.screws) and all(s.dynamic_load_rating_N for s in self.screws)
+
+    def life_revolutions(self, mean_speed_rev_s: Any) -> np.ndarray:
+        """Revolutions a screw turning at mean |speed| ``mean_speed_rev_s`` (rev/s) runs
+        over the required distance :attr:`LimitSettings.screw_life_km` on the design road."""
+        hours_s = self.limits.screw_life_km * 1e3 / self.road.speed_m_per_s
+        return np.asarray(mean_speed_rev_s, float) * hours_s
 
     @property
     def duration_s(self) -> float:
@@ -144,6 +159,7 @@ class SelectionObjectives:
             hw["lead_mm_per_rev"] = pick(lambda s: s.lead_mm_per_rev)
             hw["screw_max_speed_rpm"] = pick(lambda s: s.max_speed_rpm)
             hw["screw_inertia_gcm2"] = pick(lambda s: s.inertia_gcm2)
+            hw["screw_dynamic_load_N"] = pick(lambda s: s.dynamic_load_rating_N or np.nan)
             hw["screw_index"] = is_
         else:
             hw["lead_mm_per_rev"] = np.broadcast_to(np.asarray(
@@ -191,6 +207,10 @@ class SelectionObjectives:
                "inverse_efficiency": 1.0 / m["efficiency"]}
         out.update({k: m[k] for k in SELECTION_EXTRAS if k in m})
         out.update(self.limit_outputs(m, mapping, hw))
+        return self._with_hardware(out, hw)
+
+    def _with_hardware(self, out: dict[str, np.ndarray], hw: Mapping[str, np.ndarray]
+                       ) -> dict[str, np.ndarray]:
         out.update({"speed_constant_rpm_per_V": hw["speed_constant_rpm_per_V"],
                     "lead_mm_per_rev": hw["lead_mm_per_rev"],
                     "internal_resistance_ohm": hw["internal_resistance_ohm"],
@@ -227,6 +247,8 @@ class SelectionObjectives:
         if self.screws:
             out.update(limit_entry("screw_speed", z2 * rpm, hw["screw_max_speed_rpm"],
                                    gaussian_fraction_beyond(hw["screw_max_speed_rpm"], rpm)))
+        if self.rated_screws:
+            out.update(self._screw_life(m, mapping, hw, r))
         if self.stroke_limit_m is not None:
             out.update(limit_entry("stroke", z2 * m["stroke_rms_m"], self.stroke_limit_m,
                                    gaussian_fraction_beyond(self.stroke_limit_m,
@@ -239,6 +261,22 @@ class SelectionObjectives:
                                np.zeros(shape)))
         return {k: np.broadcast_to(v, shape) if np.ndim(v) < len(shape) else v
                 for k, v in out.items()}
+
+    def _screw_life(self, m: Mapping[str, np.ndarray], mapping: Mapping[str, Any],
+                    hw: Mapping[str, np.ndarray], r: np.ndarray) -> dict[str, np.ndarray]:
+        """The screw's fatigue limit from rms values (the Gaussian bound of
+        :mod:`.limits`): F_m ≤ 1.555 (m_eq σ_a + k_t σ_i / r) against the load of an L10
+        life of the required distance."""
+        jt = np.asarray(mapping["total_inertia_gcm2"], float) * 1e-7
+        kt = np.asarray(mapping["torque_constant_Nm_per_A"], float)
+        sigma_f = (jt / r ** 2 * m["stroke_acceleration_rms_m_s2"]
+                   + kt / r * m["current_rms_A"])
+        f_m = GAUSSIAN_CUBIC_MEAN_FACTOR * sigma_f
+        mean_rev_s = math.sqrt(2.0 / math.pi) * m["stroke_velocity_rms_m_s"] / (2 * math.pi * r)
+        allow = allowable_mean_load(hw["screw_dynamic_load_N"], self.life_revolutions(mean_rev_s))
+        out = limit_entry("screw_life", f_m, allow, np.zeros(np.shape(f_m)))
+        out["screw_mean_load_N"] = f_m
+        return out
 
     def describe(self, design: Mapping[str, Any], index: int = 0) -> dict[str, Any]:
         """The motor (with its winding) and screw of one design, for reports."""
@@ -261,6 +299,63 @@ class SelectionObjectives:
                 "base": asdict(self.base), "motors": [asdict(m) for m in self.motors],
                 "screws": [asdict(s) for s in self.screws], "limits": self.limits.as_dict(),
                 "stroke_limit_m": self.stroke_limit_m, "options": dict(self.metric_options)}
+
+
+@dataclass(frozen=True)
+class FrictionSelectionObjectives(SelectionObjectives):
+    """:class:`SelectionObjectives` with the strut's friction: the objectives by the
+    friction-aware fast path (:func:`ehsa_opt.vehicle.fast_path.friction_metrics`) at each
+    friction set, every hardware limit from the linear path with the friction's equivalent
+    damping c_f (the rms current, voltage, stroke, speeds and their rates of the damped
+    car), combined over the sets by ``mode`` (:func:`ehsa_opt.design.robust.combine`: a
+    limit is always the worst set's).
+
+    Attributes
+    ----------
+    frictions : tuple of FrictionParams
+        One (mode ``at``) or several friction sets (e.g. an identification's).
+    mode : str
+        ``at``, ``worst`` or ``mean``.
+    labels : tuple of str
+        Names of the sets (reports only).
+    """
+
+    frictions: tuple = ()
+    mode: str = "at"
+    labels: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        from .robust import FRICTION_MODES
+        if not self.frictions:
+            raise ParameterError("FrictionSelectionObjectives: give at least one friction "
+                                 "set (--friction FILE[:CASE] or a [friction] table)")
+        if self.mode not in FRICTION_MODES or (self.mode == "at" and len(self.frictions) != 1):
+            raise ParameterError(f"--friction-mode {self.mode}: with {len(self.frictions)} "
+                                 f"friction set(s) use at (one set), worst or mean")
+
+    def __call__(self, design: Mapping[str, Any]) -> dict[str, np.ndarray]:
+        from ..vehicle.fast_path import friction_metrics
+        from ..vehicle.frequency_path import linear_metrics
+        from .robust import combine, objectives_from_metrics
+        hw = self.hardware(design)
+        mapping = self.design_mapping(design)
+        opts = dict(self.metric_options)
+        per = []
+        for f in self.frictions:
+            fm = friction_metrics(self.vehicle, self.road, mapping, f, **opts)
+            lm = linear_metrics(self.vehicle, self.road, mapping,
+                                friction_damping_Ns_per_m=fm["friction_damping_Ns_per_m"],
+                                **opts)
+            o = objectives_from_metrics(fm)
+            o.update({k: lm[k] for k in SELECTION_EXTRAS if k in lm and k not in o})
+            o.update(self.limit_outputs(lm, mapping, hw))
+            per.append(o)
+        return self._with_hardware(combine(per, self.mode), hw)
+
+    def fingerprint(self) -> dict[str, Any]:
+        from dataclasses import asdict
+        return {**super().fingerprint(), "kind": "select_friction_equivalent",
+                "mode": self.mode, "frictions": [asdict(f) for f in self.frictions]}
 
 
 def motor_names(ev: Any, designs: Mapping[str, Any]) -> Sequence[str]:

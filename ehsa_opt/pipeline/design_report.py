@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -24,6 +24,7 @@ from ..design import OBJECTIVE_NAMES
 from .base import Context, StepOutput
 from .design_problem import design_config, not_applicable
 from .paper_reference import PAPER_OPTIMUM, PAPER_TABLE4
+from .design_captions import front_caption, hypervolume_caption, parallel_caption
 from .vehicle_intervals_report import caption
 from .step_results import DesignStepResult
 
@@ -251,7 +252,11 @@ def step_pareto(ctx: Context) -> StepOutput:
                 ("goal attainment", out["goal_attainment"]["design"], ga_obj),
                 (f"NSGA-II {pr.pick}", {n: float(v[k]) for n, v in pr.designs.items()},
                  dict(zip(OBJECTIVE_NAMES, pr.F[k].tolist()))))) + "\n"
-        + "".join(f"![{Path(f).stem}]({f})\n" for f in figs))
+        + "".join(f"![{Path(f).stem}]({f})\n" + caption(label, text)
+                  for f, (label, text) in zip(figs, (
+                      ("Front", front_caption(pr, out, proto)),
+                      ("Parallel coordinates", parallel_caption(pr, out)),
+                      ("Hypervolume", hypervolume_caption(pr, out))))))
     res = {"n_front": int(pr.F.shape[0]), "n_dominating_ga_by_1pct": n_dom,
            "closest_ratio": best, "hv_history": hv, "pop": pop, "gens": gens}
     return StepOutput(md, figs, res)
@@ -421,6 +426,7 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
                                      jobs=1, identified_range_m_per_s=v_id)
     pp = {r["friction"]: r for r in rows_paper}
     t4_md, t4_res = _table4_with_intervals(ctx, cfg, ga, paper_design, sets, length, v_id)
+    f20_md, f20_res = _fig20_intervals(ctx, cfg, ga, sets, speeds, length, v_id)
     rel = "figures/fig20_friction_on_optimum.png"
     plots.save(fig_fn(rows), ctx.out_dir / rel)
     t_all = [r.get("out_of_range_time_fraction", 0.0) for r in rows]
@@ -436,17 +442,40 @@ def step_friction_on_optimum(ctx: Context) -> StepOutput:
           + ", ".join(f"{r['speed_km_per_h']:g} km/h {r['friction']} "
                       f"{100 * r.get('out_of_range_time_fraction', 0.0):.0f} %"
                       for r in rows if r["friction"] == "max") + " of the time.)\n\n"
-          + "\n" + _friction_explanation(cfg, ga, rows, pp, source) + f"![fig20]({rel})\n"
-          + caption("Fig 20", _fig20_caption(rows, length)))
+          + "\n" + _friction_explanation(cfg, ga, rows, pp, source) + f20_md
+          + f"![fig20]({rel})\n" + caption("Fig 20", _fig20_caption(rows, length, f20_res)))
     return StepOutput(md, [rel], {"rows": rows, "friction_source": source,
-                                  "paper_design_rows": rows_paper, "table4_intervals": t4_res})
+                                  "paper_design_rows": rows_paper, "table4_intervals": t4_res,
+                                  "fig20_intervals": f20_res})
+
+
+def _fig20_intervals(ctx: Context, cfg: Any, ga: dict, sets: dict, speeds: Sequence[float],
+                     length: float, v_id: float | None) -> tuple[str, dict]:
+    """Fig 20's metrics at every speed with 95 % intervals over road realisations
+    (:func:`~ehsa_opt.pipeline.vehicle_intervals_report.speed_intervals`)."""
+    import dataclasses
+    from ..physics.params import HarvesterParams
+    from .vehicle_intervals_report import intervals_note, report_seeds, speed_intervals
+    h = HarvesterParams.from_design(ga["total_inertia_gcm2"], ga["lead_mm_per_rev"],
+                                    ga["speed_constant_rpm_per_V"], ga["load_ohm"],
+                                    base=cfg.harvester)
+    road = dataclasses.replace(cfg.road, length_m=length)
+    md, res = speed_intervals(cfg.vehicle, road, h, {"none": None, **sets}, speeds,
+                              report_seeds(ctx), v_id)
+    return ("**Fig 20 with its uncertainty.** The optimum at every speed of Fig 20 on road "
+            "realisations; changes are improvements against no friction, paired on the same "
+            "roads. " + intervals_note(report_seeds(ctx), road.seed) + "\n\n" + md
+            + "\n\n"), res
 
 
 def _table4_with_intervals(ctx: Context, cfg: Any, ga: dict, paper_design: dict,
                            sets: dict, length: float, v_id: float | None) -> tuple[str, dict]:
-    """Table 4 of the optimum and of the paper's design with 95 % intervals over road
-    realisations at 100 km/h (:func:`~ehsa_opt.pipeline.vehicle_intervals_report.table4_intervals`)."""
+    """Table 4 of the optimum, of the optimum on the nearest winding a real series offers
+    (:func:`~ehsa_opt.design.selection.realisable_winding`) and of the paper's design with
+    95 % intervals over road realisations at 100 km/h
+    (:func:`~ehsa_opt.pipeline.vehicle_intervals_report.table4_intervals`)."""
     import dataclasses
+    from ..design.selection import realisable_winding
     from ..physics.params import HarvesterParams
     from .vehicle_intervals_report import intervals_note, report_seeds, table4_intervals
     road = dataclasses.replace(cfg.road, speed_km_per_h=100.0, length_m=length)
@@ -454,18 +483,50 @@ def _table4_with_intervals(ctx: Context, cfg: Any, ga: dict, paper_design: dict,
                                                  d["speed_constant_rpm_per_V"], d["load_ohm"],
                                                  base=cfg.harvester)
                for name, d in (("optimum", ga), ("paper's design", paper_design))}
+    real = ""
+    if cfg.catalogue is not None:
+        w = realisable_winding(ga["speed_constant_rpm_per_V"], cfg.catalogue_motors())
+        # the real rotor turns too: J_t at least the motor's rotor and the prototype's screw
+        jt = max(ga["total_inertia_gcm2"], w["motor_inertia_gcm2"]
+                 + cfg.harvester.screw_inertia_gcm2)
+        label = (f"optimum on a real winding ({w['motor']} at k_n "
+                 f"{w['speed_constant_rpm_per_V']:.3g} rpm/V, R_i "
+                 f"{w['internal_resistance_ohm']:.3g} Ω, J_t {jt:.0f} g cm²)")
+        designs = {"optimum": designs["optimum"], label: cfg.harvester.replace(
+            motor_inertia_gcm2=w["motor_inertia_gcm2"],
+            screw_inertia_gcm2=jt - w["motor_inertia_gcm2"],
+            lead_mm_per_rev=ga["lead_mm_per_rev"],
+            voltage_constant_Vs_per_rad=w["voltage_constant_Vs_per_rad"],
+            torque_constant_Nm_per_A=w["voltage_constant_Vs_per_rad"],
+            internal_resistance_ohm=w["internal_resistance_ohm"],
+            inductance_H=w["inductance_H"], load_ohm=ga["load_ohm"]),
+            "paper's design": designs["paper's design"]}
+        real = (f" The second table puts the optimum, designed with the paper's assumption "
+                f"(R_i = {cfg.harvester.internal_resistance_ohm:g} Ω for every k_n), on the "
+                f"nearest winding a real series offers ({w['motor']}; its R_i, L_i and rotor).")
     md, res = table4_intervals(cfg.vehicle, road, designs, {"none": None, **sets},
                                report_seeds(ctx), PAPER_TABLE4, v_id)
     note = intervals_note(report_seeds(ctx), road.seed)
     return ("**Table 4 with its uncertainty.** The same designs on road realisations; the "
-            "paper's values are judged against our intervals. " + note + "\n\n" + md), res
+            "paper's values are judged against our intervals. " + note + real + "\n\n" + md), res
 
 
-def _fig20_caption(rows: list[dict], length: float) -> str:
-    """Fig 20's caption from the rows."""
+def _fig20_caption(rows: list[dict], length: float, intervals: dict | None = None) -> str:
+    """Fig 20's caption from the rows (the top speed's power with its interval over road
+    realisations when given)."""
+    from ..vehicle.uncertainty import format_interval
     speeds = sorted({r["speed_km_per_h"] for r in rows})
-    p = {r["friction"]: r["power_W"] for r in rows if r["speed_km_per_h"] == speeds[-1]}
+    cases = [r["friction"] for r in rows if r["speed_km_per_h"] == speeds[-1]]
+    top = (intervals or {}).get(f"{speeds[-1]:g}")
+    if top is not None:
+        pw = top["intervals"]["power_W"]
+        power = ", ".join(f"{c} {format_interval(d['mean'], d['half_width'])} W"
+                          for c, d in zip(cases, pw) if d is not None)
+        power += f" (95 %, {len(top['seeds'])} road realisations)"
+    else:
+        power = ", ".join(f"{r['friction']} {r['power_W']:.0f} W" for r in rows
+                          if r["speed_km_per_h"] == speeds[-1])
     return (f"The optimum with no/min/max friction over {len(speeds)} speeds "
             f"({speeds[0]:g}–{speeds[-1]:g} km/h) on the {length:g} m design road: power, "
             f"efficiency, comfort and road holding; at {speeds[-1]:g} km/h the power is "
-            + ", ".join(f"{c} {v:.0f} W" for c, v in p.items()))
+            + power)

@@ -14,9 +14,12 @@ from ..estimation.discrepancy import (
     DiscrepancySettings,
     run_discrepancy,
 )
-from ..utils.io import atomic_write_json, atomic_write_text
+from ..utils.io import atomic_write_json, atomic_write_text, display_path
 from .base import Context, StepOutput
 from .paper_reference import EMPS_PUBLISHED, EMPS_REFERENCE
+from .discrepancy_captions import (per_test_caption, ranking_caption, residual_caption,
+                                   zoom_caption)
+from .vehicle_intervals_report import caption
 
 __all__ = ["write_report", "report_documents", "write_partial_report", "partial_report",
            "report_markdown", "step_discrepancy",
@@ -91,15 +94,19 @@ def report_markdown(res: DiscrepancyResult, fig_prefix: str = "figures/",
         for ch in res.loc_after.channels.values():
             L.append(f"| {ch.channel} | {ch.rms_normalised:.2f} | "
                      f"{100 * ch.structured_fraction:.0f} % |")
-    L.append(f"\n![residual maps]({fig_prefix}discrepancy_residual_maps.png)\n")
+    L.append(f"\n![residual maps]({fig_prefix}discrepancy_residual_maps.png)\n"
+             + caption("Residual maps", residual_caption(res)))
     L += _candidates_markdown(res, fig_prefix)
     L.append("### Error per test\n")
     L.append("| test | set | error before (%) | error after (%) |\n|---|---|---|---|")
     for r in res.per_test_errors():
         L.append(f"| {r['test']} | {r['set']} | {r['error_before']:.3f} | {r['error_after']:.3f} |")
-    L.append(f"\n![per-test errors]({fig_prefix}discrepancy_per_test_errors.png)\n")
+    rows = res.per_test_errors()
+    L.append(f"\n![per-test errors]({fig_prefix}discrepancy_per_test_errors.png)\n"
+             + caption("Error per test", per_test_caption(res, rows)))
     L.append(f"Measured vs simulated, zoomed where the baseline misses most:\n\n"
-             f"![zoom]({fig_prefix}discrepancy_zoom.png)\n")
+             f"![zoom]({fig_prefix}discrepancy_zoom.png)\n"
+             + caption("Zoom", zoom_caption(res, rows)))
     L += _validation_markdown(res)
     return "\n".join(L)
 
@@ -168,7 +175,8 @@ def _candidates_markdown(res: DiscrepancyResult, fig_prefix: str) -> list[str]:
                  f"{refit} | {_fmt(c.delta_bic_fit, '.1f')} | "
                  f"{_fmt(c.delta_bic_heldout, '.1f')} | {_fmt(c.error_before, '.3f')} | "
                  f"{_fmt(c.error_after, '.3f')} | {ex} | {'**yes**' + by if c.earns else 'no'} |")
-    L.append(f"\n![ranking]({fig_prefix}discrepancy_ranking.png)\n")
+    L.append(f"\n![ranking]({fig_prefix}discrepancy_ranking.png)\n"
+             + caption("Ranking", ranking_caption(res)))
     named = {}
     for c in res.candidates:  # each named effect's record (the last, where it was added)
         if c.earns and c.effect in res.effects:
@@ -285,7 +293,9 @@ def report_documents(res: DiscrepancyResult) -> tuple[dict, str]:
     floor = _floor(res)
     doc = json.loads(json.dumps({**res.as_dict(), "error_true_parameters": floor},
                                 default=_json_default))
-    return doc, (f"# Model-discrepancy report: {res.data_path}\n\n"
+    if res.data_path:
+        doc["data"] = display_path(res.data_path)
+    return doc, (f"# Model-discrepancy report: {display_path(res.data_path)}\n\n"
                  + report_markdown(res, floor=floor))
 
 

@@ -173,7 +173,7 @@ def step_identify_prototype(ctx):
         rel_b = "figures/identify_prototype/friction_bounds.png"
         plots.save(fb.plot(truth=_truth_params(truth)), ctx.out_dir / rel_b)
         figs.append(rel_b)
-    atomic_write_json(ctx.out_dir / "identify_prototype.json", doc)
+    atomic_write_json(ctx.out_dir / "identify_prototype.json", _portable(doc, ctx.out_dir))
     ok = [f for f in rep.fits if f.success]
     lines = _prototype_table2_lines(data, opts, starts, rep, truth)
     if not ok:
@@ -283,7 +283,7 @@ def step_identify_emps(ctx):
     rep = identify(data, starts=2 if ctx.quick else 4, jobs=1, seed=0)
     f = rep.fits[0]
     figs = _rel(ctx, rep.write(ctx.figure_dir / "identify_emps"))
-    atomic_write_json(ctx.out_dir / "identify_emps.json", rep.to_dict())
+    atomic_write_json(ctx.out_dir / "identify_emps.json", _portable(rep.to_dict(), ctx.out_dir))
     if not f.success:
         return StepOutput(f"EMPS identification failed: {f.message}\n", figs, {"success": False})
     p = f.parameters
@@ -338,3 +338,13 @@ def step_identify_emps(ctx):
            "force_relative_error_percent": f.force_relative_error_percent,
            "validation_force_relative_error_percent": val_err}
     return StepOutput("\n".join(lines) + "\n", figs, res)
+
+
+def _portable(doc: dict, folder: Path) -> dict:
+    """An identification document whose ``data_dir`` is relative to the folder it is
+    written to (it is resolved against that folder when read back): no absolute path of
+    this machine in a committed result."""
+    from ..utils.io import relative_path
+    if doc.get("data_dir"):
+        return {**doc, "data_dir": relative_path(doc["data_dir"], folder)}
+    return doc

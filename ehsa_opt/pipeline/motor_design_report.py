@@ -11,6 +11,8 @@ generated from the numbers; the hardware optimum is re-simulated on held-out roa
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
+
 from .base import Context, StepOutput
 
 __all__ = ["step_motor_design"]
@@ -87,9 +89,9 @@ def step_motor_design(ctx: Context) -> StepOutput:
         f"motor, winding and ball screw chosen from the shipped catalogues "
         f"({len(cfg.catalogue_motors())} motors, {len(cfg.screws())} screws, each with its "
         "datasheet source), every limit of that hardware (thermal rms current, short-term "
-        "current, the road's peak voltage, motor and screw speed, stroke, tyre lift) a "
-        "constraint on its fraction of time at the stated tolerances "
-        f"({cfg.limit_settings.as_dict()}). Goal attainment on {cfg.vehicle_name}, class "
+        "current, the road's peak voltage, motor and screw speed, stroke, tyre lift, the "
+        "screw's L10 life) a constraint at the stated tolerances ("
+        + _tolerances(cfg.limit_settings) + f"). Goal attainment on {cfg.vehicle_name}, class "
         f"{cfg.road.iso_class} at {cfg.road.speed_km_per_h:g} km/h, goals = the prototype's "
         "objectives.\n\n" + "\n".join(rows) + "\n\n"
         f"**Against the paper's assumption.** Its optimum (k_n = "
@@ -117,6 +119,9 @@ def step_motor_design(ctx: Context) -> StepOutput:
            "(worst road): " + ", ".join(
                f"{k} {100 * roads['mean_fraction'][k]:.3g} % ({100 * v:.3g} %)"
                for k, v in roads["worst_fraction"].items())
+           + ("" if "worst_screw_load_over_allowed" not in roads else
+              "; the screw's mean load at most "
+              f"{roads['worst_screw_load_over_allowed']:.3f} of the load of its required life")
            + ".\n" if roads else ""))
     res = {"paper_space": {"design": paper["design"], "gamma": paper["gamma"],
                            "efficiency": paper_obj["efficiency"]},
@@ -128,3 +133,11 @@ def step_motor_design(ctx: Context) -> StepOutput:
                         "held_out_roads_within": (roads.get("n_within") == roads.get(
                             "n_designs")) if roads else None}}
     return StepOutput(md, [], res)
+
+
+def _tolerances(st: Any) -> str:
+    """The stated tolerances in words."""
+    return (f"a hard limit exceeded at most {100 * st.time_fraction:.3g} % of the time, the tyre "
+            f"lifting at most {100 * st.tyre_lift_fraction:.3g} %, the road's peak voltage below "
+            f"the maximum with probability {st.peak_quantile:g}, the screw surviving "
+            f"{st.screw_life_km:g} km on the design road")

@@ -21,7 +21,7 @@ from ..vehicle.validity import (EXCEEDANCE_FRACTION_LIMIT, TYRE_LIFT_FRACTION_LI
 
 __all__ = ["report_seeds", "LIMITS_HEADER", "limits_cell", "limits_note", "intervals_note",
            "versus_paper", "caption", "QUICK_SEEDS", "stroke_cell", "fig13_caption",
-           "road_caption", "fig21_caption", "table4_intervals"]
+           "road_caption", "fig21_caption", "table4_intervals", "speed_intervals"]
 
 #: Road realisations per interval in a quick run (the full run uses
 #: :data:`~ehsa_opt.vehicle.uncertainty.DEFAULT_SEEDS`).
@@ -218,3 +218,48 @@ def table4_intervals(vehicle: Any, road: Any, designs: Mapping[str, Any],
                       "validity": validity.as_list(), "seeds": iv.seeds}
         note = limits_note(limits, vehicle.stroke_limit_m)
     return "\n\n".join(out_md) + "\n\n" + note + "\n\n", res
+
+
+def speed_intervals(vehicle: Any, road: Any, harvester: Any, frictions: Mapping[str, Any],
+                    speeds: Sequence[float], n_seeds: int,
+                    identified_range_m_per_s: float | None = None
+                    ) -> tuple[str, dict[str, Any]]:
+    """One design with each friction case at several speeds: power, efficiency and the
+    paired comfort and road-holding changes against no friction with 95 % intervals over
+    ``n_seeds`` road realisations per speed (digits follow the interval), and the share of
+    the time the tyre lifts.
+
+    Returns
+    -------
+    str, dict
+        A Markdown table (a row per speed) and, per speed, the intervals as plain data.
+    """
+    import dataclasses
+
+    from ..vehicle.uncertainty import road_intervals
+    cases = list(frictions)
+    i0 = cases.index("none")
+    others = [j for j in range(len(cases)) if j != i0]
+    head = ("| speed (km/h) | power (W): " + " / ".join(cases) + " | efficiency (%): "
+            + " / ".join(cases) + " | comfort change (%, paired): "
+            + " / ".join(cases[j] for j in others) + " | road holding change (%, paired): "
+            + " / ".join(cases[j] for j in others) + " | tyre lift (share of the time) |\n"
+            "|---|---|---|---|---|---|")
+    lines, res = [head], {}
+    for v in speeds:
+        iv = road_intervals(vehicle, [harvester] * len(cases),
+                            [frictions[c] for c in cases],
+                            dataclasses.replace(road, speed_km_per_h=float(v)),
+                            n_seeds=n_seeds, identified_range_m_per_s=identified_range_m_per_s)
+        p = " / ".join(iv.interval("power_W", j).text() for j in range(len(cases)))
+        e = " / ".join(iv.interval("efficiency", j).scaled(100).text()
+                       for j in range(len(cases)))
+        c = " / ".join(iv.change("comfort", j, i0, "improvement").text() for j in others)
+        r = " / ".join(iv.change("road_holding", j, i0, "improvement").text() for j in others)
+        lift = " / ".join(_share(np.mean(iv.samples["tyre_lift_fraction"][:, j]))
+                          for j in range(len(cases)))
+        lines.append(f"| {v:g} | {p} | {e} | {c} | {r} | {lift} |")
+        res[f"{v:g}"] = {"intervals": iv.as_dict(["power_W", "efficiency", "comfort",
+                                                  "road_holding", "tyre_lift_fraction"]),
+                         "seeds": iv.seeds}
+    return "\n".join(lines), res

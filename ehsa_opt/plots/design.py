@@ -162,9 +162,13 @@ def pareto_projections(pr: ParetoResult, ga: Mapping[str, float] | None = None,
 
 
 def parallel_coordinates(pr: ParetoResult, ga: Mapping[str, float] | None = None,
-                         ax: Axes | None = None) -> Figure:
+                         ax: Axes | None = None, marks: Mapping[str, Any] | None = None
+                         ) -> Figure:
     """Design variables and objectives of every front point, each axis scaled to
-    the front's range (log axes for log-scaled spans)."""
+    the front's range (log axes for log-scaled spans).  ``marks`` as
+    :func:`pareto_projections`: infeasible points dashed red, one colour per motor (else
+    colour by comfort), the motor model and the pick's active bounds in the title."""
+    marks = marks or {}
     keys = list(pr.designs) + list(pr.objective_names)
     data = np.column_stack([np.asarray(pr.designs[k], float) for k in pr.designs] + [pr.F])
     lo, hi = data.min(axis=0), data.max(axis=0)
@@ -180,11 +184,23 @@ def parallel_coordinates(pr: ParetoResult, ga: Mapping[str, float] | None = None
         return (a - l0) / np.where(h0 > l0, h0 - l0, 1.0)
     fig, ax = axes_or_new(ax, (9, 4))
     x = np.arange(len(keys))
-    cmap = plt.get_cmap("viridis")
-    c = pr.F[:, 0]
-    cn = (c - c.min()) / (np.ptp(c) or 1.0)
-    for row, cv in zip(data, cn):
-        ax.plot(x, norm(row), color=cmap(cv), alpha=0.5, lw=0.9)
+    n = data.shape[0]
+    feas = np.asarray(marks.get("feasible", np.ones(n, bool)), bool)
+    motor = marks.get("motor")
+    if motor is not None and len(motor) == n:
+        names = sorted(set(map(str, motor)))
+        colours = [f"C{(names.index(str(m)) + 4) % 10}" for m in motor]
+        for i, m in enumerate(names):
+            ax.plot([], [], color=f"C{(i + 4) % 10}", lw=1.5, label=m)
+    else:
+        cmap = plt.get_cmap("viridis")
+        c = pr.F[:, 0]
+        colours = [cmap(v) for v in (c - c.min()) / (np.ptp(c) or 1.0)]
+    for row, col, ok in zip(data, colours, feas):
+        ax.plot(x, norm(row), color=col if ok else "red", alpha=0.5 if ok else 0.9,
+                lw=0.9, ls="-" if ok else "--")
+    if np.any(~feas):
+        ax.plot([], [], color="red", ls="--", lw=1.2, label="infeasible (a limit exceeded)")
     ax.plot(x, norm(data[pr.preferred]), color="C2", lw=2.5, label=f"{pr.pick} pick")
     if ga is not None:
         ax.plot(x, norm(g), color="C3", lw=2.5, ls="--", label="goal attainment")
@@ -194,8 +210,17 @@ def parallel_coordinates(pr: ParetoResult, ga: Mapping[str, float] | None = None
         ax.annotate(f"{l0:.3g}", (xi, -0.06), ha="center", fontsize=6)
     ax.set_yticks([])
     ax.set_ylim(-0.1, 1.08)
-    ax.legend(fontsize=8, loc="upper right")
-    ax.set_title("Parallel coordinates of the front (colour: comfort)", fontsize=10)
+    ax.legend(fontsize=7, loc="upper right")
+    extra = []
+    if marks.get("motor_label"):
+        extra.append(f"motor: {marks['motor_label']}")
+    if np.any(~feas):
+        extra.append(f"{int(np.sum(~feas))} of {n} points infeasible")
+    if marks.get("active_bounds"):
+        extra.append("pick at a bound: " + ", ".join(marks["active_bounds"]))
+    ax.set_title("Parallel coordinates of the front (colour: "
+                 + ("motor" if motor is not None and len(motor) == n else "comfort") + ")"
+                 + ("\n" + "; ".join(extra) if extra else ""), fontsize=9)
     fig.tight_layout()
     return fig
 

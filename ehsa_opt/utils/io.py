@@ -21,7 +21,7 @@ from typing import Any, Callable
 
 from .output_folder import TEMP_SUFFIX, admit, temp_prefix
 
-__all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "atomic_write_with",
+__all__ = ["display_path", "relative_path", "atomic_write_text", "atomic_write_bytes", "atomic_write_json", "atomic_write_with",
            "json_safe", "current_umask"]
 
 
@@ -98,3 +98,21 @@ def json_safe(obj: Any) -> Any:
 def atomic_write_json(path: str | Path, obj: Any, indent: int | None = 1) -> None:
     """Write ``obj`` as standard JSON (no NaN/Infinity: they become ``null``)."""
     atomic_write_text(path, json.dumps(json_safe(obj), indent=indent, allow_nan=False))
+
+
+def display_path(path: str | Path) -> str:
+    """A recorded path that does not depend on the machine: a file of the installed
+    package as ``ehsa_opt/<path in the package>`` (the same on every installation), any
+    other path as given."""
+    pkg = Path(__file__).resolve().parents[1]
+    try:
+        return (Path(pkg.name) / Path(path).resolve().relative_to(pkg)).as_posix()
+    except (ValueError, OSError):
+        return str(path)
+
+
+def relative_path(path: str | Path, folder: str | Path) -> str:
+    """``path`` relative to ``folder`` (POSIX separators), for a file in ``folder`` that
+    records ``path`` and is read back from wherever the folder is moved with it."""
+    import os
+    return Path(os.path.relpath(Path(path).resolve(), Path(folder).resolve())).as_posix()

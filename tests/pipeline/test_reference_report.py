@@ -67,3 +67,13 @@ def test_the_committed_reference_is_what_the_code_computes(tmp_path):
     assert not diff, ("results/reference/REPORT.md is stale; regenerate it (python -m "
                       "ehsa_opt reproduce --out results/reference --overwrite):\n"
                       + "\n".join(diff[:40]))
+
+
+def test_committed_results_record_no_path_of_the_machine_they_ran_on():
+    """Package files are recorded by their package path, an identification's data folder
+    relative to the file: nothing under a home, work or temporary folder."""
+    bad = re.compile(r"(?<![\w.])/(?:work|tmp|home|root|Users|private|var)/")
+    hits = [f"{p.relative_to(REFERENCE)}: {m.group(0)}"
+            for p in sorted(REFERENCE.rglob("*")) if p.suffix in (".json", ".md", ".csv")
+            for m in [bad.search(p.read_text(errors="replace"))] if m]
+    assert hits == []
