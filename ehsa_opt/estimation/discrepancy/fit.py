@@ -33,7 +33,7 @@ from ..collocation import given_block, theta_block
 from ..fit_result import FitResult
 from ..given_fit import GivenFit, fit_given
 from ..starts import Starts, draw_starts
-from .prepared import NO_GENERATOR_FIXED, PreparedTest
+from .prepared import PreparedTest
 from .rig import BASE_SPECS, Rig, param_scale, simulate_test
 
 __all__ = ["fit_group", "WINDOW_WEIGHT"]
@@ -105,8 +105,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
     names = [n for n in model.param_names if n != "load_ohm"]
     free = list(free) if free is not None else rig.base_names + list(model.param_specs)
     fixed = dict(fixed or {})
-    if not rig.has_generator:
-        fixed = {**NO_GENERATOR_FIXED, **fixed}
+    fixed = {**rig.fixed_base, **fixed}
     starts = draw_starts(model, free, starts, seed, where="fit_group")
     space = core.ParamSpace(tuple(model.param_names), tuple(free),
                             tuple(specs[n].lower for n in free),
