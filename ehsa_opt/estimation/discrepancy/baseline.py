@@ -76,7 +76,7 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
         dyn_rig = replace(rig, friction_law=DYNAMIC_LAW)
         dyn = fit_dynamic(fit_dec, dyn_rig, base.parameters, settings.max_iter)
         say(f"friction law: {dyn.message}")
-        law_note = dyn.message
+        law_note = f"friction law: static ({dyn.message})"
         if dyn.fit is not None and dyn.fit.success:
             cand = _simulated(tests, dyn_rig, dyn.fit)
             ev, pe, pe0, e0, e1, d_fit, d_held = change_evidence(
@@ -102,14 +102,13 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
 
 
 def _bristle(fit: FitResult) -> str:
-    """σ₀ and σ₁ with their ≈95 % intervals, in words."""
+    """σ₀ and σ₁ with the half-widths of their ≈95 % intervals, in words."""
     ci = parameter_intervals(fit)
     out = []
     for n, sym, unit in ((PRESLIDING_NAMES[0], "sigma0", "N/m"),
                          (PRESLIDING_NAMES[1], "sigma1", "N s/m")):
         lo, hi = ci.get(n, (math.nan, math.nan))
-        out.append(f"{sym} {fit.parameters[n]:.3g} N/m [{lo:.3g}, {hi:.3g}]".replace(
-            "N/m", unit))
+        out.append(f"{sym} {fit.parameters[n]:.4g} ± {(hi - lo) / 2:.2g} {unit}")
     return "bristle " + ", ".join(out)
 
 

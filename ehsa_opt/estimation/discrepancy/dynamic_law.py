@@ -113,8 +113,7 @@ def fit_dynamic(fit_pts: Sequence[PreparedTest], rig: Rig, static: Mapping[str, 
             fits.append((f.objective, sigma0, f))
             start = {n: f.parameters[n] for n in free_fixed}
     if not fits:
-        return DynamicFit(None, stages, "friction law: dynamic fit failed at every fixed "
-                          "stiffness (" + "; ".join(s["status"] for s in stages) + ")",
+        return DynamicFit(None, stages, "dynamic fit failed at every fixed stiffness (" + "; ".join(s["status"] for s in stages) + ")",
                           time.perf_counter() - t0)
     _, sigma0, best = min(fits, key=lambda x: x[0])
     start = {**{n: best.parameters[n] for n in free_fixed}, _SIGMA0: float(sigma0)}
@@ -126,8 +125,8 @@ def fit_dynamic(fit_pts: Sequence[PreparedTest], rig: Rig, static: Mapping[str, 
     path = ", ".join(f"{_fmt(s['sigma0'])}: {s['status']} chi2/N {s['objective']:.4g}"
                      for s in stages)
     if not ok:
-        return DynamicFit(None, stages, f"friction law: dynamic fit did not converge from "
-                          f"the static optimum ({path})", seconds)
+        return DynamicFit(None, stages, f"dynamic fit did not converge from the static "
+                          f"optimum ({path})", seconds)
     return DynamicFit(f, stages, f"dynamic fit converged ({path}; {seconds:.1f} s)", seconds)
 
 
