@@ -250,7 +250,12 @@ def hac_covariance(J: np.ndarray, r: np.ndarray, *, groups: Sequence[int] | None
     if L < 0:
         raise ValueError(f"hac_covariance: bandwidth must be >= 0, got {L}")
     A = Jp.T @ Jp
-    Ainv = np.linalg.pinv(A, rcond=rcond, hermitian=True)
+    # the pseudo-inverse on the equilibrated matrix (unit diagonal), so the cut-off
+    # judges directions, not units: a bristle stiffness of 1e6 N/m beside levels of
+    # 10 N gives diagonal entries 1e12 apart, which a plain rcond would cut
+    d = np.sqrt(np.maximum(np.diag(A), 0.0))
+    d[d == 0.0] = 1.0
+    Ainv = np.linalg.pinv(A / np.outer(d, d), rcond=rcond, hermitian=True) / np.outer(d, d)
     k = J.shape[1] if dof is None else int(dof)
     factor = n / max(n - k, 1)
     b = L / float(np.mean([s.stop - s.start for s in segs]))
