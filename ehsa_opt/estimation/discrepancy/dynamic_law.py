@@ -33,7 +33,9 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ...physics.base_parameters import PARAMETERS
+from ...physics.friction import PRESLIDING_NAMES
 from ..fit_result import FitResult
+from ..lugre_continuation import STIFFNESS_LADDER_N_PER_M
 from .fit import fit_group
 from .prepared import PreparedTest
 from .rig import NUT_NAMES, Rig
@@ -43,11 +45,6 @@ __all__ = ["DYNAMIC_LAW", "STIFFNESS_LADDER_N_PER_M", "DynamicFit", "fit_dynamic
 
 #: The dynamic friction law the base model is offered.
 DYNAMIC_LAW = "lugre"
-#: Bristle stiffnesses σ₀ (N/m) of the continuation, stiff to soft: one per decade over a
-#: ball screw's presliding stiffness (1e5–1e8 N/m, the declared range of
-#: ``presliding_stiffness_N_per_m``); the first is the static limit at a 1 kHz sample
-#: rate (a 45 N friction sliding at 0.1 m/s relaxes in φ/σ₀ ≈ 5 µs).
-STIFFNESS_LADDER_N_PER_M: tuple[float, ...] = (1e8, 1e7, 1e6, 1e5)
 #: IPOPT statuses of a converged solve.
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 _SIGMA0, _SIGMA1 = "presliding_stiffness_N_per_m", "presliding_damping_Ns_per_m"
@@ -99,10 +96,10 @@ def fit_dynamic(fit_pts: Sequence[PreparedTest], rig: Rig, static: Mapping[str, 
     """
     import time
     t0 = time.perf_counter()
-    rest = [n for n in rig.base_names if n not in NUT_NAMES and n not in (_SIGMA0, _SIGMA1)]
+    rest = [n for n in rig.base_names if n not in NUT_NAMES and n not in PRESLIDING_NAMES]
     start = {**{n: float(static[n]) for n in rest},
              **lumped_rod_friction(static, rig.harvester.lead_m_per_rad),
-             _SIGMA1: PARAMETERS[_SIGMA1].typical}
+             **{n: PARAMETERS[n].typical for n in PRESLIDING_NAMES if n != _SIGMA0}}
     free_fixed = [n for n in rig.base_names if n != _SIGMA0]
     stages, fits = [], []
     for sigma0 in ladder:
