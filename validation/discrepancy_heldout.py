@@ -260,7 +260,11 @@ def oracle(res, effects: dict, post: tuple | None, friction) -> dict:
     values = dict(friction.__dict__)
     for c in comps:
         values.update({**c.defaults(), **effects[c.name]})
-    pred = predict(held, res.rig.with_components(comps), values)
+    # the generator's friction is the static law: the true model is on the static rig
+    # whatever base law the workflow adopted
+    import dataclasses
+    rig = dataclasses.replace(res.rig, friction_law="static")
+    pred = predict(held, rig.with_components(comps), values)
     base = res.baseline_pred[len(res.fit_tests):]
     e0, e1 = force_error_percent(held, base), force_error_percent(held, pred)
     from ehsa_opt.estimation.discrepancy.evidence import channel_sse

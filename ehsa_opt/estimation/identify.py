@@ -61,7 +61,7 @@ import numpy as np
 from ..datasets.bench_format import BenchData, BenchTest, load_bench
 from ..physics.bench_model import BenchModel
 from ..physics.components import Component
-from ..physics.friction import FRICTION_LAWS
+from ..physics.friction import FRICTION_LAWS, PRESLIDING_NAMES
 from ..physics.motion import SampledMotion
 from ..physics.params import (
     FRICTION_NAMES,
@@ -87,6 +87,7 @@ from .identify_options import (
     test_motion,
     unresolved_tests,
 )
+from .lugre_continuation import continued_fit
 from .starts import Starts, draw_starts
 from .fit_result import FitResult
 from .identify_result import (
@@ -294,7 +295,10 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
         The friction law (:class:`~ehsa_opt.physics.bench_model.BenchModel`); with
         ``"lugre"`` the bristle stiffness σ₀ and damping σ₁ are fitted too, the bristle
         deflection is a collocation state, and the collocation nodes sit on every sample
-        near the velocity reversals (:data:`~.collocation.PRESLIDING_WINDOW_M`).
+        near the velocity reversals (:data:`~.collocation.PRESLIDING_WINDOW_M`).  With
+        drawn starts (``starts`` a number), the default ``free`` and σ₀ not fixed, the
+        fit is the continuation of :mod:`~.lugre_continuation` (static fit from the
+        drawn starts, σ₀ fixed stiff to soft, then free).
 
     Returns
     -------
@@ -312,6 +316,13 @@ def fit_tests(tests: Sequence[BenchTest], harvester: HarvesterParams, *,
                          f"has_generator=False for a rig without generator")
     options = options or IdentifyOptions()
     fixed = dict(fixed or {})
+    if friction_law != "static" and free is None and isinstance(starts, int) \
+            and PRESLIDING_NAMES[0] not in fixed:
+        def fit(**kw: Any) -> FitResult:
+            return fit_tests(tests, harvester, has_generator=has_generator,
+                             components=components, seed=seed, jobs=jobs, options=options,
+                             **kw)
+        return continued_fit(fit, friction_law, fixed, starts, identifiability)
     model = BenchModel(harvester, components, generator=has_generator,
                        friction_law=friction_law)
     known = [n for n in model.param_names if n != "load_ohm"]

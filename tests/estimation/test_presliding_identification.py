@@ -12,6 +12,7 @@ from ehsa_opt.datasets.bench_format import BenchData
 from ehsa_opt.datasets.synthetic import SyntheticSpec, generate_bench_tests
 from ehsa_opt.estimation.collocation import reversal_indices
 from ehsa_opt.estimation.identify import fit_tests, identify
+from ehsa_opt.estimation.lugre_continuation import STIFFNESS_LADDER_N_PER_M
 from ehsa_opt.physics.params import FrictionParams
 
 TRUE_FRICTION = FrictionParams(
@@ -74,3 +75,20 @@ def test_identify_refuses_an_unknown_friction_law(tmp_path: Path) -> None:
     data = BenchData(path=tmp_path, tests=tests, harvester=SyntheticSpec().harvester)
     with pytest.raises(ValueError, match="friction_law must be one of static, lugre"):
         identify(data, friction_law="dahl")
+
+
+@pytest.mark.slow
+def test_lugre_fit_is_continued_from_the_static_optimum() -> None:
+    """Drawn starts under the LuGre law: a static fit, σ₀ fixed stiff to soft, then free —
+    each stage's IPOPT status kept, the static and the free one converged, σ₀ recovered
+    within its interval (5 min on one core: six solves of the per-test minimax)."""
+    tests = generate_bench_tests(_spec(frequencies_hz=(2.5,), loads_ohm=(47.0,)))
+    fit = fit_tests(tests, _spec().harvester, starts=2, friction_law="lugre")
+    stages = fit.records["continuation"]
+    assert [s["sigma0"] for s in stages] == [np.inf, *STIFFNESS_LADDER_N_PER_M, None]
+    assert stages[0]["success"] and stages[-1]["success"], stages
+    assert fit.success and fit.status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+    assert "continuation: static" in fit.message
+    lo, hi = fit.identifiability["parameter_ci95"]["presliding_stiffness_N_per_m"]
+    assert lo < fit.parameters["presliding_stiffness_N_per_m"] < hi
+    assert fit.parameters["presliding_stiffness_N_per_m"] == pytest.approx(2e6, rel=0.05)

@@ -33,7 +33,7 @@ from ..collocation import given_block, theta_block
 from ..fit_result import FitResult
 from ..given_fit import GivenFit, fit_given
 from ..starts import Starts, draw_starts
-from .prepared import NO_GENERATOR_FIXED, PreparedTest
+from .prepared import PreparedTest
 from .rig import BASE_SPECS, Rig, param_scale, simulate_test
 
 __all__ = ["fit_group", "WINDOW_WEIGHT"]
@@ -105,8 +105,7 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
     names = [n for n in model.param_names if n != "load_ohm"]
     free = list(free) if free is not None else rig.base_names + list(model.param_specs)
     fixed = dict(fixed or {})
-    if not rig.has_generator:
-        fixed = {**NO_GENERATOR_FIXED, **fixed}
+    fixed = {**rig.fixed_base, **fixed}
     starts = draw_starts(model, free, starts, seed, where="fit_group")
     space = core.ParamSpace(tuple(model.param_names), tuple(free),
                             tuple(specs[n].lower for n in free),
@@ -161,7 +160,8 @@ def fit_group(prepared: Sequence[PreparedTest], rig: Rig, starts: Starts,
     vals = space.values_of(best.w, np.zeros(len(model.param_names)))
     params.update({n: vals[n] for n in free})
     sse = float(nlp.ssefun(best.w, p))
-    cov, hac = _covariance(nlp, best.w, p, blocks, len(free), prepared)
+    cov, hac = _covariance(nlp, best.w, p, blocks, len(free), prepared,
+                           equilibrate=model.friction_law != "static")
     return FitResult(success=best.success, message=best.status, status=best.status,
                      parameters=params, free=free, objective=sse / n_obs, nit=best.iterations,
                      starts=records, seconds=time.perf_counter() - t0, path="collocation",
@@ -254,15 +254,16 @@ def _outcome_given(fits: list[GivenFit], space: core.ParamSpace, blocks: Sequenc
                      covariance_info=hac)
 
 
-def _hac(S: np.ndarray, r: np.ndarray | None, groups: list[int], n_nuisance: int = 0
-         ) -> tuple[np.ndarray | None, dict | None]:
+def _hac(S: np.ndarray, r: np.ndarray | None, groups: list[int], n_nuisance: int = 0,
+         equilibrate: bool = False) -> tuple[np.ndarray | None, dict | None]:
     """Newey–West covariance of the free parameters (:func:`~ehsa_opt.estimation.
     covariance.hac_covariance`, one segment per test and channel) and its summary."""
     from ..covariance import hac_covariance
     if r is None or S.shape[0] != np.size(r):
         return None, None
     try:
-        h = hac_covariance(S, r, groups=groups, n_nuisance=n_nuisance)
+        h = hac_covariance(S, r, groups=groups, n_nuisance=n_nuisance,
+                           equilibrate=equilibrate)
     except (ValueError, np.linalg.LinAlgError) as exc:
         import warnings
         warnings.warn(f"parameter covariance unavailable: {exc}")
@@ -273,7 +274,8 @@ def _hac(S: np.ndarray, r: np.ndarray | None, groups: list[int], n_nuisance: int
 
 
 def _covariance(nlp: core.NLP, w: np.ndarray, p: np.ndarray, blocks: Sequence[Any], nz: int,
-                prepared: Sequence[PreparedTest]) -> tuple[np.ndarray | None, dict | None]:
+                prepared: Sequence[PreparedTest], equilibrate: bool = False
+                ) -> tuple[np.ndarray | None, dict | None]:
     """Newey–West covariance of the free parameters (:func:`_hac`) with S the total
     sensitivity of the noise-normalised residuals (states eliminated through the
     collocation constraints by the core; initial states profiled out)."""
@@ -288,4 +290,4 @@ def _covariance(nlp: core.NLP, w: np.ndarray, p: np.ndarray, blocks: Sequence[An
         warnings.warn(f"parameter covariance unavailable: {exc}")
         return None, None
     return _hac(S, r, [b.n_obs for b in blocks for _ in range(b.ny)],
-                n_nuisance=S.shape[1] - nz)
+                n_nuisance=S.shape[1] - nz, equilibrate=equilibrate)

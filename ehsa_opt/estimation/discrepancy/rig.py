@@ -29,12 +29,13 @@ from ...physics.bench_map import simulate_map, simulate_map_sensitivity
 from ...physics.bench_sim import simulate_bench
 from ...physics.components import Component, ParamSpec
 from ...physics.motion import FilteredMotion, SineMotion
+from ...physics.friction import PRESLIDING_NAMES
 from ...physics.params import FRICTION_NAMES, HarvesterParams
-from .prepared import PreparedTest
+from .prepared import NO_GENERATOR_FIXED, PreparedTest
 
 __all__ = ["Rig", "RigSimulation", "linear_baseline", "param_scale", "predict", "simulate_test",
            "predict_map", "predict_map_jacobian", "EXACT_JACOBIAN", "map_suits", "uniform_grid", "parameter_vector", "warmup_grid", "fit_predictor", "NON_SMOOTH", "USE_MAP",
-           "BASE_SPECS", "DISCREPANCY_PARAMETERS", "NUT_NAMES"]
+           "BASE_SPECS", "DISCREPANCY_PARAMETERS", "NUT_NAMES", "LUGRE_FIXED"]
 
 NUT_NAMES = FRICTION_NAMES[:4]
 
@@ -50,7 +51,18 @@ DISCREPANCY_PARAMETERS: dict[str, Parameter] = override(
      "nut_breakaway_velocity_m_per_s": (2e-4, 0.5), "nut_viscous_Ns_per_m": (0.0, 1e4),
      "bearing_breakaway_Nm": (0.0, 1.0), "bearing_coulomb_Nm": (0.0, 1.0),
      "bearing_breakaway_velocity_rad_per_s": (0.01, 50.0),
-     "bearing_viscous_Nms_per_rad": (0.0, 1e-2), "offset_N": (-1e3, 1e3)})
+     "bearing_viscous_Nms_per_rad": (0.0, 1e-2), "offset_N": (-1e3, 1e3),
+     # the bristle's rate σ₀/φ(v) and the force σ₁/σ₀ dF_b/dt need σ₀ > 0: from a
+     # presliding displacement of 10 mm at 100 N (far softer than any ball screw) to the
+     # static limit (a 1e10 N/m bristle relaxes within a 1 kHz sample at any speed)
+     "presliding_stiffness_N_per_m": (1e4, 1e10)})
+#: The bearing curve under the dynamic law on a rigid rig: one Simscape curve (the nut's
+#: names) is the steady state of one bristle carrying the rod's whole friction (the
+#: nut/bearing split is not identifiable at the rod, and with both free a fit moves the
+#: friction to the bearing until the bristle's rate σ₀/φ diverges).
+LUGRE_FIXED: dict[str, float] = {"bearing_breakaway_Nm": 0.0, "bearing_coulomb_Nm": 0.0,
+                                 "bearing_breakaway_velocity_rad_per_s": 1.0,
+                                 "bearing_viscous_Nms_per_rad": 0.0}
 #: The same as ``ParamSpec`` (default: the typical value, which also sets :func:`param_scale`).
 BASE_SPECS: dict[str, ParamSpec] = {n: ParamSpec(n, q.unit, q.typical, q.lower, q.upper, q.doc)
                                     for n, q in DISCREPANCY_PARAMETERS.items()}
@@ -69,31 +81,49 @@ _MODELS: dict[tuple, Any] = {}
 
 @dataclass(frozen=True)
 class Rig:
-    """What is fitted: harvester constants, rig kind and the model's components."""
+    """What is fitted: harvester constants, rig kind, the model's components and its
+    friction law (``"static"``: the Simscape map; ``"lugre"``: that map as the steady
+    state of a bristle, :class:`~ehsa_opt.physics.bench_model.BenchModel`)."""
 
     harvester: HarvesterParams
     has_generator: bool = True
     components: tuple[Component, ...] = ()
+    friction_law: str = "static"
 
     def model(self) -> BenchModel:
         """The rig's model (cached: one model object per distinct rig, kept alive —
         :func:`~ehsa_opt.physics.bench_sim.simulate_bench` caches integrators by model identity)."""
-        key = (self.has_generator, self.harvester,
+        key = (self.has_generator, self.harvester, self.friction_law,
                tuple((type(c).__name__, tuple(sorted((k, v) for k, v in vars(c).items()
                                                      if k not in c.start_attributes)))
                      for c in self.components))
         if key not in _MODELS:
             _MODELS[key] = BenchModel(self.harvester, self.components,
-                                      generator=self.has_generator)
+                                      generator=self.has_generator,
+                                      friction_law=self.friction_law)
         return _MODELS[key]
 
     def with_components(self, components: Sequence[Component]) -> "Rig":
-        return Rig(self.harvester, self.has_generator, tuple(components))
+        return Rig(self.harvester, self.has_generator, tuple(components), self.friction_law)
 
     @property
     def base_names(self) -> list[str]:
-        return list(FRICTION_NAMES) if self.has_generator else ["inertia_kg", "offset_N",
-                                                                 *NUT_NAMES]
+        """The base model's fitted names: the friction (one curve at the rod, the nut's
+        names, under the dynamic law — :data:`LUGRE_FIXED`), the rig terms without
+        generator, the bristle's σ₀ and σ₁ under the dynamic law."""
+        if self.friction_law == "static":
+            return list(FRICTION_NAMES) if self.has_generator else ["inertia_kg", "offset_N",
+                                                                     *NUT_NAMES]
+        return ([] if self.has_generator else ["inertia_kg", "offset_N"]) + list(NUT_NAMES) \
+            + list(PRESLIDING_NAMES)
+
+    @property
+    def fixed_base(self) -> dict[str, float]:
+        """Base parameters this rig does not fit, and their values."""
+        fixed = {} if self.has_generator else dict(NO_GENERATOR_FIXED)
+        if self.friction_law != "static":
+            fixed.update(LUGRE_FIXED)
+        return fixed
 
 
 # ------------------------------------------------------------------ linear baseline

@@ -124,6 +124,7 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     data = load_data(data, say, notes)
     tests = prepare_search_tests(data, settings, say, notes)
     base = fit_baseline(tests, settings, say)
+    notes.append(base.law_note)
     state = base.state(settings)
     all_cands: list[CandidateResult] = []
     # the recorded tests (the open-loop metric's input, whatever the members change)
