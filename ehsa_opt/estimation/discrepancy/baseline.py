@@ -44,6 +44,9 @@ class Baseline:
     localisation: Localisation
     error: float
     law_note: str = ""
+    #: The static law's simulated outputs on the fit tests when the dynamic law was
+    #: adopted (a record member's start: its own lag is not yet taken by the bristles).
+    static_fit_pred: list | None = None
 
     def state(self, settings: DiscrepancySettings) -> SearchState:
         """The search's start: the base model, every catalogue candidate remaining."""
@@ -72,6 +75,7 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
     say(f"baseline: {base.message}, chi2/N {base.objective:.3g} ({base.seconds:.1f} s"
         + (f"; collocation on every {k}th sample of the fit tests" if k > 1 else "") + ")")
     static = _simulated(tests, rig, base)
+    static_fit_pred = None
     law_note = "friction law: static (the dynamic law not offered)"
     if rig.friction_law == "static" and DYNAMIC_LAW in BASE_LAWS:
         dyn_rig = replace(rig, friction_law=DYNAMIC_LAW)
@@ -93,6 +97,7 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
                         + ("adopted as the base law" if adopted else rival if rival
                            else "not adopted (does not earn by the decision rule)"))
             if adopted:
+                static_fit_pred = static[0]
                 base, rig, static = dyn.fit, dyn_rig, cand
                 tests.rig = rig
         say(law_note)
@@ -101,7 +106,7 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
                     lead_m_per_rad=tests.lead_m_per_rad)
     err0 = force_error_percent(tests.eval_pts, held_pred or fit_pred)
     return Baseline(base, rig, fit_pred, held_pred, n_eff_fit, n_eff_held, loc0, err0,
-                    law_note)
+                    law_note, static_fit_pred)
 
 
 def _delay_rival(tests: SearchTests, base: FitResult, static: tuple, k: int,

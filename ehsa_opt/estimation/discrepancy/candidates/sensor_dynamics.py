@@ -74,17 +74,22 @@ def _adjusted(pts, preds, f_c, zeta, ch: int = 0) -> list[PreparedTest]:
 
 def try_sensor(fit_pts, held_pts, rig: Rig, base, fit_pred, held_pred, floor: float,
                n_eff_fit: float, n_eff_held: float, settings, decimation: int = 1,
-               ch: int = 0) -> RecordChange | None:
+               ch: int = 0, start_pred=None) -> RecordChange | None:
     """Member ``force_sensor`` (``ch`` 0) or ``voltage_sensor`` (``ch`` 1): the filter
     fitted on the current model's output, the base model refitted on the adjusted record
     (collocation on every ``decimation``-th sample, as the baseline), the filter refitted
     once on the refit, and the evidence on the record (the refitted model through the
     filter against the model before it): the relative force error, ΔBIC on every
     channel, and for the voltage its channel's SSE excess removed.  None when the refit
-    failed."""
+    failed.  ``start_pred``: the outputs the filter is first fitted on when they are not
+    the current model's — the static law's when the base law is the dynamic one, whose
+    bristles would otherwise already carry the sensor's lag (on a campaign with an 80 Hz
+    load cell the bristles took it and the filter was left at its highest bandwidth); the
+    refits are of the current (dynamic) model, so the bristles keep only what the filter
+    leaves."""
     name = NAMES[ch]
     f_c = zeta = math.nan
-    preds_f, params, est = fit_pred, base.parameters, None
+    preds_f, params, est = (start_pred or fit_pred), base.parameters, None
     b2 = None
     for _ in range(2):
         est = fit_sensor(fit_pts, preds_f, ch)

@@ -42,7 +42,8 @@ class ForceSensorMember(Member):
         t, s, b = ctx.tests, ctx.state, ctx.base
         change = try_sensor(t.fit_pts, t.held_pts, t.rig, b.fit, s.fit_pred, s.held_pred,
                             t.floor, s.n_eff_fit, s.n_eff_held, ctx.settings,
-                            decimation=baseline_decimation(t.fit_pts, t.rig), ch=self.ch)
+                            decimation=baseline_decimation(t.fit_pts, t.rig), ch=self.ch,
+                            start_pred=b.static_fit_pred)
         if change is None:
             ctx.say(f"{self.name}: the refit on the adjusted record failed")
             return None
