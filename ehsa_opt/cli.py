@@ -156,6 +156,7 @@ def _cmd_discrepancy(args: argparse.Namespace) -> int:
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
                                    candidates=members,
                                    max_tests=args.max_tests, presliding=args.presliding,
+                                   dynamic_friction=args.dynamic_friction,
                                    scheduler=args.scheduler,
                                    **({} if args.max_fits is None
                                       else {"max_member_fits": args.max_fits or None}))
@@ -335,6 +336,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--presliding", action="store_true",
                    help="offer the base friction law a presliding transition (adopted only "
                         "when it earns on the baseline; off by default)")
+    d.add_argument("--dynamic-friction", action="store_true",
+                   help="offer the base model the dynamic (LuGre) friction law, fitted from "
+                        "the static optimum and adopted when it earns (off by default)")
     d.add_argument("--with", dest="with_members", action="append", default=[],
                    metavar="MEMBER",
                    help="also search a member listed by choice (force_sensor, "

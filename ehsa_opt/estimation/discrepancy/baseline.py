@@ -76,8 +76,9 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
         + (f"; collocation on every {k}th sample of the fit tests" if k > 1 else "") + ")")
     static = _simulated(tests, rig, base)
     static_fit_pred = None
-    law_note = "friction law: static (the dynamic law not offered)"
-    if rig.friction_law == "static" and DYNAMIC_LAW in BASE_LAWS:
+    law_note = ("friction law: static (the dynamic law not offered: "
+                "DiscrepancySettings.dynamic_friction, discrepancy --dynamic-friction)")
+    if rig.friction_law == "static" and DYNAMIC_LAW in BASE_LAWS and settings.dynamic_friction:
         dyn_rig = replace(rig, friction_law=DYNAMIC_LAW)
         dyn = fit_dynamic(fit_dec, dyn_rig, base.parameters, settings.max_iter)
         say(f"friction law: {dyn.message}")

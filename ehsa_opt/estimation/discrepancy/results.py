@@ -104,6 +104,13 @@ class DiscrepancySettings:
         map only — with the candidates' parameters fitted without the term, a member
         fitted to the voltage (a winding heating) can end with a friction compromise
         that the term then counts against it (see :mod:`.presliding`).
+    dynamic_friction : bool
+        Offer the base model the dynamic (LuGre) friction law, fitted from the static
+        optimum by a continuation in the bristle stiffness and adopted when it earns
+        (:mod:`.dynamic_law`).  False (default): the static map only — on the second
+        generator's clean campaigns the dynamic law halves the held-out error but leaves
+        4–12 × the noise floor, and on a stiff-contact campaign one of its stages did not
+        finish within 15 minutes.
     scheduler : str or distributed.Client, optional
         Make the member fits on a Dask cluster (its scheduler's address, or a client)
         instead of ``jobs`` local processes: the same fits in the same order, so the
@@ -126,6 +133,7 @@ class DiscrepancySettings:
     max_member_fits: int | None = MAX_MEMBER_FITS
     wall_cap_s: float | None = None
     presliding: bool = False
+    dynamic_friction: bool = False
     criterion: Criterion = DEFAULT_CRITERION
     scheduler: Any = None
 

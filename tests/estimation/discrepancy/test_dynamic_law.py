@@ -92,10 +92,10 @@ def test_clean_presliding_campaign_adopts_the_dynamic_law_and_answers_none(
         tmp_path: Path) -> None:
     data = _data(tmp_path, presliding=True)
     tests = _tests(data)
-    base = fit_baseline(tests, DiscrepancySettings(), lambda m: None)
+    base = fit_baseline(tests, DiscrepancySettings(dynamic_friction=True), lambda m: None)
     assert base.rig.friction_law == "lugre" and tests.rig is base.rig, base.law_note
     assert "adopted as the base law" in base.law_note
-    res = run_discrepancy(data, DiscrepancySettings(jobs=1))
+    res = run_discrepancy(data, DiscrepancySettings(jobs=1, dynamic_friction=True))
     assert res.effect == "none", res.message
     # 0.32 % against a 0.17 % floor (1.8 ×; the static law leaves several times more):
     # the collocation on every second sample biases σ₁ to 0 (truth 500 N s/m)
@@ -105,7 +105,15 @@ def test_clean_presliding_campaign_adopts_the_dynamic_law_and_answers_none(
 
 def test_static_campaign_keeps_the_static_law(tmp_path: Path) -> None:
     tests = _tests(_data(tmp_path, presliding=False))
-    base = fit_baseline(tests, DiscrepancySettings(), lambda m: None)
+    base = fit_baseline(tests, DiscrepancySettings(dynamic_friction=True), lambda m: None)
     assert base.rig.friction_law == "static", base.law_note
     assert tests.rig.friction_law == "static"
     assert "friction law: static" in base.law_note or "not adopted" in base.law_note
+
+
+def test_the_dynamic_law_is_offered_only_when_asked(tmp_path: Path) -> None:
+    """Off by default: the base law stays static and the note says how to offer it."""
+    tests = _tests(_data(tmp_path, presliding=True))
+    base = fit_baseline(tests, DiscrepancySettings(), lambda m: None)
+    assert base.rig.friction_law == "static"
+    assert "not offered" in base.law_note and "--dynamic-friction" in base.law_note
