@@ -147,13 +147,7 @@ def pareto_projections(pr: ParetoResult, ga: Mapping[str, float] | None = None,
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=8, ncol=len(labels), loc="lower center",
                frameon=False, bbox_to_anchor=(0.5, -0.01))
-    extra = []
-    if marks.get("motor_label"):
-        extra.append(f"motor: {marks['motor_label']}")
-    if np.any(~feas):
-        extra.append(f"{int(np.sum(~feas))} of {n} points infeasible")
-    if marks.get("active_bounds"):
-        extra.append("pick at a bound: " + ", ".join(marks["active_bounds"]))
+    extra = _front_marks(marks, feas, n)
     fig.suptitle("Pareto front, 2-D projections (all objectives minimised; log axes where "
                  "the front spans more than a factor 3)"
                  + ("\n" + "; ".join(extra) if extra else ""), fontsize=10)
@@ -211,13 +205,7 @@ def parallel_coordinates(pr: ParetoResult, ga: Mapping[str, float] | None = None
     ax.set_yticks([])
     ax.set_ylim(-0.1, 1.08)
     ax.legend(fontsize=7, loc="upper right")
-    extra = []
-    if marks.get("motor_label"):
-        extra.append(f"motor: {marks['motor_label']}")
-    if np.any(~feas):
-        extra.append(f"{int(np.sum(~feas))} of {n} points infeasible")
-    if marks.get("active_bounds"):
-        extra.append("pick at a bound: " + ", ".join(marks["active_bounds"]))
+    extra = _front_marks(marks, feas, n)
     ax.set_title("Parallel coordinates of the front (colour: "
                  + ("motor" if motor is not None and len(motor) == n else "comfort") + ")"
                  + ("\n" + "; ".join(extra) if extra else ""), fontsize=9)
@@ -294,3 +282,16 @@ def sweep_lines(rows: Sequence[Mapping[str, float | str]], x: str, ys: Sequence[
         axes[0, 0].legend(fontsize=6, title=", ".join(hue), title_fontsize=6)
     fig.tight_layout()
     return fig
+
+
+def _front_marks(marks: dict, feas: np.ndarray, n: int) -> list[str]:
+    """The words a front figure's title carries: the motor, how many points are
+    infeasible, and the pick's active bounds."""
+    extra = []
+    if marks.get("motor_label"):
+        extra.append(f"motor: {marks['motor_label']}")
+    if np.any(~feas):
+        extra.append(f"{int(np.sum(~feas))} of {n} points infeasible")
+    if marks.get("active_bounds"):
+        extra.append("pick at a bound: " + ", ".join(marks["active_bounds"]))
+    return extra
