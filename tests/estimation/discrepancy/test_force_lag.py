@@ -48,9 +48,10 @@ def test_a_member_that_explains_the_record_as_it_is_beats_a_delay(tmp_path):
     say, notes = (lambda m: None), []
     tests = prepare_search_tests(load_data(tmp_path / "mount", say, notes), settings, say, notes)
     state = fit_baseline(tests, settings, say).state(settings)
-    rival = lag_rival(tests, state, settings, 15.0, say, notes)
+    rival = lag_rival(tests, state, settings, lambda c: c.error_after < 15.0, say, notes)
     assert rival is not None and rival.effect == "compliance" and rival.earns
     assert rival.error_after < 1.0
     assert len(state.fitted) == 1  # kept for the first round
     state.fitted.clear()
-    assert lag_rival(tests, state, settings, 0.5 * rival.error_after, say, notes) is None
+    left = 0.5 * rival.error_after
+    assert lag_rival(tests, state, settings, lambda c: c.error_after < left, say, notes) is None
