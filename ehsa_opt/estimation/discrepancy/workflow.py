@@ -131,9 +131,9 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     raw = ([pt.test for pt in tests.fit_pts], [pt.test for pt in tests.held_pts])
     ctx = Context(tests, base, state, settings, say, notes, all_cands)
     run_members(RECORD_MEMBERS, ctx)
-    skew, law = ctx.skew, ctx.law
     state = run_rounds(tests, state, settings, say, notes, all_cands)
     state = _late_laws(ctx, state)
+    skew, law = ctx.skew, ctx.law  # as the record and law members left them
     term = None
     if settings.discover:
         term = propose_term(tests.fit_pts, state.fit_pred, tests.eval_pts, state.eval_pred(),
@@ -156,11 +156,12 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
 
 
 def _late_laws(ctx: Context, state):
-    """The law members not adopted before the rounds, offered once more on the model the
-    rounds reached: a drift of the friction level hidden under an effect's larger misfit
+    """The members that say so (``offered_after_rounds``: the friction drift) and were not
+    adopted before the rounds, offered once more on the model the rounds reached: a drift of the friction level hidden under an effect's larger misfit
     (a cogging's ripple) is judged on the residual that effect leaves.  The model they
     adopt is the search's last step."""
-    late = [m for m in RECORD_MEMBERS if m.kind == "law" and m.name not in state.effects]
+    late = [m for m in RECORD_MEMBERS
+            if m.offered_after_rounds and m.name not in state.effects]
     if not late or not state.effects:
         return state
     ctx.state = state

@@ -27,6 +27,7 @@ class FrictionDriftMember(Member):
     channel = "friction level"
     setting = "friction_drift"
     refits = False
+    offered_after_rounds = True
 
     def applicable(self, ctx: Context) -> str:
         why = super().applicable(ctx)

@@ -143,6 +143,11 @@ class Member(ABC):
         Its fit refits the base model (a collocation fit): not started once the work
         budget is spent.  False for a member measured on the current model's outputs
         alone (a linear or shift search).
+    offered_after_rounds : bool
+        Not adopted before the rounds, it is offered once more on the model the rounds
+        reached (its evidence can be hidden under an effect's larger misfit: a friction
+        drift under a cogging's ripple).  False for a member judged on the base model by
+        its definition (the base law's presliding transition).
     """
 
     name: ClassVar[str]
@@ -150,6 +155,7 @@ class Member(ABC):
     channel: ClassVar[str]
     setting: ClassVar[str | None] = None
     refits: ClassVar[bool] = True
+    offered_after_rounds: ClassVar[bool] = False
 
     def applicable(self, ctx: Context) -> str:
         """"" when the member can be tried; else the reason it is not (said when it is
