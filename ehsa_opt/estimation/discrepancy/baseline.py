@@ -1,18 +1,15 @@
-"""The identified base model the search starts from: its friction law (the static map,
-or its dynamic LuGre law when that earns), its fit on the fit tests, its simulated
-outputs on every test, the localisation of its residual and its error."""
+"""The identified base model the search starts from: its fit (the static friction law;
+the dynamic law is a member offered on it, :mod:`.members.dynamic_law`) on the fit
+tests, its simulated outputs on every test, the localisation of its residual and its
+error."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from ..fit_result import FitResult
-from ...physics.friction import PRESLIDING_NAMES
-from .dynamic_law import DYNAMIC_LAW, fit_dynamic, parameter_intervals
-from .evidence import change_evidence, effective_samples, force_error_percent
-from .judge import earns
-from .candidates.force_lag import try_lag
+from .evidence import effective_samples, force_error_percent
 from .fit import fit_group
 from .localise import Localisation, localise
 from .prepared import decimated, decimation_factor
@@ -21,12 +18,8 @@ from .rig import Rig, linear_baseline, predict
 from .search import SearchState, SearchTests
 from .candidates import CANDIDATES
 
-__all__ = ["Baseline", "fit_baseline", "baseline_decimation", "BASELINE_MAX_SAMPLES",
-           "CANDIDATE_MAX_SAMPLES", "BASE_LAWS"]
-
-#: The friction laws offered as the base law, in order: the static map always, the
-#: dynamic law (:mod:`.dynamic_law`) when it earns against it on the campaign.
-BASE_LAWS: tuple[str, ...] = ("static", DYNAMIC_LAW)
+__all__ = ["Baseline", "fit_baseline", "simulate_base", "baseline_decimation",
+           "BASELINE_MAX_SAMPLES", "CANDIDATE_MAX_SAMPLES"]
 
 
 @dataclass
@@ -59,13 +52,9 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
     """Identify the base model on the fit tests, simulate it on every test and localise
     its residual.
 
-    The static law is fitted from a linear least-squares start; the dynamic (LuGre)
-    law from the static optimum by a continuation in the bristle stiffness
-    (:func:`fit_dynamic`).  The dynamic law becomes the base law when it earns against
-    the static one by the decision rule every model change meets
-    (:func:`~.judge.earns` with the criterion of ``settings``, its two bristle
-    parameters charged); ``tests.rig`` is then the dynamic rig, so every member and
-    candidate is fitted on it."""
+    The static law is fitted from a linear least-squares start.  The dynamic (LuGre)
+    law is not decided here: it is the first member offered on this model
+    (:class:`~.members.dynamic_law.DynamicLawMember`), judged like every member."""
     rig, fit_pts, held_pts = tests.rig, tests.fit_pts, tests.held_pts
     k = baseline_decimation(fit_pts, rig)
     fit_dec = [decimated(pt, k) for pt in fit_pts]
@@ -74,77 +63,18 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
         raise RuntimeError(f"baseline identification failed: {base.message}")
     say(f"baseline: {base.message}, chi2/N {base.objective:.3g} ({base.seconds:.1f} s"
         + (f"; collocation on every {k}th sample of the fit tests" if k > 1 else "") + ")")
-    static = _simulated(tests, rig, base)
-    static_fit_pred = None
-    law_note = ("friction law: static (the dynamic law not offered: "
-                "DiscrepancySettings.dynamic_friction, discrepancy --dynamic-friction)")
-    if rig.friction_law == "static" and DYNAMIC_LAW in BASE_LAWS and settings.dynamic_friction:
-        dyn_rig = replace(rig, friction_law=DYNAMIC_LAW)
-        dyn = fit_dynamic(fit_dec, dyn_rig, base.parameters, settings.max_iter)
-        say(f"friction law: {dyn.message}")
-        law_note = f"friction law: static ({dyn.message})"
-        if dyn.fit is not None and dyn.fit.success:
-            cand = _simulated(tests, dyn_rig, dyn.fit)
-            ev, pe, pe0, e0, e1, d_fit, d_held = change_evidence(
-                fit_pts, static[0], cand[0], held_pts, static[1], cand[1],
-                len(PRESLIDING_NAMES), static[2], static[3])
-            adopted = earns(e0, e1, tests.floor, d_fit, d_held, criterion=settings.criterion)
-            rival = _delay_rival(tests, base, static, k, settings, e1) if adopted else None
-            adopted = adopted and rival is None
-            law_note = (f"friction law: {DYNAMIC_LAW} ({_bristle(dyn.fit)}) "
-                        f"against static: {tests.evaluation} error {e0:.3f} -> {e1:.3f} % "
-                        f"(floor {tests.floor:.3f} %), dBIC fit {d_fit:.1f}, "
-                        f"{tests.evaluation} {d_held:.1f} — "
-                        + ("adopted as the base law" if adopted else rival if rival
-                           else "not adopted (does not earn by the decision rule)"))
-            if adopted:
-                static_fit_pred = static[0]
-                base, rig, static = dyn.fit, dyn_rig, cand
-                tests.rig = rig
-        say(law_note)
-    fit_pred, held_pred, n_eff_fit, n_eff_held = static
+    fit_pred, held_pred, n_eff_fit, n_eff_held = simulate_base(tests, rig, base)
     loc0 = localise(fit_pts + held_pts, fit_pred + held_pred,
                     lead_m_per_rad=tests.lead_m_per_rad)
     err0 = force_error_percent(tests.eval_pts, held_pred or fit_pred)
+    law_note = ("friction law: static" + ("" if settings.dynamic_friction else
+                " (the dynamic law not offered: DiscrepancySettings.dynamic_friction, "
+                "discrepancy --dynamic-friction)"))
     return Baseline(base, rig, fit_pred, held_pred, n_eff_fit, n_eff_held, loc0, err0,
-                    law_note, static_fit_pred)
+                    law_note)
 
 
-def _delay_rival(tests: SearchTests, base: FitResult, static: tuple, k: int,
-                 settings: DiscrepancySettings, err_dynamic: float) -> str | None:
-    """Why a delay of the force record is the better account, or None.
-
-    A bristle delays the friction after each reversal, so the dynamic law also absorbs a
-    delay of the force record (a 3 ms acquisition lag on static friction: held-out
-    17.1 → 12.9 %).  The ``force_lag`` member's own fit on the static model
-    (:func:`~.candidates.force_lag.try_lag`: one delay for every test, the record
-    re-aligned and the static law refitted) is the rival: when it leaves an error no
-    higher than the dynamic law's, the delay — judged next by the record members — is
-    the simpler account and the law is not adopted.  The mirror of :mod:`.lag_rival`,
-    where a member that leaves a lower error than the delay wins."""
-    change = try_lag(tests.fit_pts, tests.held_pts, tests.rig, base, static[0], static[1],
-                     tests.floor, static[2], static[3], math.nan, settings,
-                     lambda msg: None, decimation=k)
-    if change is None or change.error > err_dynamic:
-        return None
-    return (f"not adopted: a delay of the force record by "
-            f"{1e3 * change.fields['parameters']['force_lag_s']:.1f} ms leaves "
-            f"{change.error:.3f} %, no more than the dynamic law (the delay is the simpler "
-            f"account; the record members judge it)")
-
-
-def _bristle(fit: FitResult) -> str:
-    """σ₀ and σ₁ with the half-widths of their ≈95 % intervals, in words."""
-    ci = parameter_intervals(fit)
-    out = []
-    for n, sym, unit in ((PRESLIDING_NAMES[0], "sigma0", "N/m"),
-                         (PRESLIDING_NAMES[1], "sigma1", "N s/m")):
-        lo, hi = ci.get(n, (math.nan, math.nan))
-        out.append(f"{sym} {fit.parameters[n]:.4g} ± {(hi - lo) / 2:.2g} {unit}")
-    return "bristle " + ", ".join(out)
-
-
-def _simulated(tests: SearchTests, rig: Rig, fit: FitResult) -> tuple:
+def simulate_base(tests: SearchTests, rig: Rig, fit: FitResult) -> tuple:
     """A base model's simulated outputs on the fit and held-out tests and the effective
     sample sizes of its residual."""
     fit_pred = predict(tests.fit_pts, rig, fit.parameters)

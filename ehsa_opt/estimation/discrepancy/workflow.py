@@ -53,7 +53,7 @@ round after round, then propose a data-driven term for what no catalogue effect 
 :func:`run_discrepancy` runs these as named phases: :func:`load_data`,
 :func:`prepare_search_tests` (1), :func:`~.baseline.fit_baseline` (2–3), the record and
 law members (:func:`~.members.run_members` over :data:`~.members.RECORD_MEMBERS`: the
-voltage record's skew, the drive's lag, the force record's delay or sensor dynamics, the
+base friction law's dynamics when offered, the voltage record's skew, the drive's lag, the force record's delay or sensor dynamics, the
 friction law's presliding transition — each fitted, judged by the criterion, and
 adopted when it earns), :func:`~.search.run_rounds` (4–7),
 :func:`~.terms.propose_term` (8) and :func:`assemble_result`.
@@ -124,14 +124,14 @@ def _run_discrepancy(data: BenchData | str | Path, settings: DiscrepancySettings
     data = load_data(data, say, notes)
     tests = prepare_search_tests(data, settings, say, notes)
     base = fit_baseline(tests, settings, say)
-    notes.append(base.law_note)
     state = base.state(settings)
     all_cands: list[CandidateResult] = []
     # the recorded tests (the open-loop metric's input, whatever the members change)
     raw = ([pt.test for pt in tests.fit_pts], [pt.test for pt in tests.held_pts])
     ctx = Context(tests, base, state, settings, say, notes, all_cands)
-    run_members(RECORD_MEMBERS, ctx)
-    state = run_rounds(tests, state, settings, say, notes, all_cands)
+    run_members(RECORD_MEMBERS, ctx)  # the base law's dynamics first: it may replace the state
+    notes.append(base.law_note)
+    state = run_rounds(tests, ctx.state, settings, say, notes, all_cands)
     state = _late_laws(ctx, state)
     skew, law = ctx.skew, ctx.law  # as the record and law members left them
     term = None

@@ -21,6 +21,7 @@ from ehsa_opt.estimation.discrepancy.dynamic_law import (
     parameter_intervals,
 )
 from ehsa_opt.estimation.discrepancy.fit import fit_group
+from ehsa_opt.estimation.discrepancy.members import Context, DynamicLawMember, run_members
 from ehsa_opt.estimation.discrepancy.prepared import decimated
 from ehsa_opt.estimation.discrepancy.results import DiscrepancySettings
 from ehsa_opt.estimation.discrepancy.rig import Rig, linear_baseline
@@ -43,6 +44,15 @@ def _data(tmp_path: Path, presliding: bool) -> BenchData:
 
 def _tests(data: BenchData):
     return prepare_search_tests(data, DiscrepancySettings(), lambda m: None, [])
+
+
+def _base_law(tests, settings: DiscrepancySettings):
+    """The base model after the dynamic-law member was offered on it (as the workflow
+    does before the other members)."""
+    base = fit_baseline(tests, settings, lambda m: None)
+    ctx = Context(tests, base, base.state(settings), settings, lambda m: None, [], [])
+    run_members([DynamicLawMember()], ctx)
+    return base, ctx
 
 
 def test_lumped_rod_friction_adds_the_bearing_at_the_rod() -> None:
@@ -92,8 +102,10 @@ def test_clean_presliding_campaign_adopts_the_dynamic_law_and_answers_none(
         tmp_path: Path) -> None:
     data = _data(tmp_path, presliding=True)
     tests = _tests(data)
-    base = fit_baseline(tests, DiscrepancySettings(dynamic_friction=True), lambda m: None)
+    base, ctx = _base_law(tests, DiscrepancySettings(dynamic_friction=True))
     assert base.rig.friction_law == "lugre" and tests.rig is base.rig, base.law_note
+    assert ctx.state.rig is base.rig and ctx.state.error == base.error
+    assert base.static_fit_pred is not None
     assert "adopted as the base law" in base.law_note
     res = run_discrepancy(data, DiscrepancySettings(jobs=1, dynamic_friction=True))
     assert res.effect == "none", res.message
@@ -105,7 +117,7 @@ def test_clean_presliding_campaign_adopts_the_dynamic_law_and_answers_none(
 
 def test_static_campaign_keeps_the_static_law(tmp_path: Path) -> None:
     tests = _tests(_data(tmp_path, presliding=False))
-    base = fit_baseline(tests, DiscrepancySettings(dynamic_friction=True), lambda m: None)
+    base, _ = _base_law(tests, DiscrepancySettings(dynamic_friction=True))
     assert base.rig.friction_law == "static", base.law_note
     assert tests.rig.friction_law == "static"
     assert "friction law: static" in base.law_note or "not adopted" in base.law_note
@@ -114,6 +126,6 @@ def test_static_campaign_keeps_the_static_law(tmp_path: Path) -> None:
 def test_the_dynamic_law_is_offered_only_when_asked(tmp_path: Path) -> None:
     """Off by default: the base law stays static and the note says how to offer it."""
     tests = _tests(_data(tmp_path, presliding=True))
-    base = fit_baseline(tests, DiscrepancySettings(), lambda m: None)
+    base, _ = _base_law(tests, DiscrepancySettings())
     assert base.rig.friction_law == "static"
     assert "not offered" in base.law_note and "--dynamic-friction" in base.law_note

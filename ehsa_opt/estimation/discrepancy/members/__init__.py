@@ -3,6 +3,8 @@
 The record and law members, in the order they are offered before the rounds
 (:data:`RECORD_MEMBERS`; the members of one channel are rivals):
 
+* :mod:`.dynamic_law` — the base friction law's dynamics (LuGre bristles; opt-in), first:
+  once adopted every other member is fitted on it;
 * :mod:`.voltage_skew` and :mod:`.sensor_dynamics` (``voltage_sensor``) — a delay of the
   voltage record and its conditioning's second-order dynamics (a rig with a generator);
 * :mod:`.drive_lag` — the drive's hold and lag (a rig without generator);
@@ -18,6 +20,7 @@ signature scores and fitted in the forward-selection rounds
 """
 
 from .drive_lag import DriveLagMember
+from .dynamic_law import DynamicLawMember
 from .force_lag import ForceLagMember
 from .sensor_dynamics import ForceSensorMember, VoltageSensorMember
 from .friction_drift import FrictionDriftMember
@@ -26,12 +29,13 @@ from .protocol import Attempt, Context, Member, run_members
 from .voltage_skew import VoltageSkewMember
 
 __all__ = ["Member", "Attempt", "Context", "run_members", "RECORD_MEMBERS", "RECORD_MEMBER_NAMES",
-           "VoltageSkewMember", "VoltageSensorMember", "DriveLagMember", "ForceLagMember",
+           "DynamicLawMember", "VoltageSkewMember", "VoltageSensorMember", "DriveLagMember", "ForceLagMember",
            "ForceSensorMember",
            "PreslidingMember", "FrictionDriftMember"]
 
 #: The record and law members, in the order they are offered before the rounds.
-RECORD_MEMBERS: tuple[Member, ...] = (VoltageSkewMember(), VoltageSensorMember(),
+RECORD_MEMBERS: tuple[Member, ...] = (DynamicLawMember(), VoltageSkewMember(),
+                                      VoltageSensorMember(),
                                       DriveLagMember(), ForceLagMember(),
                                       ForceSensorMember(), PreslidingMember(),
                                       FrictionDriftMember())
