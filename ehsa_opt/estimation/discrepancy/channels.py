@@ -1,8 +1,8 @@
 """Per-channel statistics of the output channels (force [, voltage]): the
 noise-normalised SSE (:func:`channel_sse`), the effective samples
 (:func:`channel_effective_samples`), the ΔBIC with a variance per channel
-(:func:`channel_delta_bic`) and the refutation of a refit by one channel
-(:func:`refuted_by_channel`)."""
+(:func:`channel_delta_bic`); the refutation of a refit by one channel is a verdict
+(:func:`~.judge.refuted_by_channel`)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import numpy as np
 from .prepared import PreparedTest
 
 __all__ = ["autocorrelation_time", "channel_sse", "channel_effective_samples",
-           "channel_delta_bic", "refuted_by_channel"]
+           "channel_delta_bic"]
 
 
 def autocorrelation_time(r: np.ndarray) -> float:
@@ -98,12 +98,3 @@ def channel_delta_bic(sse_old: Sequence[float], sse_new: Sequence[float],
             total += ne * math.log(max(s1, 1e-300) / s0)
             n_tot += ne
     return total + k * math.log(max(n_tot, 2.0))
-
-
-def refuted_by_channel(sse_before: float, sse_after: float, k: int, n_eff: float) -> bool:
-    """Whether a refit is refuted by one output channel: that channel's held-out SSE
-    grows by more than the evidence the member's ``k`` parameters are charged,
-    N_eff ln(SSE_after/SSE_before) > k ln N_eff (``n_eff`` the channel's effective
-    samples)."""
-    return n_eff * math.log(max(sse_after, 1e-300) / max(sse_before, 1e-300)) \
-        > k * math.log(max(n_eff, 2.0))

@@ -30,11 +30,11 @@ from ...physics.components import Component
 from ..identify_result import force_relative_error_percent
 from .prepared import PreparedTest
 from .channels import (autocorrelation_time, channel_delta_bic, channel_effective_samples,
-                       channel_sse, refuted_by_channel)
+                       channel_sse)
 
 __all__ = ["normalised_sse", "force_error_percent", "autocorrelation_time",
            "effective_samples", "channel_effective_samples", "delta_bic", "channel_delta_bic",
-           "refuted_by_channel", "acts_on_generator", "floor_noise_std",
+           "acts_on_generator", "floor_noise_std",
            "force_noise_floor_percent", "force_resolution", "channel_sse", "significant",
            "ljung_box", "residual_is_white", "disturbance_masks", "block_excess_reductions",
            "MASK_BEFORE_S", "MASK_AFTER_S", "change_evidence"]

@@ -7,7 +7,8 @@ module that decides whether a model change *earns* (and writes it).
   seen in another channel, the same share of that channel's SSE excess), its routes
   :func:`earns_on_own_channel` (a generator member on the voltage) and
   :func:`own_evidence` (the median per-block excess reduction), and :func:`can_earn`
-  (whether any refit could earn from a state);
+  (whether any refit could earn from a state), and the refutation of a refit by one
+  channel (:func:`refuted_by_channel`);
 * the verdict of one re-identified member, :func:`judge_candidate`, of an impact-fitted
   contact (:func:`judge_on_impacts`), of a channel member or term
   (:func:`judge_change`), and the withdrawals (:func:`withdraw`: at a bound, refuted by
@@ -24,13 +25,12 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .channels import refuted_by_channel
 from .criterion import DEFAULT_CRITERION, Criterion
 from .evidence import force_resolution
 
 __all__ = ["excess_reduction", "earns", "earns_on_own_channel", "can_earn",
            "channel_sse_excess_reduction", "sse_can_earn", "own_channel_dbic", "choose_winner",
-           "own_evidence", "refuted_by_rotor_channel", "judge_candidate", "judge_on_impacts",
+           "own_evidence", "refuted_by_channel", "refuted_by_rotor_channel", "judge_candidate", "judge_on_impacts",
            "judge_change", "record_verdict", "withdraw", "impact_earns", "refuse_at_bound",
            "judge_attempt", "skew_found", "choose_rival"]
 
@@ -265,6 +265,15 @@ def own_evidence(reductions: np.ndarray, min_reduction: float) -> tuple[bool, fl
         return False, math.nan, int(r.size)
     med = float(np.median(r))
     return bool(med >= min_reduction), med, int(r.size)
+
+
+def refuted_by_channel(sse_before: float, sse_after: float, k: int, n_eff: float) -> bool:
+    """Whether a refit is refuted by one output channel: that channel's held-out SSE
+    grows by more than the evidence the member's ``k`` parameters are charged,
+    N_eff ln(SSE_after/SSE_before) > k ln N_eff (``n_eff`` the channel's effective
+    samples)."""
+    return n_eff * math.log(max(sse_after, 1e-300) / max(sse_before, 1e-300)) \
+        > k * math.log(max(n_eff, 2.0))
 
 
 def refuted_by_rotor_channel(sse_before: float, sse_after: float, k: int, n_eff: float

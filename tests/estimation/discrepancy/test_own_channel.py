@@ -10,14 +10,10 @@ import pytest
 from scipy.signal import lfilter
 
 from ehsa_opt.estimation.discrepancy.candidates import CANDIDATES
-from ehsa_opt.estimation.discrepancy.channels import (
-    channel_delta_bic,
-    channel_effective_samples,
-    refuted_by_channel,
-)
+from ehsa_opt.estimation.discrepancy.channels import channel_delta_bic, channel_effective_samples
 from ehsa_opt.estimation.discrepancy.evidence import channel_sse, delta_bic, effective_samples, force_error_percent, force_noise_floor_percent, normalised_sse
 from ehsa_opt.estimation.discrepancy.candidate_evidence import measure_candidate
-from ehsa_opt.estimation.discrepancy.judge import earns_on_own_channel, judge_candidate
+from ehsa_opt.estimation.discrepancy.judge import earns_on_own_channel, judge_candidate, refuted_by_channel
 from ehsa_opt.estimation.discrepancy.prepared import PreparedTest
 from ehsa_opt.estimation.discrepancy.results import CandidateResult
 from ehsa_opt.physics import make_component
