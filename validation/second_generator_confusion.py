@@ -25,6 +25,11 @@ none, out-of-catalogue behaviour, budget: cases over 3 min or 1 GB).
 
 A case cut by the command's own budget (``--budget-s``) gives its stated partial answer
 (``budget: ...``); one still running at ``--cut-s`` is killed by this script.
+
+``--beside-hog`` runs every case beside a CPU-bound process (a busy loop in a process of
+its own, started before the first case and stopped after the last), the condition of the
+engine's time goal ("< 3 min at ``--jobs 2`` with another CPU-bound job"); the summary
+says so and gives the machine's load average at the end.
 """
 
 from __future__ import annotations
@@ -54,6 +59,28 @@ SETS = {"cases": CASES, "tuning": TUNING, "tuning2": TUNING2, "tuning3": TUNING3
 
 BUDGET_S, BUDGET_MB = 180.0, 1024.0
 NO_NAME = ("none", "none of the catalogue", "base model inadequate")
+
+
+def _busy_loop() -> None:  # a CPU-bound job: one core, until terminated
+    x = 0
+    while True:
+        x = (x * 1103515245 + 12345) % 2147483648
+
+
+@contextmanager
+def cpu_hog(on: bool):
+    """A CPU-bound process running for the ``with`` block (nothing when ``on`` is False)."""
+    if not on:
+        yield
+        return
+    import multiprocessing as mp
+    proc = mp.get_context("spawn").Process(target=_busy_loop, daemon=True)
+    proc.start()
+    try:
+        yield
+    finally:
+        proc.terminate()
+        proc.join(10)
 
 
 @contextmanager
@@ -224,6 +251,8 @@ def main(argv=None) -> int:
     ap.add_argument("--data-root", default=str(ROOT / "results" / "second_generator" / "data"))
     ap.add_argument("--runs-root", default=str(ROOT / "results" / "second_generator" / "runs"))
     ap.add_argument("--out", default=None, help="also write the rows as JSON")
+    ap.add_argument("--beside-hog", action="store_true",
+                    help="run every case beside a CPU-bound busy-loop process")
     args = ap.parse_args(argv)
     cases = SETS[args.set]
     if args.cases:
@@ -234,16 +263,19 @@ def main(argv=None) -> int:
             ap.error(f"--cases {args.cases!r} matches no case id")
     rows = []
     t_all = time.perf_counter()
-    for case in cases:
-        row = run_case(case, args)
-        rows.append(row)
-        print(fmt(row), flush=True)
-        if args.out:
-            from ehsa_opt.utils.io import atomic_write_text
-            atomic_write_text(Path(args.out), json.dumps(rows, indent=2, default=str))
+    with cpu_hog(args.beside_hog):
+        for case in cases:
+            row = run_case(case, args)
+            rows.append(row)
+            print(fmt(row), flush=True)
+            if args.out:
+                from ehsa_opt.utils.io import atomic_write_text
+                atomic_write_text(Path(args.out), json.dumps(rows, indent=2, default=str))
     print(f"\n{args.set}: {len(rows)} cases, jobs={args.jobs}, budget "
           f"{'default' if args.budget_s is None else args.budget_s}, cap {args.cut_s:g} s, "
-          f"total {time.perf_counter() - t_all:.0f} s")
+          f"total {time.perf_counter() - t_all:.0f} s"
+          + (", beside a CPU-bound busy loop" if args.beside_hog else "")
+          + f"; load average at the end {os.getloadavg()[0]:.1f}")
     print(summary(rows))
     return 0
 
