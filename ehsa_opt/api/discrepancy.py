@@ -260,7 +260,8 @@ def _in_worker(data: Any, settings: DiscrepancySettings, cap_s: float, inner_s: 
             say(msg)
             return DiscrepancyReport(doc, markdown)
         report = DiscrepancyReport.load(tmp)
-        if report.partial:  # cut by the workflow's own cap, inside the one asked for
+        if report.partial and "safety cap" in str(report.record.get("cut") or ""):
+            # cut by the workflow's own cap, inside the one asked for
             report = dataclasses.replace(report, record={**report.record, "budget_s": cap_s})
             say(f"partial answer: the workflow's own cap ({inner_s:.0f} s) inside the "
                 f"wall-time safety cap of {cap_s:g} s reached; this partial answer depends "
