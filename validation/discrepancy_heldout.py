@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import resource
 import tempfile
 import time
@@ -52,6 +53,7 @@ from ehsa_opt.datasets.synthetic import PROTOTYPE_FRICTION, SyntheticSpec, gener
 from ehsa_opt.physics import COMPONENTS
 from ehsa_opt.physics.components import Component, ParamSpec
 from ehsa_opt.physics.params import FrictionParams
+from validation.cpu_hog import cpu_hog
 
 #: Friction truth of the held-out set (differs from PROTOTYPE_FRICTION in every term).
 FRICTION_HELDOUT = FrictionParams(
@@ -302,13 +304,16 @@ def main() -> None:
                          "(e.g. backlash)")
     ap.add_argument("--verbose", action="store_true", help="print the workflow's progress")
     ap.add_argument("--out", default=None, help="also write the rows as JSON")
+    ap.add_argument("--beside-hog", action="store_true",
+                    help="run every case beside a CPU-bound busy-loop process")
     args = ap.parse_args()
     todo = [(args.set, k, c, args.verbose) for k, c in enumerate(CASES[args.set])
             if (not args.only or k in {int(i) for i in args.only.split(",")})
             and (not args.case or args.case in c[0])]
     rows = []
     t_all = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=args.jobs, max_tasks_per_child=1) as ex:
+    with cpu_hog(args.beside_hog), \
+            ProcessPoolExecutor(max_workers=args.jobs, max_tasks_per_child=1) as ex:
         for row in ex.map(run_case, todo):
             rows.append(row)
             steps = " -> ".join(f"{s['error_after']:.2f} (+{s['effect']})" for s in row["steps"])
@@ -353,7 +358,8 @@ def main() -> None:
     print(f"wall per case: max {max(r['seconds'] for r in rows):.0f} s, mean "
           f"{np.mean([r['seconds'] for r in rows]):.0f} s; peak memory per case: max "
           f"{max(r['peak_rss_MB'] for r in rows):.0f} MB; total {time.perf_counter() - t_all:.0f} s "
-          f"(jobs={args.jobs})")
+          f"(jobs={args.jobs}" + (", beside a CPU-bound busy loop" if args.beside_hog else "")
+          + f"; load average at the end {os.getloadavg()[0]:.1f})")
     if args.out:
         from ehsa_opt.utils.io import atomic_write_text
         atomic_write_text(Path(args.out), json.dumps(rows, indent=2, default=str))

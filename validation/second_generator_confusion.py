@@ -49,6 +49,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from validation.cpu_hog import cpu_hog  # noqa: E402
 from validation.second_generator import Campaign, write_campaign  # noqa: E402
 from validation.second_generator_cases import (CASES, CASES_PHYSICS, TUNING,  # noqa: E402
                                                TUNING2, TUNING3, TUNING_PHYSICS)
@@ -59,28 +60,6 @@ SETS = {"cases": CASES, "tuning": TUNING, "tuning2": TUNING2, "tuning3": TUNING3
 
 BUDGET_S, BUDGET_MB = 180.0, 1024.0
 NO_NAME = ("none", "none of the catalogue", "base model inadequate")
-
-
-def _busy_loop() -> None:  # a CPU-bound job: one core, until terminated
-    x = 0
-    while True:
-        x = (x * 1103515245 + 12345) % 2147483648
-
-
-@contextmanager
-def cpu_hog(on: bool):
-    """A CPU-bound process running for the ``with`` block (nothing when ``on`` is False)."""
-    if not on:
-        yield
-        return
-    import multiprocessing as mp
-    proc = mp.get_context("spawn").Process(target=_busy_loop, daemon=True)
-    proc.start()
-    try:
-        yield
-    finally:
-        proc.terminate()
-        proc.join(10)
 
 
 @contextmanager
