@@ -8,7 +8,8 @@ import math
 from dataclasses import dataclass, replace
 
 from ..fit_result import FitResult
-from ...physics.friction import PRESLIDING_NAMES
+from ...physics.friction import (DYNAMIC_LAWS, LAW_PARAMETER_NAMES, PRESLIDING_NAMES,
+                                 STRIBECK_EXPONENT)
 from .dynamic_law import DYNAMIC_LAW, fit_dynamic, parameter_intervals
 from .evidence import change_evidence, effective_samples, force_error_percent
 from .judge import earns
@@ -24,9 +25,10 @@ from .candidates import CANDIDATES
 __all__ = ["Baseline", "fit_baseline", "baseline_decimation", "BASELINE_MAX_SAMPLES",
            "CANDIDATE_MAX_SAMPLES", "BASE_LAWS"]
 
-#: The friction laws offered as the base law, in order: the static map always, the
-#: dynamic law (:mod:`.dynamic_law`) when it earns against it on the campaign.
-BASE_LAWS: tuple[str, ...] = ("static", DYNAMIC_LAW)
+#: The friction laws offered as the base law: the static map always, a dynamic law
+#: (:mod:`.dynamic_law`; ``DiscrepancySettings.dynamic_law``, default :data:`DYNAMIC_LAW`)
+#: when it earns against it on the campaign.
+BASE_LAWS: tuple[str, ...] = ("static", *DYNAMIC_LAWS)
 
 
 @dataclass
@@ -78,8 +80,8 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
     static_fit_pred = None
     law_note = ("friction law: static (the dynamic law not offered: "
                 "DiscrepancySettings.dynamic_friction, discrepancy --dynamic-friction)")
-    if rig.friction_law == "static" and DYNAMIC_LAW in BASE_LAWS and settings.dynamic_friction:
-        dyn_rig = replace(rig, friction_law=DYNAMIC_LAW)
+    if rig.friction_law == "static" and settings.dynamic_friction:
+        dyn_rig = replace(rig, friction_law=settings.dynamic_law)
         dyn = fit_dynamic(fit_dec, dyn_rig, base.parameters, settings.max_iter)
         say(f"friction law: {dyn.message}")
         law_note = f"friction law: static ({dyn.message})"
@@ -87,11 +89,11 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
             cand = _simulated(tests, dyn_rig, dyn.fit)
             ev, pe, pe0, e0, e1, d_fit, d_held = change_evidence(
                 fit_pts, static[0], cand[0], held_pts, static[1], cand[1],
-                len(PRESLIDING_NAMES), static[2], static[3])
+                len(LAW_PARAMETER_NAMES[dyn_rig.friction_law]), static[2], static[3])
             adopted = earns(e0, e1, tests.floor, d_fit, d_held, criterion=settings.criterion)
             rival = _delay_rival(tests, base, static, k, settings, e1) if adopted else None
             adopted = adopted and rival is None
-            law_note = (f"friction law: {DYNAMIC_LAW} ({_bristle(dyn.fit)}) "
+            law_note = (f"friction law: {dyn_rig.friction_law} ({_bristle(dyn.fit)}) "
                         f"against static: {tests.evaluation} error {e0:.3f} -> {e1:.3f} % "
                         f"(floor {tests.floor:.3f} %), dBIC fit {d_fit:.1f}, "
                         f"{tests.evaluation} {d_held:.1f} — "
@@ -134,13 +136,16 @@ def _delay_rival(tests: SearchTests, base: FitResult, static: tuple, k: int,
 
 
 def _bristle(fit: FitResult) -> str:
-    """σ₀ and σ₁ with the half-widths of their ≈95 % intervals, in words."""
+    """σ₀, σ₁ (and δ) with the half-widths of their ≈95 % intervals, in words."""
     ci = parameter_intervals(fit)
     out = []
     for n, sym, unit in ((PRESLIDING_NAMES[0], "sigma0", "N/m"),
-                         (PRESLIDING_NAMES[1], "sigma1", "N s/m")):
+                         (PRESLIDING_NAMES[1], "sigma1", "N s/m"),
+                         (STRIBECK_EXPONENT, "Stribeck exponent", "")):
+        if n not in fit.parameters:
+            continue
         lo, hi = ci.get(n, (math.nan, math.nan))
-        out.append(f"{sym} {fit.parameters[n]:.4g} ± {(hi - lo) / 2:.2g} {unit}")
+        out.append(f"{sym} {fit.parameters[n]:.4g} ± {(hi - lo) / 2:.2g} {unit}".rstrip())
     return "bristle " + ", ".join(out)
 
 

@@ -19,6 +19,13 @@ friction identification e.g. by Bittencourt & Gunnarsson 2012):
    (a profile of the likelihood in σ₀ over the ball-screw range).
 3. **Free**: σ₀ free, started from the rung of lowest objective.
 
+The generalised Stribeck law (``"lugre_stribeck"``) takes the same path: its curve
+starts from the lumped Simscape curve's levels and breakaway velocity (read as the
+Stribeck velocity) with the exponent at its declared typical value (1).  Each stage's
+IPOPT iterations are bounded by ``max_iter`` (``DiscrepancySettings.max_iter``): a
+stage that reaches it is reported ``Maximum_Iterations_Exceeded`` in the stages and
+the account, and the free stage must converge for the fit to count.
+
 Every IPOPT status is kept in :attr:`DynamicFit.stages`; the dynamic fit is
 ``success`` only if the free solve converged (``Solve_Succeeded`` or acceptable), and
 the message says which stage failed otherwise.
@@ -33,7 +40,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ...physics.base_parameters import PARAMETERS
-from ...physics.friction import PRESLIDING_NAMES
+from ...physics.friction import LAW_PARAMETER_NAMES, PRESLIDING_NAMES
 from ..fit_result import FitResult
 from ..lugre_continuation import STIFFNESS_LADDER_N_PER_M
 from .fit import fit_group
@@ -96,10 +103,11 @@ def fit_dynamic(fit_pts: Sequence[PreparedTest], rig: Rig, static: Mapping[str, 
     """
     import time
     t0 = time.perf_counter()
-    rest = [n for n in rig.base_names if n not in NUT_NAMES and n not in PRESLIDING_NAMES]
+    law_names = LAW_PARAMETER_NAMES[rig.friction_law]
+    rest = [n for n in rig.base_names if n not in NUT_NAMES and n not in law_names]
     start = {**{n: float(static[n]) for n in rest},
              **lumped_rod_friction(static, rig.harvester.lead_m_per_rad),
-             **{n: PARAMETERS[n].typical for n in PRESLIDING_NAMES if n != _SIGMA0}}
+             **{n: PARAMETERS[n].typical for n in law_names if n != _SIGMA0}}
     free_fixed = [n for n in rig.base_names if n != _SIGMA0]
     stages, fits = [], []
     for sigma0 in ladder:
