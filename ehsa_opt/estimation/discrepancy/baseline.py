@@ -82,7 +82,8 @@ def fit_baseline(tests: SearchTests, settings: DiscrepancySettings, say) -> Base
                 "DiscrepancySettings.dynamic_friction, discrepancy --dynamic-friction)")
     if rig.friction_law == "static" and settings.dynamic_friction:
         dyn_rig = replace(rig, friction_law=settings.dynamic_law)
-        dyn = fit_dynamic(fit_dec, dyn_rig, base.parameters, settings.max_iter)
+        dyn = fit_dynamic(fit_dec, dyn_rig, base.parameters, settings.max_iter,
+                          full_pts=fit_pts if k > 1 else None)
         say(f"friction law: {dyn.message}")
         law_note = f"friction law: static ({dyn.message})"
         if dyn.fit is not None and dyn.fit.success:
