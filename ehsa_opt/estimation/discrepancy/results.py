@@ -110,8 +110,9 @@ class DiscrepancySettings:
         optimum by a continuation in the bristle stiffness and adopted when it earns
         (:mod:`.dynamic_law`).  False (default): the static map only — on the second
         generator's clean campaigns the dynamic law halves the held-out error but leaves
-        4–12 × the noise floor, and on a stiff-contact campaign one of its stages did not
-        finish within 15 minutes.
+        3.9–8.1 × the noise floor (1.0–2.1 × the true model's error, which is itself
+        3.7–4.1 × that floor: their force noise is coloured), and on a stiff-contact
+        campaign one of its stages did not finish within 15 minutes.
     dynamic_law : {"lugre", "lugre_stribeck"}
         The dynamic law offered with ``dynamic_friction``: ``"lugre"`` (the bristle's
         steady state the Simscape curve) or ``"lugre_stribeck"`` (the generalised
