@@ -151,12 +151,16 @@ def _cmd_plan_tests(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------ discrepancy
 def _cmd_discrepancy(args: argparse.Namespace) -> int:
     from . import DiscrepancySettings, discrepancy_report
+    if args.dynamic_law is not None and not args.dynamic_friction:
+        raise _UsageError(f"--dynamic-law {args.dynamic_law} chooses the law "
+                          f"--dynamic-friction offers: add --dynamic-friction")
     members = DiscrepancySettings().candidates
     members += tuple(m for m in args.with_members if m not in members)
     settings = DiscrepancySettings(seed=args.seed, jobs=args.jobs, top=args.top,
                                    candidates=members,
                                    max_tests=args.max_tests, presliding=args.presliding,
                                    dynamic_friction=args.dynamic_friction,
+                                   dynamic_law=args.dynamic_law or "lugre",
                                    scheduler=args.scheduler,
                                    **({} if args.max_fits is None
                                       else {"max_member_fits": args.max_fits or None}))
@@ -339,6 +343,10 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--dynamic-friction", action="store_true",
                    help="offer the base model the dynamic (LuGre) friction law, fitted from "
                         "the static optimum and adopted when it earns (off by default)")
+    d.add_argument("--dynamic-law", choices=("lugre", "lugre_stribeck"), default=None,
+                   help="the law --dynamic-friction offers: lugre (default; a bristle whose "
+                        "steady state is the Simscape curve) or lugre_stribeck (the "
+                        "generalised Stribeck curve, its exponent fitted)")
     d.add_argument("--with", dest="with_members", action="append", default=[],
                    metavar="MEMBER",
                    help="also search a member listed by choice (force_sensor, "

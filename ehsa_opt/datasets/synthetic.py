@@ -19,7 +19,7 @@ import tomli_w
 
 from ..physics import BenchModel, make_component
 from ..physics.bench_sim import simulate_bench
-from ..physics.friction import PRESLIDING_NAMES
+from ..physics.friction import LAW_PARAMETER_NAMES, STRIBECK_EXPONENT
 from ..physics.motion import SineMotion
 from ..physics.params import FrictionParams, HarvesterParams
 from .bench_format import BenchTest, write_bench
@@ -62,7 +62,9 @@ class SyntheticSpec:
         (``friction_law="lugre"`` of :class:`~ehsa_opt.physics.bench_model.BenchModel`)
         with these values of ``presliding_stiffness_N_per_m`` (σ₀, N/m) and
         ``presliding_damping_Ns_per_m`` (σ₁, N s/m); one left out takes its declared
-        typical value.
+        typical value.  With ``stribeck_exponent`` (δ) too, the generalised Stribeck
+        LuGre law (``friction_law="lugre_stribeck"``; the nut's breakaway velocity is
+        then the Stribeck velocity).
     frequencies_hz, loads_ohm : sequences
         The test matrix (all combinations).
     amplitude_m : float
@@ -116,10 +118,11 @@ class SyntheticSpec:
             raise ValueError("SyntheticSpec: protocols must be Protocol objects")
         if self.frequencies_hz and (not self.loads_ohm or any(r <= 0 for r in self.loads_ohm)):
             raise ValueError("SyntheticSpec: loads_ohm must be positive")
-        bad = [k for k in self.presliding if k not in PRESLIDING_NAMES]
+        known = LAW_PARAMETER_NAMES["lugre_stribeck"]
+        bad = [k for k in self.presliding if k not in known]
         if bad:
             raise ValueError(f"SyntheticSpec: presliding has unknown parameter(s) "
-                             f"{', '.join(bad)} (known: {', '.join(PRESLIDING_NAMES)})")
+                             f"{', '.join(bad)} (known: {', '.join(known)})")
 
     @property
     def sine_amplitudes_m(self) -> tuple[float, ...]:
@@ -132,8 +135,9 @@ class SyntheticSpec:
 
     def model(self) -> BenchModel:
         comps = [make_component(name) for name in self.effects]
-        return BenchModel(self.harvester, comps,
-                          friction_law="lugre" if self.presliding else "static")
+        law = ("static" if not self.presliding else "lugre_stribeck"
+               if STRIBECK_EXPONENT in self.presliding else "lugre")
+        return BenchModel(self.harvester, comps, friction_law=law)
 
 
 def generate_bench_tests(spec: SyntheticSpec, progress: Any = None) -> list[BenchTest]:

@@ -4,7 +4,8 @@ A :class:`Parameter` carries its unit, its physical bounds (what any value must 
 :class:`~ehsa_opt.physics.params.FrictionParams` validates against them), the range
 multistarts draw from, the scale decision variables are divided by and a typical value.
 :data:`PARAMETERS` declares the eight friction parameters, the two of the LuGre (presliding)
-nut friction (used by models with ``friction_law="lugre"``) and the two rig terms of a rig
+nut friction (used by models with a dynamic ``friction_law``), the exponent of the
+generalised Stribeck curve (``friction_law="lugre_stribeck"``) and the two rig terms of a rig
 without generator (moving mass, force offset).
 
 A procedure that needs narrower (or other) limits does not keep a table of its own: it
@@ -126,6 +127,9 @@ PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
        hint="a ball screw's presliding stiffness is 1e5-1e8 N/m"),
     _p("presliding_damping_Ns_per_m", "N s/m", "bristle damping sigma_1 of the LuGre friction",
        (0.0, 1e6), (0.0, 3000.0), 1000.0, 500.0),
+    _p("stribeck_exponent", "1", "exponent delta of the generalised Stribeck curve "
+       "exp(-|v/v_S|^delta) (friction_law='lugre_stribeck')", (0.1, 10.0), (0.5, 2.0), 1.0,
+       1.0, hint="reported between 0.5 and 2 (Armstrong-Helouvry et al. 1994)"),
     _p("inertia_kg", "kg", "moving mass M", (0.0, 1e4), (10.0, 200.0), 100.0, 50.0),
     _p("offset_N", "N", "force offset", (-1e4, 1e4), (-20.0, 20.0), 10.0, 0.0),
 )}

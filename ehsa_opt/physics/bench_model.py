@@ -39,7 +39,10 @@ Friction law (``friction_law``): ``"static"`` (default) F_ns(v) is the Simscape 
     ż = v − σ₀ z / φ(v),     F_fr = σ₀ z + σ₁ ż + f_v v
 
 with σ₀, σ₁ the parameters ``presliding_stiffness_N_per_m`` and
-``presliding_damping_Ns_per_m``.  On a rigid transmission the bristle carries the rod's
+``presliding_damping_Ns_per_m``.  ``"lugre_stribeck"`` is the same bristle with the
+generalised Stribeck curve as its steady state (one more parameter, the exponent
+``stribeck_exponent``) and Olsson's micro-damping σ₁ exp(−(v/u_S)²)
+(:mod:`~ehsa_opt.physics.friction`).  On a rigid transmission the bristle carries the rod's
 whole friction, F_ns(v) + T_b(v/r)/r: φ = φ_ns(v) + φ_b(v/r)/r², f_v + t_v/r² (the
 nut/bearing split is not identifiable there, and a bristle on the nut alone lets a fit
 move the friction to the bearing until the bristle's rate σ₀/φ diverges).  With a
@@ -48,8 +51,8 @@ the rotor speed.
 
 Parameters are a flat vector ``p`` in :attr:`BenchModel.param_names` order:
 ``load_ohm``, the eight friction parameter names, then (``generator=False``
-only) ``inertia_kg`` and ``offset_N``, then (``friction_law="lugre"`` only) σ₀ and
-σ₁, then each component's parameters.  States are named in :attr:`BenchModel.state_names`.
+only) ``inertia_kg`` and ``offset_N``, then (dynamic laws only) σ₀ and
+σ₁ (and δ under ``"lugre_stribeck"``), then each component's parameters.  States are named in :attr:`BenchModel.state_names`.
 """
 
 from __future__ import annotations
@@ -62,8 +65,11 @@ import numpy as np
 from .components import Component, ParamSpec
 from .base_parameters import PARAMETERS
 from .friction import (
-    FRICTION_LAWS,
-    PRESLIDING_NAMES,
+    BENCH_FRICTION_LAWS,
+    LAW_PARAMETER_NAMES,
+    STRIBECK_EXPONENT,
+    micro_damping_decay,
+    stribeck_slope,
     bearing_friction_Nm,
     bearing_static_slope,
     bristle_force_rate,
@@ -95,7 +101,7 @@ class BenchModel:
     generator : bool
         False for a rig without generator (no winding, no voltage; adds the
         parameters ``inertia_kg`` and ``offset_N``, see the module docstring).
-    friction_law : {"static", "lugre"}
+    friction_law : {"static", "lugre", "lugre_stribeck"}
         The nut–screw friction law (see the module docstring).
 
     Attributes
@@ -119,8 +125,8 @@ class BenchModel:
     def __init__(self, harvester: HarvesterParams | None = None,
                  components: Sequence[Component] = (), generator: bool = True,
                  friction_law: str = "static") -> None:
-        if friction_law not in FRICTION_LAWS:
-            raise ValueError(f"BenchModel: friction_law must be one of {FRICTION_LAWS}, got "
+        if friction_law not in BENCH_FRICTION_LAWS:
+            raise ValueError(f"BenchModel: friction_law must be one of {BENCH_FRICTION_LAWS}, got "
                              f"{friction_law!r}")
         self.friction_law = friction_law
         self.harvester = harvester or HarvesterParams()
@@ -139,7 +145,7 @@ class BenchModel:
             for q in c.parameters:
                 self.param_specs[q.name] = q
         self.rig_names = [] if self.generator else list(RIG_PARAM_NAMES)
-        self.law_names = list(PRESLIDING_NAMES) if friction_law == "lugre" else []
+        self.law_names = list(LAW_PARAMETER_NAMES[friction_law])
         self.param_names = ["load_ohm", *FRICTION_NAMES, *self.rig_names, *self.law_names,
                             *self.param_specs]
         self._build()
@@ -271,16 +277,29 @@ class BenchModel:
         if z_sym is None:
             return nut_friction_N(vr, fr), T_b, None
         r = self.harvester.lead_m_per_rad
-        slope, viscous = nut_static_slope(vr, fr), fr[3]
+        slope, viscous = self._rod_slope(vr, omega, fr, plaw), fr[3]
+        damping = plaw["presliding_damping_Ns_per_m"]
+        if self.friction_law == "lugre_stribeck":
+            damping = damping * micro_damping_decay(vr, fr[2])
         if self.transmission is None:
-            slope = slope + bearing_static_slope(omega, fr) / r ** 2
             viscous = viscous + fr[7] / r ** 2
             T_b = ca.SX(0)
         sig0 = plaw["presliding_stiffness_N_per_m"]
         z_rate = bristle_force_rate(z_sym, vr, slope, sig0)
-        F_ns = presliding_force(z_sym, z_rate, vr, sig0, plaw["presliding_damping_Ns_per_m"],
-                                viscous)
+        F_ns = presliding_force(z_sym, z_rate, vr, sig0, damping, viscous)
         return F_ns, T_b, z_rate
+
+    def _rod_slope(self, vr: Any, omega: Any, fr: Any, plaw: Mapping[str, Any]) -> Any:
+        """φ of the bristle (N s/m): the nut's curve, plus the bearing's at the rod on a
+        rigid transmission."""
+        if self.friction_law == "lugre_stribeck":
+            slope = stribeck_slope(vr, fr[0], fr[1], fr[2], plaw[STRIBECK_EXPONENT])
+        else:
+            slope = nut_static_slope(vr, fr)
+        if self.transmission is None:
+            r = self.harvester.lead_m_per_rad
+            slope = slope + bearing_static_slope(omega, fr) / r ** 2
+        return slope
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -322,9 +341,10 @@ class BenchModel:
             elif n == "rotor_speed_rad_per_s":
                 out.append(u0[1] / r)
             elif n == BRISTLE_STATE:
-                slope = float(nut_static_slope(float(u0[1]), p[1:9]))
-                if self.transmission is None:
-                    slope += float(bearing_static_slope(float(u0[1]) / r, p[1:9])) / r ** 2
+                nrig = len(self.rig_names)
+                plaw = {n: float(p[9 + nrig + k]) for k, n in enumerate(self.law_names)}
+                v0 = float(u0[1])
+                slope = float(self._rod_slope(v0, v0 / r, [float(x) for x in p[1:9]], plaw))
                 out.append(slope * u0[1])
             else:  # component states start at rest
                 out.append(0.0)

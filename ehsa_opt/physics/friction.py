@@ -26,6 +26,24 @@ collocation's scaling) fits every σ₀ from 1e4 to 1e10 N/m — z itself spans 
 1e-2 m over that range::
 
     dF_b/dt = σ₀ (u − F_b / φ(u)),     F = F_b + (σ₁/σ₀) dF_b/dt + f_v u
+
+Generalised Stribeck LuGre (``"lugre_stribeck"``): the same bristle, with the steady
+state of Canudas de Wit et al. (1995) and Armstrong-Hélouvry et al. (1994) — a level
+that falls from the static friction F_S to the Coulomb friction F_C with a free
+exponent δ — and the micro-damping of Olsson et al. (1998), which fades with speed::
+
+    g(u)  = F_C + (F_S − F_C) exp(−ρ(u)^δ),   ρ(u) = √(u² + u_c²) / u_S
+    s(u)  = g(u) tanh(u/u_c),   u_c = u_S / 10
+    F     = F_b + σ₁ exp(−(u/u_S)²) / σ₀ · dF_b/dt + f_v u
+
+F_S, F_C, u_S and f_v are the nut's breakaway, Coulomb, breakaway-velocity and
+viscous parameters (the breakaway velocity read as the Stribeck velocity u_S), δ the
+parameter ``stribeck_exponent``.  ρ is |u|/u_S smoothed over u_c, the Simscape law's
+own smoothing velocity (its u_Coul = u_brk/10), so the curve is smooth for IPOPT for
+every δ (|u|^δ is not at 0 for δ ≤ 1); above a few u_c it is the textbook curve with
+the textbook F_S, and at rest its level is F_C + (F_S − F_C) exp(−10^−δ) (the bristle
+carries the force there: the presliding regime).  The static limit σ₀ → ∞ is the generalised Stribeck map
+:func:`stribeck_friction`.
 """
 
 from __future__ import annotations
@@ -40,16 +58,36 @@ from .params import FrictionParams
 
 __all__ = ["simscape_friction", "nut_friction_N", "bearing_friction_Nm", "rod_friction_N",
            "FRICTION_LAWS", "PRESLIDING_NAMES", "static_slope", "bristle_force_rate",
-           "presliding_force", "nut_static_slope", "bearing_static_slope"]
+           "presliding_force", "nut_static_slope", "bearing_static_slope",
+           "BENCH_FRICTION_LAWS", "DYNAMIC_LAWS", "STRIBECK_EXPONENT", "LAW_PARAMETER_NAMES", "stribeck_level",
+           "stribeck_friction", "stribeck_slope", "micro_damping_decay",
+           "SMOOTHING_FRACTION"]
 
 #: Friction laws of the models: ``"static"`` (the Simscape map of the velocity) and
 #: ``"lugre"`` (the same map as the steady state of a LuGre bristle state).
 FRICTION_LAWS: tuple[str, ...] = ("static", "lugre")
+#: Friction laws of the bench model (:class:`~ehsa_opt.physics.bench_model.BenchModel`,
+#: the discrepancy engine's base law): those of :data:`FRICTION_LAWS` and
+#: ``"lugre_stribeck"`` (a bristle whose steady state is the generalised Stribeck curve,
+#: with Olsson's micro-damping).  Friction sets and the vehicle carry the first two.
+BENCH_FRICTION_LAWS: tuple[str, ...] = (*FRICTION_LAWS, "lugre_stribeck")
+#: The laws with a bristle state.
+DYNAMIC_LAWS: tuple[str, ...] = ("lugre", "lugre_stribeck")
 #: Parameters of the LuGre friction at the rod (declared in
 #: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`): bristle stiffness σ₀ (N/m) and
 #: bristle damping σ₁ (N s/m).
 PRESLIDING_NAMES: tuple[str, ...] = ("presliding_stiffness_N_per_m",
                                      "presliding_damping_Ns_per_m")
+#: The exponent δ of the generalised Stribeck curve (dimensionless, declared in
+#: :data:`~ehsa_opt.physics.base_parameters.PARAMETERS`).
+STRIBECK_EXPONENT = "stribeck_exponent"
+#: The parameters each law adds to the eight friction parameters.
+LAW_PARAMETER_NAMES: dict[str, tuple[str, ...]] = {
+    "static": (), "lugre": PRESLIDING_NAMES,
+    "lugre_stribeck": (*PRESLIDING_NAMES, STRIBECK_EXPONENT)}
+#: u_c / u_S of the generalised curve: the smoothing velocity of its sign and of |u|,
+#: the Simscape law's ratio u_Coul / u_brk (its ``tanh(u/u_Coul)``).
+SMOOTHING_FRACTION = 0.1
 #: Below this |u/u_Coul| the ratio tanh(x)/x takes its Taylor series (exact to 1e-19).
 _TAYLOR_BELOW = 1e-3
 #: Floor added to φ(u), N s/m: keeps the bristle rate finite for a frictionless law
@@ -179,3 +217,60 @@ def bearing_static_slope(omega_rad_s: Any, friction: FrictionParams | Any) -> An
     """φ(ω) of the bearing law (N m s/rad), see :func:`static_slope`."""
     p = friction.as_array() if isinstance(friction, FrictionParams) else friction
     return static_slope(omega_rad_s, p[4], p[5], p[6])
+
+
+def _smooth_ratio(u: Any, stribeck_velocity: Any, symbolic: bool) -> Any:
+    """ρ(u) = √(u² + u_c²)/u_S of the generalised curve (|u|/u_S, smooth at 0)."""
+    sqrt = ca.sqrt if symbolic else np.sqrt
+    u_c = SMOOTHING_FRACTION * stribeck_velocity
+    return sqrt(u * u + u_c * u_c) / stribeck_velocity
+
+
+def stribeck_level(u: Any, static: Any, coulomb: Any, stribeck_velocity: Any,
+                   exponent: Any) -> Any:
+    """g(u) = F_C + (F_S − F_C) exp(−ρ(u)^δ), N: the generalised Stribeck level.
+
+    Parameters
+    ----------
+    u : float, ndarray or casadi expression
+        Sliding velocity, m/s.
+    static, coulomb : same kind
+        Static friction F_S and Coulomb friction F_C, N.
+    stribeck_velocity : same kind
+        u_S (> 0), m/s.
+    exponent : same kind
+        δ (> 0), dimensionless.
+    """
+    symbolic = _is_casadi(u, static, coulomb, stribeck_velocity, exponent)
+    exp = ca.exp if symbolic else np.exp
+    if not symbolic and not np.isscalar(u):
+        u = np.asarray(u, dtype=float)
+    rho = _smooth_ratio(u, stribeck_velocity, symbolic)
+    return coulomb + (static - coulomb) * exp(-rho ** exponent)
+
+
+def stribeck_friction(u: Any, static: Any, coulomb: Any, stribeck_velocity: Any,
+                      exponent: Any, viscous: Any) -> Any:
+    """The generalised Stribeck map g(u) tanh(u/u_c) + f_v u, N (static limit of
+    ``"lugre_stribeck"``); arguments as :func:`stribeck_level`, ``viscous`` f_v in N s/m."""
+    symbolic = _is_casadi(u, static, coulomb, stribeck_velocity, exponent, viscous)
+    tanh = ca.tanh if symbolic else np.tanh
+    u_c = SMOOTHING_FRACTION * stribeck_velocity
+    return (stribeck_level(u, static, coulomb, stribeck_velocity, exponent) * tanh(u / u_c)
+            + viscous * u)
+
+
+def stribeck_slope(u: Any, static: Any, coulomb: Any, stribeck_velocity: Any,
+                   exponent: Any) -> Any:
+    """φ(u) = g(u) tanh(u/u_c)/u of the generalised curve (N s/m), finite at u = 0."""
+    symbolic = _is_casadi(u, static, coulomb, stribeck_velocity, exponent)
+    u_c = SMOOTHING_FRACTION * stribeck_velocity
+    return (stribeck_level(u, static, coulomb, stribeck_velocity, exponent)
+            * _tanh_ratio(u / u_c, symbolic) / u_c)
+
+
+def micro_damping_decay(u: Any, stribeck_velocity: Any) -> Any:
+    """exp(−(u/u_S)²): Olsson's fading of the micro-damping σ₁ with speed (1 at rest)."""
+    exp = ca.exp if _is_casadi(u, stribeck_velocity) else np.exp
+    x = u / stribeck_velocity
+    return exp(-x * x)

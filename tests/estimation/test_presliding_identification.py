@@ -79,10 +79,15 @@ def test_identify_refuses_an_unknown_friction_law(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=False, reason=(
-    "on the merged code (the sampled NLPs' structured Hessian and the vehicle's friction "
-    "law came in beside the continuation) the per-test minimax fit gives sigma0 2.162e6 "
-    "with its ~95 % interval [2.105e6, 2.220e6], which misses the truth 2e6 (the "
-    "continuation's own branch gave 1.998e6 [1.89e6, 2.11e6]); open, not yet explained"))
+    "the per-test minimax fit gives sigma0 2.162e6 with its ~95 % interval [2.105e6, "
+    "2.220e6], which misses the truth 2e6.  Not a merge regression: the continuation's own "
+    "branch, run on this machine, gives the same 2.162e6 [2.105e6, 2.220e6] (its recorded "
+    "1.998e6 does not reproduce), and the whole-graph Hessian instead of the structured one "
+    "gives 2.145e6 [2.046e6, 2.245e6] at the same objective (6.293e-4 against 6.291e-4).  "
+    "The estimate sits 7-8 % above the truth in a flat direction; the likely cause is the "
+    "collocation's one-step rule on the bristle's transient of one or two samples against "
+    "the CVODES-generated data (the discrepancy engine's fit on every sample is biased the "
+    "same way, +2.4 %), which a Wald interval does not include; open"))
 def test_lugre_fit_is_continued_from_the_static_optimum() -> None:
     """Drawn starts under the LuGre law: a static fit, σ₀ fixed stiff to soft, then free —
     each stage's IPOPT status kept, the static and the free one converged, σ₀ recovered

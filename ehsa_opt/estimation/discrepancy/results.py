@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...physics.friction import DYNAMIC_LAWS
 from .candidates import CANDIDATES
 from ..fit_result import FitResult
 from ..identify_result import force_relative_error_percent
@@ -109,8 +110,14 @@ class DiscrepancySettings:
         optimum by a continuation in the bristle stiffness and adopted when it earns
         (:mod:`.dynamic_law`).  False (default): the static map only — on the second
         generator's clean campaigns the dynamic law halves the held-out error but leaves
-        4–12 × the noise floor, and on a stiff-contact campaign one of its stages did not
-        finish within 15 minutes.
+        3.9–8.1 × the noise floor (1.0–2.1 × the true model's error, which is itself
+        3.7–4.1 × that floor: their force noise is coloured), and on a stiff-contact
+        campaign one of its stages did not finish within 15 minutes.
+    dynamic_law : {"lugre", "lugre_stribeck"}
+        The dynamic law offered with ``dynamic_friction``: ``"lugre"`` (the bristle's
+        steady state the Simscape curve) or ``"lugre_stribeck"`` (the generalised
+        Stribeck curve with its exponent and Olsson's fading micro-damping,
+        :mod:`~ehsa_opt.physics.friction`).
     scheduler : str or distributed.Client, optional
         Make the member fits on a Dask cluster (its scheduler's address, or a client)
         instead of ``jobs`` local processes: the same fits in the same order, so the
@@ -134,6 +141,7 @@ class DiscrepancySettings:
     wall_cap_s: float | None = None
     presliding: bool = False
     dynamic_friction: bool = False
+    dynamic_law: str = "lugre"
     criterion: Criterion = DEFAULT_CRITERION
     scheduler: Any = None
 
@@ -157,6 +165,10 @@ class DiscrepancySettings:
                 and self.max_member_fits >= 1):
             raise ValueError(f"DiscrepancySettings: max_member_fits must be None or an "
                              f"integer >= 1 (member fits), got {self.max_member_fits!r}")
+        if self.dynamic_law not in DYNAMIC_LAWS:
+            raise ValueError(f"DiscrepancySettings: dynamic_law must be one of "
+                             f"{', '.join(repr(x) for x in DYNAMIC_LAWS)}, got "
+                             f"{self.dynamic_law!r}")
         unknown = [c for c in self.candidates if c not in CANDIDATES
                    and c not in CHANNEL_MEMBERS]
         if unknown:

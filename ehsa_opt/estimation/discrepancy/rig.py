@@ -29,7 +29,7 @@ from ...physics.bench_map import simulate_map, simulate_map_sensitivity
 from ...physics.bench_sim import simulate_bench
 from ...physics.components import Component, ParamSpec
 from ...physics.motion import FilteredMotion, SineMotion
-from ...physics.friction import PRESLIDING_NAMES
+from ...physics.friction import LAW_PARAMETER_NAMES
 from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .prepared import NO_GENERATOR_FIXED, PreparedTest
 
@@ -83,7 +83,8 @@ _MODELS: dict[tuple, Any] = {}
 class Rig:
     """What is fitted: harvester constants, rig kind, the model's components and its
     friction law (``"static"``: the Simscape map; ``"lugre"``: that map as the steady
-    state of a bristle, :class:`~ehsa_opt.physics.bench_model.BenchModel`)."""
+    state of a bristle; ``"lugre_stribeck"``: the generalised Stribeck curve as the
+    bristle's steady state, :class:`~ehsa_opt.physics.bench_model.BenchModel`)."""
 
     harvester: HarvesterParams
     has_generator: bool = True
@@ -115,7 +116,7 @@ class Rig:
             return list(FRICTION_NAMES) if self.has_generator else ["inertia_kg", "offset_N",
                                                                      *NUT_NAMES]
         return ([] if self.has_generator else ["inertia_kg", "offset_N"]) + list(NUT_NAMES) \
-            + list(PRESLIDING_NAMES)
+            + list(LAW_PARAMETER_NAMES[self.friction_law])
 
     @property
     def fixed_base(self) -> dict[str, float]:

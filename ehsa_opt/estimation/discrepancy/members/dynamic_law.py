@@ -17,10 +17,10 @@ import math
 from dataclasses import replace
 
 from ...fit_result import FitResult
-from ....physics.friction import PRESLIDING_NAMES
+from ....physics.friction import LAW_PARAMETER_NAMES, PRESLIDING_NAMES, STRIBECK_EXPONENT
 from ..baseline import baseline_decimation, simulate_base
 from ..candidates.force_lag import try_lag
-from ..dynamic_law import DYNAMIC_LAW, fit_dynamic, parameter_intervals
+from ..dynamic_law import fit_dynamic, parameter_intervals
 from ..evidence import change_evidence, force_error_percent
 from ..localise import localise
 from ..prepared import decimated
@@ -44,24 +44,25 @@ class DynamicLawMember(Member):
     def fit(self, ctx: Context) -> Attempt | None:
         t, b = ctx.tests, ctx.base
         k = baseline_decimation(t.fit_pts, t.rig)
-        dyn_rig = replace(t.rig, friction_law=DYNAMIC_LAW)
+        dyn_rig = replace(t.rig, friction_law=ctx.settings.dynamic_law)
         dyn = fit_dynamic([decimated(pt, k) for pt in t.fit_pts], dyn_rig, b.fit.parameters,
-                          ctx.settings.max_iter)
+                          ctx.settings.max_iter, full_pts=t.fit_pts if k > 1 else None)
         ctx.say(f"friction law: {dyn.message}")
         b.law_note = f"friction law: static ({dyn.message})"
         if dyn.fit is None or not dyn.fit.success:
             return None
         static = (b.fit_pred, b.held_pred, b.n_eff_fit, b.n_eff_held)
         cand = simulate_base(t, dyn_rig, dyn.fit)
+        n_law = len(LAW_PARAMETER_NAMES[dyn_rig.friction_law])
         _, _, _, e0, e1, d_fit, d_held = change_evidence(
-            t.fit_pts, static[0], cand[0], t.held_pts, static[1], cand[1],
-            len(PRESLIDING_NAMES), static[2], static[3])
-        msg = (f"friction law: {DYNAMIC_LAW} ({_bristle(dyn.fit)}) against static: "
+            t.fit_pts, static[0], cand[0], t.held_pts, static[1], cand[1], n_law,
+            static[2], static[3])
+        msg = (f"friction law: {dyn_rig.friction_law} ({_bristle(dyn.fit)}) against static: "
                f"{t.evaluation} error {e0:.3f} -> {e1:.3f} % (floor {t.floor:.3f} %), "
                f"dBIC fit {d_fit:.1f}, {t.evaluation} {d_held:.1f}")
         b.law_note = msg + " — not adopted (does not earn by the decision rule)"
         return Attempt(self.name, error_before=e0, error_after=e1, delta_bic_fit=d_fit,
-                       delta_bic_heldout=d_held, n_parameters=len(PRESLIDING_NAMES),
+                       delta_bic_heldout=d_held, n_parameters=n_law,
                        change=(dyn.fit, dyn_rig, cand, k), message=msg)
 
     def confirm(self, attempt: Attempt, ctx: Context) -> bool:
@@ -102,11 +103,14 @@ class DynamicLawMember(Member):
 
 
 def _bristle(fit: FitResult) -> str:
-    """σ₀ and σ₁ with the half-widths of their ≈95 % intervals, in words."""
+    """σ₀, σ₁ (and δ) with the half-widths of their ≈95 % intervals, in words."""
     ci = parameter_intervals(fit)
     out = []
     for n, sym, unit in ((PRESLIDING_NAMES[0], "sigma0", "N/m"),
-                         (PRESLIDING_NAMES[1], "sigma1", "N s/m")):
+                         (PRESLIDING_NAMES[1], "sigma1", "N s/m"),
+                         (STRIBECK_EXPONENT, "Stribeck exponent", "")):
+        if n not in fit.parameters:
+            continue
         lo, hi = ci.get(n, (math.nan, math.nan))
-        out.append(f"{sym} {fit.parameters[n]:.4g} ± {(hi - lo) / 2:.2g} {unit}")
+        out.append(f"{sym} {fit.parameters[n]:.4g} ± {(hi - lo) / 2:.2g} {unit}".rstrip())
     return "bristle " + ", ".join(out)
