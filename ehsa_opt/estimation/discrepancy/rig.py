@@ -235,11 +235,12 @@ def simulate_test(model: BenchModel, pt: PreparedTest, values: Mapping[str, floa
     t = pt.time_s if grid is None else grid
     if isinstance(pt.motion, SineMotion):
         grid, nw = warmup_grid(pt, t)
-        sim = simulate_bench(model, pt.motion, p, grid, rtol=rtol, atol=rtol * 1e-2)
+        sim = simulate_bench(model, pt.motion, p, grid, rtol=rtol, atol=rtol * 1e-2,
+                             energy=False)
         keep = slice(nw, None)
     else:
         motion = pt.motion.sampled() if isinstance(pt.motion, FilteredMotion) else pt.motion
-        sim = simulate_bench(model, motion, p, t, rtol=rtol, atol=rtol * 1e-2)
+        sim = simulate_bench(model, motion, p, t, rtol=rtol, atol=rtol * 1e-2, energy=False)
         keep = slice(None)
     return RigSimulation(sim.force_N[keep], sim.voltage_V[keep], sim.states[:, keep])
 
