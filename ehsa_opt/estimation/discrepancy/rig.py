@@ -32,8 +32,10 @@ from ...physics.motion import FilteredMotion, SineMotion
 from ...physics.friction import PRESLIDING_NAMES
 from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .prepared import NO_GENERATOR_FIXED, PreparedTest
+from .spread import spread
 
 __all__ = ["Rig", "RigSimulation", "linear_baseline", "param_scale", "predict", "simulate_test",
+           "simulate_one",
            "predict_map", "predict_map_jacobian", "EXACT_JACOBIAN", "map_suits", "uniform_grid", "parameter_vector", "warmup_grid", "fit_predictor", "NON_SMOOTH", "USE_MAP",
            "BASE_SPECS", "DISCREPANCY_PARAMETERS", "NUT_NAMES", "LUGRE_FIXED"]
 
@@ -201,20 +203,43 @@ def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str,
     rig without generator gets its outputs through the same filter (``filtered``;
     False: the model's own output, e.g. to synthesise a record).
     """
+    if rig.model().n_states:  # a lone fit's tests side by side (:mod:`.spread`)
+        got = spread(simulate_one, "cvodes", prepared, rig, parameters, rtol=rtol,
+                     filtered=filtered)
+        if got is not None:
+            return got
+    return [simulate_one("cvodes", pt, rig, parameters, rtol=rtol, filtered=filtered)
+            for pt in prepared]
+
+
+def simulate_one(kind: str, pt: PreparedTest, rig: Rig, parameters: Mapping[str, float],
+                 rtol: float = 1e-7, filtered: bool = True, names: Sequence[str] = ()):
+    """One test's outputs (ny, N): ``kind`` "cvodes" (:func:`predict`), "map"
+    (:func:`predict_map`) or "sens" (:func:`predict_map_jacobian`: the outputs and their
+    derivatives with respect to ``names``, a pair)."""
     model = rig.model()
-    out = []
-    for pt in prepared:
-        p = parameter_vector(model, pt, parameters)
-        ny = pt.y.shape[0]
-        if model.n_states == 0:  # algebraic model: evaluate on the samples
-            y = np.array(model.outputs.map(pt.time_s.size)(np.zeros((0, pt.time_s.size)),
-                                                          pt.u, p))
-            out.append(pt.filter_output(y[:ny]) if filtered else y[:ny])
-            continue
-        sim = simulate_test(model, pt, parameters, rtol=rtol)
-        y = np.vstack([sim.force_N, sim.voltage_V])[:ny]
-        out.append(pt.filter_output(y) if filtered else y)
-    return out
+    p = parameter_vector(model, pt, parameters)
+    ny = pt.y.shape[0]
+    if kind == "map":
+        t, nw = warmup_grid(pt, pt.time_s)
+        y, _ = simulate_map(model, pt.motion, p, t)
+        y = y[:ny, nw:]
+        return pt.filter_output(y) if filtered else y
+    if kind == "sens":
+        cols = [model.param_names.index(n) for n in names]
+        t, nw = warmup_grid(pt, pt.time_s)
+        y, dy = simulate_map_sensitivity(model, pt.motion, p, t)
+        y, dy = y[:ny, nw:], dy[:ny, nw:][:, :, cols]
+        if filtered:
+            y, dy = pt.filter_output(y), pt.filter_output(dy, axis=1)
+        return y, dy
+    if model.n_states == 0:  # algebraic model: evaluate on the samples
+        y = np.array(model.outputs.map(pt.time_s.size)(np.zeros((0, pt.time_s.size)),
+                                                      pt.u, p))
+        return pt.filter_output(y[:ny]) if filtered else y[:ny]
+    sim = simulate_test(model, pt, parameters, rtol=rtol)
+    y = np.vstack([sim.force_N, sim.voltage_V])[:ny]
+    return pt.filter_output(y) if filtered else y
 
 
 @dataclass
@@ -282,16 +307,10 @@ def predict_map(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[
     :mod:`~ehsa_opt.physics.bench_map`); five to ten times cheaper on recorded motions."""
     if not all(uniform_grid(pt.time_s) for pt in prepared):
         return predict(prepared, rig, parameters, filtered=filtered)  # e.g. rounded stamps
-    model = rig.model()
-    out = []
-    for pt in prepared:
-        p = parameter_vector(model, pt, parameters)
-        ny = pt.y.shape[0]
-        t, nw = warmup_grid(pt, pt.time_s)
-        y, _ = simulate_map(model, pt.motion, p, t)
-        y = y[:ny, nw:]
-        out.append(pt.filter_output(y) if filtered else y)
-    return out
+    got = spread(simulate_one, "map", prepared, rig, parameters, filtered=filtered)
+    if got is not None:
+        return got
+    return [simulate_one("map", pt, rig, parameters, filtered=filtered) for pt in prepared]
 
 
 #: False: the Gauss–Newton on the map differences the map (the reference path, for
@@ -310,20 +329,13 @@ def predict_map_jacobian(prepared: Sequence[PreparedTest], rig: Rig,
     derivatives here, the caller differences instead)."""
     if not all(uniform_grid(pt.time_s) for pt in prepared):
         return None
-    model = rig.model()
-    cols = [model.param_names.index(n) for n in names]
-    outs, jacs = [], []
-    for pt in prepared:
-        p = parameter_vector(model, pt, parameters)
-        ny = pt.y.shape[0]
-        t, nw = warmup_grid(pt, pt.time_s)
-        y, dy = simulate_map_sensitivity(model, pt.motion, p, t)
-        y, dy = y[:ny, nw:], dy[:ny, nw:][:, :, cols]
-        if filtered:
-            y, dy = pt.filter_output(y), pt.filter_output(dy, axis=1)
-        outs.append(y)
-        jacs.append(dy)
-    return outs, jacs
+    names = list(names)
+    got = spread(simulate_one, "sens", prepared, rig, parameters, filtered=filtered,
+                 names=names)
+    if got is None:
+        got = [simulate_one("sens", pt, rig, parameters, filtered=filtered, names=names)
+               for pt in prepared]
+    return [y for y, _ in got], [dy for _, dy in got]
 
 
 predict_map.jacobian = predict_map_jacobian  # what polish looks for on a predictor
