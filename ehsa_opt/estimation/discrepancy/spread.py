@@ -10,8 +10,11 @@ simulate the tests of each call side by side; the caller gets the outputs in the
 of its tests.
 
 The numbers do not change: each test is simulated by the same code on the same inputs
-(the forked workers hold the same models and tests), whichever process runs it — a test
-checks the outputs bit for bit.  Only the wall time does: on an idle machine the fit
+(the forked workers hold the same models and tests), whichever process runs it, and the
+caller takes the outputs from the raw arrays by the same views as without spreading
+(:func:`~.rig.simulated`: a copy in another memory layout would be summed in another
+order downstream, and a fit's numbers would move in their last digits) — tests check
+the outputs and a run's answer bit for bit.  Only the wall time does: on an idle machine the fit
 takes about half as long; beside another CPU-bound process its share of the two cores
 is two processes' instead of one.  Calls on tests the workers do not hold (tests made
 after the fork) and nested calls inside a worker are simulated in the calling process,
@@ -24,6 +27,8 @@ import multiprocessing as mp
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from typing import Any, Callable, Sequence
+
+import numpy as np
 
 __all__ = ["spread_simulations", "spread", "MIN_TESTS"]
 
@@ -38,8 +43,39 @@ _TESTS: list[Any] = []
 
 
 def _in_worker(fn: Callable, kind: str, i: int, rig: Any, values: Any, opts: dict) -> Any:
-    """``fn(kind, test, rig, values, **opts)`` in a worker (the test by its index)."""
-    return fn(kind, _TESTS[i], rig, values, **opts)
+    """``fn(kind, test, rig, values, **opts)`` in a worker (the test by its index), its
+    arrays packed to travel in their memory layout (:func:`_pack`)."""
+    out = fn(kind, _TESTS[i], rig, values, **opts)
+    return tuple(map(_pack, out)) if isinstance(out, tuple) else _pack(out)
+
+
+def _pack(a: Any) -> Any:
+    """An array as (its axes permuted to a C-contiguous block, the permutation back):
+    pickling copies any other layout into C order, and a sum over the copy would add in
+    another order than over the original.  Anything else as it is."""
+    if not isinstance(a, np.ndarray) or a.ndim < 2:
+        return a
+    perm = sorted(range(a.ndim), key=lambda k: -a.strides[k])
+    t = a.transpose(perm)
+    if not t.flags.c_contiguous:
+        return a
+    return _Packed(t, tuple(int(k) for k in np.argsort(perm)))
+
+
+class _Packed:
+    """An array travelling as a C-contiguous block and the axis order it is seen in."""
+
+    def __init__(self, block: np.ndarray, back: tuple[int, ...]) -> None:
+        self.block, self.back = block, back
+
+    def unpack(self) -> np.ndarray:
+        return self.block.transpose(self.back)
+
+
+def _unpack(out: Any) -> Any:
+    if isinstance(out, tuple):
+        return tuple(_unpack(a) for a in out)
+    return out.unpack() if isinstance(out, _Packed) else out
 
 
 @contextmanager
@@ -77,7 +113,8 @@ def _worker_start() -> None:
 def spread(fn: Callable, kind: str, prepared: Sequence[Any], rig: Any, values: Any,
            **opts: Any) -> list | None:
     """The per-test simulations ``fn(kind, test, rig, values, **opts)`` (a module-level
-    function, :func:`~.rig.simulate_one`) of the tests ``prepared`` on the open pool, in the order of ``prepared``; None when no pool is open, the call
+    function, :func:`~.rig.simulate_raw`) of the tests ``prepared`` on the open pool, in
+    the order of ``prepared``; None when no pool is open, the call
     has fewer than :data:`MIN_TESTS` tests or a test is not one the workers hold (the
     caller then simulates them itself, one after the other)."""
     got = _POOL[0]
@@ -88,4 +125,4 @@ def spread(fn: Callable, kind: str, prepared: Sequence[Any], rig: Any, values: A
     if any(i is None for i in idx):
         return None
     futures = [ex.submit(_in_worker, fn, kind, i, rig, values, opts) for i in idx]
-    return [f.result() for f in futures]
+    return [_unpack(f.result()) for f in futures]
