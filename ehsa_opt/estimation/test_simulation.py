@@ -97,7 +97,8 @@ def simulate_tests(tests: Sequence[BenchTest], harvester: HarvesterParams,
             # makes every CVODES right-hand side evaluation costly)
             F, V = outputs_on_grid(model, motion, test.time_s, p)[:2]
         else:
-            sim = simulate_bench(model, motion, p, test.time_s, rtol=1e-7, atol=1e-9)
+            sim = simulate_bench(model, motion, p, test.time_s, rtol=1e-7, atol=1e-9,
+                                 energy=False)  # the outputs alone
             F, V = sim.force_N, sim.voltage_V
         out.append(Prediction(test.file, test.time_s, F,
                               V if (has_generator and test.voltage_V is not None) else None))

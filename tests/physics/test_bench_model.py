@@ -203,3 +203,27 @@ def test_sampled_motion_cutoff_differentiates_a_sine():
             assert err < 0.05
     with pytest.raises(ValueError, match="cutoff_hz"):
         SampledMotion.with_cutoff(t, x, 0.0)
+
+
+@pytest.mark.parametrize("sampled", [False, True], ids=["sine", "sampled"])
+def test_simulation_without_energy_gives_the_same_outputs_bit_for_bit(sampled):
+    """The fits' simulations skip the energy quadratures: they are not in CVODES' error
+    test, so the states and outputs are the same to the last bit (a stiff, rattling
+    contact included, whose trajectory would show any change in the steps)."""
+    from ehsa_opt.physics.motion import SampledMotion
+    model = BenchModel(H, [Backlash()])
+    p = model.param_vector(15.0, PROTOTYPE_FRICTION)
+    names = list(model.param_names)
+    p[names.index("backlash_gap_m")] = 3e-4
+    p[names.index("backlash_contact_stiffness_N_per_m")] = 1e8
+    t = np.arange(0, 2.0 / 1.5, 1e-3)
+    m = SineMotion(0.015, 1.5)
+    if sampled:
+        m = SampledMotion.with_cutoff(t, m.evaluate(t)[0], 30.0)
+    full = simulate_bench(model, m, p, t, rtol=1e-7, atol=1e-9)
+    bare = simulate_bench(model, m, p, t, rtol=1e-7, atol=1e-9, energy=False)
+    assert bare.energy_J == {} and full.energy_J["work_in_abs"][-1] > 0
+    np.testing.assert_array_equal(bare.force_N, full.force_N)
+    np.testing.assert_array_equal(bare.voltage_V, full.voltage_V)
+    np.testing.assert_array_equal(bare.states, full.states)
+    assert np.ptp(np.diff(full.force_N)) > 100.0  # the contact really rattles here

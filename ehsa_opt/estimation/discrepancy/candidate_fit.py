@@ -40,6 +40,7 @@ from .fit import fit_group
 from .prepared import PreparedTest
 from .rig import Rig, fit_predictor, map_suits, predict, uniform_grid
 from .polish import polish
+from .spread import spread_simulations
 
 __all__ = ["fit_candidate", "not_fitted", "judge_fit", "CUT_RECORD", "screen_starts", "screen_sse", "split_friction",
            "best_friction_share", "reproducibility", "fit_member", "fit_members", "signature_scores_in",
@@ -516,7 +517,9 @@ def fit_members(args: list[tuple], jobs: int, *, until_deadline: bool = False,
     nor one whose estimated wall time (``estimate(name)``, s, when given) exceeds the
     time left — it would be cut before it moved — so the results then hold only the fits
     started (a prefix of ``args``).  ``seconds`` (optional) receives each member's wall
-    time, s, by name."""
+    time, s, by name.  A fit made in the calling process while ``jobs`` > 1 (the only one
+    asked for) simulates its tests on ``jobs`` workers (:func:`~.spread.spread_simulations`:
+    the same numbers)."""
     if remote() is not None and args:  # on the run's Dask cluster, in the order asked
         if until_deadline and past_deadline():
             return []
@@ -561,7 +564,9 @@ def fit_members(args: list[tuple], jobs: int, *, until_deadline: bool = False,
     while pending and not stop():
         k = pending.pop(0)
         t0[k] = time.perf_counter()
-        done(k, fit_member(args[k]))
+        # a lone fit: its simulations side by side on the run's workers (:mod:`.spread`)
+        with spread_simulations(jobs, [*args[k][3], *args[k][4], *args[k][5]]):
+            done(k, fit_member(args[k]))
     return [out[k] for k in sorted(out)]
 
 

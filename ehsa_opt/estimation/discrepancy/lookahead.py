@@ -27,6 +27,7 @@ from .candidates import (
 from .criterion import DEFAULT_CRITERION, Criterion
 from .evidence import channel_sse, effective_samples, normalised_sse, significant
 from .judge import choose_winner, earns
+from .spread import spread_simulations
 
 __all__ = ["confounded", "supported", "fit_on_top", "lookahead_winner", "confounded_first",
            "not_judged",
@@ -252,7 +253,7 @@ def prefetch_on_top(pairs: Sequence[tuple], judge: dict, sub_pts: list, max_iter
 
 def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, rnd: int,
                fitted: dict | None = None, cuts: list | None = None,
-               seconds: dict | None = None) -> Any:
+               seconds: dict | None = None, jobs: int = 1) -> Any:
     """``blocked`` re-identified on the model with ``c`` and judged against it (the
     look-ahead of :func:`lookahead_winner`); None when incompatible or, with ``seconds``
     (the round's fit times by name), when it would not finish before the run's deadline
@@ -261,7 +262,9 @@ def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, 
     judged, not repeated; a new one is kept for the next round to reuse once ``c`` is
     added.  A fit cut by the time budget at its start point
     (:func:`~.candidate_fit.not_fitted`) is judged not earning and, with ``cuts`` given,
-    its path ("blocked on top of c") is appended there."""
+    its path ("blocked on top of c") is appended there.  A fit made here (the only one
+    running) simulates its tests on ``jobs`` workers (:func:`~.spread.spread_simulations`:
+    the same numbers)."""
     args = on_top_args(c, blocked, judge, sub_pts, max_iter)
     if args is None:
         return None
@@ -278,7 +281,8 @@ def fit_on_top(c: Any, blocked: Any, judge: dict, sub_pts: list, max_iter: int, 
         return None
     else:
         t0 = time.perf_counter()
-        out = fit_member(args)
+        with spread_simulations(jobs, [*args[3], *args[4], *args[5]]):
+            out = fit_member(args)
         if seconds is not None:
             seconds[blocked.effect] = time.perf_counter() - t0
     if fitted is not None:

@@ -23,7 +23,7 @@ from .candidates import CANDIDATES, compatible
 from .criterion import DEFAULT_CRITERION
 from .impact_verdict import impact_record
 
-__all__ = ["nested_to_fit", "nested_in", "prefer_nested"]
+__all__ = ["nested_to_fit", "nested_in", "nested_ahead", "prefer_nested"]
 
 
 
@@ -57,6 +57,22 @@ def nested_in(names: Sequence[str], scores: Mapping[str, dict], comps: Mapping[s
                 continue
             out.append(m)
     return out
+
+
+def nested_ahead(names: Sequence[str], scores: Mapping[str, dict], comps: Mapping[str, Any],
+                 rig: Any, remaining: Sequence[str]) -> list[str]:
+    """The simpler members nested in the members ``names`` that a round may still ask
+    for (:func:`nested_to_fit`), for fitting ahead on an idle worker (:mod:`.idle_fits`):
+    :func:`nested_in` of those ``names`` that the ranking does not send to the
+    impact-aware fit (``scores[name]["impacts"]``: the data's transient energy exceeds
+    the current model's by the ratio that routes a contact to its impacts).  A member
+    judged on its impacts never has its nested members fitted (a rattling contact is
+    not a series spring; :func:`nested_to_fit`), so such a fit made ahead would only
+    take a core from the contact's own fit — on a loaded machine, a third of it.  The
+    answer does not depend on it: a member asked for and not fitted ahead is fitted
+    when asked."""
+    return nested_in([n for n in names if not (scores.get(n) or {}).get("impacts")],
+                     scores, comps, rig, remaining)
 
 
 def prefer_nested(win: Any, cands: Mapping[str, Any], say: Any = None,

@@ -32,8 +32,10 @@ from ...physics.motion import FilteredMotion, SineMotion
 from ...physics.friction import LAW_PARAMETER_NAMES
 from ...physics.params import FRICTION_NAMES, HarvesterParams
 from .prepared import NO_GENERATOR_FIXED, PreparedTest
+from .spread import spread
 
 __all__ = ["Rig", "RigSimulation", "linear_baseline", "param_scale", "predict", "simulate_test",
+           "simulated", "simulate_raw", "outputs_of",
            "predict_map", "predict_map_jacobian", "EXACT_JACOBIAN", "map_suits", "uniform_grid", "parameter_vector", "warmup_grid", "fit_predictor", "NON_SMOOTH", "USE_MAP",
            "BASE_SPECS", "DISCREPANCY_PARAMETERS", "NUT_NAMES", "LUGRE_FIXED"]
 
@@ -202,20 +204,62 @@ def predict(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[str,
     rig without generator gets its outputs through the same filter (``filtered``;
     False: the model's own output, e.g. to synthesise a record).
     """
+    return simulated("cvodes", prepared, rig, parameters, rtol=rtol, filtered=filtered)
+
+
+def simulated(kind: str, prepared: Sequence[PreparedTest], rig: Rig,
+              parameters: Mapping[str, float], rtol: float = 1e-7, filtered: bool = True,
+              names: Sequence[str] = ()) -> list:
+    """Each test's outputs (ny, N) of ``kind``: "cvodes" (:func:`predict`), "map"
+    (:func:`predict_map`) or "sens" (:func:`predict_map_jacobian`: the outputs and their
+    derivatives with respect to ``names``, a pair).  Each test is simulated by
+    :func:`simulate_raw` — side by side on the workers of a lone fit (:mod:`.spread`),
+    else one after the other — and its outputs taken from the raw arrays here
+    (:func:`outputs_of`): the same views of the same arrays either way, so every later
+    sum adds in the same order (a copy with another memory layout would not)."""
+    raws = spread(simulate_raw, kind, prepared, rig, parameters, rtol=rtol) \
+        if kind != "cvodes" or rig.model().n_states else None
+    if raws is None:
+        raws = [simulate_raw(kind, pt, rig, parameters, rtol=rtol) for pt in prepared]
+    return [outputs_of(kind, pt, raw, filtered, rig.model(), names)
+            for pt, raw in zip(prepared, raws)]
+
+
+def simulate_raw(kind: str, pt: PreparedTest, rig: Rig, parameters: Mapping[str, float],
+                 rtol: float = 1e-7) -> tuple:
+    """One test's simulation of ``kind`` (:func:`simulated`) as computed: the outputs on
+    the whole grid (the warm-up cycle of a sine test included; with "sens" their
+    derivatives with respect to every parameter) and the warm-up samples."""
     model = rig.model()
-    out = []
-    for pt in prepared:
-        p = parameter_vector(model, pt, parameters)
-        ny = pt.y.shape[0]
-        if model.n_states == 0:  # algebraic model: evaluate on the samples
-            y = np.array(model.outputs.map(pt.time_s.size)(np.zeros((0, pt.time_s.size)),
-                                                          pt.u, p))
-            out.append(pt.filter_output(y[:ny]) if filtered else y[:ny])
-            continue
-        sim = simulate_test(model, pt, parameters, rtol=rtol)
-        y = np.vstack([sim.force_N, sim.voltage_V])[:ny]
-        out.append(pt.filter_output(y) if filtered else y)
-    return out
+    p = parameter_vector(model, pt, parameters)
+    if kind in ("map", "sens"):
+        t, nw = warmup_grid(pt, pt.time_s)
+        if kind == "map":
+            return simulate_map(model, pt.motion, p, t)[0], nw
+        return (*simulate_map_sensitivity(model, pt.motion, p, t), nw)
+    if model.n_states == 0:  # algebraic model: evaluate on the samples
+        return np.array(model.outputs.map(pt.time_s.size)(np.zeros((0, pt.time_s.size)),
+                                                         pt.u, p)), 0
+    sim = simulate_test(model, pt, parameters, rtol=rtol)
+    return np.vstack([sim.force_N, sim.voltage_V]), 0
+
+
+def outputs_of(kind: str, pt: PreparedTest, raw: tuple, filtered: bool, model: BenchModel,
+               names: Sequence[str] = ()):
+    """The outputs (ny, N) of ``pt`` from its raw simulation (:func:`simulate_raw`): the
+    recorded channels after the warm-up, through the record's filter (``filtered``); with
+    "sens" also the derivatives with respect to ``names``."""
+    ny = pt.y.shape[0]
+    if kind == "sens":
+        y, dy, nw = raw
+        cols = [model.param_names.index(n) for n in names]
+        y, dy = y[:ny, nw:], dy[:ny, nw:][:, :, cols]
+        if filtered:
+            y, dy = pt.filter_output(y), pt.filter_output(dy, axis=1)
+        return y, dy
+    y, nw = raw
+    y = y[:ny, nw:]
+    return pt.filter_output(y) if filtered else y
 
 
 @dataclass
@@ -236,11 +280,12 @@ def simulate_test(model: BenchModel, pt: PreparedTest, values: Mapping[str, floa
     t = pt.time_s if grid is None else grid
     if isinstance(pt.motion, SineMotion):
         grid, nw = warmup_grid(pt, t)
-        sim = simulate_bench(model, pt.motion, p, grid, rtol=rtol, atol=rtol * 1e-2)
+        sim = simulate_bench(model, pt.motion, p, grid, rtol=rtol, atol=rtol * 1e-2,
+                             energy=False)
         keep = slice(nw, None)
     else:
         motion = pt.motion.sampled() if isinstance(pt.motion, FilteredMotion) else pt.motion
-        sim = simulate_bench(model, motion, p, t, rtol=rtol, atol=rtol * 1e-2)
+        sim = simulate_bench(model, motion, p, t, rtol=rtol, atol=rtol * 1e-2, energy=False)
         keep = slice(None)
     return RigSimulation(sim.force_N[keep], sim.voltage_V[keep], sim.states[:, keep])
 
@@ -282,16 +327,7 @@ def predict_map(prepared: Sequence[PreparedTest], rig: Rig, parameters: Mapping[
     :mod:`~ehsa_opt.physics.bench_map`); five to ten times cheaper on recorded motions."""
     if not all(uniform_grid(pt.time_s) for pt in prepared):
         return predict(prepared, rig, parameters, filtered=filtered)  # e.g. rounded stamps
-    model = rig.model()
-    out = []
-    for pt in prepared:
-        p = parameter_vector(model, pt, parameters)
-        ny = pt.y.shape[0]
-        t, nw = warmup_grid(pt, pt.time_s)
-        y, _ = simulate_map(model, pt.motion, p, t)
-        y = y[:ny, nw:]
-        out.append(pt.filter_output(y) if filtered else y)
-    return out
+    return simulated("map", prepared, rig, parameters, filtered=filtered)
 
 
 #: False: the Gauss–Newton on the map differences the map (the reference path, for
@@ -310,20 +346,8 @@ def predict_map_jacobian(prepared: Sequence[PreparedTest], rig: Rig,
     derivatives here, the caller differences instead)."""
     if not all(uniform_grid(pt.time_s) for pt in prepared):
         return None
-    model = rig.model()
-    cols = [model.param_names.index(n) for n in names]
-    outs, jacs = [], []
-    for pt in prepared:
-        p = parameter_vector(model, pt, parameters)
-        ny = pt.y.shape[0]
-        t, nw = warmup_grid(pt, pt.time_s)
-        y, dy = simulate_map_sensitivity(model, pt.motion, p, t)
-        y, dy = y[:ny, nw:], dy[:ny, nw:][:, :, cols]
-        if filtered:
-            y, dy = pt.filter_output(y), pt.filter_output(dy, axis=1)
-        outs.append(y)
-        jacs.append(dy)
-    return outs, jacs
+    got = simulated("sens", prepared, rig, parameters, filtered=filtered, names=list(names))
+    return [y for y, _ in got], [dy for _, dy in got]
 
 
 predict_map.jacobian = predict_map_jacobian  # what polish looks for on a predictor

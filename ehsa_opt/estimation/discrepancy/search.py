@@ -43,7 +43,7 @@ from .criterion import Criterion
 from .prepared import PreparedTest
 from .rig import Rig
 from .impacts import impact_record
-from .nested import nested_in, nested_to_fit, prefer_nested
+from .nested import nested_ahead, nested_to_fit, prefer_nested
 from .lookahead import member_key
 from .widen import should_widen, widen_candidates, widen_round
 from .results import CandidateResult, DiscrepancySettings
@@ -305,10 +305,10 @@ def _estimate(state: SearchState, name: str) -> float:
 
 def fitted_ahead(rk: RoundRanking, state: SearchState) -> list[str]:
     """The members a round may ask for after its chosen ones, fitted ahead on idle
-    workers (:mod:`.idle_fits`): the simpler members nested in a chosen one
-    (:func:`~.nested.nested_in`), then those a widened round re-identifies
+    workers (:mod:`.idle_fits`): the simpler members nested in a chosen one that a round
+    may still ask for (:func:`~.nested.nested_ahead`), then those a widened round re-identifies
     (:func:`~.widen.widen_candidates`)."""
-    nested = nested_in(rk.chosen, rk.scores, rk.comps, state.rig, state.remaining)
+    nested = nested_ahead(rk.chosen, rk.scores, rk.comps, state.rig, state.remaining)
     return nested + [n for n in widen_candidates(rk, state) if n not in nested]
 
 

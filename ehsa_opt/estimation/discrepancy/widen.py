@@ -126,7 +126,7 @@ def widen_round(rnd: int, rk: Any, tests: Any, state: Any, settings: Any, judge:
     first = lookahead_winner(
         earning, blocked, lambda c: fit_on_top(c, blocked, judge, tests.sub_pts,
                                                settings.max_iter, rnd, state.fitted, cuts,
-                                               state.seconds),
+                                               state.seconds, settings.jobs),
         say, first_steps=steps1, judged=judged)
     # the second steps: what a round after `blocked` would re-identify, ranked on the
     # residual of the model with it (not among the members this round happened to fit),
@@ -140,7 +140,7 @@ def widen_round(rnd: int, rk: Any, tests: Any, state: Any, settings: Any, judge:
     if first is None and confounded_first(
             blocked, others,
             lambda c: fit_on_top(blocked, c, judge, tests.sub_pts, settings.max_iter, rnd,
-                                 state.fitted, cuts, state.seconds),
+                                 state.fitted, cuts, state.seconds, settings.jobs),
             state.error, tests.floor,
             choose_winner(earning).sse_heldout if earning else math.inf, say,
             criterion=settings.criterion):

@@ -64,8 +64,11 @@ def test_partial_report_from_the_progress_messages(tmp_path):
 
 def test_cli_budget_cuts_with_a_stated_partial_answer(tmp_path, capsys):
     d = tmp_path / "data"
-    write_synthetic(d, SyntheticSpec(frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(15.0, 109.0),
-                                     cycles=1.0, seed=2))
+    # a campaign with an effect: its member fits outlast the cap on any machine (a clean
+    # one re-identifies nothing and can finish inside 2 s once the caches are warm)
+    write_synthetic(d, SyntheticSpec(effects={"compliance": {
+        "compliance_stiffness_N_per_m": 2e5, "compliance_damping_Ns_per_m": 300.0}},
+        frequencies_hz=(1.0, 2.0, 3.0), loads_ohm=(15.0, 109.0), cycles=1.0, seed=2))
     out = tmp_path / "out"
     t0 = time.monotonic()
     rc = main(["discrepancy", str(d), "--out", str(out), "--wall-cap-s", "2"])

@@ -90,3 +90,25 @@ def test_members_nested_in_the_chosen_ones_are_what_a_round_may_fit_ahead():
     # a spring cannot join a rig that already has a transmission member
     with_gap = Rig(HarvesterParams(), True, (comps["backlash"],))
     assert nested_in(["backlash"], scores, comps, with_gap, names) == []
+
+
+def test_a_contact_ranked_on_its_impacts_has_no_nested_member_fitted_ahead():
+    """The ranking that routes a backlash to the impact-aware fit (its ``impacts`` ratio)
+    says its nested spring will never be asked for (``nested_to_fit`` leaves out a
+    member judged on impacts): it is not fitted ahead beside the contact's own fit."""
+    from ehsa_opt.estimation.discrepancy import CANDIDATES, Rig
+    from ehsa_opt.estimation.discrepancy.nested import nested_ahead
+    from ehsa_opt.physics.params import HarvesterParams
+
+    names = ["backlash", "cogging", "compliance"]
+    comps = {n: CANDIDATES[n].component() for n in names}
+    rig = Rig(HarvesterParams(), True, ())
+    scores = {n: {"applicable": True, "impacts": None} for n in names}
+    assert nested_ahead(["backlash"], scores, comps, rig, names) == ["compliance"]
+    scores["backlash"]["impacts"] = 523.0
+    assert nested_ahead(["backlash"], scores, comps, rig, names) == []
+    assert nested_ahead(["backlash", "cogging"], scores, comps, rig, names) == []
+    # and the round's own rule agrees: a backlash judged on impacts asks for no spring
+    cands = _cands(impacts=True)
+    assert nested_to_fit(cands, {n: {"applicable": True} for n in names}, comps, rig,
+                         names) == []
