@@ -84,11 +84,14 @@ def campaign_dir(root: Path, case: tuple) -> Path:
 
 
 def run_cli(data: Path, out: Path, jobs: int, cut_s: float, budget_s: float | None,
-            members: tuple[str, ...] = ()) -> dict:
+            members: tuple[str, ...] = (), dynamic_friction: bool = False) -> dict:
     """Run ``ehsa-opt discrepancy`` in a fresh process group; wall time, ru_maxrss, log.
-    ``members``: members listed by choice (``--with``)."""
+    ``members``: members listed by choice (``--with``); ``dynamic_friction``: the dynamic
+    base law offered (``--dynamic-friction``)."""
     cmd = [sys.executable, "-m", "ehsa_opt.cli", "discrepancy", str(data), "--out", str(out),
            "--jobs", str(jobs)] + ([] if budget_s is None else ["--budget-s", f"{budget_s:g}"])
+    if dynamic_friction:
+        cmd.append("--dynamic-friction")
     for m in members:
         cmd += ["--with", m]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -136,7 +139,8 @@ def run_case(case: tuple, args) -> dict:
     out.parent.mkdir(parents=True, exist_ok=True)
     with heavy_lock(args.lock):
         run = run_cli(data, out, args.jobs, args.cut_s, args.budget_s,
-                      tuple(m for m in (args.with_members or "").split(",") if m))
+                      tuple(m for m in (args.with_members or "").split(",") if m),
+                      getattr(args, "dynamic_friction", False))
     row = {"case": cid, "expected": expected, "rig": rig, "protocol": protocol,
            "tests": n_tests, "seed": seed, **{k: v for k, v in run.items() if k != "log"}}
     js = out / "discrepancy.json"
@@ -230,6 +234,8 @@ def main(argv=None) -> int:
     ap.add_argument("--data-root", default=str(ROOT / "results" / "second_generator" / "data"))
     ap.add_argument("--runs-root", default=str(ROOT / "results" / "second_generator" / "runs"))
     ap.add_argument("--out", default=None, help="also write the rows as JSON")
+    ap.add_argument("--dynamic-friction", action="store_true",
+                    help="offer the dynamic base law (discrepancy --dynamic-friction)")
     ap.add_argument("--beside-hog", action="store_true",
                     help="run every case beside a CPU-bound busy-loop process")
     args = ap.parse_args(argv)
